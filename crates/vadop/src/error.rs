@@ -1,0 +1,71 @@
+//! Typed errors for every public entry point.
+//!
+//! Every fallible call validates its input *before* it touches any state, so an `Err` always
+//! leaves the world exactly as it was. Messages name the offending value and what was expected.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building or stepping a world.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum VadopError {
+    /// A position, velocity or other vector had a NaN or infinite component.
+    #[error("{what} must be finite, got {value}")]
+    NotFinite { what: &'static str, value: String },
+    /// A radius was zero, negative or not finite.
+    #[error("radius must be a finite number > 0, got {0}")]
+    BadRadius(f64),
+    /// A mass was zero, negative or not finite.
+    #[error("mass must be a finite number > 0, got {0}")]
+    BadMass(f64),
+    /// The restitution coefficient was outside [0, 1].
+    #[error("restitution must lie in [0, 1], got {0}")]
+    BadRestitution(f64),
+    /// The box had a non-finite corner or a side of length <= 0.
+    #[error("box must have finite corners with min < max on every axis, got min {min:?} max {max:?}")]
+    BadBox { min: [f64; 3], max: [f64; 3] },
+    /// A sphere did not fit entirely inside the box.
+    #[error("sphere at {position:?} with radius {radius} does not fit inside the box {min:?}..{max:?}")]
+    OutsideBox { position: [f64; 3], radius: f64, min: [f64; 3], max: [f64; 3] },
+    /// The time step was zero, negative or not finite.
+    #[error("time step must be a finite number > 0, got {0}")]
+    BadTimeStep(f64),
+    /// `step` was called on a world with no bodies.
+    #[error("the world is empty: add at least one sphere before stepping")]
+    EmptyWorld,
+    /// A body handle that does not name a live body.
+    #[error("no body with id {0}")]
+    NoSuchBody(u32),
+    /// Two spheres overlap at the start of a run that resolves collisions.
+    #[error("spheres {a} and {b} overlap by {depth:.3e} at the start of a simulate-mode run; collisions can only be resolved between separate bodies")]
+    Overlap { a: u32, b: u32, depth: f64 },
+    /// A body would cross the box so many times in one frame that stepping it is meaningless.
+    #[error("body {body} moves {lengths:.3e} box lengths in one frame (limit {limit:.0e}); reduce the speed or the time step")]
+    AbsurdSpeed { body: u32, lengths: f64, limit: f64 },
+    /// The axis pool size was out of the supported range.
+    #[error("axis pool size must be between {min} and {max}, got {got}")]
+    BadPoolSize { got: usize, min: usize, max: usize },
+    /// The alignment angle phi was out of range.
+    #[error("phi must be a finite angle in [rho, pi/2] radians (rho = {rho:.6}) so that every pair of bodies shares an axis, got {got}")]
+    BadPhi { got: f64, rho: f64 },
+    /// Too many bodies for 32-bit body ids.
+    #[error("a world holds at most {0} bodies")]
+    TooManyBodies(usize),
+    /// A scene file or scene parameters could not be used.
+    #[error("scene: {0}")]
+    Scene(String),
+    /// An I/O failure while reading or writing a file.
+    #[error("{path}: {message}")]
+    Io { path: String, message: String },
+}
+
+/// Shorthand for results of this crate.
+pub type Result<T> = std::result::Result<T, VadopError>;
+
+/// Checks that every component of `v` is finite.
+pub(crate) fn check_finite(what: &'static str, v: glam::DVec3) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(VadopError::NotFinite { what, value: format!("{v:?}") })
+    }
+}

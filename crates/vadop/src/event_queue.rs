@@ -1,0 +1,141 @@
+//! Time-ordered queue of predicted contacts, with lazy invalidation.
+//!
+//! It owns the min-heap and the rule that makes its order total and deterministic: earlier time
+//! first, then the lower body id, then the partner (bodies before walls, lower ids first). Events
+//! carry the velocity stamps their bodies had when they were predicted; an event whose stamps no
+//! longer match is void and is dropped when it reaches the top, so invalidating a body's contacts
+//! costs O(1). It never computes contacts or changes bodies.
+
+use crate::narrow_phase::Wall;
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// What a body meets in a predicted event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Partner {
+    /// Another body, by id (always greater than the event's first body).
+    Body(u32),
+    /// A wall of the box.
+    Wall(Wall),
+}
+
+impl Partner {
+    /// Sort key: bodies before walls, lower ids first.
+    fn key(self) -> u64 {
+        match self {
+            Partner::Body(id) => id as u64,
+            Partner::Wall(wall) => (1u64 << 32) + wall as u64,
+        }
+    }
+}
+
+/// A predicted contact.
+#[derive(Debug, Clone, Copy)]
+pub struct Event {
+    /// Absolute simulation time of the contact.
+    pub time: f64,
+    /// First body (the lower id of a pair).
+    pub body: u32,
+    /// What it touches.
+    pub partner: Partner,
+    /// Velocity stamp of `body` when predicted.
+    pub body_stamp: u32,
+    /// Velocity stamp of the partner body when predicted (0 for walls).
+    pub partner_stamp: u32,
+}
+
+impl Event {
+    fn order(&self, other: &Self) -> Ordering {
+        self.time
+            .total_cmp(&other.time)
+            .then(self.body.cmp(&other.body))
+            .then(self.partner.key().cmp(&other.partner.key()))
+    }
+}
+
+impl PartialEq for Event {
+    fn eq(&self, other: &Self) -> bool {
+        self.order(other) == Ordering::Equal
+    }
+}
+impl Eq for Event {}
+impl PartialOrd for Event {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Event {
+    // Reversed so that std's max-heap pops the earliest event.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.order(self)
+    }
+}
+
+/// Min-heap of events by time, with deterministic ties.
+///
+/// ```
+/// use vadop::event_queue::{Event, EventQueue, Partner};
+/// let mut queue = EventQueue::default();
+/// queue.push(Event { time: 0.5, body: 3, partner: Partner::Body(7), body_stamp: 0, partner_stamp: 0 });
+/// queue.push(Event { time: 0.2, body: 1, partner: Partner::Body(2), body_stamp: 0, partner_stamp: 0 });
+/// assert_eq!(queue.pop().map(|e| e.body), Some(1));
+/// ```
+#[derive(Debug, Default)]
+pub struct EventQueue {
+    heap: BinaryHeap<Event>,
+}
+
+impl EventQueue {
+    /// Adds a predicted contact.
+    #[inline]
+    pub fn push(&mut self, event: Event) {
+        self.heap.push(event);
+    }
+    /// Removes and returns the earliest event (valid or not: the caller checks stamps).
+    #[inline]
+    pub fn pop(&mut self) -> Option<Event> {
+        self.heap.pop()
+    }
+    /// Drops every event, keeping the allocation for the next frame.
+    pub fn clear(&mut self) {
+        self.heap.clear();
+    }
+    /// Number of queued events, void ones included.
+    pub fn len(&self) -> usize {
+        self.heap.len()
+    }
+    /// True when no event is queued.
+    pub fn is_empty(&self) -> bool {
+        self.heap.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn event(time: f64, body: u32, partner: Partner) -> Event {
+        Event { time, body, partner, body_stamp: 0, partner_stamp: 0 }
+    }
+
+    #[test]
+    fn pops_in_time_order_with_deterministic_ties() {
+        let mut q = EventQueue::default();
+        q.push(event(1.0, 4, Partner::Wall(Wall::MinX)));
+        q.push(event(1.0, 4, Partner::Body(9)));
+        q.push(event(1.0, 2, Partner::Body(5)));
+        q.push(event(0.5, 8, Partner::Body(9)));
+        let order: Vec<(f64, u32, Partner)> =
+            std::iter::from_fn(|| q.pop()).map(|e| (e.time, e.body, e.partner)).collect();
+        assert_eq!(
+            order,
+            vec![
+                (0.5, 8, Partner::Body(9)),
+                (1.0, 2, Partner::Body(5)),
+                (1.0, 4, Partner::Body(9)),
+                (1.0, 4, Partner::Wall(Wall::MinX)),
+            ]
+        );
+        assert!(q.is_empty());
+    }
+}

@@ -1,0 +1,109 @@
+//! The VADOP world against the brute-force oracle: on random scenes (sparse and dense, slow and
+//! very fast, grazing and head-on) both must report the same contacts, in the same order, frame
+//! after frame, in detect mode (identical paths) and in simulate mode (full response).
+
+use glam::DVec3;
+use proptest::prelude::*;
+use vadop::scene::{PaperScene, Scene, FRAMES_PER_SECOND};
+use vadop::{BoxBounds, Contact, Method, Mode, Sphere, World, WorldConfig};
+
+const DT: f64 = 1.0 / FRAMES_PER_SECOND;
+
+fn config(method: Method, mode: Mode, pool_axes: Option<usize>) -> WorldConfig {
+    WorldConfig { method, mode, pool_axes, ..WorldConfig::default() }
+}
+
+/// Steps both worlds and checks every frame's contacts are identical; returns the contact count.
+fn assert_same_contacts(scene: &Scene, mode: Mode, pool_axes: Option<usize>, frames: usize) -> usize {
+    let mut vadop = scene.world(config(Method::Vadop, mode, pool_axes)).unwrap();
+    let mut oracle = scene.world(config(Method::Brute, mode, pool_axes)).unwrap();
+    let mut total = 0;
+    for frame in 0..frames {
+        let found: Vec<Contact> = vadop.step(DT).unwrap().to_vec();
+        let expected = oracle.step(DT).unwrap();
+        assert_eq!(found.len(), expected.len(), "frame {frame}: contact count differs");
+        assert_eq!(found, expected, "frame {frame}: contact sequences differ");
+        total += found.len();
+        // Every pair of bodies shares an axis, so pruning only ever uses true separating axes.
+        if frame == 0 || frame == frames - 1 {
+            let sap = vadop.sweep_prune().unwrap();
+            let n = vadop.len() as u32;
+            for i in 0..n {
+                for j in i + 1..n {
+                    assert!(sap.shares_axis(i, j), "bodies {i} and {j} share no axis");
+                }
+            }
+        }
+    }
+    total
+}
+
+/// The paper's scene; a packing too dense for a few spheres to be placed apart is thinned until
+/// they fit (small boxes hold fewer lattice sites).
+fn paper(bodies: usize, packing_fraction: f64, max_speed: f64, seed: u64) -> Scene {
+    let mut fraction = packing_fraction;
+    loop {
+        match (PaperScene { bodies, packing_fraction: fraction, max_speed, radius: 0.5, seed }).build() {
+            Ok(scene) => return scene,
+            Err(_) if fraction > 1e-3 => fraction *= 0.8,
+            Err(e) => panic!("{e}"),
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn detect_mode_matches_brute_force(
+        bodies in 2usize..300,
+        packing_fraction in 0.01f64..0.4,
+        max_speed in prop_oneof![0.01f64..0.1, 0.1f64..2.0, 2.0f64..20.0],
+        pool_axes in prop_oneof![Just(None), Just(Some(3)), Just(Some(6)), Just(Some(13)), Just(Some(46)), Just(Some(200))],
+        seed in any::<u64>(),
+    ) {
+        let scene = paper(bodies, packing_fraction, max_speed, seed);
+        assert_same_contacts(&scene, Mode::Detect, pool_axes, 12);
+    }
+
+    #[test]
+    fn simulate_mode_matches_brute_force(
+        bodies in 2usize..300,
+        packing_fraction in 0.01f64..0.4,
+        max_speed in prop_oneof![0.01f64..0.1, 0.1f64..2.0, 2.0f64..20.0],
+        pool_axes in prop_oneof![Just(None), Just(Some(3)), Just(Some(7)), Just(Some(21)), Just(Some(81))],
+        seed in any::<u64>(),
+    ) {
+        let scene = paper(bodies, packing_fraction, max_speed, seed);
+        assert_same_contacts(&scene, Mode::Simulate, pool_axes, 12);
+    }
+}
+
+#[test]
+fn dense_fast_pack_over_many_frames() {
+    let scene = paper(300, 0.4, 5.0, 7);
+    let contacts = assert_same_contacts(&scene, Mode::Simulate, None, 20);
+    assert!(contacts > 1000, "a dense fast pack must collide a lot, got {contacts}");
+}
+
+/// Grazing: pairs whose paths pass at exactly the sum of the radii, and just inside and outside.
+#[test]
+fn grazing_and_head_on_pairs() {
+    let bounds = BoxBounds::cube(200.0).unwrap();
+    let mut spheres = Vec::new();
+    for k in 0..40 {
+        let y = 10.0 + 4.5 * k as f64;
+        let miss = [0.0, 1e-7, -1e-7, 1e-12][k % 4];
+        let sphere = |x: f64, y: f64, vx: f64| Sphere { position: DVec3::new(x, y, 100.0), velocity: DVec3::new(vx, 0.0, 0.0), radius: 1.0, mass: 1.0 };
+        // Head-on at 100 diameters per frame, and a grazing pass 2 + miss apart.
+        spheres.push(sphere(20.0, y, 6000.0));
+        spheres.push(sphere(180.0, y, -6000.0));
+        spheres.push(sphere(60.0, y + 2.0 + miss, 300.0));
+        spheres.push(sphere(100.0, y, 0.0));
+    }
+    let scene = Scene { bounds, spheres };
+    for mode in [Mode::Detect, Mode::Simulate] {
+        let contacts = assert_same_contacts(&scene, mode, Some(13), 6);
+        assert!(contacts >= 40, "{mode:?}: {contacts} contacts");
+    }
+}
