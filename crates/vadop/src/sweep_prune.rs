@@ -4,18 +4,30 @@
 //! It owns the per-axis lists, each body's current axis set, and the candidate rule: a pair is a
 //! candidate iff its intervals overlap on every axis the two share. Each pair is examined on one
 //! axis only, the lowest-numbered axis the two share, so no pair is reported twice and no pair
-//! table is ever stored: memory is O(bodies x axes per body). Lists are re-sorted every frame by
-//! insertion sort, which costs little because velocity-aligned projections barely move.
+//! table is ever stored: memory is O(bodies x axes per body). It never computes contact times or
+//! touches velocities.
 //!
-//! Entries are never searched for and deleted: each carries its body's velocity stamp, and an
-//! entry whose stamp is old (the body changed velocity or was removed) is simply skipped, then
-//! dropped at the next frame start. A body that changes velocity mid-frame gets fresh entries in a
-//! small per-axis `pending` list. This module never computes contact times or touches velocities.
+//! Two things go beyond the paper. First, a single list per axis compares bodies along one
+//! direction only, and the axes two bodies share all lie near the direction orthogonal to both
+//! velocities, so with many bodies almost every pair whose paths pass within reach would be
+//! enumerated. Each list is therefore tiled by the plane orthogonal to its axis: entries are
+//! sorted by (tile, start), tiles are at least twice the largest distance a body's centre can be
+//! from its frame-start centre plus its radius, and a tile is swept only against itself and its
+//! neighbours. Within a tile the sort key is still the projection on a velocity-orthogonal axis,
+//! so insertion sort keeps its near-linear cost. Second, entries are never searched for and
+//! deleted: each carries its body's velocity stamp; a stale entry is skipped and dropped later.
+//! A body that changes velocity mid-frame gets fresh entries in a small per-axis `pending` list.
 
 use crate::axis_pool::AxisPool;
 use crate::bodies::Bodies;
 use crate::bounding_volume::{interval, select_axes, Interval};
+use glam::DVec3;
 use std::sync::Arc;
+
+/// Relative margin on tile reach, far above rounding.
+const REACH_MARGIN: f64 = 1e-9;
+/// Most tiles along one side of an axis plane, so tile ids fit in 32 bits.
+const MAX_TILES_PER_SIDE: f64 = 60_000.0;
 
 /// One body's interval on one axis, valid while the body's stamp equals `stamp`.
 #[derive(Debug, Clone, Copy)]
@@ -24,27 +36,42 @@ struct Entry {
     hi: f64,
     body: u32,
     stamp: u32,
+    tile: u32,
 }
 
-#[derive(Debug, Default)]
+impl Entry {
+    #[inline]
+    fn precedes(&self, other: &Entry) -> bool {
+        (self.tile, self.lo) < (other.tile, other.lo)
+    }
+}
+
+#[derive(Debug)]
 struct AxisList {
-    /// Sorted by `lo` at frame start.
+    /// Sorted by (tile, lo).
     sorted: Vec<Entry>,
-    /// Entries added since the frame started, unsorted.
+    /// Entries added since the last merge, unsorted.
     pending: Vec<Entry>,
     /// Widest interval in `sorted`: bounds how far back a range query must look.
     max_width: f64,
+    /// Orthonormal basis of the plane orthogonal to the axis, and the plane's lowest corner.
+    across: DVec3,
+    up: DVec3,
+    origin: [f64; 2],
 }
 
-impl AxisList {
-    /// Drops void entries and merges `pending` into `sorted`. Valid mid-frame: every entry still
-    /// bounds its body over the rest of the frame, whenever it was computed.
-    fn absorb_pending(&mut self, bodies: &Bodies) {
-        self.sorted.retain(|e| is_live(e, bodies));
-        self.sorted.extend(self.pending.drain(..).filter(|e| is_live(e, bodies)));
-        // A long sorted run plus a short tail: the stable sort detects the run and merges.
-        self.sorted.sort_by(|a, b| a.lo.total_cmp(&b.lo));
-        self.max_width = self.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
+/// The tiling shared by all axis planes.
+#[derive(Debug, Clone, Copy)]
+struct Tiling {
+    size: f64,
+    /// Tiles per side of every axis plane.
+    side: u32,
+}
+
+impl Tiling {
+    #[inline]
+    fn coordinate(&self, value: f64, origin: f64) -> u32 {
+        ((value - origin) / self.size).floor().clamp(0.0, (self.side - 1) as f64) as u32
     }
 }
 
@@ -65,6 +92,11 @@ pub struct SweepPrune {
     lists: Vec<AxisList>,
     /// Ascending pool-axis ids per body slot.
     axes_of: Vec<Vec<u32>>,
+    tiling: Tiling,
+    /// Side of the box's projection on any axis plane (its diagonal bounds all of them).
+    plane_extent: f64,
+    /// Largest radius plus distance still to travel in the frame, over all live entries.
+    max_reach: f64,
 }
 
 #[inline]
@@ -78,34 +110,92 @@ fn ordered(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
-/// Appends the entries beyond `sorted_prefix` into place; insertion sort when they are few
-/// (coherence keeps each move short), a full merge-sort otherwise (first frame, mass insertions).
-fn sort_by_lo(entries: &mut [Entry], sorted_prefix: usize) -> u64 {
-    let appended = entries.len() - sorted_prefix;
-    if appended > 64 && appended * 8 > entries.len() {
-        entries.sort_by(|a, b| a.lo.total_cmp(&b.lo));
-        return 0;
-    }
+/// How far body `b` can reach in the plane from its centre at `t` until `frame_end`.
+#[inline]
+fn reach(bodies: &Bodies, b: usize, t: f64, frame_end: f64) -> f64 {
+    bodies.radius[b] + bodies.velocity[b].length() * (frame_end - t)
+}
+
+fn by_tile_then_start(a: &Entry, b: &Entry) -> std::cmp::Ordering {
+    a.tile.cmp(&b.tile).then(a.lo.total_cmp(&b.lo))
+}
+
+/// Insertion sort exploiting coherence; when entries moved far (new tiles, many insertions) it
+/// stops after a linear budget of moves and finishes with a merge sort.
+fn sort_entries(entries: &mut [Entry]) -> u64 {
+    let budget = 8 * entries.len() as u64 + 1024;
     let mut swaps = 0u64;
     for i in 1..entries.len() {
         let entry = entries[i];
         let mut j = i;
-        while j > 0 && entries[j - 1].lo > entry.lo {
+        while j > 0 && entry.precedes(&entries[j - 1]) {
             entries[j] = entries[j - 1];
             j -= 1;
         }
         swaps += (i - j) as u64;
         entries[j] = entry;
+        if swaps > budget {
+            entries.sort_by(by_tile_then_start);
+            break;
+        }
     }
     swaps
 }
 
+impl AxisList {
+    fn new(axis: DVec3, min: DVec3, max: DVec3) -> AxisList {
+        let across = axis.any_orthonormal_vector();
+        let up = axis.cross(across);
+        let corners = (0..8).map(|k| DVec3::new(
+            if k & 1 == 0 { min.x } else { max.x },
+            if k & 2 == 0 { min.y } else { max.y },
+            if k & 4 == 0 { min.z } else { max.z },
+        ));
+        let origin = corners.fold([f64::INFINITY; 2], |o, c| [o[0].min(c.dot(across)), o[1].min(c.dot(up))]);
+        AxisList { sorted: Vec::new(), pending: Vec::new(), max_width: 0.0, across, up, origin }
+    }
+
+    #[inline]
+    fn tile_of(&self, tiling: &Tiling, centre: DVec3) -> u32 {
+        tiling.coordinate(centre.dot(self.across), self.origin[0]) * tiling.side
+            + tiling.coordinate(centre.dot(self.up), self.origin[1])
+    }
+
+    /// The run of `sorted` in tile `tile`.
+    #[inline]
+    fn run(&self, tile: u32) -> &[Entry] {
+        let start = self.sorted.partition_point(|e| e.tile < tile);
+        let len = self.sorted[start..].partition_point(|e| e.tile == tile);
+        &self.sorted[start..start + len]
+    }
+
+    /// Drops void entries and merges `pending` into `sorted`. Valid mid-frame: every entry still
+    /// bounds its body over the rest of the frame, whenever it was computed.
+    fn absorb_pending(&mut self, bodies: &Bodies) {
+        self.sorted.retain(|e| is_live(e, bodies));
+        self.pending.sort_by(by_tile_then_start);
+        self.sorted.extend(self.pending.drain(..).filter(|e| is_live(e, bodies)));
+        // Two sorted runs: the stable sort detects them and merges in linear time.
+        self.sorted.sort_by(by_tile_then_start);
+        self.max_width = self.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
+    }
+}
+
 impl SweepPrune {
-    /// An empty broad phase over `pool`, selecting axes within angle asin(`sin_phi`) of the plane
-    /// orthogonal to each body's velocity.
-    pub fn new(pool: Arc<AxisPool>, sin_phi: f64) -> SweepPrune {
-        let lists = (0..pool.len()).map(|_| AxisList::default()).collect();
-        SweepPrune { pool, sin_phi, lists, axes_of: Vec::new() }
+    /// An empty broad phase over `pool` for bodies in the box `[min, max]`, selecting axes within
+    /// angle asin(`sin_phi`) of the plane orthogonal to each body's velocity.
+    pub fn new(pool: Arc<AxisPool>, sin_phi: f64, min: DVec3, max: DVec3) -> SweepPrune {
+        let lists = pool.axes().iter().map(|&a| AxisList::new(a, min, max)).collect();
+        let plane_extent = (max - min).length();
+        SweepPrune {
+            pool,
+            sin_phi,
+            lists,
+            axes_of: Vec::new(),
+            tiling: Tiling { size: plane_extent, side: 1 },
+            plane_extent,
+            max_reach: 0.0,
+        }
     }
 
     /// The axis pool.
@@ -129,12 +219,14 @@ impl SweepPrune {
         let mut axes = std::mem::take(&mut self.axes_of[b]);
         select_axes(&self.pool, bodies.velocity[b], self.sin_phi, &mut axes);
         let position = bodies.position_at(b, now);
+        self.max_reach = self.max_reach.max(reach(bodies, b, now, frame_end));
         for &a in &axes {
             let iv = interval(self.pool.axis(a), position, bodies.velocity[b], bodies.radius[b], frame_end - now);
             let list = &mut self.lists[a as usize];
-            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body, stamp: bodies.stamp[b] });
+            let tile = list.tile_of(&self.tiling, position);
+            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body, stamp: bodies.stamp[b], tile });
             // Queries scan `pending` linearly: once it is no longer small, merge it into `sorted`.
-            if list.pending.len() > 32 + list.sorted.len() / 16 {
+            if list.pending.len() > 64 + list.sorted.len() / 128 {
                 list.absorb_pending(bodies);
             }
         }
@@ -148,30 +240,50 @@ impl SweepPrune {
         }
     }
 
-    /// Frame start, first half (c_update): drops void entries, takes in pending ones, and
-    /// recomputes every interval for the frame `[t0, t0 + dt]` (all bodies are at time t0).
-    /// Returns the length of each list's already-sorted prefix for [`Self::sort`].
-    pub fn update_intervals(&mut self, bodies: &Bodies, dt: f64, sorted_prefix: &mut Vec<usize>) {
-        sorted_prefix.clear();
+    /// Frame start, first half (c_update): drops void entries, takes in pending ones, sizes the
+    /// tiles for this frame and recomputes every interval and tile for `[t0, t0 + dt]` (all
+    /// bodies are at time t0).
+    pub fn update_intervals(&mut self, bodies: &Bodies, dt: f64) {
+        let mut max_reach: f64 = 0.0;
+        for b in 0..bodies.slots() {
+            if bodies.alive[b] {
+                max_reach = max_reach.max(reach(bodies, b, 0.0, dt));
+            }
+        }
+        // Bodies that touch during the frame have frame-start centres at most 2 * max_reach apart
+        // in any plane, so they lie in the same or adjacent tiles. Resize only when the tiles are
+        // too small or far too large, so the sort stays coherent from frame to frame.
+        let needed = 2.0 * max_reach * (1.0 + REACH_MARGIN) + f64::MIN_POSITIVE;
+        let size = self.tiling.size;
+        if size < needed || size > 2.0 * needed {
+            let size = (1.1 * needed).max(self.plane_extent / MAX_TILES_PER_SIDE);
+            let side = ((self.plane_extent / size).floor() as u32 + 1).max(1);
+            self.tiling = Tiling { size, side };
+        }
+        self.max_reach = max_reach;
+        let tiling = self.tiling;
         for (a, list) in self.lists.iter_mut().enumerate() {
             list.sorted.retain(|e| is_live(e, bodies));
-            sorted_prefix.push(list.sorted.len());
             list.sorted.extend(list.pending.drain(..).filter(|e| is_live(e, bodies)));
             let axis = self.pool.axis(a as u32);
+            let (across, up, origin) = (list.across, list.up, list.origin);
             for e in &mut list.sorted {
                 let b = e.body as usize;
-                let iv = interval(axis, bodies.position[b], bodies.velocity[b], bodies.radius[b], dt);
+                let position = bodies.position[b];
+                let iv = interval(axis, position, bodies.velocity[b], bodies.radius[b], dt);
                 e.lo = iv.lo;
                 e.hi = iv.hi;
+                e.tile = tiling.coordinate(position.dot(across), origin[0]) * tiling.side
+                    + tiling.coordinate(position.dot(up), origin[1]);
             }
         }
     }
 
-    /// Frame start, second half (c_sort): sorts every list by interval start.
-    pub fn sort(&mut self, sorted_prefix: &[usize]) -> SortCounts {
+    /// Frame start, second half (c_sort): sorts every list by (tile, interval start).
+    pub fn sort(&mut self) -> SortCounts {
         let mut counts = SortCounts::default();
-        for (list, &prefix) in self.lists.iter_mut().zip(sorted_prefix) {
-            counts.swaps += sort_by_lo(&mut list.sorted, prefix);
+        for list in &mut self.lists {
+            counts.swaps += sort_entries(&mut list.sorted);
             counts.entries += list.sorted.len() as u64;
             list.max_width = list.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
         }
@@ -223,16 +335,44 @@ impl SweepPrune {
     /// Calls `report(i, j)` (i < j) once for every candidate pair of the frame `[t0, frame_end]`.
     /// Call right after [`Self::sort`], before any body changes velocity.
     pub fn for_each_pair(&self, bodies: &Bodies, t0: f64, frame_end: f64, mut report: impl FnMut(u32, u32)) {
+        let side = self.tiling.side;
         for (a, list) in self.lists.iter().enumerate() {
-            let entries = &list.sorted;
-            for (k, e) in entries.iter().enumerate() {
-                for f in &entries[k + 1..] {
-                    if f.lo > e.hi {
-                        break;
+            let axis = a as u32;
+            let mut check = |e: &Entry, f: &Entry| {
+                let (i, j) = ordered(e.body, f.body);
+                if self.is_candidate(i, j, axis, bodies, t0, frame_end) {
+                    report(i, j);
+                }
+            };
+            let mut start = 0;
+            while start < list.sorted.len() {
+                let tile = list.sorted[start].tile;
+                let len = list.sorted[start..].partition_point(|e| e.tile == tile);
+                let run = &list.sorted[start..start + len];
+                start += len;
+                for (k, e) in run.iter().enumerate() {
+                    for f in run[k + 1..].iter().take_while(|f| f.lo <= e.hi) {
+                        check(e, f);
                     }
-                    let (i, j) = ordered(e.body, f.body);
-                    if self.is_candidate(i, j, a as u32, bodies, t0, frame_end) {
-                        report(i, j);
+                }
+                // Half of the 8 neighbours, so each pair of adjacent tiles is swept once.
+                let (row, col) = (tile / side, tile % side);
+                let neighbours = [(row, col + 1), (row + 1, col.wrapping_sub(1)), (row + 1, col), (row + 1, col + 1)];
+                for (r, c) in neighbours {
+                    if r >= side || c >= side {
+                        continue;
+                    }
+                    let other = list.run(r * side + c);
+                    let mut first = 0;
+                    for e in run {
+                        while first < other.len() && other[first].lo < e.lo - list.max_width {
+                            first += 1;
+                        }
+                        for f in other[first..].iter().take_while(|f| f.lo <= e.hi) {
+                            if f.hi >= e.lo {
+                                check(e, f);
+                            }
+                        }
                     }
                 }
             }
@@ -242,20 +382,34 @@ impl SweepPrune {
     /// Calls `report(other)` once for every body that is a candidate partner of `body` over
     /// `[t, frame_end]` (typically right after `body` changed velocity at time t).
     pub fn for_each_partner(&self, body: u32, bodies: &Bodies, t: f64, frame_end: f64, mut report: impl FnMut(u32)) {
-        for &a in &self.axes_of[body as usize] {
+        let b = body as usize;
+        let centre = bodies.position_at(b, t);
+        let distance = (reach(bodies, b, t, frame_end) + self.max_reach) * (1.0 + REACH_MARGIN)
+            + REACH_MARGIN * centre.abs().max_element();
+        for &a in &self.axes_of[b] {
             let query = self.body_interval(a, body, bodies, t, frame_end);
             let list = &self.lists[a as usize];
-            let start = list.sorted.partition_point(|e| e.lo < query.lo - list.max_width);
-            let near = list.sorted[start..].iter().take_while(|e| e.lo <= query.hi);
-            for e in near.chain(list.pending.iter()) {
+            let mut visit = |e: &Entry| {
                 if e.body == body || e.hi < query.lo || e.lo > query.hi || !is_live(e, bodies) {
-                    continue;
+                    return;
                 }
                 let (i, j) = ordered(body, e.body);
                 if self.is_candidate(i, j, a, bodies, t, frame_end) {
                     report(e.body);
                 }
+            };
+            let (x, y) = (centre.dot(list.across), centre.dot(list.up));
+            let tiling = &self.tiling;
+            let rows = tiling.coordinate(x - distance, list.origin[0])..=tiling.coordinate(x + distance, list.origin[0]);
+            for row in rows {
+                let cols = tiling.coordinate(y - distance, list.origin[1])..=tiling.coordinate(y + distance, list.origin[1]);
+                for col in cols {
+                    let run = list.run(row * tiling.side + col);
+                    let start = run.partition_point(|e| e.lo < query.lo - list.max_width);
+                    run[start..].iter().take_while(|e| e.lo <= query.hi).for_each(&mut visit);
+                }
             }
+            list.pending.iter().for_each(&mut visit);
         }
     }
 

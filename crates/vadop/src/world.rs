@@ -51,7 +51,7 @@ pub enum Mode {
 pub struct WorldConfig {
     pub method: Method,
     pub mode: Mode,
-    /// Number of pool axes; `None` chooses from the bodies' speeds at the first step.
+    /// Number of pool axes; `None` uses [`AUTO_POOL_AXES`].
     pub pool_axes: Option<usize>,
     /// Alignment angle phi in radians; `None` uses the pool's covering radius rho, the smallest
     /// angle for which every pair of bodies shares an axis.
@@ -160,17 +160,11 @@ enum BroadPhase {
     Discrete(PseudoDynamic),
 }
 
-/// Pool size chosen from the bodies' speeds, in diameters per frame (median over moving bodies).
-/// Faster bodies sweep longer; a finer pool keeps their volumes thin.
-pub fn auto_pool_axes(median_diameters_per_frame: f64) -> usize {
-    if median_diameters_per_frame < 0.5 {
-        7
-    } else if median_diameters_per_frame < 5.0 {
-        13
-    } else {
-        32
-    }
-}
+/// Pool size used when none is given. Measured with `vadop bench` (BENCHMARKS.md): with tiled
+/// axis lists the 3-axis pool is the fastest at every speed from 0.05 to 5 diameters per frame,
+/// because each extra axis per body costs more in updates and candidate checks than its thinner
+/// volume saves. Choosing per speed distribution is issue #4's work.
+pub const AUTO_POOL_AXES: usize = 3;
 
 /// A world of spheres in a box.
 ///
@@ -203,7 +197,6 @@ pub struct World {
     time: f64,
     contacts: Vec<Contact>,
     stats: FrameStats,
-    sorted_prefix: Vec<usize>,
 }
 
 impl World {
@@ -237,7 +230,6 @@ impl World {
             time: 0.0,
             contacts: Vec::new(),
             stats: FrameStats::default(),
-            sorted_prefix: Vec::new(),
         })
     }
 
@@ -359,7 +351,7 @@ impl World {
     /// bodies added since the last step that overlap another body.
     pub fn step(&mut self, dt: f64) -> Result<&[Contact]> {
         self.check_step(dt)?;
-        self.place_new_bodies(dt)?;
+        self.place_new_bodies()?;
         let t0 = self.time;
         let t1 = t0 + dt;
         self.contacts.clear();
@@ -376,10 +368,10 @@ impl World {
             }
         }
         self.time = t1;
+        self.stats.response_seconds += start.elapsed().as_secs_f64();
         if self.config.method == Method::Discrete {
             self.resolve_instant_overlaps(t1);
         }
-        self.stats.response_seconds += start.elapsed().as_secs_f64();
         self.stats.contacts = self.contacts.len() as u64;
         self.stats.broad_phase_bytes = match &self.broad {
             BroadPhase::Vadop(sap) => sap.memory_bytes() as u64,
@@ -441,7 +433,7 @@ impl World {
     }
 
     /// Builds the broad phase on the first step and enters bodies added since the last one.
-    fn place_new_bodies(&mut self, dt: f64) -> Result<()> {
+    fn place_new_bodies(&mut self) -> Result<()> {
         if matches!(self.broad, BroadPhase::Unbuilt) {
             self.broad = match self.config.method {
                 Method::Brute => BroadPhase::Brute,
@@ -449,14 +441,14 @@ impl World {
                 Method::Vadop => {
                     let pool = match &self.pool {
                         Some(pool) => pool.clone(),
-                        None => AxisPool::new(auto_pool_axes(self.median_diameters_per_frame(dt)))?,
+                        None => AxisPool::new(AUTO_POOL_AXES)?,
                     };
                     let phi = self.config.phi.unwrap_or(pool.covering_radius());
                     check_phi(phi, &pool)?;
                     // A hair wider than phi, so rounding never costs a pair its shared axis.
                     let sin_phi = (phi.sin() * (1.0 + 1e-12) + 1e-15).min(1.0);
                     self.pool = Some(pool.clone());
-                    BroadPhase::Vadop(SweepPrune::new(pool, sin_phi))
+                    BroadPhase::Vadop(SweepPrune::new(pool, sin_phi, self.bounds.min, self.bounds.max))
                 }
             };
         }
@@ -471,29 +463,16 @@ impl World {
         Ok(())
     }
 
-    fn median_diameters_per_frame(&self, dt: f64) -> f64 {
-        let mut speeds: Vec<f64> = self
-            .bodies
-            .alive_ids()
-            .map(|i| self.bodies.velocity[i as usize].length() * dt / (2.0 * self.bodies.radius[i as usize]))
-            .collect();
-        if speeds.is_empty() {
-            return 0.0;
-        }
-        let mid = speeds.len() / 2;
-        *speeds.select_nth_unstable_by(mid, f64::total_cmp).1
-    }
-
     /// Frame start: c_update, c_sort and c_test.
     fn predict_frame(&mut self, t0: f64, t1: f64) {
-        let World { bodies, broad, queue, stats, bounds, sorted_prefix, .. } = self;
+        let World { bodies, broad, queue, stats, bounds, .. } = self;
         let start = Instant::now();
         match broad {
             BroadPhase::Vadop(sap) => {
-                sap.update_intervals(bodies, t1 - t0, sorted_prefix);
+                sap.update_intervals(bodies, t1 - t0);
                 stats.update_seconds = start.elapsed().as_secs_f64();
                 let start = Instant::now();
-                let counts = sap.sort(sorted_prefix);
+                let counts = sap.sort();
                 stats.endpoint_swaps = counts.swaps;
                 stats.list_entries = counts.entries;
                 stats.sort_seconds = start.elapsed().as_secs_f64();
@@ -631,6 +610,7 @@ impl World {
         let start = Instant::now();
         self.stats.candidate_pairs += pd.find_overlaps(&self.bodies);
         self.stats.test_seconds += start.elapsed().as_secs_f64();
+        let start = Instant::now();
         for &(a, b) in pd.overlapping() {
             let (i, j) = (a as usize, b as usize);
             let normal = (self.bodies.position[j] - self.bodies.position[i]).try_normalize().unwrap_or(DVec3::X);
@@ -656,6 +636,7 @@ impl World {
                 impulse,
             });
         }
+        self.stats.response_seconds += start.elapsed().as_secs_f64();
     }
 }
 
