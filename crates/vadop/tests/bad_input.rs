@@ -1,0 +1,122 @@
+//! Every bad input gets a typed error with a clear message and leaves the world as it was.
+
+use glam::DVec3;
+use vadop::{BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
+
+fn sphere(x: f64) -> Sphere {
+    Sphere { position: DVec3::new(x, 5.0, 5.0), velocity: DVec3::new(1.0, 0.0, 0.0), radius: 0.5, mass: 1.0 }
+}
+
+fn world() -> World {
+    let mut w = World::new(BoxBounds::cube(10.0).unwrap(), WorldConfig::default()).unwrap();
+    w.add_sphere(sphere(2.0)).unwrap();
+    w.add_sphere(sphere(5.0)).unwrap();
+    w.step(0.01).unwrap();
+    w
+}
+
+fn snapshot(w: &World) -> (f64, Vec<(u32, Sphere)>) {
+    (w.time(), w.spheres().collect())
+}
+
+#[test]
+fn bad_spheres_are_rejected_and_change_nothing() {
+    let mut w = world();
+    let before = snapshot(&w);
+    let cases: Vec<(Sphere, &str)> = vec![
+        (Sphere { position: DVec3::new(f64::NAN, 5.0, 5.0), ..sphere(1.0) }, "position must be finite"),
+        (Sphere { velocity: DVec3::new(0.0, f64::INFINITY, 0.0), ..sphere(8.0) }, "velocity must be finite"),
+        (Sphere { radius: 0.0, ..sphere(8.0) }, "radius must be"),
+        (Sphere { radius: -1.0, ..sphere(8.0) }, "radius must be"),
+        (Sphere { radius: f64::NAN, ..sphere(8.0) }, "radius must be"),
+        (Sphere { mass: 0.0, ..sphere(8.0) }, "mass must be"),
+        (Sphere { mass: -2.0, ..sphere(8.0) }, "mass must be"),
+        (Sphere { position: DVec3::new(9.8, 5.0, 5.0), ..sphere(0.0) }, "does not fit inside the box"),
+        (Sphere { position: DVec3::new(50.0, 5.0, 5.0), ..sphere(0.0) }, "does not fit inside the box"),
+        (Sphere { radius: 20.0, ..sphere(5.0) }, "does not fit inside the box"),
+    ];
+    for (bad, message) in cases {
+        let err = w.add_sphere(bad).unwrap_err();
+        assert!(err.to_string().contains(message), "{err} should say {message}");
+        assert_eq!(snapshot(&w), before);
+    }
+    // A batch with one bad sphere adds none.
+    let err = w.add_spheres(&[sphere(8.0), Sphere { radius: -1.0, ..sphere(8.0) }]).unwrap_err();
+    assert_eq!(err, VadopError::BadRadius(-1.0));
+    assert_eq!(snapshot(&w), before);
+}
+
+#[test]
+fn bad_steps_are_rejected_and_change_nothing() {
+    let mut w = world();
+    let before = snapshot(&w);
+    for dt in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(matches!(w.step(dt), Err(VadopError::BadTimeStep(_))));
+        assert_eq!(snapshot(&w), before);
+    }
+    // Absurd speed: 1e9 units per second in a box of 10.
+    let fast = w.add_sphere(Sphere { velocity: DVec3::new(1e9, 0.0, 0.0), ..sphere(8.0) }).unwrap();
+    let err = w.step(0.1).unwrap_err();
+    assert!(matches!(err, VadopError::AbsurdSpeed { .. }), "{err}");
+    w.remove_sphere(fast).unwrap();
+    assert_eq!(snapshot(&w), before);
+    // Overlap at the start of a simulate-mode run: rejected, and the world steps on once removed.
+    let overlapping = w.add_sphere(sphere(2.3)).unwrap();
+    let err = w.step(0.01).unwrap_err();
+    assert!(err.to_string().contains("overlap"), "{err}");
+    w.remove_sphere(overlapping).unwrap();
+    assert_eq!(snapshot(&w), before);
+    w.step(0.01).unwrap();
+}
+
+#[test]
+fn overlaps_are_fine_in_detect_mode_and_touching_is_fine_in_simulate_mode() {
+    let bounds = BoxBounds::cube(10.0).unwrap();
+    let mut detect = World::new(bounds, WorldConfig { mode: Mode::Detect, ..WorldConfig::default() }).unwrap();
+    detect.add_spheres(&[sphere(2.0), sphere(2.3)]).unwrap();
+    detect.step(0.01).unwrap();
+    let mut simulate = World::new(bounds, WorldConfig::default()).unwrap();
+    simulate.add_spheres(&[sphere(2.0), Sphere { velocity: DVec3::ZERO, ..sphere(3.0) }]).unwrap();
+    let contacts = simulate.step(0.01).unwrap();
+    assert_eq!(contacts.len(), 1, "touching and approaching: a contact at once");
+    assert_eq!(contacts[0].time, 0.0);
+}
+
+#[test]
+fn empty_worlds_bad_ids_and_bad_configs() {
+    let bounds = BoxBounds::cube(10.0).unwrap();
+    let mut empty = World::new(bounds, WorldConfig::default()).unwrap();
+    assert_eq!(empty.step(0.1).unwrap_err(), VadopError::EmptyWorld);
+    let mut w = world();
+    assert_eq!(w.remove_sphere(7).unwrap_err(), VadopError::NoSuchBody(7));
+    assert_eq!(w.set_velocity(7, DVec3::X).unwrap_err(), VadopError::NoSuchBody(7));
+    assert!(w.set_velocity(0, DVec3::splat(f64::NAN)).is_err());
+    assert!(BoxBounds::new(DVec3::ZERO, DVec3::new(1.0, 0.0, 1.0)).is_err());
+    assert!(BoxBounds::new(DVec3::ZERO, DVec3::new(1.0, f64::INFINITY, 1.0)).is_err());
+    let bad = |config: WorldConfig| World::new(bounds, config).unwrap_err();
+    assert!(matches!(bad(WorldConfig { restitution: 1.5, ..WorldConfig::default() }), VadopError::BadRestitution(_)));
+    assert!(matches!(bad(WorldConfig { pool_axes: Some(2), ..WorldConfig::default() }), VadopError::BadPoolSize { .. }));
+    assert!(matches!(bad(WorldConfig { pool_axes: Some(1_000_000), ..WorldConfig::default() }), VadopError::BadPoolSize { .. }));
+    // phi below the covering radius would let two bodies share no axis.
+    let err = bad(WorldConfig { pool_axes: Some(13), phi: Some(0.1), ..WorldConfig::default() });
+    assert!(matches!(err, VadopError::BadPhi { .. }), "{err}");
+    assert!(matches!(bad(WorldConfig { phi: Some(f64::NAN), ..WorldConfig::default() }), VadopError::BadPhi { .. }));
+    for method in [Method::Vadop, Method::Brute, Method::Discrete] {
+        let mut w = World::new(bounds, WorldConfig { method, ..WorldConfig::default() }).unwrap();
+        assert_eq!(w.step(1.0).unwrap_err(), VadopError::EmptyWorld);
+    }
+}
+
+#[test]
+fn removed_bodies_free_their_ids_and_vanish_from_contacts() {
+    let mut w = world();
+    let gone = w.remove_sphere(1).unwrap();
+    assert_eq!(gone.radius, 0.5);
+    assert!(w.sphere(1).is_none());
+    for _ in 0..30 {
+        for c in w.step(0.1).unwrap() {
+            assert_eq!(c.body, 0);
+        }
+    }
+    assert_eq!(w.add_sphere(sphere(5.0)).unwrap(), 1);
+}
