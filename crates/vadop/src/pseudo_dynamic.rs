@@ -7,6 +7,7 @@
 //! which is exactly what the accuracy comparison measures.
 
 use crate::bodies::Bodies;
+use crate::coherent_sort::coherent_sort;
 
 /// Frame-instant AABB sweep and prune.
 #[derive(Debug, Default)]
@@ -41,19 +42,7 @@ impl PseudoDynamic {
     /// Re-sorts the list (c_sort); returns the number of insertion-sort moves.
     pub fn sort(&mut self) -> u64 {
         let keys = &self.low_x;
-        let mut swaps = 0u64;
-        for i in 1..self.order.len() {
-            let body = self.order[i];
-            let key = keys[body as usize];
-            let mut j = i;
-            while j > 0 && keys[self.order[j - 1] as usize] > key {
-                self.order[j] = self.order[j - 1];
-                j -= 1;
-            }
-            swaps += (i - j) as u64;
-            self.order[j] = body;
-        }
-        swaps
+        coherent_sort(&mut self.order, |&a, &b| keys[a as usize] < keys[b as usize])
     }
 
     /// Finds the pairs overlapping now (c_test). Returns the number of AABB-overlapping pairs

@@ -21,6 +21,7 @@
 use crate::axis_pool::AxisPool;
 use crate::bodies::Bodies;
 use crate::bounding_volume::{interval, select_axes, Interval};
+use crate::coherent_sort::coherent_sort;
 use glam::DVec3;
 use std::sync::Arc;
 
@@ -40,9 +41,15 @@ struct Entry {
 }
 
 impl Entry {
+    /// Sort order: by tile, then by interval start.
     #[inline]
     fn precedes(&self, other: &Entry) -> bool {
         (self.tile, self.lo) < (other.tile, other.lo)
+    }
+
+    /// The same order as a total order, for the standard sorts.
+    fn order(a: &Entry, b: &Entry) -> std::cmp::Ordering {
+        a.tile.cmp(&b.tile).then(a.lo.total_cmp(&b.lo))
     }
 }
 
@@ -116,32 +123,6 @@ fn reach(bodies: &Bodies, b: usize, t: f64, frame_end: f64) -> f64 {
     bodies.radius[b] + bodies.velocity[b].length() * (frame_end - t)
 }
 
-fn by_tile_then_start(a: &Entry, b: &Entry) -> std::cmp::Ordering {
-    a.tile.cmp(&b.tile).then(a.lo.total_cmp(&b.lo))
-}
-
-/// Insertion sort exploiting coherence; when entries moved far (new tiles, many insertions) it
-/// stops after a linear budget of moves and finishes with a merge sort.
-fn sort_entries(entries: &mut [Entry]) -> u64 {
-    let budget = 8 * entries.len() as u64 + 1024;
-    let mut swaps = 0u64;
-    for i in 1..entries.len() {
-        let entry = entries[i];
-        let mut j = i;
-        while j > 0 && entry.precedes(&entries[j - 1]) {
-            entries[j] = entries[j - 1];
-            j -= 1;
-        }
-        swaps += (i - j) as u64;
-        entries[j] = entry;
-        if swaps > budget {
-            entries.sort_by(by_tile_then_start);
-            break;
-        }
-    }
-    swaps
-}
-
 impl AxisList {
     fn new(axis: DVec3, min: DVec3, max: DVec3) -> AxisList {
         let across = axis.any_orthonormal_vector();
@@ -173,10 +154,10 @@ impl AxisList {
     /// bounds its body over the rest of the frame, whenever it was computed.
     fn absorb_pending(&mut self, bodies: &Bodies) {
         self.sorted.retain(|e| is_live(e, bodies));
-        self.pending.sort_by(by_tile_then_start);
+        self.pending.sort_by(Entry::order);
         self.sorted.extend(self.pending.drain(..).filter(|e| is_live(e, bodies)));
         // Two sorted runs: the stable sort detects them and merges in linear time.
-        self.sorted.sort_by(by_tile_then_start);
+        self.sorted.sort_by(Entry::order);
         self.max_width = self.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
     }
 }
@@ -283,7 +264,7 @@ impl SweepPrune {
     pub fn sort(&mut self) -> SortCounts {
         let mut counts = SortCounts::default();
         for list in &mut self.lists {
-            counts.swaps += sort_entries(&mut list.sorted);
+            counts.swaps += coherent_sort(&mut list.sorted, Entry::precedes);
             counts.entries += list.sorted.len() as u64;
             list.max_width = list.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
         }

@@ -1,0 +1,207 @@
+//! End-to-end tests of the `vadop` binary on small scenes: summaries, accuracy against brute
+//! force, outputs that parse with one row per frame, the benchmark's markdown section, and bad
+//! input that must end in an `error:` line and exit code 2, never a panic. They only run the
+//! built binary and read what it writes; they never depend on timings.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn vadop(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_vadop")).args(args).output().expect("the binary runs")
+}
+
+fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+/// A fresh scratch directory per test, so tests running in parallel never share files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("vadop-cli-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("scratch directory");
+    dir
+}
+
+/// The first number after `label` on the summary line that starts with `line`.
+fn number_after(summary: &str, line: &str, label: &str) -> f64 {
+    let text = summary.lines().find(|l| l.starts_with(line)).unwrap_or_else(|| panic!("no {line} line in\n{summary}"));
+    let rest = &text[text.find(label).unwrap_or_else(|| panic!("no {label} in {text}")) + label.len()..];
+    let number: String = rest.trim_start().chars().take_while(|c| c.is_ascii_digit() || *c == '.').collect();
+    number.parse().unwrap_or_else(|_| panic!("no number after {label} in {text}"))
+}
+
+fn assert_usage_error(output: &Output, expected: &str) {
+    let err = stderr(output);
+    assert_eq!(output.status.code(), Some(2), "stderr: {err}");
+    assert!(err.starts_with("error: "), "stderr: {err}");
+    assert!(err.contains(expected), "expected {expected:?} in: {err}");
+    assert!(!err.contains("panicked") && !err.contains("RUST_BACKTRACE"), "stderr: {err}");
+}
+
+#[test]
+fn every_mode_and_method_prints_a_summary() {
+    for mode in ["detect", "simulate"] {
+        for method in ["vadop", "brute", "discrete"] {
+            let output = vadop(&["simulate", "--bodies", "150", "--frames", "5", "--mode", mode, "--method", method]);
+            assert!(output.status.success(), "{mode} {method}: {}", stderr(&output));
+            let summary = stdout(&output);
+            for field in ["scene", "method", "pool", "frames", "contacts", "accuracy", "ms/frame", "cost split", "per frame", "memory"] {
+                assert!(summary.lines().any(|l| l.starts_with(field)), "{mode} {method}: no {field} line in\n{summary}");
+            }
+            assert!(summary.contains(&format!("{method}, {mode} mode")), "{summary}");
+            assert!(summary.contains("frames      5 of 5"), "{summary}");
+            assert_eq!(summary.lines().any(|l| l.starts_with("energy")), mode == "simulate", "{summary}");
+            if method == "vadop" {
+                assert!(summary.contains("axes per body"), "{summary}");
+            }
+        }
+    }
+}
+
+#[test]
+fn vadop_misses_nothing_and_discrete_misses_fast_contacts() {
+    let run = |method: &str| {
+        let output = vadop(&[
+            "simulate", "--bodies", "400", "--frames", "10", "--max-speed", "5", "--mode", "detect", "--method", method,
+            "--reference", "brute",
+        ]);
+        assert!(output.status.success(), "{}", stderr(&output));
+        stdout(&output)
+    };
+    let exact = run("vadop");
+    assert_eq!(number_after(&exact, "accuracy", "vs brute:"), 0.0, "{exact}");
+    assert!(exact.contains("0 missed, 0 extra"), "{exact}");
+    let discrete = run("discrete");
+    assert!(number_after(&discrete, "accuracy", "vs brute:") > 0.0, "{discrete}");
+}
+
+#[test]
+fn csv_and_json_have_one_row_per_frame() {
+    let dir = scratch("outputs");
+    let (csv, json, contacts, scene) = (dir.join("f.csv"), dir.join("f.json"), dir.join("c.csv"), dir.join("s.json"));
+    let path = |p: &PathBuf| p.to_str().expect("utf-8 path").to_string();
+    let output = vadop(&[
+        "simulate", "--bodies", "200", "--frames", "7", "--quiet", "--csv", &path(&csv), "--json", &path(&json),
+        "--contacts", &path(&contacts), "--save-scene", &path(&scene),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(stdout(&output).is_empty(), "--quiet printed {}", stdout(&output));
+
+    let text = std::fs::read_to_string(&csv).expect("csv written");
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1 + 7);
+    let header: Vec<&str> = lines[0].split(',').collect();
+    assert_eq!(&header[..5], ["frame", "time", "contacts", "pair_contacts", "ms"]);
+    for (k, line) in lines[1..].iter().enumerate() {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells.len(), header.len());
+        assert_eq!(cells[0], (k + 1).to_string());
+        assert!(cells.iter().all(|c| c.parse::<f64>().is_ok()), "{line}");
+    }
+
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("json written")).expect("json parses");
+    assert_eq!(report["frames"].as_array().map(Vec::len), Some(7));
+    assert_eq!(report["summary"]["frames_completed"], 7);
+    let total = report["summary"]["contacts"]["total"].as_u64().expect("contact total");
+    let contact_lines = std::fs::read_to_string(&contacts).expect("contacts written").lines().count() as u64;
+    assert_eq!(contact_lines, 1 + total);
+
+    // The saved scene runs again as a scene file and gives the same contacts.
+    let again = vadop(&["simulate", "--scene", &path(&scene), "--frames", "7", "--json", &path(&json), "--quiet"]);
+    assert!(again.status.success(), "{}", stderr(&again));
+    let replay: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("json written")).expect("json parses");
+    assert_eq!(replay["summary"]["contacts"]["total"].as_u64(), Some(total));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bad_arguments_are_reported_not_panicked() {
+    let cases: [(&[&str], &str); 7] = [
+        (&["--bodies", "0"], "at least one sphere"),
+        (&["--packing", "2"], "packing fraction"),
+        (&["--dt", "-1"], "time step"),
+        (&["--restitution", "3"], "restitution"),
+        (&["--pool", "1"], "axis pool size"),
+        (&["--phi", "5", "--pool", "7"], "phi"),
+        (&["--scene", "/nonexistent/vadop-scene.json"], "/nonexistent/vadop-scene.json"),
+    ];
+    for (args, expected) in cases {
+        let mut full = vec!["simulate", "--frames", "2"];
+        full.extend_from_slice(args);
+        assert_usage_error(&vadop(&full), expected);
+    }
+}
+
+#[test]
+fn bad_scene_files_are_reported_not_panicked() {
+    let dir = scratch("scenes");
+    let sphere = |position: &str, radius: &str| {
+        format!(
+            r#"{{"bounds": {{"min": [0, 0, 0], "max": [10, 10, 10]}}, "spheres": [{{"position": {position}, "velocity": [1, 0, 0], "radius": {radius}, "mass": 1}}]}}"#
+        )
+    };
+    let cases = [
+        ("nan", sphere("[5, 5, NaN]", "0.5"), "nan.json"),
+        ("negative-radius", sphere("[5, 5, 5]", "-0.5"), "radius"),
+        ("outside", sphere("[5, 5, 12]", "0.5"), "does not fit inside the box"),
+    ];
+    for (name, text, expected) in cases {
+        let path = dir.join(format!("{name}.json"));
+        std::fs::write(&path, text).expect("scene written");
+        assert_usage_error(&vadop(&["simulate", "--scene", path.to_str().expect("utf-8 path")]), expected);
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn pools_tabulate_covering_radius_against_the_bound() {
+    let output = vadop(&["pools", "--axes", "3,6,13"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let table = stdout(&output);
+    let rows: Vec<Vec<f64>> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split_whitespace().filter_map(|c| c.parse().ok()).collect())
+        .collect();
+    assert_eq!(rows.len(), 3, "{table}");
+    for row in rows {
+        // m, rho, bound, rho/bound, ms, mean band: no pool beats the lower bound.
+        assert!(row[3] >= 1.0 - 1e-9, "{table}");
+        assert!(row[5] >= 1.0, "{table}");
+    }
+    assert_usage_error(&vadop(&["pools", "--axes", "2"]), "axis pool size");
+}
+
+#[test]
+fn bench_writes_its_section_between_the_markers() {
+    let dir = scratch("bench");
+    let (markdown, csv) = (dir.join("BENCHMARKS.md"), dir.join("results").join("core.csv"));
+    std::fs::write(&markdown, "# Benchmarks\n\nKept above.\n\n<!-- core-benchmark:begin -->\nold\n<!-- core-benchmark:end -->\n\nKept below.\n")
+        .expect("markdown written");
+    let output = vadop(&[
+        "bench", "--bodies", "200", "--speeds", "0.5", "--frames", "3", "--output", markdown.to_str().expect("utf-8 path"),
+        "--csv", csv.to_str().expect("utf-8 path"),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = std::fs::read_to_string(&markdown).expect("markdown");
+    assert!(text.starts_with("# Benchmarks\n\nKept above.\n\n<!-- core-benchmark:begin -->"), "{text}");
+    assert!(text.ends_with("<!-- core-benchmark:end -->\n\nKept below.\n"), "{text}");
+    assert!(!text.contains("\nold\n"), "{text}");
+    assert!(text.contains("vadop bench --bodies 200"), "{text}");
+    for method in ["| vadop |", "| discrete |", "| brute |"] {
+        assert!(text.contains(method), "{text}");
+    }
+    assert_eq!(std::fs::read_to_string(&csv).expect("csv").lines().count(), 1 + 3);
+
+    // A child that exceeds the timeout is a row that says so, not a failed benchmark.
+    let output = vadop(&[
+        "bench", "--bodies", "200", "--speeds", "0.5", "--frames", "3", "--timeout", "0.000001", "--output",
+        markdown.to_str().expect("utf-8 path"), "--csv", csv.to_str().expect("utf-8 path"),
+    ]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    assert!(std::fs::read_to_string(&markdown).expect("markdown").contains("timed out"));
+    std::fs::remove_dir_all(dir).ok();
+}
