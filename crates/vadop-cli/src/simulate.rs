@@ -134,9 +134,6 @@ impl FromStr for PoolSize {
 /// The core's message, with phi in degrees as the user gave it (the core works in radians).
 fn describe(error: VadopError) -> String {
     match error {
-        VadopError::BadPhi { got, rho } if rho.is_nan() => {
-            format!("--phi {} degrees: phi must lie in (0, 90] degrees", got.to_degrees())
-        }
         VadopError::BadPhi { got, rho } => format!(
             "--phi {} degrees: phi must lie in [rho, 90] degrees, where rho = {:.4} degrees is the covering radius of the pool, so that every pair of bodies shares an axis",
             got.to_degrees(),
@@ -365,7 +362,7 @@ fn step_frames(
         }
     }
 
-    let pool = world.pool().filter(|_| world.config().method == Method::Vadop).map(|pool| {
+    let pool = Some(world.pool()).filter(|_| world.config().method == Method::Vadop).map(|pool| {
         let rho = pool.covering_radius();
         let entries: u64 = rows.iter().map(|r| r.list_entries).sum();
         PoolInfo {

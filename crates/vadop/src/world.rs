@@ -192,7 +192,7 @@ pub struct World {
     /// Added since the last step: validated and entered into the broad phase at the next step.
     unplaced: Vec<u32>,
     broad: BroadPhase,
-    pool: Option<Arc<AxisPool>>,
+    pool: Arc<AxisPool>,
     queue: EventQueue,
     time: f64,
     contacts: Vec<Contact>,
@@ -206,17 +206,8 @@ impl World {
         if !(0.0..=1.0).contains(&config.restitution) {
             return Err(VadopError::BadRestitution(config.restitution));
         }
-        let pool = match config.pool_axes {
-            Some(m) => Some(AxisPool::new(m)?),
-            None => None,
-        };
-        if let (Some(pool), Some(phi)) = (&pool, config.phi) {
-            check_phi(phi, pool)?;
-        } else if let Some(phi) = config.phi {
-            if !(phi.is_finite() && phi > 0.0 && phi <= std::f64::consts::FRAC_PI_2) {
-                return Err(VadopError::BadPhi { got: phi, rho: f64::NAN });
-            }
-        }
+        let pool = AxisPool::new(config.pool_axes.unwrap_or(AUTO_POOL_AXES))?;
+        check_phi(config.phi.unwrap_or(pool.covering_radius()), &pool)?;
         Ok(World {
             config,
             bounds,
@@ -321,9 +312,9 @@ impl World {
     pub fn config(&self) -> WorldConfig {
         self.config
     }
-    /// The axis pool in use, once chosen (VADOP method).
-    pub fn pool(&self) -> Option<&Arc<AxisPool>> {
-        self.pool.as_ref()
+    /// The axis pool (used by the VADOP method).
+    pub fn pool(&self) -> &Arc<AxisPool> {
+        &self.pool
     }
     /// Statistics of the last frame.
     pub fn stats(&self) -> &FrameStats {
@@ -351,7 +342,7 @@ impl World {
     /// bodies added since the last step that overlap another body.
     pub fn step(&mut self, dt: f64) -> Result<&[Contact]> {
         self.check_step(dt)?;
-        self.place_new_bodies()?;
+        self.place_new_bodies();
         let t0 = self.time;
         let t1 = t0 + dt;
         self.contacts.clear();
@@ -433,22 +424,16 @@ impl World {
     }
 
     /// Builds the broad phase on the first step and enters bodies added since the last one.
-    fn place_new_bodies(&mut self) -> Result<()> {
+    fn place_new_bodies(&mut self) {
         if matches!(self.broad, BroadPhase::Unbuilt) {
             self.broad = match self.config.method {
                 Method::Brute => BroadPhase::Brute,
                 Method::Discrete => BroadPhase::Discrete(PseudoDynamic::default()),
                 Method::Vadop => {
-                    let pool = match &self.pool {
-                        Some(pool) => pool.clone(),
-                        None => AxisPool::new(AUTO_POOL_AXES)?,
-                    };
-                    let phi = self.config.phi.unwrap_or(pool.covering_radius());
-                    check_phi(phi, &pool)?;
+                    let phi = self.config.phi.unwrap_or(self.pool.covering_radius());
                     // A hair wider than phi, so rounding never costs a pair its shared axis.
                     let sin_phi = (phi.sin() * (1.0 + 1e-12) + 1e-15).min(1.0);
-                    self.pool = Some(pool.clone());
-                    BroadPhase::Vadop(SweepPrune::new(pool, sin_phi, self.bounds.min, self.bounds.max))
+                    BroadPhase::Vadop(SweepPrune::new(self.pool.clone(), sin_phi, self.bounds.min, self.bounds.max))
                 }
             };
         }
@@ -460,7 +445,6 @@ impl World {
             }
         }
         self.unplaced.clear();
-        Ok(())
     }
 
     /// Frame start: c_update, c_sort and c_test.
