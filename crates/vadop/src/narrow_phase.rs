@@ -10,6 +10,8 @@
 //! any scale and any distance from the origin). Spheres already overlapping deeper than that are
 //! not a new contact: they are passing through each other (detect mode) or were resolved earlier.
 
+#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` deliberately also rejects NaN.
+
 use glam::DVec3;
 
 /// Relative tolerance on the centre distance within which two spheres count as touching.
@@ -35,6 +37,7 @@ pub const APPROACH_TOLERANCE: f64 = 1e-12;
 /// assert_eq!(sphere_sphere_time(DVec3::new(10.0, 0.0, 0.0), DVec3::new(-4.0, 0.0, 0.0), 2.0, 1.0), None);
 /// ```
 #[inline]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` deliberately rejects NaN too.
 pub fn sphere_sphere_time(
     offset: DVec3,
     relative_velocity: DVec3,

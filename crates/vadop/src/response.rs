@@ -39,7 +39,7 @@ pub fn pair_impulse(
 #[inline]
 pub fn wall_bounce(velocity: DVec3, axis: usize, restitution: f64) -> DVec3 {
     let mut v = velocity;
-    v[axis] = -restitution * v[axis];
+    v[axis] *= -restitution;
     v
 }
 

@@ -84,7 +84,7 @@ impl PaperScene {
         // Face-centred cubic grid: integer triples with an even sum, spacing h, neighbours h*sqrt(2)
         // apart. The smallest grid with room for every sphere, stretched over the whole box.
         let mut per_axis = 2usize;
-        while (per_axis.pow(3) + 1) / 2 < self.bodies {
+        while per_axis.pow(3).div_ceil(2) < self.bodies {
             per_axis += 1;
         }
         let spacing = usable / (per_axis - 1) as f64;

@@ -401,6 +401,7 @@ impl World {
         Ok(())
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x <= y)` deliberately rejects NaN too.
     fn check_step(&self, dt: f64) -> Result<()> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(VadopError::BadTimeStep(dt));

@@ -5,7 +5,7 @@
 use glam::DVec3;
 use proptest::prelude::*;
 use vadop::scene::{PaperScene, Scene, FRAMES_PER_SECOND};
-use vadop::{BoxBounds, Contact, Method, Mode, Sphere, World, WorldConfig};
+use vadop::{BoxBounds, Contact, Method, Mode, Sphere, WorldConfig};
 
 const DT: f64 = 1.0 / FRAMES_PER_SECOND;
 
