@@ -6,6 +6,7 @@
 //! markdown section and CSV it writes. It never touches the markdown file outside its markers, and
 //! a child that fails or times out becomes a row saying so, never a crash of the benchmark.
 
+use crate::experiments;
 use crate::report::{self, Summary};
 use crate::CliResult;
 use clap::Args;
@@ -24,32 +25,46 @@ const POLL: Duration = Duration::from_millis(20);
 
 #[derive(Debug, Args)]
 pub struct BenchArgs {
-    /// Body counts n, comma-separated [default: 1000,10000,100000,1000000; with --quick: 1000,10000]
+    /// Core suite: body counts n, comma-separated [default: 1000,10000,100000,1000000; with --quick: 1000,10000]
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     bodies: Option<Vec<usize>>,
-    /// Maximum speeds in sphere diameters per frame, comma-separated
+    /// Core suite: maximum speeds in sphere diameters per frame, comma-separated
     #[arg(long, value_name = "LIST", value_delimiter = ',', default_values_t = [0.05, 0.5, 5.0])]
     speeds: Vec<f64>,
-    /// Frames per run [default: 30 up to 10^4 bodies, 10 up to 10^5, 3 above; with --quick: 10]
+    /// Core suite: frames per run [default: 30 up to 10^4 bodies, 10 up to 10^5, 3 above; with --quick: 10]
     #[arg(long, value_name = "F", value_parser = clap::value_parser!(u64).range(1..))]
     frames: Option<u64>,
-    /// Largest n for which the brute-force method runs (it tests every pair, O(n^2) per frame)
+    /// Core suite: largest n for which brute force runs (it tests every pair, O(n^2) per frame)
     /// [default: 10000; with --quick: 1000]
     #[arg(long, value_name = "N")]
     brute_max: Option<usize>,
     /// Seconds after which a child run is stopped and recorded as timed out
     #[arg(long, value_name = "SECONDS", default_value_t = 600.0)]
     timeout: f64,
-    /// A small grid (n = 1000 and 10000, 10 frames, brute force only at 1000) that finishes in
-    /// well under a minute
+    /// Small sizes that finish in about a minute: core grid at n = 1000 and 10000 with 10 frames
+    /// (brute force only at 1000), experiments at n = 1000 with 5 frames and pools up to 32 axes
     #[arg(long)]
     quick: bool,
-    /// Markdown file whose core-benchmark section (between its markers) is replaced or added
+    /// Markdown file whose sections (between their markers) are replaced or added
     #[arg(long, value_name = "FILE", default_value = "BENCHMARKS.md")]
     output: PathBuf,
-    /// CSV file of all rows (its directory is created if missing)
+    /// Core suite: CSV file of all rows (its directory is created if missing)
     #[arg(long, value_name = "FILE", default_value = "results/core-benchmark.csv")]
     csv: PathBuf,
+    /// Which benchmark to run: core (the n x speed grid of vadop, discrete and brute force), experiments
+    /// (the paper's experiments with every method, CSV and plots) or all
+    #[arg(long, value_enum, default_value_t = Suite::All)]
+    suite: Suite,
+    /// Folder for the experiments' CSV and PNG plots
+    #[arg(long, value_name = "DIR", default_value = "results/experiments")]
+    plots: PathBuf,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Suite {
+    Core,
+    Experiments,
+    All,
 }
 
 /// The part of a child's `--json` file the benchmark reads.
@@ -79,6 +94,17 @@ impl Row {
 
 pub fn run(args: &BenchArgs) -> CliResult<()> {
     let timeout = Duration::try_from_secs_f64(args.timeout).map_err(|e| format!("--timeout {}: {e}", args.timeout))?;
+    if args.suite != Suite::Experiments {
+        run_core(args, timeout)?;
+    }
+    if args.suite != Suite::Core {
+        experiments::run(&experiments::Plan::new(args.quick, timeout), &args.output, &args.plots)?;
+    }
+    Ok(())
+}
+
+/// The core grid: n x speed, vadop against the discrete method and brute force.
+fn run_core(args: &BenchArgs, timeout: Duration) -> CliResult<()> {
     let exe = std::env::current_exe().map_err(|e| format!("cannot find this program's own path: {e}"))?;
     let default_bodies: &[usize] = if args.quick { &[1000, 10_000] } else { &[1000, 10_000, 100_000, 1_000_000] };
     let bodies = args.bodies.clone().unwrap_or_else(|| default_bodies.to_vec());
@@ -148,7 +174,7 @@ pub fn run(args: &BenchArgs) -> CliResult<()> {
 }
 
 /// The flags of a paper-scene run in detect mode; the child writes its summary to `scratch`.json.
-fn child_args(bodies: usize, speed: f64, frames: u64, method: &str, reference: &str, scratch: &Path) -> Vec<String> {
+pub(crate) fn child_args(bodies: usize, speed: f64, frames: u64, method: &str, reference: &str, scratch: &Path) -> Vec<String> {
     let flags = [
         ("--bodies", bodies.to_string()),
         ("--packing", PACKING.to_string()),
@@ -169,7 +195,7 @@ fn child_args(bodies: usize, speed: f64, frames: u64, method: &str, reference: &
 }
 
 /// Runs one child to completion or timeout and reads its summary.
-fn run_child(exe: &Path, args: &[String], scratch: &Path, timeout: Duration) -> Result<Summary, String> {
+pub(crate) fn run_child(exe: &Path, args: &[String], scratch: &Path, timeout: Duration) -> Result<Summary, String> {
     let (json, stderr_path) = (scratch.with_extension("json"), scratch.with_extension("stderr"));
     // A file, not a pipe: a child writing more than a pipe holds would block until the timeout.
     let stderr = report::create_file(&stderr_path)?;
@@ -207,7 +233,7 @@ fn run_child(exe: &Path, args: &[String], scratch: &Path, timeout: Duration) -> 
 }
 
 /// Reads the markdown file, or `None` when it does not exist yet.
-fn read_markdown(path: &Path) -> CliResult<Option<String>> {
+pub(crate) fn read_markdown(path: &Path) -> CliResult<Option<String>> {
     match std::fs::read_to_string(path) {
         Ok(text) => Ok(Some(text)),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
@@ -215,14 +241,20 @@ fn read_markdown(path: &Path) -> CliResult<Option<String>> {
     }
 }
 
-/// `existing` with its section between the markers replaced by `section`, or `section` appended
-/// when there are no markers. Unbalanced markers are an error: guessing could delete user text.
+/// `existing` with its section between the core-benchmark markers replaced by `section`.
 fn merge_section(existing: Option<&str>, section: &str, path: &Path) -> CliResult<String> {
+    merge_marked_section(existing, section, path, BEGIN, END)
+}
+
+/// `existing` with its section between the markers `begin` and `end` replaced by `section`, or
+/// `section` appended when there are no markers. Unbalanced markers are an error: guessing could
+/// delete user text.
+pub(crate) fn merge_marked_section(existing: Option<&str>, section: &str, path: &Path, begin_marker: &str, end_marker: &str) -> CliResult<String> {
     let Some(text) = existing else {
         return Ok(format!("# Benchmarks\n\n{section}\n"));
     };
-    match (text.find(BEGIN), text.find(END)) {
-        (Some(begin), Some(end)) if begin < end => Ok(format!("{}{section}{}", &text[..begin], &text[end + END.len()..])),
+    match (text.find(begin_marker), text.find(end_marker)) {
+        (Some(begin), Some(end)) if begin < end => Ok(format!("{}{section}{}", &text[..begin], &text[end + end_marker.len()..])),
         (None, None) => {
             let separator = if text.is_empty() || text.ends_with("\n\n") {
                 ""
@@ -233,7 +265,7 @@ fn merge_section(existing: Option<&str>, section: &str, path: &Path) -> CliResul
             };
             Ok(format!("{text}{separator}{section}\n"))
         }
-        _ => Err(format!("{}: the markers {BEGIN} and {END} are unbalanced or out of order; fix them by hand", path.display())),
+        _ => Err(format!("{}: the markers {begin_marker} and {end_marker} are unbalanced or out of order; fix them by hand", path.display())),
     }
 }
 
@@ -251,7 +283,7 @@ fn missed_cell(row: &Row) -> String {
 }
 
 /// A child's message made safe inside a markdown table row.
-fn table_cell(message: &str) -> String {
+pub(crate) fn table_cell(message: &str) -> String {
     message.replace('|', "\\|").replace('\n', " ")
 }
 
@@ -361,7 +393,7 @@ fn write_csv(file: std::fs::File, path: &Path, rows: &[Row]) -> CliResult<()> {
 }
 
 /// CPU model, core count and total memory, from /proc where available.
-fn machine() -> String {
+pub(crate) fn machine() -> String {
     let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
     let cpu = cpuinfo
         .lines()
@@ -380,7 +412,7 @@ fn machine() -> String {
 }
 
 /// The current UTC date and time, without a date crate.
-fn utc_now() -> String {
+pub(crate) fn utc_now() -> String {
     let seconds = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_secs());
     // Howard Hinnant's days-from-civil inverse, for the proleptic Gregorian calendar.
     let z = (seconds / 86_400) as i64 + 719_468;

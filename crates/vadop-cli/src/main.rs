@@ -1,11 +1,13 @@
 //! The `vadop` command-line tool: run the paper's scene or a scene file and report contacts,
-//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), and benchmark the core engine
-//! (`bench`). This file owns argument parsing, dispatch and the single place where a failure
+//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), and benchmark the engine and
+//! reproduce the paper's experiments with plots (`bench`). This file owns argument parsing, dispatch and the single place where a failure
 //! becomes an `error: <message>` line on stderr and exit code 2. It must never do a subcommand's
 //! work itself, and nothing a user types may reach a panic or a backtrace: every fallible step
 //! returns its message as an `Err` up to here.
 
 mod bench;
+mod experiments;
+mod plots;
 mod pools;
 mod report;
 mod simulate;
@@ -32,8 +34,8 @@ enum Command {
     Simulate(simulate::SimulateArgs),
     /// Tabulate axis pools: covering radius against the Fejes Tóth bound, build time, band size.
     Pools(pools::PoolsArgs),
-    /// Benchmark vadop against the discrete and brute-force methods, each run in its own child
-    /// process, and write the results into a markdown file and a CSV.
+    /// Benchmark vadop against its baselines, the discrete method and brute force, each run in its
+    /// own child process; write tables into a markdown file, CSVs and plots into results/.
     Bench(bench::BenchArgs),
 }
 

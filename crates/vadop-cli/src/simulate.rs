@@ -48,7 +48,9 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = ModeArg::Simulate, help_heading = "Run")]
     mode: ModeArg,
     /// Where candidate pairs come from: vadop (continuous, velocity-aligned volumes), brute
-    /// (continuous, every pair) or discrete (overlap checks at frame instants only)
+    /// (continuous, every pair), discrete (overlap checks at frame instants only), or the
+    /// continuous baselines swept-aabb (classic sweep and prune over swept boxes), swept-kdop (all
+    /// pool axes for every body) and grid (uniform grid over swept boxes)
     #[arg(long, value_enum, default_value_t = MethodArg::Vadop, help_heading = "Run")]
     method: MethodArg,
     /// Method stepped alongside on the same scene to count missed and extra pair contacts
@@ -91,6 +93,9 @@ enum MethodArg {
     Vadop,
     Brute,
     Discrete,
+    SweptAabb,
+    SweptKdop,
+    Grid,
 }
 
 impl MethodArg {
@@ -99,6 +104,9 @@ impl MethodArg {
             MethodArg::Vadop => Method::Vadop,
             MethodArg::Brute => Method::Brute,
             MethodArg::Discrete => Method::Discrete,
+            MethodArg::SweptAabb => Method::SweptAabb,
+            MethodArg::SweptKdop => Method::SweptKdop,
+            MethodArg::Grid => Method::Grid,
         }
     }
 }
@@ -143,15 +151,6 @@ fn describe(error: VadopError) -> String {
     }
 }
 
-/// Lower-case name of a method, as the user types it.
-fn method_name(method: Method) -> &'static str {
-    match method {
-        Method::Vadop => "vadop",
-        Method::Brute => "brute",
-        Method::Discrete => "discrete",
-    }
-}
-
 pub fn run(args: &SimulateArgs) -> CliResult<()> {
     let (scene, source) = match &args.scene {
         Some(path) => (Scene::load(path).map_err(describe)?, format!("scene file {}", path.display())),
@@ -189,7 +188,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
     }
     let info = RunInfo {
         scene: SceneInfo::of(&scene, source, args.dt),
-        method: method_name(config.method).to_string(),
+        method: config.method.name().to_string(),
         mode: match config.mode {
             Mode::Detect => "detect",
             Mode::Simulate => "simulate",
@@ -303,7 +302,7 @@ fn step_frames(
     let simulate = world.config().mode == Mode::Simulate;
     let (kinetic_start, momentum_start) = (world.kinetic_energy(), world.momentum());
     let mut accuracy = reference.as_ref().map(|r| Accuracy {
-        reference: method_name(r.config().method).to_string(),
+        reference: r.config().method.name().to_string(),
         identical_paths: !simulate,
         ..Accuracy::default()
     });
@@ -362,7 +361,7 @@ fn step_frames(
         }
     }
 
-    let pool = Some(world.pool()).filter(|_| world.config().method == Method::Vadop).map(|pool| {
+    let pool = Some(world.pool()).filter(|_| matches!(world.config().method, Method::Vadop | Method::SweptKdop)).map(|pool| {
         let rho = pool.covering_radius();
         let entries: u64 = rows.iter().map(|r| r.list_entries).sum();
         PoolInfo {

@@ -38,6 +38,7 @@ pub mod pseudo_dynamic;
 pub mod response;
 pub mod scene;
 pub mod sweep_prune;
+pub mod uniform_grid;
 pub mod world;
 
 pub use bodies::Sphere;

@@ -11,8 +11,9 @@
 //! direction only, and the axes two bodies share all lie near the direction orthogonal to both
 //! velocities, so with many bodies almost every pair whose paths pass within reach would be
 //! enumerated. Each list is therefore tiled by the plane orthogonal to its axis: entries are
-//! sorted by (tile, start), tiles are at least twice the largest distance a body's centre can be
-//! from its frame-start centre plus its radius, and a tile is swept only against itself and its
+//! sorted by (tile, start) with each body's tile taken at the midpoint of its path over the frame,
+//! tiles are at least twice the largest distance a body's surface can be from that midpoint, and
+//! a tile is swept only against itself and its
 //! neighbours. Within a tile the sort key is still the projection on a velocity-orthogonal axis,
 //! so insertion sort keeps its near-linear cost. Second, entries are never searched for and
 //! deleted: each carries its body's velocity stamp; a stale entry is skipped and dropped later.
@@ -104,6 +105,8 @@ pub struct SweepPrune {
     plane_extent: f64,
     /// Largest radius plus distance still to travel in the frame, over all live entries.
     max_reach: f64,
+    /// False for the classic, untiled sweep and prune (one run per list), kept as a baseline.
+    tiled: bool,
 }
 
 #[inline]
@@ -117,10 +120,18 @@ fn ordered(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
-/// How far body `b` can reach in the plane from its centre at `t` until `frame_end`.
+/// Midpoint of body `b`'s path from `t` to `frame_end`: the point its tile is taken from.
+#[inline]
+fn path_midpoint(bodies: &Bodies, b: usize, t: f64, frame_end: f64) -> DVec3 {
+    bodies.position_at(b, 0.5 * (t + frame_end))
+}
+
+/// How far body `b`'s surface can be from its path midpoint while it moves from `t` to
+/// `frame_end`: its radius plus half the path. Measuring from the midpoint rather than the start
+/// halves the tiles fast bodies need.
 #[inline]
 fn reach(bodies: &Bodies, b: usize, t: f64, frame_end: f64) -> f64 {
-    bodies.radius[b] + bodies.velocity[b].length() * (frame_end - t)
+    bodies.radius[b] + bodies.velocity[b].length() * 0.5 * (frame_end - t)
 }
 
 impl AxisList {
@@ -164,8 +175,10 @@ impl AxisList {
 
 impl SweepPrune {
     /// An empty broad phase over `pool` for bodies in the box `[min, max]`, selecting axes within
-    /// angle asin(`sin_phi`) of the plane orthogonal to each body's velocity.
-    pub fn new(pool: Arc<AxisPool>, sin_phi: f64, min: DVec3, max: DVec3) -> SweepPrune {
+    /// angle asin(`sin_phi`) of the plane orthogonal to each body's velocity (`sin_phi` = 1: every
+    /// axis, a swept k-DOP). `tiled` = false gives the classic sweep and prune of the paper and of
+    /// most engines, one sorted run per axis.
+    pub fn new(pool: Arc<AxisPool>, sin_phi: f64, min: DVec3, max: DVec3, tiled: bool) -> SweepPrune {
         let lists = pool.axes().iter().map(|&a| AxisList::new(a, min, max)).collect();
         let plane_extent = (max - min).length();
         SweepPrune {
@@ -176,6 +189,7 @@ impl SweepPrune {
             tiling: Tiling { size: plane_extent, side: 1 },
             plane_extent,
             max_reach: 0.0,
+            tiled,
         }
     }
 
@@ -200,11 +214,12 @@ impl SweepPrune {
         let mut axes = std::mem::take(&mut self.axes_of[b]);
         select_axes(&self.pool, bodies.velocity[b], self.sin_phi, &mut axes);
         let position = bodies.position_at(b, now);
+        let midpoint = path_midpoint(bodies, b, now, frame_end);
         self.max_reach = self.max_reach.max(reach(bodies, b, now, frame_end));
         for &a in &axes {
             let iv = interval(self.pool.axis(a), position, bodies.velocity[b], bodies.radius[b], frame_end - now);
             let list = &mut self.lists[a as usize];
-            let tile = list.tile_of(&self.tiling, position);
+            let tile = list.tile_of(&self.tiling, midpoint);
             list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body, stamp: bodies.stamp[b], tile });
             // Queries scan `pending` linearly: once it is no longer small, merge it into `sorted`.
             if list.pending.len() > 64 + list.sorted.len() / 128 {
@@ -231,12 +246,12 @@ impl SweepPrune {
                 max_reach = max_reach.max(reach(bodies, b, 0.0, dt));
             }
         }
-        // Bodies that touch during the frame have frame-start centres at most 2 * max_reach apart
-        // in any plane, so they lie in the same or adjacent tiles. Resize only when the tiles are
+        // Bodies that touch during the frame have path midpoints at most 2 * max_reach apart in
+        // any plane, so they lie in the same or adjacent tiles. Resize only when the tiles are
         // too small or far too large, so the sort stays coherent from frame to frame.
         let needed = 2.0 * max_reach * (1.0 + REACH_MARGIN) + f64::MIN_POSITIVE;
         let size = self.tiling.size;
-        if size < needed || size > 2.0 * needed {
+        if self.tiled && (size < needed || size > 2.0 * needed) {
             let size = (1.1 * needed).max(self.plane_extent / MAX_TILES_PER_SIDE);
             let side = ((self.plane_extent / size).floor() as u32 + 1).max(1);
             self.tiling = Tiling { size, side };
@@ -254,8 +269,9 @@ impl SweepPrune {
                 let iv = interval(axis, position, bodies.velocity[b], bodies.radius[b], dt);
                 e.lo = iv.lo;
                 e.hi = iv.hi;
-                e.tile = tiling.coordinate(position.dot(across), origin[0]) * tiling.side
-                    + tiling.coordinate(position.dot(up), origin[1]);
+                let midpoint = position + bodies.velocity[b] * (0.5 * dt);
+                e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
+                    + tiling.coordinate(midpoint.dot(up), origin[1]);
             }
         }
     }
@@ -364,7 +380,7 @@ impl SweepPrune {
     /// `[t, frame_end]` (typically right after `body` changed velocity at time t).
     pub fn for_each_partner(&self, body: u32, bodies: &Bodies, t: f64, frame_end: f64, mut report: impl FnMut(u32)) {
         let b = body as usize;
-        let centre = bodies.position_at(b, t);
+        let centre = path_midpoint(bodies, b, t, frame_end);
         let distance = (reach(bodies, b, t, frame_end) + self.max_reach) * (1.0 + REACH_MARGIN)
             + REACH_MARGIN * centre.abs().max_element();
         for &a in &self.axes_of[b] {

@@ -4,9 +4,10 @@
 //! It owns the frame loop and ties the stages together: validate input, rebuild and sort the
 //! volumes, predict contacts for candidate pairs and walls, then pop contacts in time order,
 //! respond, void the touched bodies' predictions, rebuild their volumes and re-test them for the
-//! rest of the frame. The three methods differ only in where candidates come from (VADOP sweep
-//! and prune, all pairs, or frame-instant overlap checks); the narrow phase and response are shared,
-//! so the VADOP world and the brute-force oracle produce bit-identical contact sequences.
+//! rest of the frame. The methods differ only in where candidates come from (VADOP sweep and
+//! prune, its swept-AABB, swept-k-DOP and uniform-grid baselines, all pairs, or frame-instant
+//! overlap checks); the narrow phase and response are shared, so every continuous method and the
+//! brute-force oracle produce bit-identical contact sequences.
 //! Every fallible call checks its input before it changes anything.
 
 use crate::axis_pool::AxisPool;
@@ -17,6 +18,7 @@ use crate::narrow_phase::{sphere_sphere_time, sphere_wall_time, Wall};
 use crate::pseudo_dynamic::PseudoDynamic;
 use crate::response::{pair_impulse, wall_bounce};
 use crate::sweep_prune::SweepPrune;
+use crate::uniform_grid::UniformGrid;
 use glam::DVec3;
 use std::sync::Arc;
 use std::time::Instant;
@@ -34,6 +36,37 @@ pub enum Method {
     Brute,
     /// Pseudo-dynamic: overlap checks at frame instants only (misses what passes in between).
     Discrete,
+    /// Continuous baseline: classic sweep and prune over swept axis-aligned boxes (the three
+    /// coordinate axes for every body, one sorted list per axis, no tiles), as most engines do.
+    SweptAabb,
+    /// Continuous baseline: the VADOP sweep and prune with *every* pool axis for every body, a
+    /// swept k-DOP; isolates what the velocity alignment buys.
+    SweptKdop,
+    /// Continuous baseline: uniform grid over swept axis-aligned boxes.
+    Grid,
+}
+
+impl Method {
+    /// Every method, in the order the benchmarks list them.
+    pub const ALL: [Method; 6] =
+        [Method::Vadop, Method::SweptAabb, Method::SweptKdop, Method::Grid, Method::Discrete, Method::Brute];
+
+    /// The method's name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Vadop => "vadop",
+            Method::Brute => "brute",
+            Method::Discrete => "discrete",
+            Method::SweptAabb => "swept-aabb",
+            Method::SweptKdop => "swept-kdop",
+            Method::Grid => "grid",
+        }
+    }
+
+    /// True for the methods that find every contact inside the frame.
+    pub fn is_continuous(self) -> bool {
+        self != Method::Discrete
+    }
 }
 
 /// Whether bodies collide with each other or only report contacts.
@@ -155,15 +188,20 @@ impl FrameStats {
 enum BroadPhase {
     /// Not built yet (the pool is chosen at the first step).
     Unbuilt,
-    Vadop(SweepPrune),
+    /// Vadop, SweptAabb and SweptKdop: sweep and prune over pool axes.
+    SweepPrune(SweepPrune),
     Brute,
     Discrete(PseudoDynamic),
+    Grid(UniformGrid),
 }
 
-/// Pool size used when none is given. Measured with `vadop bench` (BENCHMARKS.md): with tiled
-/// axis lists the 3-axis pool is the fastest at every speed from 0.05 to 5 diameters per frame,
+/// Pool size used when none is given, whatever the bodies' speeds. Measured by experiment 4 of
+/// `vadop bench` (BENCHMARKS.md): with tiled axis lists the 3-axis pool is the fastest at every
+/// speed tested, from 0.05 to 20 diameters per frame and with heavy-tailed speed distributions,
 /// because each extra axis per body costs more in updates and candidate checks than its thinner
-/// volume saves. Choosing per speed distribution is issue #4's work.
+/// volume saves; phi = rho is likewise faster than any wider band. The paper's finding that the
+/// best pool grows with speed holds for untiled lists, where thinner volumes are the only way to
+/// cut overlaps; the tiles do that job here.
 pub const AUTO_POOL_AXES: usize = 3;
 
 /// A world of spheres in a box.
@@ -259,7 +297,7 @@ impl World {
         self.bodies.stamp[i] = self.bodies.stamp[i].wrapping_add(1);
         self.live -= 1;
         self.unplaced.retain(|&u| u != id);
-        if let BroadPhase::Vadop(sap) = &mut self.broad {
+        if let BroadPhase::SweepPrune(sap) = &mut self.broad {
             sap.remove_body(id);
         }
         self.free_slots.push(id);
@@ -273,7 +311,7 @@ impl World {
         let i = self.live_index(id)?;
         check_finite("velocity", velocity)?;
         self.bodies.set_velocity_at(i, self.time, velocity);
-        if let BroadPhase::Vadop(sap) = &mut self.broad {
+        if let BroadPhase::SweepPrune(sap) = &mut self.broad {
             if !self.unplaced.contains(&id) {
                 sap.set_body(id, &self.bodies, self.time, self.time);
             }
@@ -320,10 +358,11 @@ impl World {
     pub fn stats(&self) -> &FrameStats {
         &self.stats
     }
-    /// The VADOP broad phase, once built (for inspection and tests).
+    /// The sweep-and-prune broad phase (methods Vadop, SweptAabb, SweptKdop), once built (for
+    /// inspection and tests).
     pub fn sweep_prune(&self) -> Option<&SweepPrune> {
         match &self.broad {
-            BroadPhase::Vadop(sap) => Some(sap),
+            BroadPhase::SweepPrune(sap) => Some(sap),
             _ => None,
         }
     }
@@ -365,8 +404,9 @@ impl World {
         }
         self.stats.contacts = self.contacts.len() as u64;
         self.stats.broad_phase_bytes = match &self.broad {
-            BroadPhase::Vadop(sap) => sap.memory_bytes() as u64,
+            BroadPhase::SweepPrune(sap) => sap.memory_bytes() as u64,
             BroadPhase::Discrete(pd) => pd.memory_bytes() as u64,
+            BroadPhase::Grid(grid) => grid.memory_bytes() as u64,
             _ => 0,
         };
         Ok(&self.contacts)
@@ -430,19 +470,27 @@ impl World {
             self.broad = match self.config.method {
                 Method::Brute => BroadPhase::Brute,
                 Method::Discrete => BroadPhase::Discrete(PseudoDynamic::default()),
+                Method::Grid => BroadPhase::Grid(UniformGrid::default()),
                 Method::Vadop => {
                     let phi = self.config.phi.unwrap_or(self.pool.covering_radius());
                     // A hair wider than phi, so rounding never costs a pair its shared axis.
                     let sin_phi = (phi.sin() * (1.0 + 1e-12) + 1e-15).min(1.0);
-                    BroadPhase::Vadop(SweepPrune::new(self.pool.clone(), sin_phi, self.bounds.min, self.bounds.max))
+                    BroadPhase::SweepPrune(SweepPrune::new(self.pool.clone(), sin_phi, self.bounds.min, self.bounds.max, true))
+                }
+                Method::SweptKdop => {
+                    BroadPhase::SweepPrune(SweepPrune::new(self.pool.clone(), 1.0, self.bounds.min, self.bounds.max, true))
+                }
+                Method::SweptAabb => {
+                    let coordinate_axes = AxisPool::new(3).expect("the 3-axis pool always builds");
+                    BroadPhase::SweepPrune(SweepPrune::new(coordinate_axes, 1.0, self.bounds.min, self.bounds.max, false))
                 }
             };
         }
         for &id in &self.unplaced {
             match &mut self.broad {
-                BroadPhase::Vadop(sap) => sap.set_body(id, &self.bodies, self.time, self.time),
+                BroadPhase::SweepPrune(sap) => sap.set_body(id, &self.bodies, self.time, self.time),
                 BroadPhase::Discrete(pd) => pd.add_body(id),
-                BroadPhase::Brute | BroadPhase::Unbuilt => {}
+                BroadPhase::Brute | BroadPhase::Grid(_) | BroadPhase::Unbuilt => {}
             }
         }
         self.unplaced.clear();
@@ -453,7 +501,7 @@ impl World {
         let World { bodies, broad, queue, stats, bounds, .. } = self;
         let start = Instant::now();
         match broad {
-            BroadPhase::Vadop(sap) => {
+            BroadPhase::SweepPrune(sap) => {
                 sap.update_intervals(bodies, t1 - t0);
                 stats.update_seconds = start.elapsed().as_secs_f64();
                 let start = Instant::now();
@@ -477,6 +525,16 @@ impl World {
                         predict_pair(bodies, i, j, t0, t1, queue, stats);
                     }
                 }
+                stats.test_seconds = start.elapsed().as_secs_f64();
+            }
+            BroadPhase::Grid(grid) => {
+                grid.rebuild(bodies, bounds.min, bounds.max, t0, t1);
+                stats.update_seconds = start.elapsed().as_secs_f64();
+                let start = Instant::now();
+                grid.for_each_pair(|i, j| {
+                    stats.candidate_pairs += 1;
+                    predict_pair(bodies, i, j, t0, t1, queue, stats);
+                });
                 stats.test_seconds = start.elapsed().as_secs_f64();
             }
             BroadPhase::Discrete(_) | BroadPhase::Unbuilt => {}
@@ -563,7 +621,7 @@ impl World {
         let World { bodies, broad, queue, stats, bounds, .. } = self;
         predict_wall(bodies, bounds, body, t, t1, queue);
         match broad {
-            BroadPhase::Vadop(sap) => {
+            BroadPhase::SweepPrune(sap) => {
                 sap.set_body(body, bodies, t, t1);
                 sap.for_each_partner(body, bodies, t, t1, |other| {
                     if Some(other) != skip {
@@ -577,6 +635,13 @@ impl World {
                         predict_pair(bodies, body, other, t, t1, queue, stats);
                     }
                 }
+            }
+            BroadPhase::Grid(grid) => {
+                grid.update_and_query(body, bodies, t, t1, |other| {
+                    if Some(other) != skip {
+                        predict_pair(bodies, body, other, t, t1, queue, stats);
+                    }
+                });
             }
             BroadPhase::Discrete(_) | BroadPhase::Unbuilt => {}
         }
