@@ -37,7 +37,8 @@ fn shape_text(shape: &[usize]) -> String {
 fn expected(dtype: &str, shape: &[Option<usize>]) -> String {
     let dims: Vec<String> = shape.iter().map(|d| d.map_or("n".to_string(), |d| d.to_string())).collect();
     let shape = if dims.len() == 1 { format!("({},)", dims[0]) } else { format!("({})", dims.join(", ")) };
-    format!("a {dtype} array of shape {shape}")
+    let article = if dtype.starts_with("int") { "an" } else { "a" };
+    format!("{article} {dtype} array of shape {shape}")
 }
 
 /// Checks that `obj` is a numpy array of `dtype` whose shape matches `shape` (`None` = any
