@@ -7,7 +7,7 @@ as numpy arrays; the engine is Rust and releases the GIL while it steps.
 >>> import numpy as np, vadop
 >>> world = vadop.World(np.array([[2.0, 5, 5], [8, 5, 5]]), np.array([[30.0, 0, 0], [0, 0, 0]]),
 ...                     np.array([0.5, 0.5]), box=10.0)
->>> contacts = world.step(0.25)          # the gap of 5 closes at t = 1/6, inside the frame
+>>> contacts = world.step(0.2)           # the gap of 5 closes at t = 1/6, inside the frame
 >>> contacts.i.tolist(), contacts.j.tolist()
 ([0], [1])
 >>> world.velocities[:, 0].round(12).tolist()   # equal masses: velocities exchanged

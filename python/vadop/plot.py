@@ -21,7 +21,7 @@ from __future__ import annotations
 import csv
 from collections import defaultdict
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, Mapping, Optional, Sequence, Union, cast
 
 import numpy as np
 
@@ -65,7 +65,7 @@ def benchmark(csv_path: Union[str, Path] = "results/core-benchmark.csv") -> Figu
     axes[0][0].set_ylabel("median c_total per frame (ms)")
     axes[0][0].legend()
     figure.tight_layout()
-    return figure
+    return cast("Figure", figure)
 
 
 def cost_split(stats: Sequence[Mapping[str, float]], ax: Optional[Axes] = None) -> Figure:
@@ -74,6 +74,7 @@ def cost_split(stats: Sequence[Mapping[str, float]], ax: Optional[Axes] = None) 
         raise ValueError("stats must hold the stats of at least one frame")
     plt = _pyplot()
     figure, ax = (plt.subplots(figsize=(7, 3.5)) if ax is None else (ax.figure, ax))
+    assert ax is not None
     frames = np.arange(1, len(stats) + 1)
     bottom = np.zeros(len(stats))
     for stage in STAGES:
@@ -82,7 +83,7 @@ def cost_split(stats: Sequence[Mapping[str, float]], ax: Optional[Axes] = None) 
         bottom += ms
     ax.set(xlabel="frame", ylabel="cost (ms)", title="c_total = c_update + c_sort + c_test + c_response")
     ax.legend(loc="upper right")
-    return figure
+    return cast("Figure", figure)
 
 
 def contact_timeline(
@@ -120,4 +121,4 @@ def contact_timeline(
             counts_ax.set(xlabel="time (s)", ylabel="per frame")
     else:
         ax.set_xlabel("time (s)")
-    return figure
+    return cast("Figure", figure)

@@ -564,10 +564,10 @@ fn scene(
 /// contacts).
 ///
 /// >>> import numpy as np, vadop
-/// >>> c = vadop.detect(np.array([[1.0, 1, 1], [9, 1, 1]]), np.array([[40.0, 0, 0], [0, 0, 0]]),
+/// >>> c = vadop.detect(np.array([[1.0, 1, 1], [4, 1, 1]]), np.array([[40.0, 0, 0], [0, 0, 0]]),
 /// ...                  np.array([0.5, 0.5]), box=10.0, dt=0.1, frames=1)
-/// >>> c.j.tolist()
-/// [1]
+/// >>> c.j.tolist(), c.time.tolist()   # the gap of 2 closes at 40 units/s
+/// ([1], [0.05])
 #[pyfunction]
 #[pyo3(signature = (positions, velocities, radii, *, r#box, dt, frames, method = "vadop", pool_axes = None, phi = None))]
 #[allow(clippy::too_many_arguments)]
