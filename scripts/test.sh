@@ -8,3 +8,24 @@ cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
 cargo test --release --workspace --all-targets
 cargo test --release --workspace --doc
+
+# Python package: build and install it into a local virtual environment the way users do
+# (`pip install ./`), with the test tools, then run its tests. The viewer test drives a real
+# headless browser: install Debian's chromium when it is missing (CI runs as root on Debian).
+if ! command -v chromium >/dev/null 2>&1; then
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+  else
+    echo "note: chromium is missing and cannot be installed here; the viewer's browser test will be skipped" >&2
+  fi
+fi
+if [ ! -x .venv/bin/python ]; then
+  python3 -m venv .venv || {
+    # Debian's system Python keeps venv in a separate package.
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3-venv >/dev/null
+    python3 -m venv .venv
+  }
+fi
+.venv/bin/python -m pip install -q --disable-pip-version-check maturin numpy pytest hypothesis matplotlib mypy
+.venv/bin/python -m pip install -q --disable-pip-version-check ./
+.venv/bin/python -m pytest -q python/tests

@@ -1,0 +1,610 @@
+//! Python bindings of vadop: the `vadop._vadop` extension module.
+//!
+//! It owns the translation between numpy arrays and the core's types, and nothing else: every
+//! physical rule stays in the `vadop` crate. Input is checked here first, row by row, so that a
+//! bad argument raises `TypeError` (wrong type or dtype) or `ValueError` (wrong shape or value)
+//! naming the argument, the row and what was expected, before the world is touched; whatever
+//! the core still rejects (overlaps, absurd speeds, bad settings) becomes a `ValueError` with the
+//! core's message. Stepping releases the GIL.
+
+use glam::DVec3;
+use numpy::ndarray::{Array1, Array2};
+use numpy::prelude::*;
+use numpy::{PyArray1, PyArray2, PyArrayDescr, PyUntypedArray};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use vadop::bounding_volume::interval;
+use vadop::scene::PaperScene;
+use vadop::{BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
+
+/// Names of the six walls, indexed by the `wall` column of [`Contacts`].
+const WALLS: [&str; 6] = ["min_x", "max_x", "min_y", "max_y", "min_z", "max_z"];
+
+fn value_error(e: VadopError) -> PyErr {
+    PyValueError::new_err(e.to_string())
+}
+
+/// A numpy shape written the way Python prints it: `(4,)`, `(4, 3)`.
+fn shape_text(shape: &[usize]) -> String {
+    match shape {
+        [one] => format!("({one},)"),
+        _ => format!("({})", shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(", ")),
+    }
+}
+
+/// What an argument must be, for messages: "a float64 array of shape (n, 3)".
+fn expected(dtype: &str, shape: &[Option<usize>]) -> String {
+    let dims: Vec<String> = shape.iter().map(|d| d.map_or("n".to_string(), |d| d.to_string())).collect();
+    let shape = if dims.len() == 1 { format!("({},)", dims[0]) } else { format!("({})", dims.join(", ")) };
+    let article = if dtype.starts_with("int") { "an" } else { "a" };
+    format!("{article} {dtype} array of shape {shape}")
+}
+
+/// Checks that `obj` is a numpy array of `dtype` whose shape matches `shape` (`None` = any
+/// length) and returns it. Type and dtype problems are `TypeError`, shape problems `ValueError`.
+fn checked_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    dtype: Bound<'py, PyArrayDescr>,
+    shape: &[Option<usize>],
+) -> PyResult<Bound<'py, PyUntypedArray>> {
+    let want = expected(&dtype.to_string(), shape);
+    let Ok(array) = obj.downcast::<PyUntypedArray>() else {
+        let type_name = obj.get_type().name()?;
+        return Err(PyTypeError::new_err(format!(
+            "{name} must be {want}, got {type_name} (convert with numpy.asarray({name}, dtype={dtype}))"
+        )));
+    };
+    let got = format!("{} of shape {}", array.dtype(), shape_text(array.shape()));
+    if !array.dtype().is_equiv_to(&dtype) {
+        return Err(PyTypeError::new_err(format!("{name} must be {want}, got {got}")));
+    }
+    let fits = array.ndim() == shape.len() && array.shape().iter().zip(shape).all(|(&d, &s)| s.is_none_or(|s| s == d));
+    if !fits {
+        return Err(PyValueError::new_err(format!("{name} must be {want}, got {got}")));
+    }
+    Ok(array.clone())
+}
+
+/// Rows of a float64 array of shape (n, 3) as vectors, each checked to be finite.
+fn vectors(obj: &Bound<'_, PyAny>, name: &str, rows: Option<usize>) -> PyResult<Vec<DVec3>> {
+    let py = obj.py();
+    let array = checked_array(obj, name, numpy::dtype::<f64>(py), &[rows, Some(3)])?;
+    let array = array.downcast::<PyArray2<f64>>()?.readonly();
+    let view = array.as_array();
+    let mut out = Vec::with_capacity(view.nrows());
+    for (i, row) in view.rows().into_iter().enumerate() {
+        let v = DVec3::new(row[0], row[1], row[2]);
+        if !v.is_finite() {
+            return Err(PyValueError::new_err(format!("{name}[{i}] must be finite, got {:?}", v.to_array())));
+        }
+        out.push(v);
+    }
+    Ok(out)
+}
+
+/// A float64 array of shape (n,), each value checked to be finite and > 0.
+fn positive_values(obj: &Bound<'_, PyAny>, name: &str, rows: usize) -> PyResult<Vec<f64>> {
+    let py = obj.py();
+    let array = checked_array(obj, name, numpy::dtype::<f64>(py), &[Some(rows)])?;
+    let array = array.downcast::<PyArray1<f64>>()?.readonly();
+    let values: Vec<f64> = array.as_array().iter().copied().collect();
+    if let Some((i, v)) = values.iter().enumerate().find(|(_, v)| !(v.is_finite() && **v > 0.0)) {
+        return Err(PyValueError::new_err(format!("{name}[{i}] must be a finite number > 0, got {v}")));
+    }
+    Ok(values)
+}
+
+/// Body ids: a Python int or an int64 array of shape (k,).
+fn ids(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
+    if let Ok(id) = obj.extract::<i64>() {
+        if !obj.is_instance_of::<PyUntypedArray>() {
+            return Ok(vec![id]);
+        }
+    }
+    let py = obj.py();
+    let array = checked_array(obj, name, numpy::dtype::<i64>(py), &[None]).map_err(|e| {
+        let message = e.value(py).to_string().replacen("must be", "must be an int or", 1);
+        if e.is_instance_of::<PyTypeError>(py) {
+            PyTypeError::new_err(message)
+        } else {
+            PyValueError::new_err(message)
+        }
+    })?;
+    let array = array.downcast::<PyArray1<i64>>()?.readonly();
+    Ok(array.as_array().to_vec())
+}
+
+/// The box: a cube side (a number) or a float64 array [[min x, y, z], [max x, y, z]].
+fn bounds(obj: &Bound<'_, PyAny>) -> PyResult<BoxBounds> {
+    if !obj.is_instance_of::<PyUntypedArray>() {
+        if let Ok(side) = obj.extract::<f64>() {
+            return BoxBounds::cube(side).map_err(|_| {
+                PyValueError::new_err(format!("box as a number is the side of the cube [0, side]^3 and must be finite and > 0, got {side}"))
+            });
+        }
+    }
+    let py = obj.py();
+    let array = checked_array(obj, "box", numpy::dtype::<f64>(py), &[Some(2), Some(3)]).map_err(|e| {
+        let message = e.value(py).to_string().replacen("must be", "must be a number (cube side) or", 1);
+        if e.is_instance_of::<PyTypeError>(py) {
+            PyTypeError::new_err(message)
+        } else {
+            PyValueError::new_err(message)
+        }
+    })?;
+    let array = array.downcast::<PyArray2<f64>>()?.readonly();
+    let v = array.as_array();
+    BoxBounds::new(DVec3::new(v[[0, 0]], v[[0, 1]], v[[0, 2]]), DVec3::new(v[[1, 0]], v[[1, 1]], v[[1, 2]])).map_err(value_error)
+}
+
+/// Spheres from the column arrays, each checked (and checked to fit in `bounds`) before any is used.
+fn spheres(
+    positions: &Bound<'_, PyAny>,
+    velocities: &Bound<'_, PyAny>,
+    radii: &Bound<'_, PyAny>,
+    masses: Option<&Bound<'_, PyAny>>,
+    bounds: &BoxBounds,
+) -> PyResult<Vec<Sphere>> {
+    let positions = vectors(positions, "positions", None)?;
+    let n = positions.len();
+    let velocities = vectors(velocities, "velocities", Some(n))?;
+    let radii = positive_values(radii, "radii", n)?;
+    let masses = match masses {
+        Some(m) => positive_values(m, "masses", n)?,
+        None => vec![1.0; n],
+    };
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let (p, r) = (positions[i], radii[i]);
+        if !((p - r).cmpge(bounds.min).all() && (p + r).cmple(bounds.max).all()) {
+            return Err(PyValueError::new_err(format!(
+                "positions[{i}] = {:?} with radii[{i}] = {r} must lie inside the box {:?}..{:?}",
+                p.to_array(),
+                bounds.min.to_array(),
+                bounds.max.to_array()
+            )));
+        }
+        out.push(Sphere { position: p, velocity: velocities[i], radius: r, mass: masses[i] });
+    }
+    Ok(out)
+}
+
+fn parse_method(method: &str) -> PyResult<Method> {
+    match method {
+        "vadop" => Ok(Method::Vadop),
+        "brute" => Ok(Method::Brute),
+        "discrete" => Ok(Method::Discrete),
+        _ => Err(PyValueError::new_err(format!("method must be 'vadop', 'brute' or 'discrete', got {method:?}"))),
+    }
+}
+
+fn parse_mode(mode: &str) -> PyResult<Mode> {
+    match mode {
+        "simulate" => Ok(Mode::Simulate),
+        "detect" => Ok(Mode::Detect),
+        _ => Err(PyValueError::new_err(format!("mode must be 'simulate' or 'detect', got {mode:?}"))),
+    }
+}
+
+fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, restitution: f64) -> PyResult<WorldConfig> {
+    let pool_axes = match pool_axes {
+        Some(m) if m < 0 => return Err(PyValueError::new_err(format!("pool_axes must be an int between 3 and 100000, got {m}"))),
+        Some(m) => Some(m as usize),
+        None => None,
+    };
+    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution })
+}
+
+fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f64>> {
+    let flat: Vec<f64> = rows.iter().flat_map(|v| v.to_array()).collect();
+    Array2::from_shape_vec((rows.len(), 3), flat).expect("3 values per row").into_pyarray(py)
+}
+
+/// The contacts of one or more frames, as columns in time order.
+///
+/// ``time`` (m,) float64 absolute times; ``i`` (m,) int64 the body (the lower id of a pair);
+/// ``j`` (m,) int64 the other body, or -1 for a wall; ``wall`` (m,) int64 the wall's index in
+/// ``vadop.WALLS``, or -1 for a pair; ``point`` and ``normal`` (m, 3) float64, the normal
+/// pointing from ``i`` towards what it touched; ``impulse`` (m,) float64, 0 when not resolved.
+#[pyclass(frozen, get_all, module = "vadop._vadop")]
+struct Contacts {
+    time: Py<PyArray1<f64>>,
+    i: Py<PyArray1<i64>>,
+    j: Py<PyArray1<i64>>,
+    wall: Py<PyArray1<i64>>,
+    point: Py<PyArray2<f64>>,
+    normal: Py<PyArray2<f64>>,
+    impulse: Py<PyArray1<f64>>,
+}
+
+impl Contacts {
+    fn new(py: Python<'_>, contacts: &[Contact]) -> Contacts {
+        let column = |f: &dyn Fn(&Contact) -> f64| Array1::from_iter(contacts.iter().map(f)).into_pyarray(py).unbind();
+        let index = |f: &dyn Fn(&Contact) -> i64| Array1::from_iter(contacts.iter().map(f)).into_pyarray(py).unbind();
+        let points: Vec<DVec3> = contacts.iter().map(|c| c.point).collect();
+        let normals: Vec<DVec3> = contacts.iter().map(|c| c.normal).collect();
+        Contacts {
+            time: column(&|c| c.time),
+            i: index(&|c| c.body as i64),
+            j: index(&|c| match c.touched {
+                Touched::Body(j) => j as i64,
+                Touched::Wall(_) => -1,
+            }),
+            wall: index(&|c| match c.touched {
+                Touched::Body(_) => -1,
+                Touched::Wall(w) => w as i64,
+            }),
+            point: vectors_array(py, &points).unbind(),
+            normal: vectors_array(py, &normals).unbind(),
+            impulse: column(&|c| c.impulse),
+        }
+    }
+}
+
+#[pymethods]
+impl Contacts {
+    fn __len__(&self, py: Python<'_>) -> usize {
+        self.time.bind(py).len()
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let walls = self.wall.bind(py).readonly().as_array().iter().filter(|&&w| w >= 0).count();
+        let n = self.time.bind(py).len();
+        format!("<Contacts: {} body-body, {} wall>", n - walls, walls)
+    }
+}
+
+/// Spheres in a box, stepped frame by frame; every contact inside a frame is found, in time order.
+///
+/// Bodies are given as numpy columns: ``positions`` and ``velocities`` float64 (n, 3), ``radii``
+/// and ``masses`` float64 (n,) (``masses`` defaults to 1). ``box`` is a cube side or a float64
+/// array ``[[min x, y, z], [max x, y, z]]``. Settings: ``method`` ('vadop', 'brute' — every pair,
+/// the oracle — or 'discrete' — overlap checks at frame instants only), ``mode`` ('simulate' or
+/// 'detect': bodies pass through each other and bounce only off the walls), ``pool_axes`` (None
+/// picks the engine's default), ``phi`` in radians (None: the pool's covering radius) and
+/// ``restitution`` in [0, 1].
+///
+/// Body ids start at 0 in row order; ids of removed bodies are reused, lowest first. Arrays read
+/// back (``positions``, ``velocities`` ...) hold the live bodies in ascending id order (``ids``).
+///
+/// >>> import numpy as np, vadop
+/// >>> w = vadop.World(np.array([[2.0, 5, 5], [8, 5, 5]]), np.array([[30.0, 0, 0], [0, 0, 0]]),
+/// ...                 np.array([0.5, 0.5]), box=10.0)
+/// >>> c = w.step(0.25)
+/// >>> int(c.i[0]), int(c.j[0]), round(float(c.time[0]), 6)
+/// (0, 1, 0.166667)
+#[pyclass(name = "World", module = "vadop._vadop")]
+struct PyWorld {
+    world: World,
+}
+
+#[pymethods]
+impl PyWorld {
+    #[new]
+    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "vadop", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        positions: &Bound<'_, PyAny>,
+        velocities: &Bound<'_, PyAny>,
+        radii: &Bound<'_, PyAny>,
+        masses: Option<&Bound<'_, PyAny>>,
+        r#box: &Bound<'_, PyAny>,
+        method: &str,
+        mode: &str,
+        pool_axes: Option<i64>,
+        phi: Option<f64>,
+        restitution: f64,
+    ) -> PyResult<PyWorld> {
+        let bounds = bounds(r#box)?;
+        let config = config(method, mode, pool_axes, phi, restitution)?;
+        let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
+        let mut world = World::new(bounds, config).map_err(value_error)?;
+        world.add_spheres(&spheres).map_err(value_error)?;
+        Ok(PyWorld { world })
+    }
+
+    /// Adds bodies (all or none) and returns their ids as an int64 array.
+    #[pyo3(signature = (positions, velocities, radii, masses = None))]
+    fn add<'py>(
+        &mut self,
+        py: Python<'py>,
+        positions: &Bound<'py, PyAny>,
+        velocities: &Bound<'py, PyAny>,
+        radii: &Bound<'py, PyAny>,
+        masses: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let spheres = spheres(positions, velocities, radii, masses, &self.world.bounds())?;
+        let added = self.world.add_spheres(&spheres).map_err(value_error)?;
+        Ok(Array1::from_iter(added.into_iter().map(i64::from)).into_pyarray(py))
+    }
+
+    /// Removes bodies by id (an int or an int64 array), all or none.
+    fn remove(&mut self, ids: &Bound<'_, PyAny>) -> PyResult<()> {
+        let ids = self.live_ids(ids, "ids")?;
+        for id in ids {
+            self.world.remove_sphere(id).map_err(value_error)?;
+        }
+        Ok(())
+    }
+
+    /// Sets the velocities of bodies ``ids`` (an int or an int64 array of k ids) to the rows of
+    /// ``velocities`` (float64 (k, 3)), all or none.
+    fn set_velocities(&mut self, ids: &Bound<'_, PyAny>, velocities: &Bound<'_, PyAny>) -> PyResult<()> {
+        let ids = self.live_ids(ids, "ids")?;
+        let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
+        for (id, v) in ids.into_iter().zip(velocities) {
+            self.world.set_velocity(id, v).map_err(value_error)?;
+        }
+        Ok(())
+    }
+
+    /// Advances the world by ``dt`` and returns the frame's contacts in time order.
+    fn step(&mut self, py: Python<'_>, dt: f64) -> PyResult<Contacts> {
+        let world = &mut self.world;
+        let contacts = py.allow_threads(|| world.step(dt).map(|c| c.to_vec())).map_err(value_error)?;
+        Ok(Contacts::new(py, &contacts))
+    }
+
+    /// Ids of the live bodies, ascending (the row order of every array read back).
+    #[getter]
+    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        Array1::from_iter(self.world.spheres().map(|(id, _)| i64::from(id))).into_pyarray(py)
+    }
+
+    /// Centres now, float64 (n, 3).
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        vectors_array(py, &self.world.spheres().map(|(_, s)| s.position).collect::<Vec<_>>())
+    }
+
+    /// Velocities now, float64 (n, 3).
+    #[getter]
+    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        vectors_array(py, &self.world.spheres().map(|(_, s)| s.velocity).collect::<Vec<_>>())
+    }
+
+    /// Radii, float64 (n,).
+    #[getter]
+    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        Array1::from_iter(self.world.spheres().map(|(_, s)| s.radius)).into_pyarray(py)
+    }
+
+    /// Masses, float64 (n,).
+    #[getter]
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        Array1::from_iter(self.world.spheres().map(|(_, s)| s.mass)).into_pyarray(py)
+    }
+
+    /// The box as float64 [[min x, y, z], [max x, y, z]].
+    #[getter(r#box)]
+    fn get_box<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let b = self.world.bounds();
+        vectors_array(py, &[b.min, b.max])
+    }
+
+    /// Simulation time now.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.world.time()
+    }
+
+    /// 'vadop', 'brute' or 'discrete'.
+    #[getter]
+    fn method(&self) -> &'static str {
+        match self.world.config().method {
+            Method::Vadop => "vadop",
+            Method::Brute => "brute",
+            Method::Discrete => "discrete",
+        }
+    }
+
+    /// 'simulate' or 'detect'.
+    #[getter]
+    fn mode(&self) -> &'static str {
+        match self.world.config().mode {
+            Mode::Simulate => "simulate",
+            Mode::Detect => "detect",
+        }
+    }
+
+    /// Number of axes in the pool.
+    #[getter]
+    fn pool_axes(&self) -> usize {
+        self.world.pool().len()
+    }
+
+    /// The alignment angle phi in use, in radians.
+    #[getter]
+    fn phi(&self) -> f64 {
+        self.world.config().phi.unwrap_or(self.world.pool().covering_radius())
+    }
+
+    /// Coefficient of restitution.
+    #[getter]
+    fn restitution(&self) -> f64 {
+        self.world.config().restitution
+    }
+
+    /// The pool's axes as unit vectors, float64 (pool_axes, 3).
+    #[getter]
+    fn axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        vectors_array(py, self.world.pool().axes())
+    }
+
+    /// Statistics of the last frame: seconds per stage (update, sort, test, response, total) and
+    /// counters (endpoint swaps, list entries, candidate pairs, narrow tests, contacts, pair
+    /// contacts, invalidations, broad-phase bytes).
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.world.stats();
+        let d = PyDict::new(py);
+        d.set_item("update_seconds", s.update_seconds)?;
+        d.set_item("sort_seconds", s.sort_seconds)?;
+        d.set_item("test_seconds", s.test_seconds)?;
+        d.set_item("response_seconds", s.response_seconds)?;
+        d.set_item("total_seconds", s.total_seconds())?;
+        d.set_item("endpoint_swaps", s.endpoint_swaps)?;
+        d.set_item("list_entries", s.list_entries)?;
+        d.set_item("candidate_pairs", s.candidate_pairs)?;
+        d.set_item("narrow_tests", s.narrow_tests)?;
+        d.set_item("contacts", s.contacts)?;
+        d.set_item("pair_contacts", s.pair_contacts)?;
+        d.set_item("invalidations", s.invalidations)?;
+        d.set_item("broad_phase_bytes", s.broad_phase_bytes)?;
+        Ok(d)
+    }
+
+    /// Total kinetic energy.
+    fn kinetic_energy(&self) -> f64 {
+        self.world.kinetic_energy()
+    }
+
+    /// Total linear momentum, float64 (3,).
+    fn momentum<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        Array1::from_vec(self.world.momentum().to_array().to_vec()).into_pyarray(py)
+    }
+
+    /// The VADOP volumes the next frame of length ``dt`` will use, one row per (body, axis):
+    /// ``(body, axis, lo, hi)``: int64 body ids, int64 indices into ``axes``, and the float64
+    /// interval each body's swept sphere covers on that axis. The broad phase is built by the
+    /// first step, so this needs method 'vadop' and at least one step; bodies added since the
+    /// last step have no rows yet.
+    #[allow(clippy::type_complexity)]
+    fn volumes<'py>(
+        &self,
+        py: Python<'py>,
+        dt: f64,
+    ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(value_error(VadopError::BadTimeStep(dt)));
+        }
+        let Some(sap) = self.world.sweep_prune() else {
+            return Err(PyValueError::new_err(format!(
+                "volumes exist only for method 'vadop' after the first step (method {:?}, time {})",
+                self.method(),
+                self.world.time()
+            )));
+        };
+        let (mut body, mut axis, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (id, s) in self.world.spheres() {
+            for &a in sap.axes_of(id) {
+                let iv = interval(sap.pool().axis(a), s.position, s.velocity, s.radius, dt);
+                body.push(i64::from(id));
+                axis.push(i64::from(a));
+                lo.push(iv.lo);
+                hi.push(iv.hi);
+            }
+        }
+        Ok((Array1::from_vec(body).into_pyarray(py), Array1::from_vec(axis).into_pyarray(py), Array1::from_vec(lo).into_pyarray(py), Array1::from_vec(hi).into_pyarray(py)))
+    }
+
+    fn __len__(&self) -> usize {
+        self.world.len()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<World: {} bodies, method {}, mode {}, time {}>", self.world.len(), self.method(), self.mode(), self.world.time())
+    }
+}
+
+impl PyWorld {
+    /// Ids that all name distinct live bodies, or an error naming the first that does not.
+    fn live_ids(&self, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<u32>> {
+        let ids = ids(obj, name)?;
+        let mut seen = std::collections::HashSet::new();
+        ids.iter()
+            .map(|&id| {
+                let live = u32::try_from(id).ok().filter(|&u| self.world.sphere(u).is_some());
+                match live {
+                    Some(u) if seen.insert(u) => Ok(u),
+                    Some(_) => Err(PyValueError::new_err(format!("{name} must not repeat an id, got {id} twice"))),
+                    None => Err(PyValueError::new_err(format!("{name} must name live bodies, got {id}"))),
+                }
+            })
+            .collect()
+    }
+}
+
+/// The paper's scene as a world: ``bodies`` spheres of radius ``radius`` at ``packing_fraction``
+/// in a cube, random directions, speeds uniform up to ``max_speed`` diameters per frame at 30
+/// frames per second (so step with ``dt = 1/30``), generated from ``seed``; the world settings
+/// as for ``World``.
+///
+/// >>> import vadop
+/// >>> w = vadop.scene(1000, 0.05, 0.5)
+/// >>> len(w), w.positions.shape
+/// (1000, (1000, 3))
+#[pyfunction]
+#[pyo3(signature = (bodies = 1000, packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = 1, method = "vadop", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0))]
+#[allow(clippy::too_many_arguments)]
+fn scene(
+    py: Python<'_>,
+    bodies: usize,
+    packing_fraction: f64,
+    max_speed: f64,
+    radius: f64,
+    seed: u64,
+    method: &str,
+    mode: &str,
+    pool_axes: Option<i64>,
+    phi: Option<f64>,
+    restitution: f64,
+) -> PyResult<PyWorld> {
+    let config = config(method, mode, pool_axes, phi, restitution)?;
+    let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
+    let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
+    Ok(PyWorld { world })
+}
+
+/// Detect mode on given paths: bodies start at ``positions`` with ``velocities`` and move in
+/// straight lines, passing through each other and bouncing only off the box walls, for
+/// ``frames`` frames of ``dt``; returns every contact of the run in time order. ``method``
+/// chooses how they are found ('vadop', 'brute' or 'discrete'; the first two find the same
+/// contacts).
+///
+/// >>> import numpy as np, vadop
+/// >>> c = vadop.detect(np.array([[1.0, 1, 1], [4, 1, 1]]), np.array([[40.0, 0, 0], [0, 0, 0]]),
+/// ...                  np.array([0.5, 0.5]), box=10.0, dt=0.1, frames=1)
+/// >>> c.j.tolist(), c.time.tolist()   # the gap of 2 closes at 40 units/s
+/// ([1], [0.05])
+#[pyfunction]
+#[pyo3(signature = (positions, velocities, radii, *, r#box, dt, frames, method = "vadop", pool_axes = None, phi = None))]
+#[allow(clippy::too_many_arguments)]
+fn detect(
+    py: Python<'_>,
+    positions: &Bound<'_, PyAny>,
+    velocities: &Bound<'_, PyAny>,
+    radii: &Bound<'_, PyAny>,
+    r#box: &Bound<'_, PyAny>,
+    dt: f64,
+    frames: usize,
+    method: &str,
+    pool_axes: Option<i64>,
+    phi: Option<f64>,
+) -> PyResult<Contacts> {
+    let bounds = bounds(r#box)?;
+    let config = config(method, "detect", pool_axes, phi, 1.0)?;
+    let spheres = spheres(positions, velocities, radii, None, &bounds)?;
+    let run = || -> vadop::Result<Vec<Contact>> {
+        let mut world = World::new(bounds, config)?;
+        world.add_spheres(&spheres)?;
+        let mut all = Vec::new();
+        for _ in 0..frames {
+            all.extend_from_slice(world.step(dt)?);
+        }
+        Ok(all)
+    };
+    let contacts = py.allow_threads(run).map_err(value_error)?;
+    Ok(Contacts::new(py, &contacts))
+}
+
+#[pymodule]
+fn _vadop(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyWorld>()?;
+    m.add_class::<Contacts>()?;
+    m.add_function(wrap_pyfunction!(scene, m)?)?;
+    m.add_function(wrap_pyfunction!(detect, m)?)?;
+    m.add("WALLS", WALLS.to_vec())?;
+    Ok(())
+}

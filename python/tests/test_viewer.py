@@ -1,0 +1,112 @@
+"""The viewer: a recording holds what the page needs, and the page renders in a real browser
+(headless Chromium with its software WebGL): the screenshot is checked for its content."""
+
+import html
+import json
+import os
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+import vadop
+from vadop.viewer import main, record, write_html
+
+
+def test_recording_holds_frames_contacts_and_honest_volumes():
+    world = vadop.scene(80, 0.1, 2.0, pool_axes=7)
+    run = record(world, frames=6, watch=[3, 5])
+    assert len(run["frames"]) == 7 and run["frames"][0]["v"] is None
+    assert len(run["axes"]) == 7 and run["ids"] == list(range(80))
+    assert sum(len(f["c"]) for f in run["frames"]) > 0
+    for frame in run["frames"][1:]:
+        p = np.array(frame["p"]).reshape(-1, 3)
+        u = np.array(frame["u"]).reshape(-1, 3)
+        assert {v[0] for v in frame["v"]} == {3, 5}
+        for body, axis, lo, hi in frame["v"]:
+            a = np.array(run["axes"][axis])
+            start, end = p[body] @ a, p[body] @ a + u[body] @ a * run["dt"]
+            tolerance = 1e-4  # the recording rounds to 1e-5 of the box
+            assert lo <= min(start, end) - 0.5 + tolerance and hi >= max(start, end) + 0.5 - tolerance
+            # A VADOP axis is nearly orthogonal to the body's velocity.
+            assert abs(u[body] @ a) <= np.linalg.norm(u[body]) * np.sin(world.phi) + 1e-3
+
+
+def test_other_methods_record_without_volumes(tmp_path):
+    run = record(vadop.scene(30, 0.1, 1.0, method="brute"), frames=2)
+    assert all(f["v"] is None for f in run["frames"])
+    page = write_html(run, tmp_path / "run.html").read_text()
+    assert "/*VADOP_DATA*/" not in page and '"method":"brute"' in page
+
+
+def test_command_writes_a_page(tmp_path, capsys):
+    out = tmp_path / "run.html"
+    assert main(["--bodies", "40", "--frames", "5", "--out", str(out)]) == 0
+    assert out.exists() and "wrote" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as exit:
+        main(["--bodies", "0", "--out", str(out)])
+    assert exit.value.code == 2
+
+
+def chromium():
+    found = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+    if found is None:
+        if os.environ.get("CI"):
+            pytest.fail("chromium is required in CI (scripts/test.sh installs it with apt-get)")
+        pytest.skip("chromium not installed (apt-get install -y chromium)")
+    return found
+
+
+def browse(page, fragment, *args):
+    command = [chromium(), "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+               "--window-size=1000,700", "--hide-scrollbars", "--virtual-time-budget=4000", *args,
+               page.resolve().as_uri() + "#" + fragment]
+    return subprocess.run(command, capture_output=True, text=True, timeout=180, check=True).stdout
+
+
+@pytest.fixture(scope="module")
+def page(tmp_path_factory):
+    world = vadop.scene(150, 0.08, 1.5, seed=2)
+    return write_html(record(world, frames=40), tmp_path_factory.mktemp("viewer") / "run.html")
+
+
+def test_page_runs_without_errors(page):
+    dom = browse(page, "frame=20&body=7&pause", "--dump-dom")
+    status = json.loads(html.unescape(dom.split('data-status="', 1)[1].split('"', 1)[0]))
+    assert status["error"] == "" and status["gl"] == "webgl2"
+    assert status["rendered"] >= 1 and status["frame"] == 20 and status["body"] == 7
+    assert status["slabs"] >= 2  # a body uses at least two axes of the 3-axis pool
+
+
+def screenshot(page, fragment, path):
+    browse(page, fragment, f"--screenshot={path}")
+    return imread(path)[:, :, :3]
+
+
+def test_screenshot_shows_spheres_box_and_the_selected_volume(page, tmp_path):
+    with_volume = screenshot(page, "frame=20&body=7&pause", tmp_path / "volume.png")
+    without = screenshot(page, "frame=20&body=7&pause&volumes=0", tmp_path / "plain.png")
+    assert with_volume.shape == (700, 1000, 3)
+    r, g, b = with_volume[..., 0], with_volume[..., 1], with_volume[..., 2]
+    scene = with_volume[:640, 340:]  # right of the panel, above the controls
+    background = np.all(np.abs(scene - np.array([16, 19, 26]) / 255) < 0.03, axis=-1)
+    assert 0.3 < background.mean() < 0.97, "the scene is neither empty nor covered"
+    # Lit blue-grey spheres, the orange selected body, and the light box edges.
+    spheres = (b > r + 0.08) & (b > 0.3)
+    selected = (r > 0.4) & (g > 0.4 * r) & (g < 0.7 * r) & (b < 0.25 * r)
+    assert spheres.sum() > 5000 and selected.sum() > 20
+    edges = np.all(with_volume > 0.6, axis=-1) & (np.abs(r - b) < 0.12)
+    assert edges[:640, 340:].sum() > 300
+    # The slabs of the selected body's two axes (red for axis 0, green for axis 1) appear only
+    # with volumes on, and near the selected body.
+    def slab_pixels(image):
+        r, g, b = image[:640, 340:, 0], image[:640, 340:, 1], image[:640, 340:, 2]
+        return (r > 0.5) & (g < 0.6 * r) & (b > 0.25 * r) & (b < 0.5 * r), (g > 0.5) & (r < 0.7 * g) & (b < 0.7 * g)
+    (red, green), (red_before, green_before) = slab_pixels(with_volume), slab_pixels(without)
+    assert red.sum() > red_before.sum() + 100 and green.sum() > green_before.sum() + 100
+    ys, xs = np.nonzero(selected[:640, 340:])
+    new_red = red & ~red_before
+    ry, rx = np.nonzero(new_red)
+    assert abs(np.median(ry) - np.median(ys)) < 120 and abs(np.median(rx) - np.median(xs)) < 120

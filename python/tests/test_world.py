@@ -1,0 +1,172 @@
+"""World round trips: arrays in and out, bodies added and removed, settings, statistics, contacts."""
+
+import threading
+
+import numpy as np
+import pytest
+
+import vadop
+
+
+def two_bodies(**settings):
+    positions = np.array([[2.0, 5, 5], [8, 5, 5]])
+    velocities = np.array([[30.0, 0, 0], [0, 0, 0]])
+    return vadop.World(positions, velocities, np.array([0.5, 0.5]), np.array([1.0, 3.0]), box=10.0, **settings)
+
+
+def test_arrays_round_trip():
+    rng = np.random.default_rng(1)
+    positions = rng.uniform(1, 9, (20, 3))
+    velocities = rng.normal(size=(20, 3))
+    radii = rng.uniform(0.01, 0.1, 20)
+    masses = rng.uniform(1, 2, 20)
+    box = np.array([[0.0, 0, 0], [10, 10, 12]])
+    world = vadop.World(positions, velocities, radii, masses, box=box, mode="detect")
+    assert len(world) == 20
+    np.testing.assert_array_equal(world.ids, np.arange(20))
+    np.testing.assert_array_equal(world.positions, positions)
+    np.testing.assert_array_equal(world.velocities, velocities)
+    np.testing.assert_array_equal(world.radii, radii)
+    np.testing.assert_array_equal(world.masses, masses)
+    np.testing.assert_array_equal(world.box, box)
+    assert world.positions.dtype == np.float64 and world.ids.dtype == np.int64
+    # Arrays read back are copies: writing to them changes nothing.
+    world.positions[0] = 0.0
+    np.testing.assert_array_equal(world.positions, positions)
+
+
+def test_non_contiguous_input_is_read_correctly():
+    data = np.arange(24, dtype=np.float64).reshape(4, 6) / 10 + 1
+    positions = data[:, ::2]
+    world = vadop.World(positions, np.zeros((4, 3)), np.full(4, 0.01), box=10.0, mode="detect")
+    np.testing.assert_array_equal(world.positions, positions)
+
+
+def test_masses_default_to_one_and_box_side_means_a_cube():
+    world = vadop.World(np.array([[1.0, 1, 1]]), np.zeros((1, 3)), np.array([0.5]), box=4.0)
+    np.testing.assert_array_equal(world.masses, [1.0])
+    np.testing.assert_array_equal(world.box, [[0, 0, 0], [4, 4, 4]])
+
+
+def test_settings_are_reported():
+    world = two_bodies(method="brute", mode="detect", pool_axes=13, phi=1.2, restitution=0.5)
+    assert (world.method, world.mode, world.pool_axes, world.phi, world.restitution) == ("brute", "detect", 13, 1.2, 0.5)
+    assert world.axes.shape == (13, 3)
+    np.testing.assert_allclose(np.linalg.norm(world.axes, axis=1), 1.0)
+    default = two_bodies()
+    assert default.method == "vadop" and default.mode == "simulate" and default.restitution == 1.0
+    assert 0 < default.phi <= np.pi / 2
+
+
+def test_step_finds_the_contact_between_frames_and_resolves_it():
+    world = two_bodies()
+    contacts = world.step(0.25)
+    assert world.time == 0.25
+    pair = contacts.j >= 0
+    assert contacts.i[pair].tolist() == [0] and contacts.j[pair].tolist() == [1]
+    assert contacts.time[pair][0] == pytest.approx(5 / 30, abs=1e-12)
+    # Centre at 2 + 30 / 6 = 7, the point one radius further.
+    np.testing.assert_allclose(contacts.point[pair][0], [7.5, 5, 5], atol=1e-9)
+    np.testing.assert_allclose(contacts.normal[pair][0], [1.0, 0, 0], atol=1e-12)
+    # Masses 1 and 3, elastic: v1' = -15, v2' = 15.
+    np.testing.assert_allclose(world.velocities[:, 0], [-15.0, 15.0], atol=1e-9)
+    assert contacts.impulse[pair][0] == pytest.approx(45.0)
+    assert len(contacts) == len(contacts.time) == contacts.point.shape[0]
+    assert world.momentum()[0] == pytest.approx(30.0)
+    assert world.kinetic_energy() == pytest.approx(450.0)
+
+
+def test_contact_columns_are_typed_and_in_time_order():
+    world = vadop.scene(400, 0.1, 3.0, seed=4)
+    for _ in range(5):
+        c = world.step(1 / 30)
+        assert len(c) > 0
+        assert c.time.dtype == c.impulse.dtype == c.point.dtype == c.normal.dtype == np.float64
+        assert c.i.dtype == c.j.dtype == c.wall.dtype == np.int64
+        assert c.point.shape == c.normal.shape == (len(c), 3)
+        assert np.all(np.diff(c.time) >= 0)
+        # A contact is either with a body (j >= 0, wall -1) or a wall (j -1, wall 0..5).
+        assert np.all((c.j >= 0) == (c.wall == -1))
+        assert np.all(c.wall < len(vadop.WALLS))
+        assert np.all(c.i[c.j >= 0] < c.j[c.j >= 0])
+        walls = c.wall >= 0
+        axis = c.wall[walls] // 2
+        side = np.where(c.wall[walls] % 2 == 1, 1.0, -1.0)
+        np.testing.assert_array_equal(c.normal[walls][np.arange(walls.sum()), axis], side)
+        np.testing.assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0)
+
+
+def test_add_remove_reuse_ids_lowest_first():
+    world = two_bodies(mode="detect")
+    new = world.add(np.array([[5.0, 2, 2], [5, 8, 8]]), np.zeros((2, 3)), np.array([0.5, 0.25]))
+    assert new.tolist() == [2, 3]
+    world.remove(np.array([3, 1]))
+    assert world.ids.tolist() == [0, 2] and len(world) == 2
+    world.remove(0)
+    assert world.ids.tolist() == [2]
+    again = world.add(np.array([[1.0, 1, 1], [3, 3, 3]]), np.zeros((2, 3)), np.array([0.5, 0.5]), np.array([2.0, 2.0]))
+    assert again.tolist() == [0, 1]
+    np.testing.assert_array_equal(world.positions, [[1.0, 1, 1], [3, 3, 3], [5, 2, 2]])
+    np.testing.assert_array_equal(world.masses, [2.0, 2.0, 1.0])
+
+
+def test_set_velocities():
+    world = two_bodies()
+    world.set_velocities(np.array([1, 0]), np.array([[0.0, 1, 0], [0, 0, 2]]))
+    np.testing.assert_array_equal(world.velocities, [[0.0, 0, 2], [0, 1, 0]])
+    world.set_velocities(1, np.array([[3.0, 0, 0]]))
+    np.testing.assert_array_equal(world.velocities[1], [3.0, 0, 0])
+
+
+def test_stats_is_a_dict_of_the_last_frame():
+    world = vadop.scene(300, 0.1, 2.0)
+    world.step(1 / 30)
+    stats = world.stats()
+    expected = {"update_seconds", "sort_seconds", "test_seconds", "response_seconds", "total_seconds",
+                "endpoint_swaps", "list_entries", "candidate_pairs", "narrow_tests", "contacts",
+                "pair_contacts", "invalidations", "broad_phase_bytes"}
+    assert set(stats) == expected
+    parts = sum(stats[k] for k in ("update_seconds", "sort_seconds", "test_seconds", "response_seconds"))
+    assert stats["total_seconds"] == pytest.approx(parts)
+    assert stats["contacts"] >= stats["pair_contacts"] > 0
+    assert isinstance(stats["candidate_pairs"], int)
+
+
+def test_volumes_bound_each_body_on_its_axes():
+    world = vadop.scene(200, 0.1, 2.0, pool_axes=13)
+    world.step(1 / 30)
+    body, axis, lo, hi = world.volumes(1 / 30)
+    assert set(body.tolist()) == set(world.ids.tolist())
+    positions, velocities, radii, axes = world.positions, world.velocities, world.radii, world.axes
+    start = np.einsum("ij,ij->i", positions[body], axes[axis])
+    end = start + np.einsum("ij,ij->i", velocities[body], axes[axis]) / 30
+    assert np.all(lo <= np.minimum(start, end) - radii[body])
+    assert np.all(hi >= np.maximum(start, end) + radii[body])
+    # Each body uses axes nearly orthogonal to its velocity: within phi of its orthogonal plane.
+    speed = np.linalg.norm(velocities[body], axis=1)
+    moving = speed > 0
+    sines = np.abs(np.einsum("ij,ij->i", velocities[body], axes[axis]))[moving] / speed[moving]
+    assert np.all(sines <= np.sin(world.phi) + 1e-9)
+
+
+def test_scene_matches_its_parameters():
+    world = vadop.scene(500, 0.05, 0.5, seed=3)
+    side = (500 * 4 / 3 * np.pi * 0.125 / 0.05) ** (1 / 3)
+    np.testing.assert_allclose(world.box, [[0, 0, 0], [side] * 3])
+    assert np.all(world.radii == 0.5)
+    assert np.linalg.norm(world.velocities, axis=1).max() <= 0.5 * 30 * 1.0
+    np.testing.assert_array_equal(vadop.scene(500, 0.05, 0.5, seed=3).positions, world.positions)
+    assert not np.array_equal(vadop.scene(500, 0.05, 0.5, seed=4).positions, world.positions)
+
+
+def test_step_releases_the_gil():
+    world = vadop.scene(60_000, 0.05, 1.0)
+    world.step(1 / 30)
+    worker = threading.Thread(target=world.step, args=(1 / 30,))
+    spins = 0
+    worker.start()
+    while worker.is_alive():
+        spins += 1
+    worker.join()
+    # Holding the GIL for the whole step would leave this loop a few thousand turns at most.
+    assert spins > 50_000

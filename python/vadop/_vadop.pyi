@@ -1,0 +1,123 @@
+"""Type stubs of the vadop extension module (checked against it with mypy's stubtest)."""
+
+from typing import Literal, Optional, Union, final
+
+import numpy as np
+import numpy.typing as npt
+
+_Float64Array = npt.NDArray[np.float64]
+_Int64Array = npt.NDArray[np.int64]
+_Box = Union[float, _Float64Array]
+_Ids = Union[int, _Int64Array]
+_MethodName = Literal["vadop", "brute", "discrete"]
+_ModeName = Literal["simulate", "detect"]
+
+__all__ = ["WALLS", "Contacts", "World", "detect", "scene"]
+
+WALLS: list[str]
+
+@final
+class Contacts:
+    """The contacts of one or more frames, as columns in time order."""
+
+    @property
+    def time(self) -> _Float64Array: ...
+    @property
+    def i(self) -> _Int64Array: ...
+    @property
+    def j(self) -> _Int64Array: ...
+    @property
+    def wall(self) -> _Int64Array: ...
+    @property
+    def point(self) -> _Float64Array: ...
+    @property
+    def normal(self) -> _Float64Array: ...
+    @property
+    def impulse(self) -> _Float64Array: ...
+    def __len__(self) -> int: ...
+
+@final
+class World:
+    """Spheres in a box, stepped frame by frame; every contact inside a frame is found."""
+
+    def __new__(
+        cls,
+        positions: _Float64Array,
+        velocities: _Float64Array,
+        radii: _Float64Array,
+        masses: Optional[_Float64Array] = None,
+        *,
+        box: _Box,
+        method: _MethodName = "vadop",
+        mode: _ModeName = "simulate",
+        pool_axes: Optional[int] = None,
+        phi: Optional[float] = None,
+        restitution: float = 1.0,
+    ) -> World: ...
+    def add(
+        self,
+        positions: _Float64Array,
+        velocities: _Float64Array,
+        radii: _Float64Array,
+        masses: Optional[_Float64Array] = None,
+    ) -> _Int64Array: ...
+    def remove(self, ids: _Ids) -> None: ...
+    def set_velocities(self, ids: _Ids, velocities: _Float64Array) -> None: ...
+    def step(self, dt: float) -> Contacts: ...
+    @property
+    def ids(self) -> _Int64Array: ...
+    @property
+    def positions(self) -> _Float64Array: ...
+    @property
+    def velocities(self) -> _Float64Array: ...
+    @property
+    def radii(self) -> _Float64Array: ...
+    @property
+    def masses(self) -> _Float64Array: ...
+    @property
+    def box(self) -> _Float64Array: ...
+    @property
+    def time(self) -> float: ...
+    @property
+    def method(self) -> _MethodName: ...
+    @property
+    def mode(self) -> _ModeName: ...
+    @property
+    def pool_axes(self) -> int: ...
+    @property
+    def phi(self) -> float: ...
+    @property
+    def restitution(self) -> float: ...
+    @property
+    def axes(self) -> _Float64Array: ...
+    def stats(self) -> dict[str, float]: ...
+    def kinetic_energy(self) -> float: ...
+    def momentum(self) -> _Float64Array: ...
+    def volumes(self, dt: float) -> tuple[_Int64Array, _Int64Array, _Float64Array, _Float64Array]: ...
+    def __len__(self) -> int: ...
+
+def scene(
+    bodies: int = 1000,
+    packing_fraction: float = 0.05,
+    max_speed: float = 0.5,
+    *,
+    radius: float = 0.5,
+    seed: int = 1,
+    method: _MethodName = "vadop",
+    mode: _ModeName = "simulate",
+    pool_axes: Optional[int] = None,
+    phi: Optional[float] = None,
+    restitution: float = 1.0,
+) -> World: ...
+def detect(
+    positions: _Float64Array,
+    velocities: _Float64Array,
+    radii: _Float64Array,
+    *,
+    box: _Box,
+    dt: float,
+    frames: int,
+    method: _MethodName = "vadop",
+    pool_axes: Optional[int] = None,
+    phi: Optional[float] = None,
+) -> Contacts: ...
