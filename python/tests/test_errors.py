@@ -50,7 +50,7 @@ def world_with(**changes):
         (dict(box=np.array([[0, 0, 0], [10, 10, 10]])), TypeError, "box must be a number (cube side) or a float64 array of shape (2, 3), got int64"),
         (dict(box="big"), TypeError, "box must be a number (cube side) or a float64 array of shape (2, 3), got str"),
         (dict(box=np.array([[0.0, 0, 10], [10, 10, 0]])), ValueError, "box must have finite corners with min < max"),
-        (dict(method="fast"), ValueError, "method must be 'vadop', 'brute' or 'discrete', got \"fast\""),
+        (dict(method="fast"), ValueError, "method must be one of 'vadop', 'swept-aabb', 'swept-kdop', 'grid', 'discrete', 'brute', got \"fast\""),
         (dict(mode="both"), ValueError, "mode must be 'simulate' or 'detect', got \"both\""),
         (dict(pool_axes=2), ValueError, "axis pool size must be between 3 and 100000, got 2"),
         (dict(pool_axes=-5), ValueError, "pool_axes must be an int between 3 and 100000, got -5"),

@@ -9,7 +9,7 @@ _Float64Array = npt.NDArray[np.float64]
 _Int64Array = npt.NDArray[np.int64]
 _Box = Union[float, _Float64Array]
 _Ids = Union[int, _Int64Array]
-_MethodName = Literal["vadop", "brute", "discrete"]
+_MethodName = Literal["vadop", "brute", "discrete", "swept-aabb", "swept-kdop", "grid"]
 _ModeName = Literal["simulate", "detect"]
 
 __all__ = ["WALLS", "Contacts", "World", "detect", "scene"]

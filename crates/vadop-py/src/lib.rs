@@ -172,12 +172,10 @@ fn spheres(
 }
 
 fn parse_method(method: &str) -> PyResult<Method> {
-    match method {
-        "vadop" => Ok(Method::Vadop),
-        "brute" => Ok(Method::Brute),
-        "discrete" => Ok(Method::Discrete),
-        _ => Err(PyValueError::new_err(format!("method must be 'vadop', 'brute' or 'discrete', got {method:?}"))),
-    }
+    Method::ALL.into_iter().find(|m| m.name() == method).ok_or_else(|| {
+        let names: Vec<String> = Method::ALL.iter().map(|m| format!("'{}'", m.name())).collect();
+        PyValueError::new_err(format!("method must be one of {}, got {method:?}", names.join(", ")))
+    })
 }
 
 fn parse_mode(mode: &str) -> PyResult<Mode> {
@@ -261,7 +259,8 @@ impl Contacts {
 /// Bodies are given as numpy columns: ``positions`` and ``velocities`` float64 (n, 3), ``radii``
 /// and ``masses`` float64 (n,) (``masses`` defaults to 1). ``box`` is a cube side or a float64
 /// array ``[[min x, y, z], [max x, y, z]]``. Settings: ``method`` ('vadop', 'brute' — every pair,
-/// the oracle — or 'discrete' — overlap checks at frame instants only), ``mode`` ('simulate' or
+/// the oracle —, 'discrete' — overlap checks at frame instants only — or the continuous
+/// baselines 'swept-aabb', 'swept-kdop' and 'grid'), ``mode`` ('simulate' or
 /// 'detect': bodies pass through each other and bounce only off the walls), ``pool_axes`` (None
 /// picks the engine's default), ``phi`` in radians (None: the pool's covering radius) and
 /// ``restitution`` in [0, 1].
@@ -390,14 +389,10 @@ impl PyWorld {
         self.world.time()
     }
 
-    /// 'vadop', 'brute' or 'discrete'.
+    /// The method's name: 'vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or 'grid'.
     #[getter]
     fn method(&self) -> &'static str {
-        match self.world.config().method {
-            Method::Vadop => "vadop",
-            Method::Brute => "brute",
-            Method::Discrete => "discrete",
-        }
+        self.world.config().method.name()
     }
 
     /// 'simulate' or 'detect'.
@@ -560,8 +555,8 @@ fn scene(
 /// Detect mode on given paths: bodies start at ``positions`` with ``velocities`` and move in
 /// straight lines, passing through each other and bouncing only off the box walls, for
 /// ``frames`` frames of ``dt``; returns every contact of the run in time order. ``method``
-/// chooses how they are found ('vadop', 'brute' or 'discrete'; the first two find the same
-/// contacts).
+/// chooses how they are found ('vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or
+/// 'grid'; all but 'discrete' find the same contacts).
 ///
 /// >>> import numpy as np, vadop
 /// >>> c = vadop.detect(np.array([[1.0, 1, 1], [4, 1, 1]]), np.array([[40.0, 0, 0], [0, 0, 0]]),
