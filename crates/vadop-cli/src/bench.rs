@@ -150,7 +150,7 @@ fn run_core(args: &BenchArgs, timeout: Duration) -> CliResult<()> {
             for method in methods(n) {
                 let measure = |reference: &str| {
                     bar.set_message(format!("n={n} speed={speed} {method} (reference {reference})"));
-                    let outcome = run_child(&exe, &child_args(n, speed, frames, method, reference, &scratch), &scratch, timeout);
+                    let outcome = run_child(&exe, &child_args(n, speed, frames, method, "detect", reference, &scratch), &scratch, timeout);
                     bar.inc(1);
                     outcome
                 };
@@ -173,15 +173,15 @@ fn run_core(args: &BenchArgs, timeout: Duration) -> CliResult<()> {
     report::print(&format!("{section}\nwrote {} and {}\n", args.output.display(), args.csv.display()))
 }
 
-/// The flags of a paper-scene run in detect mode; the child writes its summary to `scratch`.json.
-pub(crate) fn child_args(bodies: usize, speed: f64, frames: u64, method: &str, reference: &str, scratch: &Path) -> Vec<String> {
+/// The flags of a paper-scene run; the child writes its summary to `scratch`.json.
+pub(crate) fn child_args(bodies: usize, speed: f64, frames: u64, method: &str, mode: &str, reference: &str, scratch: &Path) -> Vec<String> {
     let flags = [
         ("--bodies", bodies.to_string()),
         ("--packing", PACKING.to_string()),
         ("--max-speed", speed.to_string()),
         ("--seed", "1".to_string()),
         ("--frames", frames.to_string()),
-        ("--mode", "detect".to_string()),
+        ("--mode", mode.to_string()),
         ("--method", method.to_string()),
         ("--reference", reference.to_string()),
         ("--json", scratch.with_extension("json").display().to_string()),

@@ -31,6 +31,8 @@ enum Experiment {
     Speed,
     /// vadop's ms/frame against pool size at several speeds.
     Pool,
+    /// ms/frame per method with full response (paths differ between methods).
+    Simulate,
 }
 
 impl Experiment {
@@ -40,6 +42,16 @@ impl Experiment {
             Experiment::Bodies => "bodies",
             Experiment::Speed => "speed",
             Experiment::Pool => "pool",
+            Experiment::Simulate => "simulate",
+        }
+    }
+
+    /// Detect mode (identical paths) everywhere but in the simulate experiment.
+    fn mode(self) -> &'static str {
+        if self == Experiment::Simulate {
+            "simulate"
+        } else {
+            "detect"
         }
     }
 }
@@ -84,6 +96,7 @@ pub struct Plan {
     body_counts: Vec<usize>,
     pool_speeds: Vec<f64>,
     pools: Vec<usize>,
+    simulate_speeds: Vec<f64>,
     /// Largest n brute force runs at in the time experiments.
     brute_max: usize,
     timeout: Duration,
@@ -101,6 +114,7 @@ impl Plan {
                 body_counts: vec![250, 500, 1000, 2000],
                 pool_speeds: vec![0.05, 0.5, 5.0],
                 pools: vec![3, 7, 13, 32],
+                simulate_speeds: vec![0.5],
                 brute_max: 2000,
                 timeout,
             }
@@ -113,6 +127,7 @@ impl Plan {
                 body_counts: vec![1000, 3000, 10_000, 30_000, 100_000],
                 pool_speeds: vec![0.05, 0.5, 5.0],
                 pools: vec![3, 7, 13, 32, 65, 200, 1000, 39_000],
+                simulate_speeds: vec![0.5, 5.0],
                 brute_max: 10_000,
                 timeout,
             }
@@ -144,6 +159,11 @@ impl Plan {
                 runs.push((Experiment::Pool, self.bodies, speed, "vadop", Some(m), "none"));
             }
         }
+        for &speed in &self.simulate_speeds {
+            for method in methods_at(self.bodies) {
+                runs.push((Experiment::Simulate, self.bodies, speed, method, None, "none"));
+            }
+        }
         runs
     }
 }
@@ -162,7 +182,7 @@ pub fn run(plan: &Plan, markdown: &Path, out_dir: &Path) -> CliResult<()> {
     for (experiment, bodies, speed, method, pool, reference) in planned {
         let label = pool.map_or(String::new(), |m| format!(" m={m}"));
         bar.set_message(format!("{}: n={bodies} speed={speed} {method}{label}", experiment.name()));
-        let mut args = child_args(bodies, speed, plan.frames, method, reference, &scratch);
+        let mut args = child_args(bodies, speed, plan.frames, method, experiment.mode(), reference, &scratch);
         if let Some(m) = pool {
             args.extend(["--pool".to_string(), m.to_string()]);
         }
@@ -460,6 +480,18 @@ fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, 
                 r.method, c.update_ms, c.sort_ms, c.test_ms, c.response_ms, s.per_frame.endpoint_swaps, s.per_frame.candidate_pairs
             );
         }
+    }
+    let _ = writeln!(md, "\n### 7. Simulate mode (full response; paths differ between methods, so no miss counts): median ms per frame (n = {})\n", plan.bodies);
+    let _ = writeln!(md, "| method | {} |", plan.simulate_speeds.iter().map(|s| format!("speed {s} | pair contacts/frame")).collect::<Vec<_>>().join(" | "));
+    let _ = writeln!(md, "|---|{}", "---:|---:|".repeat(plan.simulate_speeds.len()));
+    for method in METHODS {
+        let _ = write!(md, "| {method} |");
+        for &speed in &plan.simulate_speeds {
+            let run = of(runs, Experiment::Simulate).find(|r| r.speed == speed && r.method == method);
+            let pairs = run.and_then(Run::summary).map_or("—".to_string(), |s| format!("{:.0}", s.contacts.pairs as f64 / s.frames_completed.max(1) as f64));
+            let _ = write!(md, " {} | {pairs} |", cell(run));
+        }
+        let _ = writeln!(md);
     }
     let _ = writeln!(md, "\n### Plots\n");
     for (file, title) in figures {
