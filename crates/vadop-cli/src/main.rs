@@ -9,6 +9,7 @@ mod bench;
 mod pools;
 mod report;
 mod simulate;
+mod soak;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -35,6 +36,9 @@ enum Command {
     /// Benchmark vadop against the discrete and brute-force methods, each run in its own child
     /// process, and write the results into a markdown file and a CSV.
     Bench(bench::BenchArgs),
+    /// A long elastic run (10^7 contacts by default) checking after every frame that energy and
+    /// momentum do not drift, no body leaves the box and no pair overlaps beyond tolerance.
+    Soak(soak::SoakArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +48,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Pools(args) => pools::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Soak(args) => soak::run(&args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

@@ -29,6 +29,7 @@
 pub mod axis_pool;
 pub mod bodies;
 pub mod bounding_volume;
+pub mod collapse;
 pub mod coherent_sort;
 pub mod error;
 pub mod event_queue;
