@@ -49,7 +49,9 @@ fn edit(world: &mut World, frame: usize) {
         3 => {
             // A small sphere in a corner, which may be free or not: only the outcome must match.
             let corner = Sphere { position: world.bounds().min + 0.11, velocity: DVec3::new(1.0, -0.0, 2.0), radius: 0.1, mass: 0.01 };
-            let _ = world.add_sphere(corner);
+            if world.spheres().all(|(_, s)| s.position.distance(corner.position) > s.radius + corner.radius) {
+                world.add_sphere(corner).unwrap();
+            }
         }
         _ => {}
     }
