@@ -37,6 +37,9 @@ pub struct SoakArgs {
     /// Seed of the scene generator
     #[arg(long, value_name = "K", default_value_t = 1)]
     seed: u64,
+    /// Stop after this many frames even if fewer contacts happened (a scene at rest has none)
+    #[arg(long, value_name = "F", default_value_t = 1_000_000)]
+    max_frames: u64,
     /// Print no progress bar
     #[arg(long)]
     quiet: bool,
@@ -65,7 +68,7 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
     let started = Instant::now();
     let (mut frames, mut contacts, mut pair_contacts) = (0u64, 0u64, 0u64);
     let mut worst = Worst::default();
-    while contacts < args.contacts {
+    while contacts < args.contacts && frames < args.max_frames {
         let momentum = world.momentum();
         let scale: f64 = world.spheres().map(|(_, s)| s.mass * s.velocity.length()).sum();
         let found = world.step(dt).map_err(|e| format!("frame {}: {e}", frames + 1))?;

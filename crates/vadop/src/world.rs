@@ -12,7 +12,7 @@
 use crate::axis_pool::AxisPool;
 use crate::bodies::{Bodies, Sphere};
 use crate::collapse::CollapseGuard;
-use crate::error::{check_finite, Result, VadopError};
+use crate::error::{check_magnitude, check_vector, Result, VadopError};
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::narrow_phase::{sphere_sphere_time, sphere_wall_time, Wall};
 use crate::pseudo_dynamic::PseudoDynamic;
@@ -82,6 +82,8 @@ impl BoxBounds {
         if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
             return Err(VadopError::BadBox { min: min.to_array(), max: max.to_array() });
         }
+        check_vector("box corner", min)?;
+        check_vector("box corner", max)?;
         Ok(BoxBounds { min, max })
     }
     /// The cube `[0, side]^3`.
@@ -278,7 +280,7 @@ impl World {
     /// Sets a body's velocity (between frames).
     pub fn set_velocity(&mut self, id: u32, velocity: DVec3) -> Result<()> {
         let i = self.live_index(id)?;
-        check_finite("velocity", velocity)?;
+        check_vector("velocity", velocity)?;
         self.bodies.set_velocity_at(i, self.time, velocity);
         if let BroadPhase::Vadop(sap) = &mut self.broad {
             if !self.unplaced.contains(&id) {
@@ -390,14 +392,17 @@ impl World {
     }
 
     fn check_sphere(&self, s: &Sphere) -> Result<()> {
-        check_finite("position", s.position)?;
-        check_finite("velocity", s.velocity)?;
+        check_vector("position", s.position)?;
+        check_vector("velocity", s.velocity)?;
         if !(s.radius.is_finite() && s.radius > 0.0) {
             return Err(VadopError::BadRadius(s.radius));
         }
         if !(s.mass.is_finite() && s.mass > 0.0) {
             return Err(VadopError::BadMass(s.mass));
         }
+        check_magnitude("radius", s.radius)?;
+        check_magnitude("mass", s.mass)?;
+        check_magnitude("inverse mass", 1.0 / s.mass)?;
         if !self.bounds.contains(s.position, s.radius) {
             return Err(VadopError::OutsideBox {
                 position: s.position.to_array(),
