@@ -1,6 +1,6 @@
 //! The `vadop` command-line tool: run the paper's scene or a scene file and report contacts,
-//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), and benchmark the core engine
-//! (`bench`). This file owns argument parsing, dispatch and the single place where a failure
+//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), benchmark the core engine
+//! (`bench`), and check long runs for drift (`soak`). This file owns argument parsing, dispatch and the single place where a failure
 //! becomes an `error: <message>` line on stderr and exit code 2. It must never do a subcommand's
 //! work itself, and nothing a user types may reach a panic or a backtrace: every fallible step
 //! returns its message as an `Err` up to here.

@@ -9,31 +9,16 @@ use glam::DVec3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
-use vadop::narrow_phase::CONTACT_TOLERANCE;
 use vadop::scene::{PaperScene, Scene};
 use vadop::{BoxBounds, Contact, Method, Mode, Sphere, Touched, World, WorldConfig};
 
-/// Frame-end invariants: every body inside the box; in simulate mode no pair overlapping beyond
-/// the contact tolerance (with a little slack for the rounding of positions far from the origin).
+mod common;
+
+use common::{frame_end_violation, random_direction};
+
 fn check_frame_end(world: &World, frame: usize) {
-    let bounds = world.bounds();
-    let spheres: Vec<(u32, Sphere)> = world.spheres().collect();
-    let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
-    for (id, s) in &spheres {
-        let slack = 1e-9 * s.radius + 4.0 * f64::EPSILON * scale;
-        assert!((s.position - s.radius).cmpge(bounds.min - slack).all(), "frame {frame}: body {id} escaped below: {s:?}");
-        assert!((s.position + s.radius).cmple(bounds.max + slack).all(), "frame {frame}: body {id} escaped above: {s:?}");
-    }
-    if world.config().mode == Mode::Detect {
-        return;
-    }
-    for (k, (i, a)) in spheres.iter().enumerate() {
-        for (j, b) in &spheres[k + 1..] {
-            let reach = a.radius + b.radius;
-            let slack = 2.0 * CONTACT_TOLERANCE * reach + 8.0 * f64::EPSILON * a.position.abs().max_element();
-            let distance = a.position.distance(b.position);
-            assert!(distance >= reach - slack, "frame {frame}: bodies {i} and {j} overlap by {:e}", reach - distance);
-        }
+    if let Some(what) = frame_end_violation(world, true) {
+        panic!("frame {frame}: {what}");
     }
 }
 
@@ -76,15 +61,6 @@ fn assert_same(found: &[Contact], expected: &[Contact], frame: usize) {
 
 fn sphere(position: DVec3, velocity: DVec3, radius: f64) -> Sphere {
     Sphere { position, velocity, radius, mass: radius.powi(3) }
-}
-
-fn random_direction(rng: &mut ChaCha8Rng) -> DVec3 {
-    loop {
-        let v = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
-        if let Some(u) = v.try_normalize().filter(|_| v.length() <= 1.0) {
-            return u;
-        }
-    }
 }
 
 fn both_modes() -> [WorldConfig; 2] {

@@ -9,6 +9,9 @@
 //!
 //! A failure prints the seed and the case number; rerun with that seed to reproduce it.
 
+mod common;
+
+use common::{contact_bits, frame_end_violation, random_direction, state_bits};
 use glam::DVec3;
 use num_bigint::BigInt;
 use num_rational::BigRational;
@@ -17,7 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
 use vadop::narrow_phase::{sphere_sphere_time, CONTACT_TOLERANCE};
-use vadop::{BoxBounds, Contact, Method, Mode, Sphere, VadopError, World, WorldConfig};
+use vadop::{BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
 
 /// The budget: (seed, deadline, most cases).
 fn budget(default_cases: u64) -> (u64, Instant, u64) {
@@ -25,17 +28,6 @@ fn budget(default_cases: u64) -> (u64, Instant, u64) {
     let seconds = var("VADOP_FUZZ_SECONDS").unwrap_or(4);
     let cases = var("VADOP_FUZZ_CASES").unwrap_or(if var("VADOP_FUZZ_SECONDS").is_some() { u64::MAX } else { default_cases });
     (var("VADOP_FUZZ_SEED").unwrap_or(7), Instant::now() + Duration::from_secs(seconds), cases)
-}
-
-fn direction(rng: &mut ChaCha8Rng) -> DVec3 {
-    loop {
-        let v = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
-        if v.length_squared() <= 1.0 {
-            if let Some(u) = v.try_normalize() {
-                return u;
-            }
-        }
-    }
 }
 
 fn power(rng: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
@@ -96,10 +88,10 @@ fn narrow_case(rng: &mut ChaCha8Rng) -> (DVec3, DVec3, f64, f64) {
     let window = power(rng, -3.0, 1.0);
     let speed = radius / window * power(rng, -2.0, 3.0);
     match rng.random_range(0..6) {
-        0 => (direction(rng) * radius * power(rng, -0.5, 3.0), direction(rng) * speed, radius, window),
+        0 => (random_direction(rng) * radius * power(rng, -0.5, 3.0), random_direction(rng) * speed, radius, window),
         1 | 2 => {
             // Aimed: closest approach at distance `miss` at time `when`; grazing when miss ~ R.
-            let u = direction(rng);
+            let u = random_direction(rng);
             let across = u.any_orthonormal_vector();
             let across = across * rng.random_range(-1.0f64..1.0).signum();
             let miss = match rng.random_range(0..4) {
@@ -113,21 +105,21 @@ fn narrow_case(rng: &mut ChaCha8Rng) -> (DVec3, DVec3, f64, f64) {
         }
         3 => {
             // Touching (or a rounding away from it) at the start, approaching or not.
-            let n = direction(rng);
+            let n = random_direction(rng);
             let gap = [0.0, 1e-16, -1e-16, 1e-10, -1e-10, -3e-9][rng.random_range(0..6)];
-            (n * radius * (1.0 + gap), direction(rng) * speed, radius, window)
+            (n * radius * (1.0 + gap), random_direction(rng) * speed, radius, window)
         }
         4 => {
             // Far from the origin: the offset is the rounded difference of two large positions.
-            let base = direction(rng) * power(rng, 5.0, 7.0);
-            let a = base + direction(rng) * radius * power(rng, 0.0, 2.0);
-            let b = base + direction(rng) * radius * power(rng, 0.0, 2.0);
-            (b - a, direction(rng) * speed, radius, window)
+            let base = random_direction(rng) * power(rng, 5.0, 7.0);
+            let a = base + random_direction(rng) * radius * power(rng, 0.0, 2.0);
+            let b = base + random_direction(rng) * radius * power(rng, 0.0, 2.0);
+            (b - a, random_direction(rng) * speed, radius, window)
         }
         _ => {
             // Nearly parallel (tiny relative speed) or very fast (many diameters per window).
             let scale = if rng.random_bool(0.5) { power(rng, -14.0, -6.0) } else { power(rng, 3.0, 6.0) };
-            (direction(rng) * radius * power(rng, 0.0, 3.0), direction(rng) * radius / window * scale, radius, window)
+            (random_direction(rng) * radius * power(rng, 0.0, 3.0), random_direction(rng) * radius / window * scale, radius, window)
         }
     }
 }
@@ -216,42 +208,14 @@ fn maybe_bad(rng: &mut ChaCha8Rng, good: f64) -> f64 {
     if rng.random_bool(0.03) { BAD[rng.random_range(0..BAD.len())] } else { good }
 }
 
-fn contact_bits(contacts: &[Contact]) -> Vec<String> {
-    contacts
-        .iter()
-        .map(|c| {
-            let bits = |v: DVec3| v.to_array().map(f64::to_bits);
-            format!("{:x} {} {:?} {:?} {:?} {:x}", c.time.to_bits(), c.body, c.touched, bits(c.point), bits(c.normal), c.impulse.to_bits())
-        })
-        .collect()
-}
-
-fn state_bits(world: &World) -> Vec<String> {
-    world.spheres().map(|(id, s)| format!("{id} {:?} {:?} {:x} {:x}", s.position.to_array().map(f64::to_bits), s.velocity.to_array().map(f64::to_bits), s.radius.to_bits(), s.mass.to_bits())).collect()
-}
-
 fn random_bounds(rng: &mut ChaCha8Rng) -> BoxBounds {
     let side = power(rng, -3.0, 4.0);
     let min = match rng.random_range(0..3) {
         0 => DVec3::ZERO,
         1 => DVec3::splat(1e6),
-        _ => direction(rng) * power(rng, -3.0, 7.0),
+        _ => random_direction(rng) * power(rng, -3.0, 7.0),
     };
     BoxBounds::new(min, min + DVec3::new(side, side * rng.random_range(0.2..2.0), side * rng.random_range(0.2..2.0))).unwrap()
-}
-
-/// Frame-end invariants of a world that stepped successfully.
-fn check_world(world: &World) -> Result<(), String> {
-    let bounds = world.bounds();
-    let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
-    let spheres: Vec<(u32, Sphere)> = world.spheres().collect();
-    for (id, s) in &spheres {
-        let slack = 1e-9 * s.radius + 4.0 * f64::EPSILON * scale;
-        if !((s.position - s.radius).cmpge(bounds.min - slack).all() && (s.position + s.radius).cmple(bounds.max + slack).all()) {
-            return Err(format!("body {id} left the box: {s:?}"));
-        }
-    }
-    Ok(())
 }
 
 #[test]
@@ -282,7 +246,7 @@ fn world_api_survives_random_operation_sequences() {
                     let radius = maybe_bad(&mut rng, radius);
                     let position = bounds.min + (bounds.max - bounds.min) * DVec3::new(rng.random(), rng.random(), rng.random());
                     let position = DVec3::new(maybe_bad(&mut rng, position.x), position.y, position.z);
-                    let velocity = direction(&mut rng) * side * power(&mut rng, -3.0, 2.5);
+                    let velocity = random_direction(&mut rng) * side * power(&mut rng, -3.0, 2.5);
                     let velocity = DVec3::new(velocity.x, maybe_bad(&mut rng, velocity.y), velocity.z);
                     let mass = power(&mut rng, -3.0, 3.0);
                     let mass = maybe_bad(&mut rng, mass);
@@ -301,7 +265,7 @@ fn world_api_survives_random_operation_sequences() {
                 }
                 10..=12 => {
                     let id = rng.random_range(0..slots);
-                    let velocity = direction(&mut rng) * side * power(&mut rng, -3.0, 2.5);
+                    let velocity = random_direction(&mut rng) * side * power(&mut rng, -3.0, 2.5);
                     let velocity = DVec3::new(maybe_bad(&mut rng, velocity.x), velocity.y, velocity.z);
                     let (a, b) = (vadop.set_velocity(id, velocity), oracle.set_velocity(id, velocity));
                     if format!("{a:?}") != format!("{b:?}") {
@@ -328,7 +292,9 @@ fn world_api_survives_random_operation_sequences() {
                     match a {
                         Ok(found) => {
                             contacts += found.len();
-                            check_world(&vadop).unwrap_or_else(|e| fail(format!("op {op}: {e}")));
+                            if let Some(e) = frame_end_violation(&vadop, false) {
+                                fail(format!("op {op}: {e}"));
+                            }
                             let after = vadop.kinetic_energy();
                             if config.mode == Mode::Simulate && after > before * (1.0 + 1e-9) {
                                 fail(format!("op {op}: energy grew from {before} to {after}"));
