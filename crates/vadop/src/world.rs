@@ -558,37 +558,29 @@ impl World {
                         impulse,
                     });
                 }
-                Partner::Wall(wall) if resolve_pairs && self.collapse.group(event.body).is_some() => {
-                    let members = self.collapse.group(event.body).unwrap_or_default().to_vec();
-                    let mut common = self.common_velocity(&members);
-                    let normal = wall.outward_normal();
-                    let into_wall = common.dot(normal).max(0.0);
-                    common[wall.axis()] -= into_wall * normal[wall.axis()];
-                    let mass: f64 = members.iter().map(|&k| self.bodies.mass[k as usize]).sum();
-                    self.contacts.push(Contact {
-                        time: t,
-                        body: event.body,
-                        touched: Touched::Wall(wall),
-                        point: self.bodies.position_at(i, t) + normal * self.bodies.radius[i],
-                        normal,
-                        impulse: mass * into_wall,
-                    });
-                    self.move_together(&members, common, t, t1);
-                }
                 Partner::Wall(wall) => {
-                    let v = self.bodies.velocity[i];
-                    let bounced = wall_bounce(v, wall.axis(), restitution);
                     let normal = wall.outward_normal();
-                    self.contacts.push(Contact {
-                        time: t,
-                        body: event.body,
-                        touched: Touched::Wall(wall),
-                        point: self.bodies.position_at(i, t) + normal * self.bodies.radius[i],
-                        normal,
-                        impulse: self.bodies.mass[i] * (v - bounced).length(),
-                    });
-                    self.bodies.set_velocity_at(i, t, bounced);
-                    self.retest(event.body, None, t, t1);
+                    let point = self.bodies.position_at(i, t) + normal * self.bodies.radius[i];
+                    let group = self.collapse.group(event.body).filter(|_| resolve_pairs).map(<[u32]>::to_vec);
+                    let impulse = match group {
+                        // A merged group stops moving into the wall (see `collapse`).
+                        Some(members) => {
+                            let mut common = self.common_velocity(&members);
+                            let into_wall = common.dot(normal).max(0.0);
+                            common -= into_wall * normal;
+                            let mass: f64 = members.iter().map(|&k| self.bodies.mass[k as usize]).sum();
+                            self.move_together(&members, common, t, t1);
+                            mass * into_wall
+                        }
+                        None => {
+                            let v = self.bodies.velocity[i];
+                            let bounced = wall_bounce(v, wall.axis(), restitution);
+                            self.bodies.set_velocity_at(i, t, bounced);
+                            self.retest(event.body, None, t, t1);
+                            self.bodies.mass[i] * (v - bounced).length()
+                        }
+                    };
+                    self.contacts.push(Contact { time: t, body: event.body, touched: Touched::Wall(wall), point, normal, impulse });
                 }
             }
         }
