@@ -2,7 +2,7 @@
 //! has been processed, checking after every frame that nothing drifts: kinetic energy against the
 //! start, momentum against the wall impulses (pair impulses are equal and opposite, so only the
 //! walls may change it), no body outside the box, no pair overlapping beyond the contact
-//! tolerance. It owns these checks and their summary; it never changes the world beyond stepping
+//! tolerance, and no merge by the collapse rule (an elastic gas never collapses). It owns these checks and their summary; it never changes the world beyond stepping
 //! it. A violation is reported in the summary and makes the command fail (exit code 2).
 
 use crate::report;
@@ -66,7 +66,7 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
         report::reveal(&bar);
     }
     let started = Instant::now();
-    let (mut frames, mut contacts, mut pair_contacts) = (0u64, 0u64, 0u64);
+    let (mut frames, mut contacts, mut pair_contacts, mut merges) = (0u64, 0u64, 0u64, 0u64);
     let mut worst = Worst::default();
     while contacts < args.contacts && frames < args.max_frames {
         let momentum = world.momentum();
@@ -77,6 +77,7 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
         contacts += found.len() as u64;
         pair_contacts += pairs;
         frames += 1;
+        merges += world.stats().collapse_contacts;
         let error = (world.momentum() - momentum - wall).length() / scale.max(f64::MIN_POSITIVE);
         worst.momentum_error = worst.momentum_error.max(error);
         worst.energy_drift = worst.energy_drift.max((world.kinetic_energy() - energy).abs() / energy);
@@ -88,7 +89,8 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
     let passed = worst.energy_drift <= MAX_ENERGY_DRIFT
         && worst.momentum_error <= MAX_MOMENTUM_ERROR
         && worst.escapes == 0
-        && worst.overlap <= MAX_OVERLAP;
+        && worst.overlap <= MAX_OVERLAP
+        && merges == 0;
     let text = format!(
         "scene       {} spheres, packing fraction {}, speeds up to {} diameters/frame, seed {}, restitution 1\n\
          run         {frames} frames, {contacts} contacts ({pair_contacts} body-body), {seconds:.1} s, {:.0} contacts/s\n\
@@ -96,6 +98,7 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
          momentum    worst error against wall impulses {:.2e} of the total (limit {MAX_MOMENTUM_ERROR:.0e})\n\
          escapes     {} bodies outside the box at a frame end\n\
          overlap     worst {:.2e} of the radii sum at a frame end (limit {MAX_OVERLAP:.0e})\n\
+         collapse    {merges} merges into resting contact (an elastic gas needs none)\n\
          result      {}\n",
         args.bodies,
         args.packing,
