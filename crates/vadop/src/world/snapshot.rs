@@ -132,7 +132,9 @@ impl World {
         world.free_slots = snapshot.free_slots;
         // Enter the bodies that had been stepped into a fresh broad phase now, so the next step
         // checks only the bodies added since the last one, exactly as the saved world would.
-        world.unplaced = world.bodies.alive_ids().filter(|id| !snapshot.unplaced.contains(id)).collect();
+        let mut waiting = snapshot.unplaced.clone();
+        waiting.sort_unstable();
+        world.unplaced = world.bodies.alive_ids().filter(|id| waiting.binary_search(id).is_err()).collect();
         world.place_new_bodies();
         world.prime_discrete();
         world.unplaced = snapshot.unplaced;
