@@ -1,6 +1,7 @@
 //! The `vadop` command-line tool: run the paper's scene or a scene file and report contacts,
-//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), and benchmark the engine and
-//! reproduce the paper's experiments with plots (`bench`). This file owns argument parsing, dispatch and the single place where a failure
+//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), benchmark the engine and
+//! reproduce the paper's experiments with plots (`bench`), and check long runs for drift (`soak`).
+//! This file owns argument parsing, dispatch and the single place where a failure
 //! becomes an `error: <message>` line on stderr and exit code 2. It must never do a subcommand's
 //! work itself, and nothing a user types may reach a panic or a backtrace: every fallible step
 //! returns its message as an `Err` up to here.
@@ -11,6 +12,7 @@ mod plots;
 mod pools;
 mod report;
 mod simulate;
+mod soak;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -37,6 +39,9 @@ enum Command {
     /// Benchmark vadop against its baselines, the discrete method and brute force, each run in its
     /// own child process; write tables into a markdown file, CSVs and plots into results/.
     Bench(bench::BenchArgs),
+    /// A long elastic run (10^7 contacts by default) checking after every frame that energy and
+    /// momentum do not drift, no body leaves the box and no pair overlaps beyond tolerance.
+    Soak(soak::SoakArgs),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +51,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Pools(args) => pools::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Soak(args) => soak::run(&args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

@@ -39,6 +39,10 @@ pub struct SimulateArgs {
     /// Seed of the scene generator
     #[arg(long, value_name = "K", default_value_t = 1, conflicts_with = "scene", help_heading = "Scene")]
     seed: u64,
+    /// Continue a run saved with --save-state for --frames more frames, bit-exactly; the
+    /// world's method, mode, pool, phi and restitution come from the file
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["scene", "bodies", "packing", "max_speed", "seed"], help_heading = "Scene")]
+    resume: Option<PathBuf>,
 
     /// Number of frames to step
     #[arg(long, value_name = "F", default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..), help_heading = "Run")]
@@ -83,6 +87,10 @@ pub struct SimulateArgs {
     /// Save the scene, before stepping, as a scene file
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     save_scene: Option<PathBuf>,
+    /// Save the whole world after every frame (atomically: a run killed mid-way loses at most
+    /// the frame in progress), to continue with --resume
+    #[arg(long, value_name = "FILE", help_heading = "Output")]
+    save_state: Option<PathBuf>,
     /// Print no summary and no progress bar (errors still go to stderr)
     #[arg(long, help_heading = "Output")]
     quiet: bool,
@@ -152,6 +160,9 @@ fn describe(error: VadopError) -> String {
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult<()> {
+    if let Some(path) = &args.resume {
+        return resume(path, args);
+    }
     let (scene, source) = match &args.scene {
         Some(path) => (Scene::load(path).map_err(describe)?, format!("scene file {}", path.display())),
         None => {
@@ -182,6 +193,24 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         Some(method) => Some(scene.world(WorldConfig { method, ..config }).map_err(describe)?),
         None => None,
     };
+    run_world(world, reference_world, scene, source, args)
+}
+
+/// `--resume FILE`: the saved world, stepped on without a reference (a reference would need the
+/// state it had when the world was saved).
+fn resume(path: &std::path::Path, args: &SimulateArgs) -> CliResult<()> {
+    if matches!(args.reference, Some(ReferenceArg::Brute | ReferenceArg::Vadop)) {
+        return Err("--resume cannot be combined with --reference: the reference's state was not saved".to_string());
+    }
+    let world = World::load(path).map_err(describe)?;
+    let scene = Scene { bounds: world.bounds(), spheres: world.spheres().map(|(_, s)| s).collect() };
+    let source = format!("saved world {} at time {}", path.display(), world.time());
+    run_world(world, None, scene, source, args)
+}
+
+/// Steps `world` (and `reference_world` alongside), then reports and writes the outputs.
+fn run_world(world: World, reference_world: Option<World>, scene: Scene, source: String, args: &SimulateArgs) -> CliResult<()> {
+    let config = world.config();
     let outputs = Outputs::open(args)?;
     if let Some(path) = &args.save_scene {
         scene.save(path).map_err(describe)?;
@@ -195,7 +224,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         }
         .to_string(),
         dt: args.dt,
-        restitution: args.restitution,
+        restitution: config.restitution,
         frames_requested: args.frames,
     };
     // The scene is no longer needed; at a million bodies it is worth giving back before stepping.
@@ -344,6 +373,12 @@ fn step_frames(
                     failure = Some(format!("frame {frame}: reference method: {}", describe(e)));
                     break;
                 }
+            }
+        }
+        if let Some(path) = &args.save_state {
+            if let Err(e) = world.save(path) {
+                failure = Some(format!("frame {frame}: {}", describe(e)));
+                break;
             }
         }
         rows.push(FrameRow::new(frame, world.time(), world.stats(), wall_seconds));

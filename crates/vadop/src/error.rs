@@ -20,6 +20,9 @@ pub enum VadopError {
     /// The restitution coefficient was outside [0, 1].
     #[error("restitution must lie in [0, 1], got {0}")]
     BadRestitution(f64),
+    /// A finite value too large (or a mass too small) for the arithmetic to stay finite.
+    #[error("{what} {value:e} is out of range: coordinates, velocities, radii and masses must have magnitude at most 1e50, and masses at least 1e-50, so that squared distances, speeds and inverse masses stay finite")]
+    OutOfRange { what: &'static str, value: f64 },
     /// The box had a non-finite corner or a side of length <= 0.
     #[error("box must have finite corners with min < max on every axis, got min {min:?} max {max:?}")]
     BadBox { min: [f64; 3], max: [f64; 3] },
@@ -61,11 +64,23 @@ pub enum VadopError {
 /// Shorthand for results of this crate.
 pub type Result<T> = std::result::Result<T, VadopError>;
 
-/// Checks that every component of `v` is finite.
-pub(crate) fn check_finite(what: &'static str, v: glam::DVec3) -> Result<()> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(VadopError::NotFinite { what, value: format!("{v:?}") })
+/// Largest magnitude of a coordinate, velocity component, radius or mass (and inverse of the
+/// smallest mass): products of four such values stay far from overflow, so no contact is lost
+/// to an infinite square.
+pub const MAX_MAGNITUDE: f64 = 1e50;
+
+/// Checks that every component of `v` is finite and at most [`MAX_MAGNITUDE`] in magnitude.
+pub(crate) fn check_vector(what: &'static str, v: glam::DVec3) -> Result<()> {
+    if !v.is_finite() {
+        return Err(VadopError::NotFinite { what, value: format!("{v:?}") });
     }
+    check_magnitude(what, v.abs().max_element())
+}
+
+/// Checks that a finite value is at most [`MAX_MAGNITUDE`] in magnitude.
+pub(crate) fn check_magnitude(what: &'static str, value: f64) -> Result<()> {
+    if value.abs() > MAX_MAGNITUDE {
+        return Err(VadopError::OutOfRange { what, value });
+    }
+    Ok(())
 }

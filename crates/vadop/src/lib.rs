@@ -8,7 +8,7 @@
 //!
 //! The modules follow the pipeline, one stage each:
 //! [`axis_pool`] → [`bounding_volume`] → [`sweep_prune`] → [`narrow_phase`] → [`event_queue`] →
-//! [`response`] → [`world`]; plus [`bodies`] (the state store), [`coherent_sort`] (insertion sort with a budget), [`pseudo_dynamic`] (the
+//! [`response`] → [`world`]; plus [`collapse`] (the rule that ends inelastic collapse), [`bodies`] (the state store), [`coherent_sort`] (insertion sort with a budget), [`pseudo_dynamic`] (the
 //! frame-instant baseline), [`overlap`] (start-of-run validation) and [`scene`] (the paper's scene
 //! and the scene file format).
 //!
@@ -29,6 +29,7 @@
 pub mod axis_pool;
 pub mod bodies;
 pub mod bounding_volume;
+pub mod collapse;
 pub mod coherent_sort;
 pub mod error;
 pub mod event_queue;

@@ -55,7 +55,8 @@ pub fn sphere_sphere_time(
     let gap = offset.length_squared() - radius_sq;
     if gap <= 0.0 {
         let touching = gap >= -2.0 * CONTACT_TOLERANCE * radius_sq;
-        return touching.then_some(0.0);
+        // An empty window holds no contact, not even one at its start.
+        return (touching && 0.0 < window).then_some(0.0);
     }
     // b^2 - a c written as a R^2 - |offset x v|^2: no cancellation between two large squares,
     // which keeps grazing and nearly parallel motion accurate.
@@ -161,6 +162,9 @@ mod tests {
         // Deep overlap is not a new contact (bodies passing through in detect mode).
         let deep = DVec3::new(1.0, 0.0, 0.0);
         assert_eq!(sphere_sphere_time(deep, DVec3::new(-1.0, 0.0, 0.0), 2.0, 1.0), None);
+        // Found by fuzzing: touching pairs reported a contact at 0 in an empty window.
+        assert_eq!(sphere_sphere_time(touching, DVec3::new(-1.0, 0.0, 0.0), 2.0, 0.0), None);
+        assert_eq!(sphere_sphere_time(touching, DVec3::new(-1.0, 0.0, 0.0), 2.0, -1.0), None);
     }
 
     #[test]

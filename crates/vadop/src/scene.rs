@@ -18,6 +18,10 @@ use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+/// Most spheres a generated scene holds: more would not fit in memory, and generating them would
+/// run for hours before failing.
+pub const MAX_SCENE_BODIES: usize = 100_000_000;
+
 /// Frame rate of the paper's scene.
 pub const FRAMES_PER_SECOND: f64 = 30.0;
 
@@ -68,6 +72,9 @@ impl PaperScene {
     pub fn build(&self) -> Result<Scene> {
         if self.bodies == 0 {
             return Err(VadopError::Scene("a scene needs at least one sphere".into()));
+        }
+        if self.bodies > MAX_SCENE_BODIES {
+            return Err(VadopError::Scene(format!("a scene holds at most {MAX_SCENE_BODIES} spheres, got {}", self.bodies)));
         }
         if !(self.packing_fraction > 0.0 && self.packing_fraction <= 0.6) {
             return Err(VadopError::Scene(format!("packing fraction must be in (0, 0.6], got {}", self.packing_fraction)));

@@ -12,7 +12,8 @@
 
 use crate::axis_pool::AxisPool;
 use crate::bodies::{Bodies, Sphere};
-use crate::error::{check_finite, Result, VadopError};
+use crate::collapse::CollapseGuard;
+use crate::error::{check_magnitude, check_vector, Result, VadopError};
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::narrow_phase::{sphere_sphere_time, sphere_wall_time, Wall};
 use crate::pseudo_dynamic::PseudoDynamic;
@@ -22,6 +23,8 @@ use crate::uniform_grid::UniformGrid;
 use glam::DVec3;
 use std::sync::Arc;
 use std::time::Instant;
+
+mod snapshot;
 
 /// A body moving more box lengths than this in one frame is rejected: it would bounce off the
 /// walls that many times per frame, which is never a meaningful simulation.
@@ -112,6 +115,8 @@ impl BoxBounds {
         if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
             return Err(VadopError::BadBox { min: min.to_array(), max: max.to_array() });
         }
+        check_vector("box corner", min)?;
+        check_vector("box corner", max)?;
         Ok(BoxBounds { min, max })
     }
     /// The cube `[0, side]^3`.
@@ -174,6 +179,8 @@ pub struct FrameStats {
     pub invalidations: u64,
     /// Bytes held by the broad phase.
     pub broad_phase_bytes: u64,
+    /// Contacts made plastic by the collapse rule (see [`crate::collapse`]).
+    pub collapse_contacts: u64,
 }
 
 impl FrameStats {
@@ -235,6 +242,7 @@ pub struct World {
     time: f64,
     contacts: Vec<Contact>,
     stats: FrameStats,
+    collapse: CollapseGuard,
 }
 
 impl World {
@@ -259,6 +267,7 @@ impl World {
             time: 0.0,
             contacts: Vec::new(),
             stats: FrameStats::default(),
+            collapse: CollapseGuard::default(),
         })
     }
 
@@ -309,7 +318,7 @@ impl World {
     /// Sets a body's velocity (between frames).
     pub fn set_velocity(&mut self, id: u32, velocity: DVec3) -> Result<()> {
         let i = self.live_index(id)?;
-        check_finite("velocity", velocity)?;
+        check_vector("velocity", velocity)?;
         self.bodies.set_velocity_at(i, self.time, velocity);
         if let BroadPhase::SweepPrune(sap) = &mut self.broad {
             if !self.unplaced.contains(&id) {
@@ -386,6 +395,7 @@ impl World {
         let t1 = t0 + dt;
         self.contacts.clear();
         self.queue.clear();
+        self.collapse.clear();
         self.stats = FrameStats::default();
 
         self.predict_frame(t0, t1);
@@ -422,14 +432,17 @@ impl World {
     }
 
     fn check_sphere(&self, s: &Sphere) -> Result<()> {
-        check_finite("position", s.position)?;
-        check_finite("velocity", s.velocity)?;
+        check_vector("position", s.position)?;
+        check_vector("velocity", s.velocity)?;
         if !(s.radius.is_finite() && s.radius > 0.0) {
             return Err(VadopError::BadRadius(s.radius));
         }
         if !(s.mass.is_finite() && s.mass > 0.0) {
             return Err(VadopError::BadMass(s.mass));
         }
+        check_magnitude("radius", s.radius)?;
+        check_magnitude("mass", s.mass)?;
+        check_magnitude("inverse mass", 1.0 / s.mass)?;
         if !self.bounds.contains(s.position, s.radius) {
             return Err(VadopError::OutsideBox {
                 position: s.position.to_array(),
@@ -550,7 +563,6 @@ impl World {
 
     /// Pops contacts in time order until the frame ends (c_response).
     fn process_events(&mut self, t1: f64) {
-        let restitution = self.config.restitution;
         let resolve_pairs = self.config.mode == Mode::Simulate;
         while let Some(event) = self.queue.pop() {
             let i = event.body as usize;
@@ -564,6 +576,7 @@ impl World {
                 continue;
             }
             let t = event.time;
+            let restitution = self.config.restitution;
             match event.partner {
                 Partner::Body(j) => {
                     let ju = j as usize;
@@ -574,7 +587,12 @@ impl World {
                         .or_else(|| (self.bodies.velocity[i] - self.bodies.velocity[ju]).try_normalize())
                         .unwrap_or(DVec3::X);
                     let mut impulse = 0.0;
-                    if resolve_pairs {
+                    if resolve_pairs && self.collapse.must_merge(event.body, j) {
+                        let members = self.collapse.merge(event.body, j).to_vec();
+                        let common = self.common_velocity(&members);
+                        impulse = (self.bodies.mass[i] * (self.bodies.velocity[i] - common).dot(normal)).max(0.0);
+                        self.move_together(&members, common, t, t1);
+                    } else if resolve_pairs {
                         let (vi, vj) = (self.bodies.velocity[i], self.bodies.velocity[ju]);
                         let (wi, wj) = (self.bodies.inv_mass[i], self.bodies.inv_mass[ju]);
                         impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
@@ -582,8 +600,10 @@ impl World {
                         if impulse > 0.0 {
                             self.bodies.set_velocity_at(i, t, vi - impulse * wi * normal);
                             self.bodies.set_velocity_at(ju, t, vj + impulse * wj * normal);
-                            self.retest(event.body, None, t, t1);
-                            self.retest(j, Some(event.body), t, t1);
+                            // The pair itself is re-tested last, once both volumes are rebuilt, so
+                            // every method tests it (a rounding residue may still approach).
+                            self.retest(event.body, Some(j), t, t1);
+                            self.retest(j, None, t, t1);
                         }
                     }
                     self.stats.pair_contacts += 1;
@@ -597,21 +617,47 @@ impl World {
                     });
                 }
                 Partner::Wall(wall) => {
-                    let v = self.bodies.velocity[i];
-                    let bounced = wall_bounce(v, wall.axis(), restitution);
                     let normal = wall.outward_normal();
-                    self.contacts.push(Contact {
-                        time: t,
-                        body: event.body,
-                        touched: Touched::Wall(wall),
-                        point: self.bodies.position_at(i, t) + normal * self.bodies.radius[i],
-                        normal,
-                        impulse: self.bodies.mass[i] * (v - bounced).length(),
-                    });
-                    self.bodies.set_velocity_at(i, t, bounced);
-                    self.retest(event.body, None, t, t1);
+                    let point = self.bodies.position_at(i, t) + normal * self.bodies.radius[i];
+                    let group = self.collapse.group(event.body).filter(|_| resolve_pairs).map(<[u32]>::to_vec);
+                    let impulse = match group {
+                        // A merged group stops moving into the wall (see `collapse`).
+                        Some(members) => {
+                            let mut common = self.common_velocity(&members);
+                            let into_wall = common.dot(normal).max(0.0);
+                            common -= into_wall * normal;
+                            let mass: f64 = members.iter().map(|&k| self.bodies.mass[k as usize]).sum();
+                            self.move_together(&members, common, t, t1);
+                            mass * into_wall
+                        }
+                        None => {
+                            let v = self.bodies.velocity[i];
+                            let bounced = wall_bounce(v, wall.axis(), restitution);
+                            self.bodies.set_velocity_at(i, t, bounced);
+                            self.retest(event.body, None, t, t1);
+                            self.bodies.mass[i] * (v - bounced).length()
+                        }
+                    };
+                    self.contacts.push(Contact { time: t, body: event.body, touched: Touched::Wall(wall), point, normal, impulse });
                 }
             }
+        }
+    }
+
+    /// Centre-of-mass velocity of `members` (ascending ids, so the sum is the same every time).
+    fn common_velocity(&self, members: &[u32]) -> DVec3 {
+        let mass: f64 = members.iter().map(|&k| self.bodies.mass[k as usize]).sum();
+        members.iter().map(|&k| self.bodies.mass[k as usize] * self.bodies.velocity[k as usize]).sum::<DVec3>() / mass
+    }
+
+    /// The collapse rule (see [`crate::collapse`]): a merged group moves on with one velocity.
+    fn move_together(&mut self, members: &[u32], velocity: DVec3, t: f64, t1: f64) {
+        self.stats.collapse_contacts += 1;
+        for &k in members {
+            self.bodies.set_velocity_at(k as usize, t, velocity);
+        }
+        for &k in members {
+            self.retest(k, None, t, t1);
         }
     }
 
@@ -690,6 +736,9 @@ impl World {
     }
 }
 
+/// Relative velocities below this fraction of the bodies' speeds are rounding noise.
+const NOISE_VELOCITY: f64 = 1e-12;
+
 fn check_phi(phi: f64, pool: &AxisPool) -> Result<()> {
     let rho = pool.covering_radius();
     if !(phi.is_finite() && phi >= rho && phi <= std::f64::consts::FRAC_PI_2) {
@@ -705,6 +754,12 @@ fn predict_pair(bodies: &Bodies, i: u32, j: u32, t: f64, t1: f64, queue: &mut Ev
     stats.narrow_tests += 1;
     let offset = bodies.position_at(b, t) - bodies.position_at(a, t);
     let relative_velocity = bodies.velocity[b] - bodies.velocity[a];
+    // A relative velocity within rounding of the bodies' own velocities is noise, not an
+    // approach: without this, a pair brought to rest against each other would keep "colliding"
+    // on rounding residues until they underflow.
+    if relative_velocity.length() <= NOISE_VELOCITY * (bodies.velocity[a].length() + bodies.velocity[b].length()) {
+        return;
+    }
     if let Some(tau) = sphere_sphere_time(offset, relative_velocity, bodies.radius[a] + bodies.radius[b], t1 - t) {
         queue.push(Event {
             time: t + tau,

@@ -120,3 +120,39 @@ fn removed_bodies_free_their_ids_and_vanish_from_contacts() {
     }
     assert_eq!(w.add_sphere(sphere(5.0)).unwrap(), 1);
 }
+
+#[test]
+fn huge_and_tiny_values_are_rejected_before_they_overflow() {
+    let mut w = world();
+    let before = snapshot(&w);
+    let cases: Vec<(Sphere, &str)> = vec![
+        (Sphere { velocity: DVec3::new(1e51, 0.0, 0.0), ..sphere(8.0) }, "velocity 1e51 is out of range"),
+        (Sphere { mass: 1e60, ..sphere(8.0) }, "mass 1e60 is out of range"),
+        (Sphere { mass: 1e-60, ..sphere(8.0) }, "inverse mass 1e60 is out of range"),
+        (Sphere { mass: 5e-324, ..sphere(8.0) }, "inverse mass inf"),
+        (Sphere { mass: f64::INFINITY, ..sphere(8.0) }, "mass must be"),
+    ];
+    for (bad, message) in cases {
+        let err = w.add_sphere(bad).unwrap_err();
+        assert!(err.to_string().contains(message), "{err} should say {message}");
+        assert_eq!(snapshot(&w), before);
+    }
+    assert!(matches!(w.set_velocity(0, DVec3::new(0.0, -1e300, 0.0)), Err(VadopError::OutOfRange { .. })));
+    assert_eq!(snapshot(&w), before);
+    // A box far beyond 1e50 would square to infinity.
+    let err = BoxBounds::cube(1e200).unwrap_err();
+    assert!(matches!(err, VadopError::OutOfRange { what: "box corner", .. }), "{err}");
+    // At the limit itself everything still works: a head-on pair 1e49 wide is found.
+    let mut big = World::new(BoxBounds::cube(1e50).unwrap(), WorldConfig::default()).unwrap();
+    let r = 1e48;
+    big.add_sphere(Sphere { position: DVec3::new(2.0 * r, 5e49, 5e49), velocity: DVec3::new(1e49, 0.0, 0.0), radius: r, mass: 1e50 }).unwrap();
+    big.add_sphere(Sphere { position: DVec3::new(9e49, 5e49, 5e49), velocity: DVec3::new(-1e49, 0.0, 0.0), radius: r, mass: 1e-50 }).unwrap();
+    let contacts = big.step(10.0).unwrap();
+    assert!(contacts.iter().any(|c| c.touched == vadop::Touched::Body(1)), "{contacts:?}");
+}
+
+#[test]
+fn scenes_too_large_to_generate_are_rejected_at_once() {
+    let err = vadop::scene::PaperScene::new(10_000_000_000_000, 0.05, 1.0).build().unwrap_err();
+    assert!(err.to_string().contains("at most"), "{err}");
+}

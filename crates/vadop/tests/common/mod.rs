@@ -1,0 +1,69 @@
+//! Helpers shared by the reliability tests: bit-exact fingerprints of contacts and states, random
+//! directions, and the frame-end invariants every run must keep.
+
+#![allow(dead_code)] // Each test file uses its own subset.
+
+use glam::DVec3;
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use vadop::narrow_phase::CONTACT_TOLERANCE;
+use vadop::{Contact, Mode, Sphere, World};
+
+/// Every field of every contact as bits: a difference in the last bit, or in the sign of a zero,
+/// shows.
+pub fn contact_bits(contacts: &[Contact]) -> Vec<String> {
+    let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+    contacts
+        .iter()
+        .map(|c| format!("{:x} {} {:?} {:?} {:?} {:x}", c.time.to_bits(), c.body, c.touched, bits(c.point), bits(c.normal), c.impulse.to_bits()))
+        .collect()
+}
+
+/// The time and every live body as bits.
+pub fn state_bits(world: &World) -> Vec<String> {
+    let bits = |v: DVec3| v.to_array().map(f64::to_bits);
+    let mut state = vec![format!("time {:x}", world.time().to_bits())];
+    state.extend(world.spheres().map(|(id, s)| format!("{id} {:?} {:?} {:x} {:x}", bits(s.position), bits(s.velocity), s.radius.to_bits(), s.mass.to_bits())));
+    state
+}
+
+/// A uniformly random unit vector.
+pub fn random_direction(rng: &mut ChaCha8Rng) -> DVec3 {
+    loop {
+        let v = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        if v.length_squared() <= 1.0 {
+            if let Some(u) = v.try_normalize() {
+                return u;
+            }
+        }
+    }
+}
+
+/// What is wrong at a frame end, if anything: a body outside the box, or (simulate mode, when
+/// `pairs` is set) two bodies overlapping beyond the contact tolerance, with a little slack for
+/// the rounding of positions far from the origin.
+pub fn frame_end_violation(world: &World, pairs: bool) -> Option<String> {
+    let bounds = world.bounds();
+    let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
+    let spheres: Vec<(u32, Sphere)> = world.spheres().collect();
+    for (id, s) in &spheres {
+        let slack = 1e-9 * s.radius + 4.0 * f64::EPSILON * scale;
+        if !((s.position - s.radius).cmpge(bounds.min - slack).all() && (s.position + s.radius).cmple(bounds.max + slack).all()) {
+            return Some(format!("body {id} left the box: {s:?}"));
+        }
+    }
+    if !pairs || world.config().mode == Mode::Detect {
+        return None;
+    }
+    for (k, (i, a)) in spheres.iter().enumerate() {
+        for (j, b) in &spheres[k + 1..] {
+            let reach = a.radius + b.radius;
+            let slack = 2.0 * CONTACT_TOLERANCE * reach + 8.0 * f64::EPSILON * a.position.abs().max_element();
+            let distance = a.position.distance(b.position);
+            if distance < reach - slack {
+                return Some(format!("bodies {i} and {j} overlap by {:e}", reach - distance));
+            }
+        }
+    }
+    None
+}
