@@ -6,6 +6,7 @@
 //! returns its message as an `Err` up to here.
 
 mod bench;
+mod peers;
 mod pools;
 mod report;
 mod simulate;
@@ -35,6 +36,8 @@ enum Command {
     /// Benchmark vadop against the discrete and brute-force methods, each run in its own child
     /// process, and write the results into a markdown file and a CSV.
     Bench(bench::BenchArgs),
+    /// Compare vadop with Bullet, FCL and rapier/parry on identical paths (builds the peers itself).
+    Peers(peers::PeersArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +47,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(&args),
         Command::Pools(args) => pools::run(&args),
         Command::Bench(args) => bench::run(&args),
+        Command::Peers(args) => peers::run(&args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,
