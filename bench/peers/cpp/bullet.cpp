@@ -19,14 +19,21 @@ static void discrete(btBroadphaseInterface* broadphase, Trajectory& trajectory, 
   btCollisionWorld world(&dispatcher, broadphase, &configuration);
   btSphereShape sphere(btScalar(trajectory.radius));
   std::vector<std::unique_ptr<btCollisionObject>> objects(trajectory.n);
+  // Objects enter the world at their first frame's start: all at the origin, every pair would
+  // overlap once.
+  bool loaded = trajectory.next_frame();
   for (uint64_t i = 0; i < trajectory.n; ++i) {
     objects[i].reset(new btCollisionObject());
     objects[i]->setCollisionShape(&sphere);
     objects[i]->setUserIndex(int(i));
+    btTransform transform;
+    transform.setIdentity();
+    transform.setOrigin(vec(trajectory.start(i)));
+    objects[i]->setWorldTransform(transform);
     world.addCollisionObject(objects[i].get());
   }
   NewOverlaps overlaps;
-  while (trajectory.next_frame()) {
+  for (; loaded; loaded = trajectory.next_frame()) {
     report.begin_frame();
     for (uint64_t i = 0; i < trajectory.n; ++i) {
       btTransform transform;

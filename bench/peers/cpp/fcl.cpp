@@ -42,16 +42,22 @@ static void discrete(fcl::BroadPhaseCollisionManagerd& manager, Trajectory& traj
   auto sphere = std::make_shared<fcl::Sphered>(trajectory.radius);
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects(trajectory.n);
   std::vector<fcl::CollisionObjectd*> registered(trajectory.n);
+  // Objects are registered at their first frame's start: all at the origin, every pair would
+  // overlap once (FCL's SaP then spends minutes removing them from its pair list).
+  bool loaded = trajectory.next_frame();
   for (uint64_t i = 0; i < trajectory.n; ++i) {
     objects[i].reset(new fcl::CollisionObjectd(sphere));
     objects[i]->setUserData(reinterpret_cast<void*>(i));
+    const double* p = trajectory.start(i);
+    objects[i]->setTranslation(fcl::Vector3d(p[0], p[1], p[2]));
+    objects[i]->computeAABB();
     registered[i] = objects[i].get();
   }
   manager.registerObjects(registered);
   manager.setup();
   NewOverlaps overlaps;
   DiscreteData data{&overlaps, fcl::CollisionRequestd()};
-  while (trajectory.next_frame()) {
+  for (; loaded; loaded = trajectory.next_frame()) {
     report.begin_frame();
     for (uint64_t i = 0; i < trajectory.n; ++i) {
       const double* p = trajectory.end(i);

@@ -523,7 +523,7 @@ fn write_plot(rows: &[Row], dir: &Path, png: &Path) -> CliResult<()> {
     let mut speeds: Vec<f64> = rows.iter().map(|r| r.speed).collect();
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
-    let names: Vec<&str> = PIPELINES.iter().map(|p| p.0).filter(|name| rows.iter().any(|r| r.pipeline == *name)).collect();
+    let names: Vec<&str> = PIPELINES.iter().map(|p| p.0).filter(|name| rows.iter().any(|r| r.pipeline == *name && r.outcome.is_ok())).collect();
     let data = dir.join("peers.dat");
     let mut text = String::new();
     // One gnuplot data block per (speed, pipeline), in that order, separated by two blank lines.

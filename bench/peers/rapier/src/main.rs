@@ -163,8 +163,12 @@ fn rapier(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String
     let mut bodies = RigidBodySet::new();
     let mut colliders = ColliderSet::new();
     let mut handles = Vec::with_capacity(trajectory.n);
+    // Colliders start at their first frame's start: all at the origin, every pair would overlap.
+    let mut data = trajectory.read_frame()?;
     for i in 0..trajectory.n {
+        let s = data.start[i];
         let collider = ColliderBuilder::ball(trajectory.radius)
+            .translation(Vector::new(s[0], s[1], s[2]))
             .sensor(true)
             .active_collision_types(ActiveCollisionTypes::all())
             .user_data(i as u128)
@@ -177,7 +181,9 @@ fn rapier(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String
     let mut pipeline = CollisionPipeline::new();
     let mut previous: Vec<u64> = Vec::new();
     for frame in 0..trajectory.frames {
-        let data = trajectory.read_frame()?;
+        if frame > 0 {
+            data = trajectory.read_frame()?;
+        }
         let started = Instant::now();
         for (i, &handle) in handles.iter().enumerate() {
             let p = data.end[i];
