@@ -114,8 +114,9 @@ class Trajectory {
   // Runs a library's linear cast over each piece of the frame in which both bodies move in a
   // straight line (the frame split at either body's bounces). cast(a0, a1, b0, b1, fraction)
   // returns whether the spheres touch while moving from a0 to a1 and b0 to b1, and the fraction
-  // of the piece at first touch. A new contact is a touch after the piece's start: touching at
-  // a piece's start means the pair already overlapped (it passed through in an earlier frame).
+  // of the piece at first touch. A new contact is a touch after a piece's start: touching at a
+  // piece's start means the pair still overlaps from before, but it may separate and, after a
+  // bounce, meet again in a later piece.
   template <class Cast>
   bool new_contact(uint64_t i, uint64_t j, Cast&& cast) const {
     double cuts[64];
@@ -134,7 +135,7 @@ class Trajectory {
       position(j, ta, b0);
       position(j, tb, b1);
       double fraction;
-      if (cast(a0, a1, b0, b1, fraction)) return fraction > 0;
+      if (cast(a0, a1, b0, b1, fraction) && fraction > 0) return true;
     }
     return false;
   }

@@ -214,7 +214,9 @@ fn rapier(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String
 
 /// Continuous: parry's Bvh over the swept boxes, then cast_shapes over each piece of the frame in
 /// which both bodies move in a straight line (split at either body's wall bounces). A touch at a
-/// piece's start means the pair already overlapped, so only a later touch is a new contact.
+/// piece's start means the pair still overlaps from before, so only a later touch is a new
+/// contact (possibly in a later piece: overlapping pairs can separate and meet again after a
+/// bounce).
 fn parry_ccd(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String> {
     let ball = Ball::new(trajectory.radius);
     let (dt, radius) = (trajectory.dt, trajectory.radius);
@@ -241,10 +243,8 @@ fn parry_ccd(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), Str
                 let options = ShapeCastOptions { max_time_of_impact: 1.0, stop_at_penetration: true, ..Default::default() };
                 let hit = cast_shapes(&Pose::from_translation(a0), a1 - a0, &ball, &Pose::from_translation(b0), b1 - b0, &ball, options)
                     .map_err(|_| "parry cannot cast a ball against a ball".to_string())?;
-                if let Some(hit) = hit {
-                    if hit.time_of_impact > 0.0 {
-                        report.contact(frame as u32, i, j);
-                    }
+                if hit.is_some_and(|hit| hit.time_of_impact > 0.0) {
+                    report.contact(frame as u32, i, j);
                     break;
                 }
             }
