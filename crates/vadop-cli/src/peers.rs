@@ -43,14 +43,14 @@ pub struct PeersArgs {
     /// Frames per run [default: 30 up to 10^4 bodies, 10 up to 10^5, 3 above; with --quick: 10]
     #[arg(long, value_name = "F", value_parser = clap::value_parser!(u64).range(1..))]
     frames: Option<u64>,
-    /// Largest n whose reference contacts come from brute force (above it: from vadop)
-    /// [default: 10000; with --quick: 2000]
-    #[arg(long, value_name = "N")]
-    brute_max: Option<usize>,
+    /// Largest n whose reference contacts come from brute force (above it: from vadop, which the
+    /// core test suite proves identical to brute force); vadop-brute runs only up to it too
+    #[arg(long, value_name = "N", default_value_t = 2000)]
+    brute_max: usize,
     /// Pipelines to run, comma-separated [default: all]
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pipelines: Option<Vec<String>>,
-    /// Seconds after which a run is stopped and recorded as timed out [default: 300; with --quick: 60]
+    /// Seconds after which a run is stopped and recorded as timed out [default: 120; with --quick: 60]
     #[arg(long, value_name = "SECONDS")]
     timeout: Option<f64>,
     /// The core every run is pinned to with taskset [default: the last one]
@@ -131,8 +131,8 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
         return run_child(args, child);
     }
     let bodies = args.bodies.clone().unwrap_or(if args.quick { vec![1000, 2000] } else { vec![1000, 2000, 10_000, 100_000, 1_000_000] });
-    let brute_max = args.brute_max.unwrap_or(if args.quick { 2000 } else { 10_000 });
-    let timeout = Duration::try_from_secs_f64(args.timeout.unwrap_or(if args.quick { 60.0 } else { 300.0 }))
+    let brute_max = args.brute_max;
+    let timeout = Duration::try_from_secs_f64(args.timeout.unwrap_or(if args.quick { 60.0 } else { 120.0 }))
         .map_err(|e| format!("--timeout: {e}"))?;
     let frames_for = |n: usize| args.frames.unwrap_or(if args.quick { 10 } else if n <= 10_000 { 30 } else if n <= 100_000 { 10 } else { 3 });
     let pipelines: Vec<_> = match &args.pipelines {
@@ -220,21 +220,30 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
             for file in ["trajectory.bin", "reference.bin", "contacts.bin"] {
                 let _ = std::fs::remove_file(scratch.join(file));
             }
+            // Written after every cell, so a benchmark stopped early still leaves its rows.
+            write_outputs(args, existing.as_deref(), &rows, pin.then_some(cpu), false)?;
         }
     }
     let _ = std::fs::remove_dir_all(&scratch);
+    let section = write_outputs(args, existing.as_deref(), &rows, pin.then_some(cpu), true)?;
+    report::print(&format!("{section}\nwrote {} and {}\n", args.output.display(), args.results.display()))
+}
 
-    let csv = args.results.join("peers.csv");
-    write_csv(&csv, &rows)?;
-    let plot = args.results.join("peers.png");
-    let plotted = write_plot(&rows, &args.results, &plot);
-    if let Err(e) = &plotted {
-        eprintln!("no plot: {e}");
-    }
-    let section = markdown_section(&rows, brute_max, pin.then_some(cpu), plotted.is_ok().then_some(&plot));
-    let merged = merge_section(existing.as_deref(), &section, &args.output)?;
+/// Writes the CSV, the markdown section and (when `plot`) the PNG; returns the section.
+fn write_outputs(args: &PeersArgs, existing: Option<&str>, rows: &[Row], cpu: Option<usize>, plot: bool) -> CliResult<String> {
+    write_csv(&args.results.join("peers.csv"), rows)?;
+    let png = args.results.join("peers.png");
+    let plotted = plot && match write_plot(rows, &args.results, &png) {
+        Ok(()) => true,
+        Err(e) => {
+            eprintln!("no plot: {e}");
+            false
+        }
+    };
+    let section = markdown_section(rows, args.brute_max, cpu, plotted.then_some(&png));
+    let merged = merge_section(existing, &section, &args.output)?;
     std::fs::write(&args.output, merged).map_err(|e| report::io_error(&args.output, e))?;
-    report::print(&format!("{section}\nwrote {}, {} and {}\n", args.output.display(), csv.display(), plot.display()))
+    Ok(section)
 }
 
 fn child_name(child: Child) -> &'static str {
@@ -420,7 +429,7 @@ fn run_child(args: &PeersArgs, child: Child) -> CliResult<()> {
     let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
     let dt = 1.0 / FRAMES_PER_SECOND;
     let method = match child {
-        Child::Export if n <= args.brute_max.unwrap_or(10_000) => Method::Brute,
+        Child::Export if n <= args.brute_max => Method::Brute,
         Child::Export | Child::Vadop => Method::Vadop,
         Child::Brute => Method::Brute,
         Child::Discrete => Method::Discrete,
