@@ -65,6 +65,10 @@ pub struct PeersArgs {
     /// Directory for the CSV and the plot
     #[arg(long, value_name = "DIR", default_value = "results/peers")]
     results: PathBuf,
+    /// Run nothing: redraw the table and the plot from the CSV of an earlier run (for example
+    /// results/peers/peers.csv after changing how they are presented)
+    #[arg(long, value_name = "CSV")]
+    render: Option<PathBuf>,
     /// Internal: run one child job instead of the benchmark
     #[arg(long, value_enum, hide = true)]
     child: Option<Child>,
@@ -142,14 +146,21 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
             .map(|name| PIPELINES.iter().find(|p| p.0 == name).copied().ok_or(format!("unknown pipeline {name}")))
             .collect::<CliResult<_>>()?,
     };
-    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program's own path: {e}"))?;
-    let root = repository_root()?;
     let existing = match std::fs::read_to_string(&args.output) {
         Ok(text) => Some(text),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(report::io_error(&args.output, e)),
     };
     std::fs::create_dir_all(&args.results).map_err(|e| report::io_error(&args.results, e))?;
+    if let Some(csv) = &args.render {
+        let rows = read_csv(csv)?;
+        // The run that wrote the CSV pinned to --cpu, by default the last core.
+        let cpu = args.cpu.unwrap_or(std::thread::available_parallelism().map_or(1, |n| n.get()) - 1);
+        let section = write_outputs(args, existing.as_deref(), &rows, Some(cpu), true)?;
+        return report::print(&format!("{section}\nwrote {} and {}\n", args.output.display(), args.results.display()));
+    }
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program's own path: {e}"))?;
+    let root = repository_root()?;
 
     let programs = build_peers(&root)?;
     let cpu = args.cpu.unwrap_or(std::thread::available_parallelism().map_or(1, |n| n.get()) - 1);
@@ -426,19 +437,44 @@ fn run_child(args: &PeersArgs, child: Child) -> CliResult<()> {
     else {
         return Err("a child needs --bodies N --speeds S --frames F --child-out PATH".into());
     };
-    let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
-    let dt = 1.0 / FRAMES_PER_SECOND;
     let method = match child {
-        Child::Export if n <= args.brute_max => Method::Brute,
-        Child::Export | Child::Vadop => Method::Vadop,
+        Child::Export => return export(n, speed, frames, n <= args.brute_max, out),
+        Child::Vadop => Method::Vadop,
         Child::Brute => Method::Brute,
         Child::Discrete => Method::Discrete,
     };
+    let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
     let config = WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() };
     let mut world = scene.world(config).map_err(|e| e.to_string())?;
     let mut contacts = Vec::new();
-    if child == Child::Export {
-        let path = out.join("trajectory.bin");
+    let mut frame_ms = Vec::new();
+    for frame in 0..frames {
+        let started = Instant::now();
+        let step = world.step(1.0 / FRAMES_PER_SECOND).map_err(|e| e.to_string())?;
+        frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
+        for c in step {
+            if let Touched::Body(j) = c.touched {
+                contacts.push([frame as u32, c.body.min(j), c.body.max(j)]);
+            }
+        }
+    }
+    write_contacts(out, &contacts)?;
+    let peak_kib = report::peak_memory_mib().map_or(-1, |m| (m * 1024.0) as i64);
+    let times: Vec<String> = frame_ms.iter().map(|t| format!("{t:.6}")).collect();
+    report::print(&format!("{{\"frame_ms\":[{}],\"peak_kib\":{peak_kib}}}\n", times.join(",")))
+}
+
+/// Steps the paper scene in detect mode and writes `dir`/trajectory.bin (the format is in this
+/// file's doc and in bench/peers/cpp/trajectory.h) and `dir`/reference.bin, the pair contacts
+/// found by brute force (`brute`) or by vadop.
+fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> CliResult<()> {
+    let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
+    let dt = 1.0 / FRAMES_PER_SECOND;
+    let method = if brute { Method::Brute } else { Method::Vadop };
+    let mut world = scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
+    let mut contacts = Vec::new();
+    {
+        let path = dir.join("trajectory.bin");
         let mut file = BufWriter::new(report::create_file(&path)?);
         let header = [n as u64, frames];
         let floats = [dt, scene.spheres[0].radius];
@@ -474,25 +510,10 @@ fn run_child(args: &PeersArgs, child: Child) -> CliResult<()> {
             file.write_all(&bytes).map_err(|e| report::io_error(&path, e))?;
         }
         file.flush().map_err(|e| report::io_error(&path, e))?;
-        contacts.sort_unstable();
-        contacts.dedup();
-        return write_contacts(&out.join("reference.bin"), &contacts);
     }
-    let mut frame_ms = Vec::new();
-    for frame in 0..frames {
-        let started = Instant::now();
-        let step = world.step(dt).map_err(|e| e.to_string())?;
-        frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
-        for c in step {
-            if let Touched::Body(j) = c.touched {
-                contacts.push([frame as u32, c.body.min(j), c.body.max(j)]);
-            }
-        }
-    }
-    write_contacts(out, &contacts)?;
-    let peak_kib = report::peak_memory_mib().map_or(-1, |m| (m * 1024.0) as i64);
-    let times: Vec<String> = frame_ms.iter().map(|t| format!("{t:.6}")).collect();
-    report::print(&format!("{{\"frame_ms\":[{}],\"peak_kib\":{peak_kib}}}\n", times.join(",")))
+    contacts.sort_unstable();
+    contacts.dedup();
+    write_contacts(&dir.join("reference.bin"), &contacts)
 }
 
 fn write_csv(path: &Path, rows: &[Row]) -> CliResult<()> {
@@ -519,6 +540,35 @@ fn write_csv(path: &Path, rows: &[Row]) -> CliResult<()> {
         };
     }
     std::fs::write(path, text).map_err(|e| report::io_error(path, e))
+}
+
+/// Reads the rows of a CSV written by `write_csv`.
+fn read_csv(path: &Path) -> CliResult<Vec<Row>> {
+    let text = std::fs::read_to_string(path).map_err(|e| report::io_error(path, e))?;
+    let bad = |line: usize, what: &str| format!("{}:{}: {what}", path.display(), line + 1);
+    let mut rows = Vec::new();
+    for (k, line) in text.lines().enumerate().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != 13 {
+            return Err(bad(k, "expected 13 fields"));
+        }
+        let &(pipeline, continuous, _) = PIPELINES.iter().find(|p| p.0 == f[2]).ok_or_else(|| bad(k, "unknown pipeline"))?;
+        let number = |i: usize| f[i].parse::<f64>().map_err(|_| bad(k, &format!("bad number {:?}", f[i])));
+        let outcome = if f[5] == "ok" {
+            Ok(Measured {
+                median_ms: number(6)?,
+                found: number(7)? as u64,
+                missed: number(8)? as u64,
+                false_contacts: number(9)? as u64,
+                reference: number(10)? as u64,
+                peak_mib: number(11)?,
+            })
+        } else {
+            Err(f[5].to_string())
+        };
+        rows.push(Row { bodies: number(0)? as usize, speed: number(1)?, frames: number(4)? as u64, pipeline, continuous, outcome });
+    }
+    Ok(rows)
 }
 
 /// This row's median time divided by vadop's on the same cell.
@@ -549,8 +599,9 @@ fn write_plot(rows: &[Row], dir: &Path, png: &Path) -> CliResult<()> {
     }
     std::fs::write(&data, text).map_err(|e| report::io_error(&data, e))?;
     let mut script = format!(
-        "set terminal pngcairo size {},520 font ',10'\nset output '{}'\nset multiplot layout 1,{}\n\
-         set logscale xy\nset grid\nset xlabel 'bodies n'\nset ylabel 'median ms per frame'\nset key top left font ',8'\n",
+        "set terminal pngcairo size {},620 font ',10'\nset output '{}'\nset multiplot layout 1,{}\n\
+         set logscale xy\nset grid\nset xlabel 'bodies n'\nset ylabel 'median ms per frame'\nset key below font ',8' maxrows 4\n\
+         set offsets graph 0.05, graph 0.05, 0, 0\n",
         480 * speeds.len(),
         png.display(),
         speeds.len()
@@ -562,8 +613,8 @@ fn write_plot(rows: &[Row], dir: &Path, png: &Path) -> CliResult<()> {
             .enumerate()
             .map(|(p, name)| {
                 let style = if PIPELINES.iter().any(|q| q.0 == *name && q.1) { "lp pt 7" } else { "lp dt 2 pt 6" };
-                let width = if name.starts_with("vadop") { 3 } else { 1 };
-                format!("'{}' index {} using 1:2 with {style} lw {width} title '{name}'", data.display(), s * names.len() + p)
+                let width = if *name == "vadop" { 3.0 } else { 1.5 };
+                format!("'{}' index {} using 1:2 with {style} lw {width} lc rgb '{}' title '{name}'", data.display(), s * names.len() + p, colour(name))
             })
             .collect();
         let _ = writeln!(script, "plot {}", plots.join(", \\\n     "));
@@ -572,6 +623,24 @@ fn write_plot(rows: &[Row], dir: &Path, png: &Path) -> CliResult<()> {
     let script_path = dir.join("peers.gp");
     std::fs::write(&script_path, script).map_err(|e| report::io_error(&script_path, e))?;
     checked(Command::new("gnuplot").arg(&script_path), "gnuplot")
+}
+
+/// A fixed colour per pipeline, so each reads the same in every panel: vadop's in red,
+/// Bullet's in blues, FCL's in greens, rapier's in purple and brown.
+fn colour(pipeline: &str) -> &'static str {
+    match pipeline {
+        "vadop" => "#d62728",
+        "vadop-brute" => "#ff9896",
+        "vadop-discrete" => "#e377c2",
+        "bullet-dbvt" => "#1f77b4",
+        "bullet-sap" => "#6baed6",
+        "bullet-ccd" => "#08306b",
+        "fcl-dtree" => "#2ca02c",
+        "fcl-sap" => "#98df8a",
+        "fcl-ccd" => "#00441b",
+        "rapier" => "#9467bd",
+        _ => "#8c564b",
+    }
 }
 
 /// `nproc`, the lscpu model name and the memory, as the commands report them.
@@ -589,7 +658,15 @@ fn markdown_section(rows: &[Row], brute_max: usize, cpu: Option<usize>, plot: Op
     let mut md = String::new();
     let command: Vec<String> = std::env::args().skip(1).collect();
     let _ = writeln!(md, "{BEGIN}");
-    let _ = writeln!(md, "Produced by `vadop {}`.  ", command.join(" "));
+    match command.iter().position(|a| a == "--render") {
+        Some(k) => {
+            let csv = command.get(k + 1).map_or("", String::as_str);
+            let _ = writeln!(md, "Rows measured by `vadop peers` into `{csv}`, drawn by `vadop {}`.  ", command.join(" "));
+        }
+        None => {
+            let _ = writeln!(md, "Produced by `vadop {}`.  ", command.join(" "));
+        }
+    }
     let _ = writeln!(md, "Machine: {}. {}\n", machine(), cpu.map_or("Runs not pinned.".to_string(), |c| format!("Every run pinned to core {c} with taskset, one thread.")));
     let _ = writeln!(
         md,
@@ -677,6 +754,62 @@ mod tests {
         std::fs::remove_file(&path).unwrap();
         assert_eq!(read, vec![[0, 5, 9], [1, 2, 3]]);
         assert_eq!(compare(&read, &[[0, 5, 9], [2, 0, 1]]), (1, 1, 1));
+    }
+
+    /// Reads the trajectory file the way the peers do and checks that each path is the polyline
+    /// vadop stepped: frames chain up, bounces sit on a wall, and the start velocity leads from
+    /// the start to the first knot.
+    #[test]
+    fn trajectory_file_describes_the_stepped_paths() {
+        let dir = std::env::temp_dir().join(format!("vadop-peers-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 60 bodies at 5 diameters per frame in a box about 8.6 wide: bounces in every frame.
+        export(60, 5.0, 4, true, &dir).unwrap();
+        let bytes = std::fs::read(dir.join("trajectory.bin")).unwrap();
+        let contacts = read_contacts(&dir.join("reference.bin")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let at = std::cell::Cell::new(8);
+        let word = || {
+            at.set(at.get() + 8);
+            u64::from_le_bytes(bytes[at.get() - 8..at.get()].try_into().unwrap())
+        };
+        let float = || f64::from_bits(word());
+        assert_eq!(&bytes[..8], MAGIC);
+        let (n, frames) = (word() as usize, word());
+        let (dt, radius) = (float(), float());
+        let (low, high) = ([float(), float(), float()], [float(), float(), float()]);
+        assert_eq!((n, frames, dt, radius), (60, 4, 1.0 / 30.0, 0.5));
+        let mut previous_end: Option<Vec<[f64; 3]>> = None;
+        let mut bounce_total = 0;
+        for _ in 0..frames {
+            let start: Vec<[f64; 6]> = (0..n).map(|_| std::array::from_fn(|_| float())).collect();
+            let end: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| float())).collect();
+            if let Some(previous) = &previous_end {
+                assert!(start.iter().zip(previous).all(|(s, e)| s[..3] == e[..]));
+            }
+            let count = word();
+            let mut first_knot = vec![None; n];
+            let mut bodies_seen = Vec::new();
+            for _ in 0..count {
+                let body = word() as usize;
+                let (tau, p) = (float(), [float(), float(), float()]);
+                assert!((0.0..dt).contains(&tau));
+                let on_wall = (0..3).any(|a| (p[a] - low[a] - radius).abs() < 1e-9 || (high[a] - p[a] - radius).abs() < 1e-9);
+                assert!(on_wall, "bounce of body {body} at {p:?} is on no wall");
+                first_knot[body].get_or_insert((tau, p));
+                bodies_seen.push(body);
+            }
+            assert!(bodies_seen.windows(2).all(|w| w[0] <= w[1]), "bounces sorted by body");
+            for (i, s) in start.iter().enumerate() {
+                let (tau, p) = first_knot[i].unwrap_or((dt, end[i]));
+                assert!((0..3).all(|a| (s[a] + tau * s[3 + a] - p[a]).abs() < 1e-9), "body {i} leaves its line");
+            }
+            bounce_total += count;
+            previous_end = Some(end);
+        }
+        assert_eq!(at.get(), bytes.len());
+        assert!(bounce_total > 0 && !contacts.is_empty());
+        assert!(contacts.iter().all(|c| (c[0] as u64) < frames && c[1] < c[2] && (c[2] as usize) < n));
     }
 
     #[test]
