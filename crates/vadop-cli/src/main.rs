@@ -9,6 +9,7 @@
 mod bench;
 mod experiments;
 mod plots;
+mod peers;
 mod pools;
 mod report;
 mod simulate;
@@ -42,6 +43,8 @@ enum Command {
     /// A long elastic run (10^7 contacts by default) checking after every frame that energy and
     /// momentum do not drift, no body leaves the box and no pair overlaps beyond tolerance.
     Soak(soak::SoakArgs),
+    /// Compare vadop with Bullet, FCL and rapier/parry on identical paths (builds the peers itself).
+    Peers(peers::PeersArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         Command::Pools(args) => pools::run(&args),
         Command::Bench(args) => bench::run(&args),
         Command::Soak(args) => soak::run(&args),
+        Command::Peers(args) => peers::run(&args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,
