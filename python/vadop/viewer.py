@@ -121,7 +121,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         world = scene(args.bodies, args.packing_fraction, args.max_speed, seed=args.seed, mode=args.mode, pool_axes=args.pool_axes)
         path = write_html(record(world, args.frames), args.out)
-    except ValueError as e:
+    except (ValueError, OverflowError, OSError) as e:
+        # Out-of-range integers and unwritable paths are the user's input too: one line, exit 2.
         parser.exit(2, f"error: {e}\n")
     print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB): open it in a browser")
     if args.open:

@@ -333,10 +333,7 @@ impl PyWorld {
     fn set_velocities(&mut self, ids: &Bound<'_, PyAny>, velocities: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = self.live_ids(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
-        for (id, v) in ids.into_iter().zip(velocities) {
-            self.world.set_velocity(id, v).map_err(value_error)?;
-        }
-        Ok(())
+        self.world.set_velocities(&ids, &velocities).map_err(value_error)
     }
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order.

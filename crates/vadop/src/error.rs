@@ -32,9 +32,15 @@ pub enum VadopError {
     /// The time step was zero, negative or not finite.
     #[error("time step must be a finite number > 0, got {0}")]
     BadTimeStep(f64),
+    /// The world's time plus the time step is no longer a finite number.
+    #[error("the world's time {time:e} plus the time step {dt:e} is not finite; positions at that time would be NaN")]
+    TimeOverflow { time: f64, dt: f64 },
     /// `step` was called on a world with no bodies.
     #[error("the world is empty: add at least one sphere before stepping")]
     EmptyWorld,
+    /// A batch call was given lists of different lengths.
+    #[error("{ids} ids but {velocities} velocities: give one velocity per id")]
+    LengthMismatch { ids: usize, velocities: usize },
     /// A body handle that does not name a live body.
     #[error("no body with id {0}")]
     NoSuchBody(u32),

@@ -328,6 +328,21 @@ impl World {
         Ok(())
     }
 
+    /// Sets the velocities of the bodies `ids` (between frames), all or none.
+    pub fn set_velocities(&mut self, ids: &[u32], velocities: &[DVec3]) -> Result<()> {
+        if ids.len() != velocities.len() {
+            return Err(VadopError::LengthMismatch { ids: ids.len(), velocities: velocities.len() });
+        }
+        for (&id, &velocity) in ids.iter().zip(velocities) {
+            self.live_index(id)?;
+            check_vector("velocity", velocity)?;
+        }
+        for (&id, &velocity) in ids.iter().zip(velocities) {
+            self.set_velocity(id, velocity)?;
+        }
+        Ok(())
+    }
+
     /// The body `id` now, if alive.
     pub fn sphere(&self, id: u32) -> Option<Sphere> {
         let i = id as usize;
@@ -462,9 +477,17 @@ impl World {
         if self.live == 0 {
             return Err(VadopError::EmptyWorld);
         }
+        if !(self.time + dt).is_finite() {
+            return Err(VadopError::TimeOverflow { time: self.time, dt });
+        }
         let side = (self.bounds.max - self.bounds.min).min_element();
         for i in self.bodies.alive_ids() {
-            let lengths = self.bodies.velocity[i as usize].length() * dt / side;
+            // Scaled by the largest component first: the squares of a speed below 1e-162 underflow
+            // to 0, which would let a tiny speed times a huge dt through.
+            let v = self.bodies.velocity[i as usize];
+            let largest = v.abs().max_element();
+            let speed = if largest > 0.0 { largest * (v / largest).length() } else { 0.0 };
+            let lengths = speed * dt / side;
             if !(lengths <= MAX_BOX_LENGTHS_PER_FRAME) {
                 return Err(VadopError::AbsurdSpeed { body: i, lengths, limit: MAX_BOX_LENGTHS_PER_FRAME });
             }

@@ -156,3 +156,42 @@ fn scenes_too_large_to_generate_are_rejected_at_once() {
     let err = vadop::scene::PaperScene::new(10_000_000_000_000, 0.05, 1.0).build().unwrap_err();
     assert!(err.to_string().contains("at most"), "{err}");
 }
+
+/// Regression (found from Python): one out-of-range velocity in a batch used to be rejected only
+/// after the rows before it were applied.
+#[test]
+fn set_velocities_is_all_or_none() {
+    let mut w = world();
+    let before = snapshot(&w);
+    let err = w.set_velocities(&[0, 1], &[DVec3::new(3.0, 0.0, 0.0), DVec3::new(1e60, 0.0, 0.0)]).unwrap_err();
+    assert!(matches!(err, VadopError::OutOfRange { .. }), "{err}");
+    assert!(matches!(w.set_velocities(&[0, 7], &[DVec3::X, DVec3::X]).unwrap_err(), VadopError::NoSuchBody(7)));
+    assert!(matches!(w.set_velocities(&[0, 1], &[DVec3::X]).unwrap_err(), VadopError::LengthMismatch { .. }));
+    assert_eq!(snapshot(&w), before);
+    w.set_velocities(&[0, 1], &[DVec3::new(3.0, 0.0, 0.0), DVec3::new(-3.0, 0.0, 0.0)]).unwrap();
+    assert_eq!(w.sphere(1).unwrap().velocity, DVec3::new(-3.0, 0.0, 0.0));
+}
+
+/// Regression: the speed's square underflowed to 0 below 1e-162, so a tiny speed times a huge dt
+/// escaped the absurd-speed check and the step never returned.
+#[test]
+fn tiny_speed_times_huge_step_is_an_absurd_speed() {
+    let mut w = world();
+    w.set_velocity(0, DVec3::new(1e-200, 0.0, 0.0)).unwrap();
+    let before = snapshot(&w);
+    assert!(matches!(w.step(1e300).unwrap_err(), VadopError::AbsurdSpeed { body: 0, .. }));
+    assert_eq!(snapshot(&w), before);
+}
+
+/// Regression: bodies at rest passed every check, and time overflowing to infinity turned every
+/// position into NaN without an error.
+#[test]
+fn time_never_overflows() {
+    let mut w = world();
+    w.set_velocities(&[0, 1], &[DVec3::ZERO, DVec3::ZERO]).unwrap();
+    w.step(1e308).unwrap();
+    let before = snapshot(&w);
+    assert!(matches!(w.step(1e308).unwrap_err(), VadopError::TimeOverflow { .. }));
+    assert_eq!(snapshot(&w), before);
+    assert!(w.spheres().all(|(_, s)| s.position.is_finite()));
+}
