@@ -236,9 +236,9 @@ impl SweepPrune {
         }
     }
 
-    /// Frame start, first half (c_update): drops void entries, takes in pending ones, sizes the
-    /// tiles for this frame and recomputes every interval and tile for `[t0, t0 + dt]` (all
-    /// bodies are at time t0).
+    /// Frame start, first half (c_update): drops void entries, sizes the tiles for this frame and
+    /// recomputes every interval and tile, pending ones too, for `[t0, t0 + dt]` (all bodies are at
+    /// time t0). [`Self::sort`] then merges the pending entries in.
     pub fn update_intervals(&mut self, bodies: &Bodies, dt: f64) {
         let mut max_reach: f64 = 0.0;
         for b in 0..bodies.slots() {
@@ -259,11 +259,9 @@ impl SweepPrune {
         self.max_reach = max_reach;
         let tiling = self.tiling;
         for (a, list) in self.lists.iter_mut().enumerate() {
-            list.sorted.retain(|e| is_live(e, bodies));
-            list.sorted.extend(list.pending.drain(..).filter(|e| is_live(e, bodies)));
             let axis = self.pool.axis(a as u32);
             let (across, up, origin) = (list.across, list.up, list.origin);
-            for e in &mut list.sorted {
+            let refresh = |e: &mut Entry| {
                 let b = e.body as usize;
                 let position = bodies.position[b];
                 let iv = interval(axis, position, bodies.velocity[b], bodies.radius[b], dt);
@@ -272,7 +270,26 @@ impl SweepPrune {
                 let midpoint = position + bodies.velocity[b] * (0.5 * dt);
                 e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
                     + tiling.coordinate(midpoint.dot(up), origin[1]);
-            }
+            };
+            list.pending.retain_mut(|e| {
+                refresh(e);
+                is_live(e, bodies)
+            });
+            // An entry that changed tile jumps a whole tile row in the (tile, start) order: it
+            // joins `pending`, to be merged in, so insertion sort only sees moves within a tile.
+            let pending = &mut list.pending;
+            list.sorted.retain_mut(|e| {
+                if !is_live(e, bodies) {
+                    return false;
+                }
+                let tile = e.tile;
+                refresh(e);
+                if e.tile != tile {
+                    pending.push(*e);
+                    return false;
+                }
+                true
+            });
         }
     }
 
@@ -281,6 +298,15 @@ impl SweepPrune {
         let mut counts = SortCounts::default();
         for list in &mut self.lists {
             counts.swaps += coherent_sort(&mut list.sorted, Entry::precedes);
+            // Entries added or moved to another tile since the last frame are sorted apart and
+            // merged: appended at the end they would each travel the whole list and spend
+            // insertion sort's budget.
+            if !list.pending.is_empty() {
+                list.pending.sort_by(Entry::order);
+                list.sorted.append(&mut list.pending);
+                // Two sorted runs: the stable sort detects them and merges in linear time.
+                list.sorted.sort_by(Entry::order);
+            }
             counts.entries += list.sorted.len() as u64;
             list.max_width = list.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
         }
