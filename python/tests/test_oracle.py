@@ -37,11 +37,20 @@ def test_detect_mode_on_random_paths(n, speed, seed, pool_axes):
     fraction=st.floats(0.01, 0.3),
     speed=st.floats(0.01, 5.0),
     seed=st.integers(0, 2**32),
-    # Low restitution in dense scenes drives the core into inelastic collapse (unboundedly many
-    # contacts per frame), a limitation of the engine, not of the binding: keep to e >= 0.5.
+    # Low restitution in dense scenes collapses: the core merges a pair into resting contact only
+    # after 64 contacts in a frame (docs/reliability.md), which makes such runs slow: keep e >= 0.5.
     restitution=st.floats(0.5, 1.0),
 )
 def test_simulate_mode_on_random_scenes(n, fraction, speed, seed, restitution):
+    # A few spheres in a small box have few lattice sites: thin a packing that cannot be placed.
+    while True:
+        try:
+            vadop.scene(n, fraction, speed, seed=seed)
+            break
+        except ValueError as e:
+            if "too dense" not in str(e):
+                raise
+            fraction *= 0.8
     make = lambda method: vadop.scene(n, fraction, speed, seed=seed, method=method, restitution=restitution)
     world, oracle = make("vadop"), make("brute")
     for _ in range(3):
