@@ -13,7 +13,7 @@ use clap::Args;
 use serde::Deserialize;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 const BEGIN: &str = "<!-- core-benchmark:begin -->";
@@ -199,37 +199,47 @@ pub(crate) fn run_child(exe: &Path, args: &[String], scratch: &Path, timeout: Du
     let (json, stderr_path) = (scratch.with_extension("json"), scratch.with_extension("stderr"));
     // A file, not a pipe: a child writing more than a pipe holds would block until the timeout.
     let stderr = report::create_file(&stderr_path)?;
-    let mut child = Command::new(exe)
+    let child = Command::new(exe)
         .args(args)
         .stdout(Stdio::null())
         .stderr(stderr)
         .spawn()
         .map_err(|e| format!("could not start {}: {e}", exe.display()))?;
-    let start = Instant::now();
-    let status = loop {
-        match child.try_wait() {
-            Ok(Some(status)) => break status,
-            Ok(None) if start.elapsed() > timeout => {
-                // Failing to kill means it has just exited; either way it is waited for.
-                let _ = child.kill();
-                let _ = child.wait();
-                return Err(format!("timed out after {} s", timeout.as_secs_f64()));
-            }
-            Ok(None) => std::thread::sleep(POLL),
-            Err(e) => return Err(format!("could not wait for the child: {e}")),
-        }
-    };
-    let messages = std::fs::read_to_string(&stderr_path).unwrap_or_default();
-    let _ = std::fs::remove_file(&stderr_path);
-    if !status.success() {
+    if let Err(e) = finish_child(child, timeout, &stderr_path) {
         let _ = std::fs::remove_file(&json);
-        let last = messages.lines().rev().find(|line| !line.trim().is_empty()).unwrap_or("no message");
-        return Err(format!("failed ({status}): {}", last.trim_start_matches("error: ")));
+        return Err(e);
     }
     let text = std::fs::read_to_string(&json).map_err(|e| report::io_error(&json, e))?;
     let _ = std::fs::remove_file(&json);
     let report: ChildReport = serde_json::from_str(&text).map_err(|e| report::io_error(&json, e))?;
     Ok(report.summary)
+}
+
+/// Waits for `child` until it exits or `timeout` passes (then kills it). A failed exit becomes
+/// an error carrying the last line the child wrote to `stderr_path`, which is removed either way.
+pub(crate) fn finish_child(mut child: Child, timeout: Duration, stderr_path: &Path) -> Result<(), String> {
+    let start = Instant::now();
+    let waited = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break Ok(status),
+            Ok(None) if start.elapsed() > timeout => {
+                // Failing to kill means it has just exited; either way it is waited for.
+                let _ = child.kill();
+                let _ = child.wait();
+                break Err(format!("timed out after {} s", timeout.as_secs_f64()));
+            }
+            Ok(None) => std::thread::sleep(POLL),
+            Err(e) => break Err(format!("could not wait for the child: {e}")),
+        }
+    };
+    let messages = std::fs::read_to_string(stderr_path).unwrap_or_default();
+    let _ = std::fs::remove_file(stderr_path);
+    let status = waited?;
+    if !status.success() {
+        let last = messages.lines().rev().find(|line| !line.trim().is_empty()).unwrap_or("no message");
+        return Err(format!("failed ({status}): {}", last.trim_start_matches("error: ")));
+    }
+    Ok(())
 }
 
 /// Reads the markdown file, or `None` when it does not exist yet.

@@ -16,6 +16,7 @@
 //! plot it writes. It never touches BENCHMARKS.md outside its markers, and a failed or timed-out
 //! run becomes a row saying so.
 
+use crate::bench::{finish_child, machine, merge_marked_section};
 use crate::report;
 use crate::CliResult;
 use clap::{Args, ValueEnum};
@@ -252,7 +253,7 @@ fn write_outputs(args: &PeersArgs, existing: Option<&str>, rows: &[Row], cpu: Op
         }
     };
     let section = markdown_section(rows, args.brute_max, cpu, plotted.then_some(&png));
-    let merged = merge_section(existing, &section, &args.output)?;
+    let merged = merge_marked_section(existing, &section, &args.output, BEGIN, END)?;
     std::fs::write(&args.output, merged).map_err(|e| report::io_error(&args.output, e))?;
     Ok(section)
 }
@@ -344,34 +345,17 @@ fn spawn(program: &Path, arguments: &[String], cpu: Option<usize>, scratch: &Pat
         }
         None => Command::new(program),
     };
-    let mut child = command
+    let child = command
         .args(arguments)
         .stdin(Stdio::null())
         .stdout(stdout)
         .stderr(stderr)
         .spawn()
         .map_err(|e| format!("could not start {}: {e}", program.display()))?;
-    let start = Instant::now();
-    let status = loop {
-        match child.try_wait() {
-            Ok(Some(status)) => break status,
-            Ok(None) if start.elapsed() > timeout => {
-                let _ = child.kill();
-                let _ = child.wait();
-                return Err(format!("timed out after {} s", timeout.as_secs_f64()));
-            }
-            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
-            Err(e) => return Err(format!("could not wait for the child: {e}")),
-        }
-    };
-    let messages = std::fs::read_to_string(&stderr_path).unwrap_or_default();
+    let finished = finish_child(child, timeout, &stderr_path);
     let output = std::fs::read_to_string(&stdout_path).unwrap_or_default();
-    let _ = std::fs::remove_file(&stderr_path);
     let _ = std::fs::remove_file(&stdout_path);
-    if !status.success() {
-        let last = messages.lines().rev().find(|line| !line.trim().is_empty()).unwrap_or("no message");
-        return Err(format!("failed ({status}): {}", last.trim_start_matches("error: ")));
-    }
+    finished?;
     Ok(output)
 }
 
@@ -643,17 +627,6 @@ fn colour(pipeline: &str) -> &'static str {
     }
 }
 
-/// `nproc`, the lscpu model name and the memory, as the commands report them.
-fn machine() -> String {
-    let run = |program: &str| Command::new(program).output().ok().map(|o| String::from_utf8_lossy(&o.stdout).to_string()).unwrap_or_default();
-    let model = run("lscpu").lines().find_map(|l| l.strip_prefix("Model name:").map(|m| m.trim().to_string())).unwrap_or("unknown CPU".into());
-    let memory = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|m| m.lines().find_map(|l| l.strip_prefix("MemTotal:").and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())))
-        .map_or("unknown".to_string(), |kib| format!("{:.1} GiB", kib / 1024.0 / 1024.0));
-    format!("`nproc` = {}, `lscpu` model: {model}, RAM {memory}", run("nproc").trim())
-}
-
 fn markdown_section(rows: &[Row], brute_max: usize, cpu: Option<usize>, plot: Option<&PathBuf>) -> String {
     let mut md = String::new();
     let command: Vec<String> = std::env::args().skip(1).collect();
@@ -727,19 +700,6 @@ fn markdown_section(rows: &[Row], brute_max: usize, cpu: Option<usize>, plot: Op
     }
     let _ = write!(md, "{END}");
     md
-}
-
-/// `existing` with its section between the markers replaced by `section`, or `section` appended
-/// when there are no markers. Unbalanced markers are an error: guessing could delete user text.
-fn merge_section(existing: Option<&str>, section: &str, path: &Path) -> CliResult<String> {
-    let Some(text) = existing else {
-        return Ok(format!("# Benchmarks\n\n{section}\n"));
-    };
-    match (text.find(BEGIN), text.find(END)) {
-        (Some(begin), Some(end)) if begin < end => Ok(format!("{}{section}{}", &text[..begin], &text[end + END.len()..])),
-        (None, None) => Ok(format!("{}\n\n{section}\n", text.trim_end())),
-        _ => Err(format!("{}: the markers {BEGIN} and {END} are unbalanced or out of order; fix them by hand", path.display())),
-    }
 }
 
 #[cfg(test)]
@@ -817,7 +777,7 @@ mod tests {
         let path = Path::new("B.md");
         let section = format!("{BEGIN}\nnew\n{END}");
         let text = format!("# Top\n\n{BEGIN}\nold\n{END}\n\nTail\n");
-        assert_eq!(merge_section(Some(&text), &section, path).unwrap(), format!("# Top\n\n{section}\n\nTail\n"));
-        assert!(merge_section(Some(&format!("{END}{BEGIN}")), &section, path).is_err());
+        assert_eq!(merge_marked_section(Some(&text), &section, path, BEGIN, END).unwrap(), format!("# Top\n\n{section}\n\nTail\n"));
+        assert!(merge_marked_section(Some(&format!("{END}{BEGIN}")), &section, path, BEGIN, END).is_err());
     }
 }

@@ -96,6 +96,17 @@ fn positive_values(obj: &Bound<'_, PyAny>, name: &str, rows: usize) -> PyResult<
     Ok(values)
 }
 
+/// An array error for an argument that also accepts `alternative`: the message says so, the
+/// exception type (TypeError or ValueError) stays.
+fn also_accepts(py: Python<'_>, error: PyErr, alternative: &str) -> PyErr {
+    let message = error.value(py).to_string().replacen("must be", &format!("must be {alternative} or"), 1);
+    if error.is_instance_of::<PyTypeError>(py) {
+        PyTypeError::new_err(message)
+    } else {
+        PyValueError::new_err(message)
+    }
+}
+
 /// Body ids: a Python int or an int64 array of shape (k,).
 fn ids(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
     if let Ok(id) = obj.extract::<i64>() {
@@ -104,14 +115,7 @@ fn ids(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
         }
     }
     let py = obj.py();
-    let array = checked_array(obj, name, numpy::dtype::<i64>(py), &[None]).map_err(|e| {
-        let message = e.value(py).to_string().replacen("must be", "must be an int or", 1);
-        if e.is_instance_of::<PyTypeError>(py) {
-            PyTypeError::new_err(message)
-        } else {
-            PyValueError::new_err(message)
-        }
-    })?;
+    let array = checked_array(obj, name, numpy::dtype::<i64>(py), &[None]).map_err(|e| also_accepts(py, e, "an int"))?;
     let array = array.downcast::<PyArray1<i64>>()?.readonly();
     Ok(array.as_array().to_vec())
 }
@@ -126,14 +130,7 @@ fn bounds(obj: &Bound<'_, PyAny>) -> PyResult<BoxBounds> {
         }
     }
     let py = obj.py();
-    let array = checked_array(obj, "box", numpy::dtype::<f64>(py), &[Some(2), Some(3)]).map_err(|e| {
-        let message = e.value(py).to_string().replacen("must be", "must be a number (cube side) or", 1);
-        if e.is_instance_of::<PyTypeError>(py) {
-            PyTypeError::new_err(message)
-        } else {
-            PyValueError::new_err(message)
-        }
-    })?;
+    let array = checked_array(obj, "box", numpy::dtype::<f64>(py), &[Some(2), Some(3)]).map_err(|e| also_accepts(py, e, "a number (cube side)"))?;
     let array = array.downcast::<PyArray2<f64>>()?.readonly();
     let v = array.as_array();
     BoxBounds::new(DVec3::new(v[[0, 0]], v[[0, 1]], v[[0, 2]]), DVec3::new(v[[1, 0]], v[[1, 1]], v[[1, 2]])).map_err(value_error)

@@ -165,11 +165,30 @@ impl AxisList {
     /// bounds its body over the rest of the frame, whenever it was computed.
     fn absorb_pending(&mut self, bodies: &Bodies) {
         self.sorted.retain(|e| is_live(e, bodies));
-        self.pending.sort_by(Entry::order);
-        self.sorted.extend(self.pending.drain(..).filter(|e| is_live(e, bodies)));
-        // Two sorted runs: the stable sort detects them and merges in linear time.
-        self.sorted.sort_by(Entry::order);
+        self.pending.retain(|e| is_live(e, bodies));
+        self.merge_pending();
         self.max_width = self.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
+    }
+
+    /// Sorts `pending` and merges it into `sorted` in linear time, in place from the back, so
+    /// no frame allocates once the lists have grown. Ties keep `sorted` first, as a stable sort
+    /// of the two runs would.
+    fn merge_pending(&mut self) {
+        self.pending.sort_unstable_by(Entry::order);
+        let (mut i, mut j) = (self.sorted.len(), self.pending.len());
+        self.sorted.extend_from_slice(&self.pending);
+        // Invariant: slots [i + j, len) hold the merged tail; [0, i) is still the untouched head.
+        while j > 0 {
+            let k = i + j - 1;
+            if i > 0 && Entry::order(&self.pending[j - 1], &self.sorted[i - 1]).is_lt() {
+                self.sorted[k] = self.sorted[i - 1];
+                i -= 1;
+            } else {
+                self.sorted[k] = self.pending[j - 1];
+                j -= 1;
+            }
+        }
+        self.pending.clear();
     }
 }
 
@@ -302,10 +321,7 @@ impl SweepPrune {
             // merged: appended at the end they would each travel the whole list and spend
             // insertion sort's budget.
             if !list.pending.is_empty() {
-                list.pending.sort_by(Entry::order);
-                list.sorted.append(&mut list.pending);
-                // Two sorted runs: the stable sort detects them and merges in linear time.
-                list.sorted.sort_by(Entry::order);
+                list.merge_pending();
             }
             counts.entries += list.sorted.len() as u64;
             list.max_width = list.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);

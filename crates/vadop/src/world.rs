@@ -204,11 +204,12 @@ enum BroadPhase {
 
 /// Pool size used when none is given, whatever the bodies' speeds. Measured by experiment 4 of
 /// `vadop bench` (BENCHMARKS.md): with tiled axis lists the 3-axis pool is the fastest at every
-/// speed tested, from 0.05 to 20 diameters per frame and with heavy-tailed speed distributions,
-/// because each extra axis per body costs more in updates and candidate checks than its thinner
-/// volume saves; phi = rho is likewise faster than any wider band. The paper's finding that the
-/// best pool grows with speed holds for untiled lists, where thinner volumes are the only way to
-/// cut overlaps; the tiles do that job here.
+/// speed it tests (0.05, 0.5 and 5 diameters per frame, pools of 3 to 39,000 axes), because each
+/// extra axis per body costs more in updates and candidate checks than its thinner volume saves.
+/// phi stays rho, the smallest angle that keeps every pair sharing an axis; every axis for every
+/// body (the swept k-DOP, table 3) is no faster. The paper's finding that the best pool grows
+/// with speed holds for untiled lists, where thinner volumes are the only way to cut overlaps;
+/// the tiles do that job here.
 pub const AUTO_POOL_AXES: usize = 3;
 
 /// A world of spheres in a box.
@@ -482,11 +483,11 @@ impl World {
         }
         let side = (self.bounds.max - self.bounds.min).min_element();
         for i in self.bodies.alive_ids() {
-            // Scaled by the largest component first: the squares of a speed below 1e-162 underflow
-            // to 0, which would let a tiny speed times a huge dt through.
+            // The squares of a speed below 1e-162 underflow to 0, which would let a tiny speed
+            // times a huge dt through: then the largest component stands in for the speed.
             let v = self.bodies.velocity[i as usize];
-            let largest = v.abs().max_element();
-            let speed = if largest > 0.0 { largest * (v / largest).length() } else { 0.0 };
+            let length = v.length();
+            let speed = if length > 0.0 { length } else { v.abs().max_element() };
             let lengths = speed * dt / side;
             if !(lengths <= MAX_BOX_LENGTHS_PER_FRAME) {
                 return Err(VadopError::AbsurdSpeed { body: i, lengths, limit: MAX_BOX_LENGTHS_PER_FRAME });
@@ -777,13 +778,14 @@ fn predict_pair(bodies: &Bodies, i: u32, j: u32, t: f64, t1: f64, queue: &mut Ev
     stats.narrow_tests += 1;
     let offset = bodies.position_at(b, t) - bodies.position_at(a, t);
     let relative_velocity = bodies.velocity[b] - bodies.velocity[a];
-    // A relative velocity within rounding of the bodies' own velocities is noise, not an
-    // approach: without this, a pair brought to rest against each other would keep "colliding"
-    // on rounding residues until they underflow.
-    if relative_velocity.length() <= NOISE_VELOCITY * (bodies.velocity[a].length() + bodies.velocity[b].length()) {
-        return;
-    }
     if let Some(tau) = sphere_sphere_time(offset, relative_velocity, bodies.radius[a] + bodies.radius[b], t1 - t) {
+        // A relative velocity within rounding of the bodies' own velocities is noise, not an
+        // approach: without this, a pair brought to rest against each other would keep
+        // "colliding" on rounding residues until they underflow. Checked only for predicted
+        // contacts, which are far fewer than candidate pairs.
+        if relative_velocity.length() <= NOISE_VELOCITY * (bodies.velocity[a].length() + bodies.velocity[b].length()) {
+            return;
+        }
         queue.push(Event {
             time: t + tau,
             body: a as u32,
