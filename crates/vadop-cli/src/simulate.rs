@@ -55,7 +55,7 @@ pub struct SimulateArgs {
     /// (continuous, every pair), discrete (overlap checks at frame instants only), or the
     /// continuous baselines swept-aabb (classic sweep and prune over swept boxes), swept-kdop (all
     /// pool axes for every body) and grid (uniform grid over swept boxes)
-    #[arg(long, value_enum, default_value_t = MethodArg::Vadop, help_heading = "Run")]
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto, help_heading = "Run")]
     method: MethodArg,
     /// Method stepped alongside on the same scene to count missed and extra pair contacts
     /// [default: brute for at most 3000 bodies unless --method is brute, else none]
@@ -71,6 +71,11 @@ pub struct SimulateArgs {
     /// Coefficient of restitution of every impact, in [0, 1]
     #[arg(long, value_name = "E", default_value_t = 1.0, allow_negative_numbers = true, help_heading = "World")]
     restitution: f64,
+    /// Contact duration t_c of the TC model in seconds: with restitution below 1, a contact of a
+    /// body whose previous contact lies less than t_c before is elastic, which ends inelastic
+    /// collapse
+    #[arg(long, value_name = "SECONDS", default_value_t = vadop::collapse::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
+    contact_duration: f64,
     /// Frame length in seconds
     #[arg(long, value_name = "SECONDS", default_value_t = 1.0 / FRAMES_PER_SECOND, allow_negative_numbers = true, help_heading = "World")]
     dt: f64,
@@ -98,6 +103,7 @@ pub struct SimulateArgs {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum MethodArg {
+    Auto,
     Vadop,
     Brute,
     Discrete,
@@ -109,6 +115,7 @@ enum MethodArg {
 impl MethodArg {
     fn method(self) -> Method {
         match self {
+            MethodArg::Auto => Method::Auto,
             MethodArg::Vadop => Method::Vadop,
             MethodArg::Brute => Method::Brute,
             MethodArg::Discrete => Method::Discrete,
@@ -180,6 +187,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         pool_axes: args.pool.0,
         phi: args.phi.map(f64::to_radians),
         restitution: args.restitution,
+        contact_duration: args.contact_duration,
     };
     let reference = match args.reference {
         Some(ReferenceArg::Brute) => Some(Method::Brute),

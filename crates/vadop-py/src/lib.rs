@@ -189,7 +189,7 @@ fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, re
         Some(m) => Some(m as usize),
         None => None,
     };
-    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution })
+    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution, ..WorldConfig::default() })
 }
 
 fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f64>> {

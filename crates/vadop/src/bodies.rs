@@ -5,6 +5,7 @@
 //! stored together with the time it refers to (`since`), so a body that changed velocity mid-frame
 //! is evaluated exactly as p(t) = p + (t - since) * v by every method alike.
 
+use crate::narrow_phase::Motion;
 use glam::DVec3;
 
 /// One sphere as users see it.
@@ -48,6 +49,19 @@ impl Bodies {
         self.position[i] + (t - self.since[i]) * self.velocity[i]
     }
 
+    /// Body `i`'s straight motion since its last velocity change.
+    #[inline]
+    pub fn motion(&self, i: usize) -> Motion {
+        Motion { position: self.position[i], since: self.since[i], velocity: self.velocity[i] }
+    }
+
+    /// Radius of the sphere about body `i`'s centre that holds the whole body: all the broad
+    /// phase needs of its shape.
+    #[inline]
+    pub fn bounding_radius(&self, i: usize) -> f64 {
+        self.radius[i]
+    }
+
     /// Writes `sphere` into slot `i`, appending when `i` is one past the end.
     pub(crate) fn put(&mut self, i: usize, sphere: Sphere, time: f64) {
         if i == self.slots() {
@@ -77,6 +91,12 @@ impl Bodies {
         self.position[i] = self.position_at(i, t);
         self.since[i] = t;
         self.velocity[i] = velocity;
+        self.stamp[i] = self.stamp[i].wrapping_add(1);
+    }
+
+    /// Voids body `i`'s predictions without changing its motion (its proxy is being renewed).
+    #[inline]
+    pub(crate) fn renew(&mut self, i: usize) {
         self.stamp[i] = self.stamp[i].wrapping_add(1);
     }
 

@@ -29,12 +29,21 @@ pub enum VadopError {
     /// A sphere did not fit entirely inside the box.
     #[error("sphere at {position:?} with radius {radius} does not fit inside the box {min:?}..{max:?}")]
     OutsideBox { position: [f64; 3], radius: f64, min: [f64; 3], max: [f64; 3] },
+    /// The contact duration of the TC model was negative or not finite.
+    #[error("contact duration must be a finite number >= 0 seconds, got {0}")]
+    BadContactDuration(f64),
+    /// A length (radius, box side) below the supported range.
+    #[error("{what} {value:e} is out of range: radii and box sides must be at least 1e-50 (and at most 1e50)")]
+    TooSmall { what: &'static str, value: f64 },
     /// The time step was zero, negative or not finite.
     #[error("time step must be a finite number > 0, got {0}")]
     BadTimeStep(f64),
     /// The world's time plus the time step is no longer a finite number.
     #[error("the world's time {time:e} plus the time step {dt:e} is not finite; positions at that time would be NaN")]
     TimeOverflow { time: f64, dt: f64 },
+    /// The time step is below the resolution of the world's time: the clock would not move.
+    #[error("the time step {dt:e} is too small to advance the world's time {time:e} (below its floating-point resolution)")]
+    TimeStepTooSmall { time: f64, dt: f64 },
     /// `step` was called on a world with no bodies.
     #[error("the world is empty: add at least one sphere before stepping")]
     EmptyWorld,
@@ -74,6 +83,18 @@ pub type Result<T> = std::result::Result<T, VadopError>;
 /// smallest mass): products of four such values stay far from overflow, so no contact is lost
 /// to an infinite square.
 pub const MAX_MAGNITUDE: f64 = 1e50;
+
+/// Smallest radius or box side: with lengths in [1e-50, 1e50], and the narrow phase scaling
+/// lengths and speeds by exact powers of two, no square under- or overflows.
+pub const MIN_LENGTH: f64 = 1e-50;
+
+/// Checks that a positive length lies in [[`MIN_LENGTH`], [`MAX_MAGNITUDE`]].
+pub(crate) fn check_length(what: &'static str, value: f64) -> Result<()> {
+    if value < MIN_LENGTH {
+        return Err(VadopError::TooSmall { what, value });
+    }
+    check_magnitude(what, value)
+}
 
 /// Checks that every component of `v` is finite and at most [`MAX_MAGNITUDE`] in magnitude.
 pub(crate) fn check_vector(what: &'static str, v: glam::DVec3) -> Result<()> {

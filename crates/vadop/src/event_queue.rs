@@ -1,10 +1,14 @@
 //! Time-ordered queue of predicted contacts, with lazy invalidation.
 //!
 //! It owns the min-heap and the rule that makes its order total and deterministic: earlier time
-//! first, then the lower body id, then the partner (bodies before walls, lower ids first). Events
+//! first, then the lower body id, then the partner (bodies before walls before renewals, lower ids
+//! first). Events
 //! carry the velocity stamps their bodies had when they were predicted; an event whose stamps no
 //! longer match is void and is dropped when it reaches the top, so invalidating a body's contacts
-//! costs O(1). It never computes contacts or changes bodies.
+//! costs O(1). A prediction made twice (a pair found through two pieces of a path, or re-tested
+//! by both bodies of a collision) yields two identical events, which pop one after the other:
+//! the repeat is dropped, so no contact is ever reported twice. It never computes contacts or
+//! changes bodies.
 
 use crate::narrow_phase::Wall;
 use std::cmp::Ordering;
@@ -17,14 +21,18 @@ pub enum Partner {
     Body(u32),
     /// A wall of the box.
     Wall(Wall),
+    /// No contact: the body's proxy ends here and must be renewed (see [`crate::proxy`]).
+    Renew,
 }
 
 impl Partner {
-    /// Sort key: bodies before walls, lower ids first.
+    /// Sort key: bodies before walls, lower ids first, renewals last (every contact at the
+    /// same instant is handled with the proxy it was predicted from).
     fn key(self) -> u64 {
         match self {
             Partner::Body(id) => id as u64,
             Partner::Wall(wall) => (1u64 << 32) + wall as u64,
+            Partner::Renew => u64::MAX,
         }
     }
 }
@@ -50,14 +58,19 @@ impl Event {
             .total_cmp(&other.time)
             .then(self.body.cmp(&other.body))
             .then(self.partner.key().cmp(&other.partner.key()))
+            // Stamps last: the order is total, so repeats of one prediction are adjacent.
+            .then(self.body_stamp.cmp(&other.body_stamp))
+            .then(self.partner_stamp.cmp(&other.partner_stamp))
     }
 }
 
+/// Equal events predict the same contact of the same motions.
 impl PartialEq for Event {
     fn eq(&self, other: &Self) -> bool {
         self.order(other) == Ordering::Equal
     }
 }
+
 impl Eq for Event {}
 impl PartialOrd for Event {
     fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
@@ -83,6 +96,8 @@ impl Ord for Event {
 #[derive(Debug, Default)]
 pub struct EventQueue {
     heap: BinaryHeap<Event>,
+    /// The last event popped, to drop repeats of it.
+    last: Option<Event>,
 }
 
 impl EventQueue {
@@ -91,14 +106,35 @@ impl EventQueue {
     pub fn push(&mut self, event: Event) {
         self.heap.push(event);
     }
-    /// Removes and returns the earliest event (valid or not: the caller checks stamps).
+    /// Adds many predicted contacts at once (a heap rebuild when they outnumber the queue).
+    pub fn extend(&mut self, events: &mut Vec<Event>) {
+        self.heap.extend(events.drain(..));
+    }
+    /// Time of the earliest event (valid or not).
+    #[inline]
+    pub fn peek_time(&self) -> Option<f64> {
+        self.heap.peek().map(|e| e.time)
+    }
+    /// Removes and returns the earliest event (valid or not: the caller checks stamps), dropping
+    /// repeats of the event popped before it.
     #[inline]
     pub fn pop(&mut self) -> Option<Event> {
-        self.heap.pop()
+        loop {
+            let event = self.heap.pop()?;
+            if self.last != Some(event) {
+                self.last = Some(event);
+                return Some(event);
+            }
+        }
     }
-    /// Drops every event, keeping the allocation for the next frame.
+    /// Drops every event, keeping the allocation.
     pub fn clear(&mut self) {
         self.heap.clear();
+        self.last = None;
+    }
+    /// Bytes held (capacity).
+    pub fn memory_bytes(&self) -> usize {
+        self.heap.capacity() * std::mem::size_of::<Event>()
     }
     /// Number of queued events, void ones included.
     pub fn len(&self) -> usize {
@@ -137,5 +173,14 @@ mod tests {
             ]
         );
         assert!(q.is_empty());
+    }
+
+    #[test]
+    fn a_prediction_made_twice_pops_once() {
+        let mut q = EventQueue::default();
+        q.push(event(1.0, 2, Partner::Body(5)));
+        q.push(event(1.0, 2, Partner::Body(5)));
+        q.push(Event { body_stamp: 1, ..event(1.0, 2, Partner::Body(5)) });
+        assert_eq!(std::iter::from_fn(|| q.pop()).count(), 2);
     }
 }

@@ -4,23 +4,27 @@
 //! contact inside the frame, in time order, with its exact time and place, using
 //! velocity-aligned discrete oriented polytopes (VADOPs, Coming & Staadt): each body bounds
 //! itself on the few axes of a common pool that are nearly orthogonal to its velocity, so its
-//! projections barely move while it flies and keeping them sorted costs almost nothing.
+//! projections barely move while it flies and keeping them sorted costs almost nothing; a
+//! hierarchical grid over pieces of the swept paths is the other broad phase, and the default
+//! picks the faster for the scene.
 //!
 //! The modules follow the pipeline, one stage each:
-//! [`axis_pool`] → [`bounding_volume`] → [`sweep_prune`] → [`narrow_phase`] → [`event_queue`] →
-//! [`response`] → [`world`]; plus [`collapse`] (the rule that ends inelastic collapse), [`bodies`] (the state store), [`coherent_sort`] (insertion sort with a budget), [`pseudo_dynamic`] (the
-//! frame-instant baseline), [`overlap`] (start-of-run validation) and [`scene`] (the paper's scene
-//! and the scene file format).
+//! [`axis_pool`] → [`bounding_volume`] → [`proxy`] → [`broad_phase`] → [`narrow_phase`] →
+//! [`event_queue`] → [`response`] (with [`collapse`], the rules that keep inelastic and jammed
+//! contacts finite) → [`pipeline`] → [`world`]; plus [`window`] (the time-window convention),
+//! [`bodies`] (the state store), [`coherent_sort`] (insertion sort with a budget),
+//! [`pseudo_dynamic`] (the frame-instant baseline), [`overlap`] (start-of-run validation) and
+//! [`scene`] (the paper's scene and the scene file format).
 //!
 //! ```
 //! use vadop::{scene::PaperScene, scene::FRAMES_PER_SECOND, Method, Mode, WorldConfig};
 //! // 500 spheres at packing fraction 0.05, speeds up to 5 diameters per frame, detect mode.
 //! let scene = PaperScene::new(500, 0.05, 5.0).build().unwrap();
 //! let detect = |method| WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() };
-//! let mut vadop = scene.world(detect(Method::Vadop)).unwrap();
+//! let mut fast = scene.world(detect(Method::Auto)).unwrap();
 //! let mut oracle = scene.world(detect(Method::Brute)).unwrap();
 //! for _ in 0..10 {
-//!     let found = vadop.step(1.0 / FRAMES_PER_SECOND).unwrap().to_vec();
+//!     let found = fast.step(1.0 / FRAMES_PER_SECOND).unwrap().to_vec();
 //!     // The same contacts as testing every pair, in the same order.
 //!     assert_eq!(found, oracle.step(1.0 / FRAMES_PER_SECOND).unwrap());
 //! }
@@ -29,20 +33,23 @@
 pub mod axis_pool;
 pub mod bodies;
 pub mod bounding_volume;
-pub mod collapse;
+pub mod broad_phase;
 pub mod coherent_sort;
+pub mod collapse;
 pub mod error;
 pub mod event_queue;
 pub mod narrow_phase;
 pub mod overlap;
+pub mod pipeline;
+pub mod proxy;
 pub mod pseudo_dynamic;
 pub mod response;
 pub mod scene;
-pub mod sweep_prune;
-pub mod uniform_grid;
+pub mod window;
 pub mod world;
 
 pub use bodies::Sphere;
 pub use error::{Result, VadopError};
 pub use narrow_phase::Wall;
+pub use window::Window;
 pub use world::{BoxBounds, Contact, FrameStats, Method, Mode, Touched, World, WorldConfig};

@@ -1,14 +1,25 @@
 //! Narrow phase: the exact time of first contact of two moving spheres, or of a sphere and a wall
-//! of the box, within the rest of a frame.
+//! of the box.
 //!
 //! It owns the contact arithmetic and its tolerance, and nothing else: it never sees the world,
-//! the broad phase or the queue, so the VADOP world and the brute-force oracle call the very same
-//! functions and get bit-identical times. Motion is linear within a frame: p(t) = p + t * v.
+//! the broad phase or the queue, so every method and the brute-force oracle call the very same
+//! functions and get bit-identical times. Motion is linear between velocity changes:
+//! p(t) = p + (t - since) v.
+//!
+//! Times are *canonical*: a pair's contact time is computed from the instant its relative motion
+//! began (the later of the two bodies' last velocity changes), never from the window or frame
+//! that asks. Whichever frame, window or method tests a pair, it gets the same time to the bit,
+//! and the time belongs to exactly one half-open window `[start, end)`: a contact on a frame
+//! boundary is reported once.
 //!
 //! Tolerance: two spheres whose centre distance d satisfies d^2 >= R^2 (1 - 2 * `CONTACT_TOLERANCE`)
 //! count as touching, R being the sum of the radii (a *relative* tolerance, so it means the same at
 //! any scale and any distance from the origin). Spheres already overlapping deeper than that are
 //! not a new contact: they are passing through each other (detect mode) or were resolved earlier.
+//!
+//! Scale: lengths and velocities are scaled by exact powers of two before any square is taken,
+//! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
+//! scaled by a power of two gives bit-identical contact times, scaled alike.
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` deliberately also rejects NaN.
 
@@ -22,28 +33,97 @@ pub const CONTACT_TOLERANCE: f64 = 1e-9;
 /// treating it as a contact could re-detect a just-resolved pair forever.
 pub const APPROACH_TOLERANCE: f64 = 1e-12;
 
-/// Time `tau` in `[0, window)` at which two spheres first touch while approaching, if any.
+/// A relative velocity within this fraction of the bodies' own speeds is rounding noise, not an
+/// approach: without this, a pair brought to rest against each other would keep "colliding" on
+/// rounding residues until they underflow.
+pub const NOISE_VELOCITY: f64 = 1e-12;
+
+/// A body's straight motion: at `since` its centre is at `position`, then it moves with `velocity`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    pub position: DVec3,
+    pub since: f64,
+    pub velocity: DVec3,
+}
+
+impl Motion {
+    /// Centre at time `t`.
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.position + (t - self.since) * self.velocity
+    }
+}
+
+/// The exponent e with `2^e <= |x| < 2^(e+1)`, clamped to the normal range `[-1022, 1022]`.
+#[inline]
+fn exponent(x: f64) -> i32 {
+    let biased = ((x.to_bits() >> 52) & 0x7ff) as i32;
+    (biased - 1023).clamp(-1022, 1022)
+}
+
+/// `2^k` for k in the normal range.
+#[inline]
+fn power_of_two(k: i32) -> f64 {
+    f64::from_bits(((1023 + k) as u64) << 52)
+}
+
+/// `x * 2^k` for any k in `[-2044, 2044]`, exact unless the result leaves the normal range.
+#[inline]
+fn scale_by_power_of_two(x: f64, k: i32) -> f64 {
+    x * power_of_two(k / 2) * power_of_two(k - k / 2)
+}
+
+/// The exact power of two `2^-e` with `2^e <= |x| < 2^(e+1)` (clamped to the normal range), so
+/// that `x * unit_scale(x)` lies in `[1, 2)` without rounding.
+///
+/// ```
+/// use vadop::narrow_phase::unit_scale;
+/// assert_eq!(unit_scale(3.0), 0.5);
+/// assert!(unit_scale(1e-300) * 1e-300 >= 1.0);
+/// ```
+#[inline]
+pub fn unit_scale(x: f64) -> f64 {
+    power_of_two(-exponent(x))
+}
+
+/// `v` scaled to unit length, exactly scale-free: tiny and huge vectors normalise like ordinary
+/// ones. `None` for the zero vector (or a non-finite one).
+#[inline]
+pub fn direction(v: DVec3) -> Option<DVec3> {
+    (v * unit_scale(v.abs().max_element())).try_normalize()
+}
+
+/// Time `tau >= 0` after the reference instant at which two spheres first touch while
+/// approaching, if they ever do on their straight paths.
 ///
 /// `offset` is the centre of the second sphere minus the centre of the first, `relative_velocity`
-/// the second's velocity minus the first's, both at the current time; `radius_sum` is R.
+/// the second's velocity minus the first's, both at the reference instant; `radius_sum` is R.
 ///
 /// ```
 /// use glam::DVec3;
 /// use vadop::narrow_phase::sphere_sphere_time;
 /// // Two unit spheres 10 apart closing at speed 4 touch after (10 - 2) / 4 = 2.
-/// let tau = sphere_sphere_time(DVec3::new(10.0, 0.0, 0.0), DVec3::new(-4.0, 0.0, 0.0), 2.0, 5.0);
+/// let tau = sphere_sphere_time(DVec3::new(10.0, 0.0, 0.0), DVec3::new(-4.0, 0.0, 0.0), 2.0);
 /// assert_eq!(tau, Some(2.0));
-/// // They do not touch within a window of 1.
-/// assert_eq!(sphere_sphere_time(DVec3::new(10.0, 0.0, 0.0), DVec3::new(-4.0, 0.0, 0.0), 2.0, 1.0), None);
+/// // Receding: never.
+/// assert_eq!(sphere_sphere_time(DVec3::new(10.0, 0.0, 0.0), DVec3::new(4.0, 0.0, 0.0), 2.0), None);
 /// ```
 #[inline]
-#[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` deliberately rejects NaN too.
-pub fn sphere_sphere_time(
-    offset: DVec3,
-    relative_velocity: DVec3,
-    radius_sum: f64,
-    window: f64,
-) -> Option<f64> {
+pub fn sphere_sphere_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Option<f64> {
+    let (length, speed) = (exponent(radius_sum), exponent(relative_velocity.abs().max_element()));
+    let tau = scaled_time(
+        offset * power_of_two(-length),
+        relative_velocity * power_of_two(-speed),
+        radius_sum * power_of_two(-length),
+    )?;
+    // tau = tau' * 2^length / 2^speed: a power of two, so this is exact.
+    let tau = scale_by_power_of_two(tau, length - speed);
+    tau.is_finite().then_some(tau)
+}
+
+/// The root of [`sphere_sphere_time`] for inputs already scaled near 1.
+#[inline]
+fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Option<f64> {
     let approach = offset.dot(relative_velocity);
     let speed_sq = relative_velocity.length_squared();
     // Only approaching pairs can start a contact; `!(x < y)` also rejects NaN.
@@ -55,8 +135,7 @@ pub fn sphere_sphere_time(
     let gap = offset.length_squared() - radius_sq;
     if gap <= 0.0 {
         let touching = gap >= -2.0 * CONTACT_TOLERANCE * radius_sq;
-        // An empty window holds no contact, not even one at its start.
-        return (touching && 0.0 < window).then_some(0.0);
+        return touching.then_some(0.0);
     }
     // b^2 - a c written as a R^2 - |offset x v|^2: no cancellation between two large squares,
     // which keeps grazing and nearly parallel motion accurate.
@@ -65,8 +144,34 @@ pub fn sphere_sphere_time(
         return None;
     }
     // The smaller root (-b - sqrt(disc)) / a in the form that never divides by a tiny a.
-    let tau = gap / (-approach + discriminant.sqrt());
-    (tau < window).then_some(tau)
+    Some(gap / (-approach + discriminant.sqrt()))
+}
+
+/// Canonical absolute time at which two spheres on their current straight motions first touch
+/// while approaching, if ever: computed from the later of the two `since` instants, so it does
+/// not depend on when or by whom it is asked.
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::narrow_phase::{pair_contact_time, Motion};
+/// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
+/// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
+/// // The gap of 5 closes at 3: one contact at 5/3, whichever frame asks.
+/// assert_eq!(pair_contact_time(&a, &b, 1.0), Some(5.0 / 3.0));
+/// ```
+#[inline]
+pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+    let reference = a.since.max(b.since);
+    let relative_velocity = b.velocity - a.velocity;
+    let tau = sphere_sphere_time(b.at(reference) - a.at(reference), relative_velocity, radius_sum)?;
+    // Checked only for predicted contacts, which are far fewer than candidate pairs.
+    let scale = unit_scale(a.velocity.abs().max_element().max(b.velocity.abs().max_element()));
+    let (va, vb) = (a.velocity * scale, b.velocity * scale);
+    if (vb - va).length() <= NOISE_VELOCITY * (va.length() + vb.length()) {
+        return None;
+    }
+    let time = reference + tau;
+    time.is_finite().then_some(time)
 }
 
 /// A side of the axis-aligned box.
@@ -81,6 +186,9 @@ pub enum Wall {
 }
 
 impl Wall {
+    /// Every wall, in id order.
+    pub const ALL: [Wall; 6] = [Wall::MinX, Wall::MaxX, Wall::MinY, Wall::MaxY, Wall::MinZ, Wall::MaxZ];
+
     /// The coordinate axis (0, 1, 2) this wall is orthogonal to.
     pub fn axis(self) -> usize {
         self as usize / 2
@@ -91,8 +199,7 @@ impl Wall {
     }
     /// The wall on `axis` at the maximum side when `is_max`.
     pub fn new(axis: usize, is_max: bool) -> Wall {
-        const WALLS: [Wall; 6] = [Wall::MinX, Wall::MaxX, Wall::MinY, Wall::MaxY, Wall::MinZ, Wall::MaxZ];
-        WALLS[axis * 2 + is_max as usize]
+        Wall::ALL[axis * 2 + is_max as usize]
     }
     /// Unit normal pointing out of the box.
     pub fn outward_normal(self) -> DVec3 {
@@ -100,44 +207,46 @@ impl Wall {
         n[self.axis()] = if self.is_max() { 1.0 } else { -1.0 };
         n
     }
+    /// The wall's name as written in files: `min-x`, `max-x`, ...
+    pub fn name(self) -> &'static str {
+        ["min-x", "max-x", "min-y", "max-y", "min-z", "max-z"][self as usize]
+    }
 }
 
-/// Earliest time in `[0, window)` at which a sphere moving inside the box `[min, max]` touches a
-/// wall while moving towards it, with the wall it touches. Ties go to the lowest axis.
+impl std::fmt::Display for Wall {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Canonical absolute time at which a sphere of `radius` on `motion` inside the box `[min, max]`
+/// first touches a wall while moving towards it, with the wall. Ties go to the lowest axis.
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::{sphere_wall_time, Wall};
-/// let hit = sphere_wall_time(DVec3::new(5.0, 5.0, 5.0), DVec3::new(2.0, 0.0, 0.0), 1.0,
-///                            DVec3::ZERO, DVec3::splat(10.0), 10.0);
-/// assert_eq!(hit, Some((2.0, Wall::MaxX)));
+/// use vadop::narrow_phase::{wall_contact_time, Motion, Wall};
+/// let motion = Motion { position: DVec3::new(5.0, 5.0, 5.0), since: 1.0, velocity: DVec3::new(2.0, 0.0, 0.0) };
+/// assert_eq!(wall_contact_time(&motion, 1.0, DVec3::ZERO, DVec3::splat(10.0)), Some((3.0, Wall::MaxX)));
 /// ```
 #[inline]
-pub fn sphere_wall_time(
-    position: DVec3,
-    velocity: DVec3,
-    radius: f64,
-    min: DVec3,
-    max: DVec3,
-    window: f64,
-) -> Option<(f64, Wall)> {
+pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -> Option<(f64, Wall)> {
     let mut best: Option<(f64, Wall)> = None;
     for axis in 0..3 {
-        let speed = velocity[axis];
+        let speed = motion.velocity[axis];
         let (distance, is_max) = if speed > 0.0 {
-            (max[axis] - radius - position[axis], true)
+            (max[axis] - radius - motion.position[axis], true)
         } else if speed < 0.0 {
-            (position[axis] - (min[axis] + radius), false)
+            (motion.position[axis] - (min[axis] + radius), false)
         } else {
             continue;
         };
         // A body already at (or a rounding error past) the wall and moving out touches it now.
         let tau = distance.max(0.0) / speed.abs();
-        if tau < window && best.is_none_or(|(t, _)| tau < t) {
+        if tau.is_finite() && best.is_none_or(|(t, _)| tau < t) {
             best = Some((tau, Wall::new(axis, is_max)));
         }
     }
-    best
+    best.map(|(tau, wall)| (motion.since + tau, wall)).filter(|(time, _)| time.is_finite())
 }
 
 #[cfg(test)]
@@ -146,34 +255,30 @@ mod tests {
 
     #[test]
     fn head_on_and_miss() {
-        let t = sphere_sphere_time(DVec3::new(3.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), 1.0, 10.0);
+        let t = sphere_sphere_time(DVec3::new(3.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), 1.0);
         assert_eq!(t, Some(2.0));
-        let miss = sphere_sphere_time(DVec3::new(3.0, 1.5, 0.0), DVec3::new(-1.0, 0.0, 0.0), 1.0, 10.0);
+        let miss = sphere_sphere_time(DVec3::new(3.0, 1.5, 0.0), DVec3::new(-1.0, 0.0, 0.0), 1.0);
         assert_eq!(miss, None);
-        let receding = sphere_sphere_time(DVec3::new(3.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), 1.0, 10.0);
+        let receding = sphere_sphere_time(DVec3::new(3.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), 1.0);
         assert_eq!(receding, None);
     }
 
     #[test]
     fn touching_at_start_counts_only_when_approaching() {
         let touching = DVec3::new(2.0, 0.0, 0.0);
-        assert_eq!(sphere_sphere_time(touching, DVec3::new(-1.0, 0.0, 0.0), 2.0, 1.0), Some(0.0));
-        assert_eq!(sphere_sphere_time(touching, DVec3::new(1.0, 0.0, 0.0), 2.0, 1.0), None);
+        assert_eq!(sphere_sphere_time(touching, DVec3::new(-1.0, 0.0, 0.0), 2.0), Some(0.0));
+        assert_eq!(sphere_sphere_time(touching, DVec3::new(1.0, 0.0, 0.0), 2.0), None);
         // Deep overlap is not a new contact (bodies passing through in detect mode).
         let deep = DVec3::new(1.0, 0.0, 0.0);
-        assert_eq!(sphere_sphere_time(deep, DVec3::new(-1.0, 0.0, 0.0), 2.0, 1.0), None);
-        // Found by fuzzing: touching pairs reported a contact at 0 in an empty window.
-        assert_eq!(sphere_sphere_time(touching, DVec3::new(-1.0, 0.0, 0.0), 2.0, 0.0), None);
-        assert_eq!(sphere_sphere_time(touching, DVec3::new(-1.0, 0.0, 0.0), 2.0, -1.0), None);
+        assert_eq!(sphere_sphere_time(deep, DVec3::new(-1.0, 0.0, 0.0), 2.0), None);
     }
 
     #[test]
     fn grazing_contact_is_found_at_the_closest_approach() {
         // Passes at distance exactly R: touches once, at the closest approach t = 5.
-        let t = sphere_sphere_time(DVec3::new(5.0, 2.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), 2.0, 10.0);
+        let t = sphere_sphere_time(DVec3::new(5.0, 2.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), 2.0);
         assert_eq!(t, Some(5.0));
-        let just_misses =
-            sphere_sphere_time(DVec3::new(5.0, 2.0 + 1e-9, 0.0), DVec3::new(-1.0, 0.0, 0.0), 2.0, 10.0);
+        let just_misses = sphere_sphere_time(DVec3::new(5.0, 2.0 + 1e-9, 0.0), DVec3::new(-1.0, 0.0, 0.0), 2.0);
         assert_eq!(just_misses, None);
     }
 
@@ -181,34 +286,67 @@ mod tests {
     fn far_from_origin_and_very_fast() {
         // 500 diameters per frame, a million units from the origin.
         let base = DVec3::splat(1.0e6);
-        let a = base;
         let b = base + DVec3::new(400.0, 0.3, 0.0);
-        let t = sphere_sphere_time(b - a, DVec3::new(-500.0, 0.0, 0.0), 1.0, 1.0).expect("contact");
+        let t = sphere_sphere_time(b - base, DVec3::new(-500.0, 0.0, 0.0), 1.0).expect("contact");
         let expected = (400.0 - (1.0f64 - 0.09).sqrt()) / 500.0;
         assert!((t - expected).abs() <= 1e-12, "{t} vs {expected}");
     }
 
     #[test]
     fn nearly_parallel_motion_is_stable() {
-        // Relative speed 1e-12: the contact lies far outside any frame, and nothing divides by ~0.
-        let t = sphere_sphere_time(DVec3::new(3.0, 0.0, 0.0), DVec3::new(-1e-12, 0.0, 0.0), 2.0, 1.0);
-        assert_eq!(t, None);
-        let t = sphere_sphere_time(DVec3::new(2.0 + 1e-13, 0.0, 0.0), DVec3::new(-1e-12, 0.0, 0.0), 2.0, 1.0);
-        let t = t.expect("contact within the frame");
+        // Relative speed 1e-12: the contact lies 1e12 time units away, and nothing divides by ~0.
+        let t = sphere_sphere_time(DVec3::new(3.0, 0.0, 0.0), DVec3::new(-1e-12, 0.0, 0.0), 2.0).unwrap();
+        assert!((t - 1e12).abs() < 1e-3, "{t}");
+        let t = sphere_sphere_time(DVec3::new(2.0 + 1e-13, 0.0, 0.0), DVec3::new(-1e-12, 0.0, 0.0), 2.0).unwrap();
         assert!((t - 0.1).abs() < 1e-3, "{t}");
     }
 
     #[test]
+    fn scaling_by_powers_of_two_is_exact_at_both_ends_of_the_range() {
+        let offset = DVec3::new(7.25, 1.5, -0.375);
+        let velocity = DVec3::new(-3.0, -0.5, 0.25);
+        let unit = sphere_sphere_time(offset, velocity, 1.75).unwrap();
+        for exponent in [-1000, -500, -160, 160, 500] {
+            let s = 2f64.powi(exponent);
+            // Same velocity, lengths scaled: the time scales exactly.
+            let scaled = sphere_sphere_time(offset * s, velocity, 1.75 * s).unwrap();
+            assert_eq!(scaled, unit * s, "2^{exponent}");
+            // Same lengths, velocity scaled: the time scales inversely.
+            if exponent.abs() <= 500 {
+                let slow = sphere_sphere_time(offset, velocity * s, 1.75).unwrap();
+                assert_eq!(slow, unit / s, "2^{exponent}");
+            }
+        }
+        assert!((direction(DVec3::new(1e-320, 0.0, 0.0)).unwrap().x - 1.0).abs() < 1e-15);
+        assert!(direction(DVec3::new(0.0, 1e300, 1e300)).unwrap().y > 0.7);
+        assert_eq!(direction(DVec3::ZERO), None);
+    }
+
+    #[test]
+    fn pair_time_does_not_depend_on_who_asks() {
+        // Body b changed velocity at 0.7; the pair's time is computed from 0.7 whatever frame asks.
+        let a = Motion { position: DVec3::new(0.0, 0.0, 0.0), since: 0.0, velocity: DVec3::new(1.0, 0.0, 0.0) };
+        let b = Motion { position: DVec3::new(5.0, 0.0, 0.0), since: 0.7, velocity: DVec3::new(-1.0, 0.0, 0.0) };
+        let t = pair_contact_time(&a, &b, 1.0).unwrap();
+        // At 0.7, a is at 0.7: the gap 5 - 0.7 - 1 closes at 2.
+        assert_eq!(t, 0.7 + (5.0 - 0.7 - 1.0) / 2.0);
+        // Moving together exactly (relative velocity noise only): no contact.
+        let c = Motion { velocity: DVec3::new(1.0 + 1e-15, 0.0, 0.0), ..b };
+        let d = Motion { position: DVec3::new(3.0, 0.0, 0.0), ..a };
+        assert_eq!(pair_contact_time(&d, &Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c }, 1.0), None);
+    }
+
+    #[test]
     fn walls() {
-        let min = DVec3::ZERO;
-        let max = DVec3::splat(10.0);
-        let r = sphere_wall_time(DVec3::new(1.0, 5.0, 5.0), DVec3::new(-1.0, 0.0, 0.0), 1.0, min, max, 1.0);
+        let (min, max) = (DVec3::ZERO, DVec3::splat(10.0));
+        let at = |p: DVec3, v: DVec3| Motion { position: p, since: 0.0, velocity: v };
+        let r = wall_contact_time(&at(DVec3::new(1.0, 5.0, 5.0), DVec3::new(-1.0, 0.0, 0.0)), 1.0, min, max);
         assert_eq!(r, Some((0.0, Wall::MinX)));
-        let r = sphere_wall_time(DVec3::new(5.0, 5.0, 8.0), DVec3::new(0.0, 0.0, 2.0), 1.0, min, max, 1.0);
+        let r = wall_contact_time(&at(DVec3::new(5.0, 5.0, 8.0), DVec3::new(0.0, 0.0, 2.0)), 1.0, min, max);
         assert_eq!(r, Some((0.5, Wall::MaxZ)));
-        let none = sphere_wall_time(DVec3::new(5.0, 5.0, 5.0), DVec3::new(1.0, 1.0, 1.0), 1.0, min, max, 1.0);
-        assert_eq!(none, None);
+        assert_eq!(wall_contact_time(&at(DVec3::splat(5.0), DVec3::ZERO), 1.0, min, max), None);
         assert_eq!(Wall::MaxY.outward_normal(), DVec3::Y);
         assert_eq!(Wall::new(2, false), Wall::MinZ);
+        assert_eq!(Wall::MinZ.to_string(), "min-z");
     }
 }

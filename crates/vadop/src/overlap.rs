@@ -6,18 +6,19 @@
 //! bodies in its 27 neighbouring cells. It never changes the bodies.
 
 use crate::bodies::Bodies;
-use crate::narrow_phase::CONTACT_TOLERANCE;
+use crate::narrow_phase::{unit_scale, CONTACT_TOLERANCE};
 use glam::DVec3;
 
 const CELL_BITS: u32 = 21;
 
 /// First pair `(a, b, depth)` in which a body of `new_bodies` overlaps any live body by more than
 /// the contact tolerance; touching is allowed.
-pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32]) -> Option<(u32, u32, f64)> {
+pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(u32, u32, f64)> {
     let live: Vec<u32> = bodies.alive_ids().collect();
+    let position = |i: u32| bodies.position_at(i as usize, time);
     let max_radius = live.iter().map(|&i| bodies.radius[i as usize]).fold(0.0, f64::max);
     let (lo, hi) = live.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &i| {
-        let p = bodies.position[i as usize];
+        let p = position(i);
         (lo.min(p), hi.max(p))
     });
     // Cells at least one diameter wide, and few enough per axis to fit the key.
@@ -28,11 +29,11 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32]) -> Option<(u32, u32, f
         [c.x as u64, c.y as u64, c.z as u64]
     };
     let key = |c: [u64; 3]| c[0] | (c[1] << CELL_BITS) | (c[2] << (2 * CELL_BITS));
-    let mut by_cell: Vec<(u64, u32)> = live.iter().map(|&i| (key(coords(bodies.position[i as usize])), i)).collect();
+    let mut by_cell: Vec<(u64, u32)> = live.iter().map(|&i| (key(coords(position(i))), i)).collect();
     by_cell.sort_unstable();
     let mut found: Option<(u32, u32, f64)> = None;
     for &a in new_bodies {
-        let (pa, ra) = (bodies.position[a as usize], bodies.radius[a as usize]);
+        let (pa, ra) = (position(a), bodies.radius[a as usize]);
         let c = coords(pa);
         for dz in 0..3u64 {
             for dy in 0..3u64 {
@@ -47,7 +48,9 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32]) -> Option<(u32, u32, f
                             continue;
                         }
                         let reach = ra + bodies.radius[b as usize];
-                        let distance = pa.distance(bodies.position[b as usize]);
+                        // Scaled so the square neither underflows nor overflows at any scale.
+                        let scale = unit_scale(reach);
+                        let distance = ((pa - position(b)) * scale).length() / scale;
                         let depth = reach - distance;
                         if depth > CONTACT_TOLERANCE * reach {
                             let pair = (a.min(b), a.max(b), depth);

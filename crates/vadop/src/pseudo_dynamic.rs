@@ -1,90 +1,162 @@
-//! The pseudo-dynamic baseline: discrete overlap checks at frame instants, like freeSOLID.
+//! The pseudo-dynamic baseline, stepped on its own: overlap checks at frame instants only, like
+//! freeSOLID.
 //!
 //! It owns one list of bodies sorted by the low end of their x extent (kept sorted by insertion
-//! sort across frames) and the set of pairs found overlapping at the previous instant. At each
-//! frame end it sweeps the list, confirms AABB overlap on y and z and then sphere overlap. It
-//! never predicts contact times: whatever touches and separates between two instants is missed,
-//! which is exactly what the accuracy comparison measures.
+//! sort across frames) and the pairs found overlapping at the previous instant. At each frame's
+//! start it sweeps the list, confirms AABB overlap on y and z and then sphere overlap, and reports
+//! (or, in simulate mode, resolves) what overlaps at that instant; then bodies move, bouncing off
+//! the walls exactly. It never predicts pair contacts: whatever touches and separates between two
+//! instants is missed, which is exactly what the accuracy comparison measures. A contact found at
+//! a frame's start belongs to that frame, as every contact belongs to the frame holding its time.
 
 use crate::bodies::Bodies;
 use crate::coherent_sort::coherent_sort;
+use crate::collapse::{ContactRules, Rule};
+use crate::narrow_phase::{direction, wall_contact_time};
+use crate::pipeline::{Output, Physics};
+use crate::response::{pair_impulse, wall_bounce};
+use crate::world::{Contact, Mode, Touched};
+use glam::DVec3;
+use std::time::Instant;
 
 /// Frame-instant AABB sweep and prune.
 #[derive(Debug, Default)]
-pub struct PseudoDynamic {
+pub(crate) struct PseudoDynamic {
     /// Live body ids sorted by `low_x`.
     order: Vec<u32>,
-    /// Low end of each slot's x extent at the current instant.
+    /// Centre and low end of the x extent of each slot at the current instant.
+    centre: Vec<DVec3>,
     low_x: Vec<f64>,
     /// Pairs (i < j) overlapping at the previous instant, ascending.
     previous: Vec<(u32, u32)>,
     /// Pairs overlapping now, ascending.
     current: Vec<(u32, u32)>,
+    /// The jam rule, for a body exactly as wide as the box.
+    pub(crate) rules: ContactRules,
 }
 
 impl PseudoDynamic {
     /// Adds a body to the sweep list.
-    pub fn add_body(&mut self, body: u32) {
+    pub(crate) fn add_body(&mut self, body: u32) {
         self.order.push(body);
     }
 
-    /// Updates the sort keys of all bodies at their current positions (c_update), dropping
-    /// removed bodies.
-    pub fn update(&mut self, bodies: &Bodies) {
+    /// Pairs (i < j) overlapping at the last frame instant, ascending.
+    pub(crate) fn overlapping(&self) -> &[(u32, u32)] {
+        &self.current
+    }
+
+    /// Restores the pairs overlapping at the last frame instant (from a saved world).
+    pub(crate) fn set_overlapping(&mut self, pairs: Vec<(u32, u32)>) {
+        self.current = pairs;
+    }
+
+    /// Bytes held.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.order.capacity() * 4
+            + self.centre.capacity() * 24
+            + self.low_x.capacity() * 8
+            + (self.previous.capacity() + self.current.capacity()) * 8
+            + self.rules.memory_bytes()
+    }
+
+    /// Finds the pairs overlapping at `t` (c_update, c_sort, c_test); read them from `current`.
+    pub(crate) fn find_overlaps(&mut self, bodies: &Bodies, t: f64, out: &mut Output) {
+        let start = Instant::now();
         self.order.retain(|&b| bodies.alive[b as usize]);
+        self.centre.resize(bodies.slots(), DVec3::ZERO);
         self.low_x.resize(bodies.slots(), 0.0);
         for &b in &self.order {
             let b = b as usize;
-            self.low_x[b] = bodies.position[b].x - bodies.radius[b];
+            self.centre[b] = bodies.position_at(b, t);
+            self.low_x[b] = self.centre[b].x - bodies.radius[b];
         }
-    }
+        out.stats.update_seconds += start.elapsed().as_secs_f64();
 
-    /// Re-sorts the list (c_sort); returns the number of insertion-sort moves.
-    pub fn sort(&mut self) -> u64 {
+        let start = Instant::now();
         let keys = &self.low_x;
-        coherent_sort(&mut self.order, |&a, &b| keys[a as usize] < keys[b as usize])
-    }
+        out.stats.endpoint_swaps += coherent_sort(&mut self.order, |&a, &b| keys[a as usize] < keys[b as usize]);
+        out.stats.list_entries = self.order.len() as u64;
+        out.stats.sort_seconds += start.elapsed().as_secs_f64();
 
-    /// Finds the pairs overlapping now (c_test). Returns the number of AABB-overlapping pairs
-    /// examined. Read them with [`Self::overlapping`] and [`Self::is_new`].
-    pub fn find_overlaps(&mut self, bodies: &Bodies) -> u64 {
+        let start = Instant::now();
         std::mem::swap(&mut self.previous, &mut self.current);
         self.current.clear();
-        let mut examined = 0u64;
         for (k, &i) in self.order.iter().enumerate() {
-            let (pi, ri) = (bodies.position[i as usize], bodies.radius[i as usize]);
+            let (pi, ri) = (self.centre[i as usize], bodies.radius[i as usize]);
             let high_x = pi.x + ri;
             for &j in &self.order[k + 1..] {
                 if self.low_x[j as usize] > high_x {
                     break;
                 }
-                let (pj, rj) = (bodies.position[j as usize], bodies.radius[j as usize]);
+                let (pj, rj) = (self.centre[j as usize], bodies.radius[j as usize]);
                 let reach = ri + rj;
                 if (pi.y - pj.y).abs() > reach || (pi.z - pj.z).abs() > reach {
                     continue;
                 }
-                examined += 1;
-                if pi.distance_squared(pj) < reach * reach {
+                out.stats.candidate_pairs += 1;
+                out.stats.narrow_tests += 1;
+                // Scaled so the squares neither underflow nor overflow at any scale.
+                let scale = crate::narrow_phase::unit_scale(reach);
+                if ((pi - pj) * scale).length_squared() < (reach * scale) * (reach * scale) {
                     self.current.push(if i < j { (i, j) } else { (j, i) });
                 }
             }
         }
         self.current.sort_unstable();
-        examined
+        out.stats.test_seconds += start.elapsed().as_secs_f64();
     }
 
-    /// Pairs overlapping at the current instant, ascending.
-    pub fn overlapping(&self) -> &[(u32, u32)] {
-        &self.current
-    }
-
-    /// True when `pair` did not overlap at the previous instant.
-    pub fn is_new(&self, pair: (u32, u32)) -> bool {
-        self.previous.binary_search(&pair).is_err()
-    }
-
-    /// Bytes held.
-    pub fn memory_bytes(&self) -> usize {
-        self.order.capacity() * 4 + self.low_x.capacity() * 8 + (self.previous.capacity() + self.current.capacity()) * 8
+    /// Steps from `t0` to `t1`: overlaps at `t0`, then straight motion with exact wall bounces.
+    pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        self.rules.resize(bodies.slots());
+        self.rules.next_step();
+        self.find_overlaps(bodies, t0, out);
+        let start = Instant::now();
+        for k in 0..self.current.len() {
+            let (a, b) = self.current[k];
+            let (i, j) = (a as usize, b as usize);
+            let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
+            let mut impulse = 0.0;
+            if physics.mode == Mode::Simulate {
+                let (vi, vj) = (bodies.velocity[i], bodies.velocity[j]);
+                let (wi, wj) = (bodies.inv_mass[i], bodies.inv_mass[j]);
+                impulse = pair_impulse(normal, vi, vj, wi, wj, physics.restitution);
+                if impulse == 0.0 {
+                    continue;
+                }
+                bodies.set_velocity_at(i, t0, vi - impulse * wi * normal);
+                bodies.set_velocity_at(j, t0, vj + impulse * wj * normal);
+            } else if self.previous.binary_search(&(a, b)).is_ok() {
+                continue;
+            }
+            out.stats.pair_contacts += 1;
+            out.contacts.push(Contact { time: t0, body: a, touched: Touched::Body(b), point: self.centre[i] + normal * bodies.radius[i], normal, impulse });
+        }
+        // Walls: each body on its own, every bounce inside the frame, merged in time order.
+        let first_wall = out.contacts.len();
+        for &body in &self.order {
+            let i = body as usize;
+            while let Some((t, wall)) = wall_contact_time(&bodies.motion(i), bodies.radius[i], physics.bounds.min, physics.bounds.max) {
+                if !(t < t1) {
+                    break;
+                }
+                let v = bodies.velocity[i];
+                let bounced = match self.rules.wall(body, t, physics.restitution, 0.0) {
+                    // A body alone: its cluster is itself, stopped at the wall.
+                    Rule::Jam => {
+                        out.stats.jam_contacts += 1;
+                        v - v.dot(wall.outward_normal()).max(0.0) * wall.outward_normal()
+                    }
+                    Rule::Impulse { restitution, .. } => wall_bounce(v, wall.axis(), restitution),
+                };
+                bodies.set_velocity_at(i, t, bounced);
+                let normal = wall.outward_normal();
+                let point = bodies.position_at(i, t) + normal * bodies.radius[i];
+                out.contacts.push(Contact { time: t, body, touched: Touched::Wall(wall), point, normal, impulse: bodies.mass[i] * (v - bounced).length() });
+            }
+        }
+        out.contacts[first_wall..].sort_by(|x, y| x.time.total_cmp(&y.time).then(x.body.cmp(&y.body)));
+        out.stats.response_seconds += start.elapsed().as_secs_f64();
     }
 }

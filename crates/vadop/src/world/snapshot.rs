@@ -2,16 +2,21 @@
 //! from which stepping continues bit-exactly as if the world had never stopped.
 //!
 //! It owns the file format and its validation. What is saved: the settings, the box, the time,
-//! every body slot (removed ones too, so ids are reused in the same order), the free ids and the
-//! bodies added since the last step. What is not: the broad phase, the queue and the last frame's
-//! statistics, which are rebuilt or reset. That cannot change a contact, because candidate
-//! generation only decides which pairs are tested, never what a test finds: the VADOP world and
-//! the brute-force oracle already agree bit for bit whatever their broad-phase history.
-//! Numbers are written in the shortest form that reads back to the same bits.
+//! every body slot (removed ones too, so ids are reused in the same order) with the time of its
+//! last velocity change and of its last contact (the TC model depends on it), the free ids, the
+//! bodies added since the last step, and for the pseudo-dynamic method the pairs it saw
+//! overlapping. What is not: the broad phase, the proxies and the queue, which are rebuilt. That
+//! cannot change a contact, because contact times are canonical and candidate generation only
+//! decides which pairs are tested, never what a test finds. Numbers are written in the shortest
+//! form that reads back to the same bits.
 //!
-//! It never writes a file in place: a run killed mid-write leaves the previous file intact.
+//! A file is validated as a whole before anything is built from it: every value the world would
+//! have refused, times out of order, bodies outside the box at either end of their current motion,
+//! overlapping bodies in a simulate-mode world of a continuous method, inconsistent ids. A loaded world is one stepping
+//! could have produced. It never writes a file in place: a run killed mid-write leaves the
+//! previous file intact.
 
-use super::{BoxBounds, World, WorldConfig};
+use super::{BoxBounds, Engine, Mode, World, WorldConfig};
 use crate::bodies::Sphere;
 use crate::error::{Result, VadopError};
 use glam::DVec3;
@@ -20,8 +25,9 @@ use std::path::Path;
 
 /// First field of every world file, so other JSON files are recognised as such.
 const FORMAT: &str = "vadop-world";
-/// Bumped on every incompatible change of the layout.
-const VERSION: u32 = 1;
+/// Bumped on every incompatible change of the layout. Version 1 files (no contact history, every
+/// position at the saved time) still load.
+const VERSION: u32 = 2;
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Snapshot {
@@ -33,18 +39,23 @@ struct Snapshot {
     slots: Vec<Slot>,
     free_slots: Vec<u32>,
     unplaced: Vec<u32>,
+    /// Pseudo-dynamic method: pairs (i < j) overlapping at its last frame instant.
+    #[serde(default)]
+    overlapping: Vec<(u32, u32)>,
 }
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Slot {
     position: DVec3,
     velocity: DVec3,
-    /// Time at which `position` holds.
+    /// Time at which `position` holds (the body's last velocity change).
     since: f64,
     radius: f64,
     mass: f64,
-    stamp: u32,
     alive: bool,
+    /// Time of the body's last contact, if any.
+    #[serde(default)]
+    last_contact: Option<f64>,
 }
 
 impl World {
@@ -53,6 +64,7 @@ impl World {
     pub fn save(&self, path: &Path) -> Result<()> {
         let io = |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
         let b = &self.bodies;
+        let history = self.rules().map(|r| &r.last_contact[..]).unwrap_or(&[]);
         let slots = (0..b.slots())
             .map(|i| Slot {
                 position: b.position[i],
@@ -60,10 +72,14 @@ impl World {
                 since: b.since[i],
                 radius: b.radius[i],
                 mass: b.mass[i],
-                stamp: b.stamp[i],
                 alive: b.alive[i],
+                last_contact: history.get(i).copied().filter(|t| t.is_finite()),
             })
             .collect();
+        let overlapping = match &self.engine {
+            Engine::Discrete(pd) => pd.overlapping().to_vec(),
+            _ => Vec::new(),
+        };
         let snapshot = Snapshot {
             format: FORMAT.to_string(),
             version: VERSION,
@@ -73,6 +89,7 @@ impl World {
             slots,
             free_slots: self.free_slots.clone(),
             unplaced: self.unplaced.clone(),
+            overlapping,
         };
         let text = serde_json::to_string(&snapshot).map_err(|e| io(&e))?;
         let mut temporary = path.as_os_str().to_owned();
@@ -84,35 +101,45 @@ impl World {
     }
 
     /// Reads a world written by [`World::save`]. Fails on a file of another format or version,
-    /// or on any value the world would not have accepted.
+    /// or on any state stepping could not have produced.
     pub fn load(path: &Path) -> Result<World> {
         let bad = |message: String| VadopError::Io { path: path.display().to_string(), message };
         let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
         let snapshot: Snapshot = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        if snapshot.format != FORMAT || snapshot.version != VERSION {
+        if snapshot.format != FORMAT || !(1..=VERSION).contains(&snapshot.version) {
             return Err(bad(format!(
-                "not a {FORMAT} file of version {VERSION} (format {:?}, version {})",
+                "not a {FORMAT} file of version 1 to {VERSION} (format {:?}, version {})",
                 snapshot.format, snapshot.version
             )));
         }
-        let mut world = World::new(snapshot.bounds, snapshot.config)?;
-        if !(snapshot.time.is_finite() && snapshot.time >= 0.0) {
-            return Err(bad(format!("time must be finite and >= 0, got {}", snapshot.time)));
+        let mut world = World::new(snapshot.bounds, snapshot.config).map_err(|e| bad(e.to_string()))?;
+        let time = snapshot.time;
+        if !(time.is_finite() && time >= 0.0) {
+            return Err(bad(format!("time must be finite and >= 0, got {time}")));
         }
-        world.time = snapshot.time;
-        // Bodies end a frame up to a rounding error outside the box; a corrupt file is further out.
-        let side = (world.bounds.max - world.bounds.min).max_element();
-        let slack = 1e-6 * side;
+        world.time = time;
+        // Bodies end a frame up to a rounding error outside the box; a damaged file is further out.
         let exact = world.bounds;
+        let slack = 1e-9 * (exact.max - exact.min).max_element() + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
         world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack };
         for (i, slot) in snapshot.slots.iter().enumerate() {
-            let sphere = Sphere { position: slot.position, velocity: slot.velocity, radius: slot.radius, mass: slot.mass };
-            world.check_sphere(&sphere).map_err(|e| bad(format!("slot {i}: {e}")))?;
-            if !(slot.since.is_finite() && slot.since <= snapshot.time) {
-                return Err(bad(format!("slot {i}: since must be finite and <= time, got {}", slot.since)));
+            let at = |position: DVec3| Sphere { position, velocity: slot.velocity, radius: slot.radius, mass: slot.mass };
+            // A removed body's slot only keeps its id; a live one must be where stepping put it.
+            let now = slot.position + (time - slot.since) * slot.velocity;
+            let checked = world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
+                true => world.check_sphere(&at(now)),
+                false => Ok(()),
+            });
+            checked.map_err(|e| bad(format!("slot {i}: {e}")))?;
+            if !(slot.since.is_finite() && slot.since <= time) {
+                return Err(bad(format!("slot {i}: since must be finite and <= time {time}, got {}", slot.since)));
             }
-            world.bodies.put(i, sphere, slot.since);
-            world.bodies.stamp[i] = slot.stamp;
+            if let Some(last) = slot.last_contact {
+                if !(last.is_finite() && last <= time) {
+                    return Err(bad(format!("slot {i}: last contact must be finite and <= time {time}, got {last}")));
+                }
+            }
+            world.bodies.put(i, at(slot.position), slot.since);
             world.bodies.alive[i] = slot.alive;
         }
         world.bounds = exact;
@@ -121,33 +148,44 @@ impl World {
         let mut free = snapshot.free_slots.clone();
         free.sort_unstable();
         free.dedup();
+        let mut waiting = snapshot.unplaced.clone();
+        waiting.sort_unstable();
+        waiting.dedup();
         let consistent = free.len() == snapshot.free_slots.len()
             && free.len() == dead
             && free.iter().all(|&id| (id as usize) < slots && !snapshot.slots[id as usize].alive)
-            && snapshot.unplaced.iter().all(|&id| (id as usize) < slots && snapshot.slots[id as usize].alive);
+            && waiting.len() == snapshot.unplaced.len()
+            && waiting.iter().all(|&id| (id as usize) < slots && snapshot.slots[id as usize].alive);
         if !consistent {
             return Err(bad("free and unplaced ids do not match the slots".to_string()));
         }
+        let pairs_valid = snapshot.overlapping.windows(2).all(|w| w[0] < w[1])
+            && snapshot.overlapping.iter().all(|&(a, b)| a < b && (b as usize) < slots && snapshot.slots[a as usize].alive && snapshot.slots[b as usize].alive);
+        if !pairs_valid || (!snapshot.overlapping.is_empty() && snapshot.config.method != super::Method::Discrete) {
+            return Err(bad("overlapping pairs must be ascending pairs of live bodies, saved by the discrete method only".to_string()));
+        }
         world.live = slots - dead;
         world.free_slots = snapshot.free_slots;
-        // Enter the bodies that had been stepped into a fresh broad phase now, so the next step
+        // Enter the bodies that had been stepped into a fresh engine now, so the next step
         // checks only the bodies added since the last one, exactly as the saved world would.
-        let mut waiting = snapshot.unplaced.clone();
-        waiting.sort_unstable();
         world.unplaced = world.bodies.alive_ids().filter(|id| waiting.binary_search(id).is_err()).collect();
+        // The pseudo-dynamic method finds overlaps only after they happen: its worlds may hold some.
+        if world.config.mode == Mode::Simulate && world.config.method != super::Method::Discrete {
+            if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.unplaced, time) {
+                return Err(bad(format!("bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies")));
+            }
+        }
         world.place_new_bodies();
-        world.prime_discrete();
+        if let Some(rules) = world.rules_mut() {
+            rules.resize(slots);
+            for (i, slot) in snapshot.slots.iter().enumerate() {
+                rules.last_contact[i] = slot.last_contact.unwrap_or(f64::NEG_INFINITY);
+            }
+        }
+        if let Engine::Discrete(pd) = &mut world.engine {
+            pd.set_overlapping(snapshot.overlapping);
+        }
         world.unplaced = snapshot.unplaced;
         Ok(world)
-    }
-
-    /// The pseudo-dynamic baseline reports an overlap only when it is new: recompute which pairs
-    /// overlapped at the last frame instant, as the saved world remembered.
-    fn prime_discrete(&mut self) {
-        if let super::BroadPhase::Discrete(pd) = &mut self.broad {
-            pd.update(&self.bodies);
-            pd.sort();
-            pd.find_overlaps(&self.bodies);
-        }
     }
 }

@@ -19,10 +19,12 @@
 //! deleted: each carries its body's velocity stamp; a stale entry is skipped and dropped later.
 //! A body that changes velocity mid-frame gets fresh entries in a small per-axis `pending` list.
 
+use super::{BroadPhase, PrepareCounts};
 use crate::axis_pool::AxisPool;
-use crate::bodies::Bodies;
 use crate::bounding_volume::{interval, select_axes, Interval};
 use crate::coherent_sort::coherent_sort;
+use crate::proxy::ProxyTable;
+use crate::window::Window;
 use glam::DVec3;
 use std::sync::Arc;
 
@@ -83,15 +85,6 @@ impl Tiling {
     }
 }
 
-/// Counters of the last frame's sort.
-#[derive(Debug, Default, Clone, Copy)]
-pub struct SortCounts {
-    /// Entry moves made by insertion sort.
-    pub swaps: u64,
-    /// Entries across all lists.
-    pub entries: u64,
-}
-
 /// The VADOP broad phase.
 #[derive(Debug)]
 pub struct SweepPrune {
@@ -100,6 +93,10 @@ pub struct SweepPrune {
     lists: Vec<AxisList>,
     /// Ascending pool-axis ids per body slot.
     axes_of: Vec<Vec<u32>>,
+    /// The proxy stamp each body's entries were made with (`None`: no entries yet).
+    entered: Vec<Option<u32>>,
+    /// Scratch: the axes of the body being queried.
+    query_axes: Vec<u32>,
     tiling: Tiling,
     /// Side of the box's projection on any axis plane (its diagonal bounds all of them).
     plane_extent: f64,
@@ -110,9 +107,8 @@ pub struct SweepPrune {
 }
 
 #[inline]
-fn is_live(entry: &Entry, bodies: &Bodies) -> bool {
-    let b = entry.body as usize;
-    bodies.alive[b] && bodies.stamp[b] == entry.stamp
+fn is_live(entry: &Entry, proxies: &ProxyTable) -> bool {
+    proxies.is_current(entry.body as usize, entry.stamp)
 }
 
 #[inline]
@@ -120,18 +116,24 @@ fn ordered(a: u32, b: u32) -> (u32, u32) {
     if a < b { (a, b) } else { (b, a) }
 }
 
-/// Midpoint of body `b`'s path from `t` to `frame_end`: the point its tile is taken from.
+/// Midpoint of body `b`'s path over its proxy window: the point its tile is taken from.
 #[inline]
-fn path_midpoint(bodies: &Bodies, b: usize, t: f64, frame_end: f64) -> DVec3 {
-    bodies.position_at(b, 0.5 * (t + frame_end))
+fn path_midpoint(proxies: &ProxyTable, b: usize) -> DVec3 {
+    proxies.origin[b] + proxies.velocity[b] * (0.5 * proxies.window_of(b).duration())
 }
 
-/// How far body `b`'s surface can be from its path midpoint while it moves from `t` to
-/// `frame_end`: its radius plus half the path. Measuring from the midpoint rather than the start
-/// halves the tiles fast bodies need.
+/// How far body `b`'s surface can be from its path midpoint over its proxy window: its bounding
+/// radius plus half the path. Measuring from the midpoint rather than the start halves the tiles
+/// fast bodies need.
 #[inline]
-fn reach(bodies: &Bodies, b: usize, t: f64, frame_end: f64) -> f64 {
-    bodies.radius[b] + bodies.velocity[b].length() * 0.5 * (frame_end - t)
+fn reach(proxies: &ProxyTable, b: usize) -> f64 {
+    proxies.radius[b] + proxies.velocity[b].length() * 0.5 * proxies.window_of(b).duration()
+}
+
+/// Body `b`'s interval on `axis` over its proxy window.
+#[inline]
+fn body_interval(axis: DVec3, proxies: &ProxyTable, b: usize) -> Interval {
+    interval(axis, proxies.origin[b], proxies.velocity[b], proxies.radius[b], proxies.window_of(b).duration())
 }
 
 impl AxisList {
@@ -163,9 +165,9 @@ impl AxisList {
 
     /// Drops void entries and merges `pending` into `sorted`. Valid mid-frame: every entry still
     /// bounds its body over the rest of the frame, whenever it was computed.
-    fn absorb_pending(&mut self, bodies: &Bodies) {
-        self.sorted.retain(|e| is_live(e, bodies));
-        self.pending.retain(|e| is_live(e, bodies));
+    fn absorb_pending(&mut self, proxies: &ProxyTable) {
+        self.sorted.retain(|e| is_live(e, proxies));
+        self.pending.retain(|e| is_live(e, proxies));
         self.merge_pending();
         self.max_width = self.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
     }
@@ -192,6 +194,7 @@ impl AxisList {
     }
 }
 
+
 impl SweepPrune {
     /// An empty broad phase over `pool` for bodies in the box `[min, max]`, selecting axes within
     /// angle asin(`sin_phi`) of the plane orthogonal to each body's velocity (`sin_phi` = 1: every
@@ -205,6 +208,8 @@ impl SweepPrune {
             sin_phi,
             lists,
             axes_of: Vec::new(),
+            entered: Vec::new(),
+            query_axes: Vec::new(),
             tiling: Tiling { size: plane_extent, side: 1 },
             plane_extent,
             max_reach: 0.0,
@@ -222,118 +227,42 @@ impl SweepPrune {
         self.axes_of.get(body as usize).map_or(&[], |a| a.as_slice())
     }
 
-    /// (Re)builds the volume of `body` from its state at time `now` until `frame_end`: picks its
-    /// axes and adds fresh entries. Call after the body was added or changed velocity (its stamp
-    /// already bumped, which voids its old entries).
-    pub fn set_body(&mut self, body: u32, bodies: &Bodies, now: f64, frame_end: f64) {
-        let b = body as usize;
+    /// Picks body `b`'s axes for its proxy's velocity and adds fresh entries to the lists' pending
+    /// parts (its old entries carry an old stamp and are void).
+    fn enter_entries(&mut self, b: usize, proxies: &ProxyTable) {
         if self.axes_of.len() <= b {
             self.axes_of.resize_with(b + 1, Vec::new);
+            self.entered.resize(b + 1, None);
         }
         let mut axes = std::mem::take(&mut self.axes_of[b]);
-        select_axes(&self.pool, bodies.velocity[b], self.sin_phi, &mut axes);
-        let position = bodies.position_at(b, now);
-        let midpoint = path_midpoint(bodies, b, now, frame_end);
-        self.max_reach = self.max_reach.max(reach(bodies, b, now, frame_end));
+        select_axes(&self.pool, proxies.velocity[b], self.sin_phi, &mut axes);
+        let midpoint = path_midpoint(proxies, b);
+        self.max_reach = self.max_reach.max(reach(proxies, b));
         for &a in &axes {
-            let iv = interval(self.pool.axis(a), position, bodies.velocity[b], bodies.radius[b], frame_end - now);
+            let iv = body_interval(self.pool.axis(a), proxies, b);
             let list = &mut self.lists[a as usize];
             let tile = list.tile_of(&self.tiling, midpoint);
-            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body, stamp: bodies.stamp[b], tile });
+            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body: b as u32, stamp: proxies.stamp[b], tile });
             // Queries scan `pending` linearly: once it is no longer small, merge it into `sorted`.
             if list.pending.len() > 64 + list.sorted.len() / 128 {
-                list.absorb_pending(bodies);
+                list.absorb_pending(proxies);
             }
         }
         self.axes_of[b] = axes;
-    }
-
-    /// Forgets a removed body (its entries are already void: it is no longer alive).
-    pub fn remove_body(&mut self, body: u32) {
-        if let Some(axes) = self.axes_of.get_mut(body as usize) {
-            axes.clear();
-        }
-    }
-
-    /// Frame start, first half (c_update): drops void entries, sizes the tiles for this frame and
-    /// recomputes every interval and tile, pending ones too, for `[t0, t0 + dt]` (all bodies are at
-    /// time t0). [`Self::sort`] then merges the pending entries in.
-    pub fn update_intervals(&mut self, bodies: &Bodies, dt: f64) {
-        let mut max_reach: f64 = 0.0;
-        for b in 0..bodies.slots() {
-            if bodies.alive[b] {
-                max_reach = max_reach.max(reach(bodies, b, 0.0, dt));
-            }
-        }
-        // Bodies that touch during the frame have path midpoints at most 2 * max_reach apart in
-        // any plane, so they lie in the same or adjacent tiles. Resize only when the tiles are
-        // too small or far too large, so the sort stays coherent from frame to frame.
-        let needed = 2.0 * max_reach * (1.0 + REACH_MARGIN) + f64::MIN_POSITIVE;
-        let size = self.tiling.size;
-        if self.tiled && (size < needed || size > 2.0 * needed) {
-            let size = (1.1 * needed).max(self.plane_extent / MAX_TILES_PER_SIDE);
-            let side = ((self.plane_extent / size).floor() as u32 + 1).max(1);
-            self.tiling = Tiling { size, side };
-        }
-        self.max_reach = max_reach;
-        let tiling = self.tiling;
-        for (a, list) in self.lists.iter_mut().enumerate() {
-            let axis = self.pool.axis(a as u32);
-            let (across, up, origin) = (list.across, list.up, list.origin);
-            let refresh = |e: &mut Entry| {
-                let b = e.body as usize;
-                let position = bodies.position[b];
-                let iv = interval(axis, position, bodies.velocity[b], bodies.radius[b], dt);
-                e.lo = iv.lo;
-                e.hi = iv.hi;
-                let midpoint = position + bodies.velocity[b] * (0.5 * dt);
-                e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
-                    + tiling.coordinate(midpoint.dot(up), origin[1]);
-            };
-            list.pending.retain_mut(|e| {
-                refresh(e);
-                is_live(e, bodies)
-            });
-            // An entry that changed tile jumps a whole tile row in the (tile, start) order: it
-            // joins `pending`, to be merged in, so insertion sort only sees moves within a tile.
-            let pending = &mut list.pending;
-            list.sorted.retain_mut(|e| {
-                if !is_live(e, bodies) {
-                    return false;
-                }
-                let tile = e.tile;
-                refresh(e);
-                if e.tile != tile {
-                    pending.push(*e);
-                    return false;
-                }
-                true
-            });
-        }
-    }
-
-    /// Frame start, second half (c_sort): sorts every list by (tile, interval start).
-    pub fn sort(&mut self) -> SortCounts {
-        let mut counts = SortCounts::default();
-        for list in &mut self.lists {
-            counts.swaps += coherent_sort(&mut list.sorted, Entry::precedes);
-            // Entries added or moved to another tile since the last frame are sorted apart and
-            // merged: appended at the end they would each travel the whole list and spend
-            // insertion sort's budget.
-            if !list.pending.is_empty() {
-                list.merge_pending();
-            }
-            counts.entries += list.sorted.len() as u64;
-            list.max_width = list.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
-        }
-        counts
+        self.entered[b] = Some(proxies.stamp[b]);
     }
 
     /// True when bodies `i < j` overlap on every axis they share and `axis` is the first of those.
-    /// Intervals are taken over `[t, frame_end]` from the bodies' positions at `t`.
     #[inline]
-    fn is_candidate(&self, i: u32, j: u32, axis: u32, bodies: &Bodies, t: f64, frame_end: f64) -> bool {
-        let (axes_i, axes_j) = (&self.axes_of[i as usize], &self.axes_of[j as usize]);
+    fn is_candidate(&self, i: u32, j: u32, axis: u32, proxies: &ProxyTable) -> bool {
+        self.is_candidate_through(i, &self.axes_of[i as usize], j, axis, proxies)
+    }
+
+    /// The same rule with body `i`'s axes given (`axes_i`): the pair is reported only through
+    /// its lowest shared axis, and only when the two intervals overlap on every shared axis.
+    #[inline]
+    fn is_candidate_through(&self, i: u32, axes_i: &[u32], j: u32, axis: u32, proxies: &ProxyTable) -> bool {
+        let axes_j = &self.axes_of[j as usize];
         let (mut x, mut y) = (0, 0);
         let mut first = true;
         while x < axes_i.len() && y < axes_j.len() {
@@ -349,8 +278,11 @@ impl SweepPrune {
                         return false;
                     }
                     first = false;
-                } else if !self.overlap_on(ai, i, j, bodies, t, frame_end) {
-                    return false;
+                } else {
+                    let a = self.pool.axis(ai);
+                    if !body_interval(a, proxies, i as usize).overlaps(body_interval(a, proxies, j as usize)) {
+                        return false;
+                    }
                 }
                 x += 1;
                 y += 1;
@@ -359,28 +291,106 @@ impl SweepPrune {
         !first
     }
 
-    #[inline]
-    fn body_interval(&self, axis: u32, body: u32, bodies: &Bodies, t: f64, frame_end: f64) -> Interval {
-        let b = body as usize;
-        interval(self.pool.axis(axis), bodies.position_at(b, t), bodies.velocity[b], bodies.radius[b], frame_end - t)
+    /// True when bodies `i` and `j` use at least one common axis (the invariant that makes
+    /// pruning safe: a pair is only ever pruned on a true separating axis).
+    pub fn shares_axis(&self, i: u32, j: u32) -> bool {
+        let (axes_i, axes_j) = (self.axes_of(i), self.axes_of(j));
+        let (mut x, mut y) = (0, 0);
+        while x < axes_i.len() && y < axes_j.len() {
+            match axes_i[x].cmp(&axes_j[y]) {
+                std::cmp::Ordering::Less => x += 1,
+                std::cmp::Ordering::Greater => y += 1,
+                std::cmp::Ordering::Equal => return true,
+            }
+        }
+        false
+    }
+}
+
+impl BroadPhase for SweepPrune {
+    /// Drops void entries, sizes the tiles for the window, recomputes every interval and tile
+    /// (c_update folded in: the intervals are the lists' own), then sorts every list by (tile,
+    /// interval start).
+    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
+        for b in 0..proxies.slots() {
+            if proxies.live[b] && self.entered.get(b).copied().flatten() != Some(proxies.stamp[b]) {
+                self.enter_entries(b, proxies);
+            }
+        }
+        let mut max_reach: f64 = 0.0;
+        for b in 0..proxies.slots() {
+            if proxies.live[b] {
+                max_reach = max_reach.max(reach(proxies, b));
+            }
+        }
+        // Bodies that touch during the window have path midpoints at most 2 * max_reach apart in
+        // any plane, so they lie in the same or adjacent tiles. Resize only when the tiles are
+        // too small or far too large, so the sort stays coherent from window to window.
+        let needed = 2.0 * max_reach * (1.0 + REACH_MARGIN) + f64::MIN_POSITIVE;
+        let size = self.tiling.size;
+        if self.tiled && (size < needed || size > 2.0 * needed) {
+            let size = (1.1 * needed).max(self.plane_extent / MAX_TILES_PER_SIDE);
+            let side = ((self.plane_extent / size).floor() as u32 + 1).max(1);
+            self.tiling = Tiling { size, side };
+        }
+        self.max_reach = max_reach;
+        let tiling = self.tiling;
+        let mut counts = PrepareCounts::default();
+        for (a, list) in self.lists.iter_mut().enumerate() {
+            let axis = self.pool.axis(a as u32);
+            let (across, up, origin) = (list.across, list.up, list.origin);
+            let refresh = |e: &mut Entry| {
+                let b = e.body as usize;
+                let iv = body_interval(axis, proxies, b);
+                e.lo = iv.lo;
+                e.hi = iv.hi;
+                let midpoint = path_midpoint(proxies, b);
+                e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
+                    + tiling.coordinate(midpoint.dot(up), origin[1]);
+            };
+            list.pending.retain_mut(|e| {
+                let live = is_live(e, proxies);
+                if live {
+                    refresh(e);
+                }
+                live
+            });
+            // An entry that changed tile jumps a whole tile row in the (tile, start) order: it
+            // joins `pending`, to be merged in, so insertion sort only sees moves within a tile.
+            let pending = &mut list.pending;
+            list.sorted.retain_mut(|e| {
+                if !is_live(e, proxies) {
+                    return false;
+                }
+                let tile = e.tile;
+                refresh(e);
+                if e.tile != tile {
+                    pending.push(*e);
+                    return false;
+                }
+                true
+            });
+            counts.moves += coherent_sort(&mut list.sorted, Entry::precedes);
+            // Entries added or moved to another tile since the last window are sorted apart and
+            // merged: appended at the end they would each travel the whole list and spend
+            // insertion sort's budget.
+            if !list.pending.is_empty() {
+                list.merge_pending();
+            }
+            counts.entries += list.sorted.len() as u64;
+            list.max_width = list.sorted.iter().map(|e| e.hi - e.lo).fold(0.0, f64::max);
+        }
+        counts
     }
 
-    #[inline]
-    fn overlap_on(&self, axis: u32, i: u32, j: u32, bodies: &Bodies, t: f64, frame_end: f64) -> bool {
-        self.body_interval(axis, i, bodies, t, frame_end)
-            .overlaps(self.body_interval(axis, j, bodies, t, frame_end))
-    }
-
-    /// Calls `report(i, j)` (i < j) once for every candidate pair of the frame `[t0, frame_end]`.
-    /// Call right after [`Self::sort`], before any body changes velocity.
-    pub fn for_each_pair(&self, bodies: &Bodies, t0: f64, frame_end: f64, mut report: impl FnMut(u32, u32)) {
+    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(u32, u32, Window)) {
         let side = self.tiling.side;
         for (a, list) in self.lists.iter().enumerate() {
             let axis = a as u32;
             let mut check = |e: &Entry, f: &Entry| {
                 let (i, j) = ordered(e.body, f.body);
-                if self.is_candidate(i, j, axis, bodies, t0, frame_end) {
-                    report(i, j);
+                if self.is_candidate(i, j, axis, proxies) {
+                    report(i, j, proxies.window_of(i as usize).intersect(proxies.window_of(j as usize)));
                 }
             };
             let mut start = 0;
@@ -418,26 +428,28 @@ impl SweepPrune {
         }
     }
 
-    /// Calls `report(other)` once for every body that is a candidate partner of `body` over
-    /// `[t, frame_end]` (typically right after `body` changed velocity at time t).
-    pub fn for_each_partner(&self, body: u32, bodies: &Bodies, t: f64, frame_end: f64, mut report: impl FnMut(u32)) {
+    /// Picks the body's axes for its new velocity, adds fresh entries (its old ones carry an old
+    /// stamp and are void) and reports its candidate partners.
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(u32, Window)) {
         let b = body as usize;
-        let centre = path_midpoint(bodies, b, t, frame_end);
-        let distance = (reach(bodies, b, t, frame_end) + self.max_reach) * (1.0 + REACH_MARGIN)
-            + REACH_MARGIN * centre.abs().max_element();
-        for &a in &self.axes_of[b] {
-            let query = self.body_interval(a, body, bodies, t, frame_end);
+        let mut axes = std::mem::take(&mut self.query_axes);
+        select_axes(&self.pool, proxies.velocity[b], self.sin_phi, &mut axes);
+        let midpoint = path_midpoint(proxies, b);
+        let body_reach = reach(proxies, b);
+        let window = proxies.window_of(b);
+        let distance = (body_reach + self.max_reach.max(body_reach)) * (1.0 + REACH_MARGIN) + REACH_MARGIN * midpoint.abs().max_element();
+        for &a in &axes {
+            let query = body_interval(self.pool.axis(a), proxies, b);
             let list = &self.lists[a as usize];
             let mut visit = |e: &Entry| {
-                if e.body == body || e.hi < query.lo || e.lo > query.hi || !is_live(e, bodies) {
+                if e.body == body || Some(e.body) == skip || e.hi < query.lo || e.lo > query.hi || !is_live(e, proxies) {
                     return;
                 }
-                let (i, j) = ordered(body, e.body);
-                if self.is_candidate(i, j, a, bodies, t, frame_end) {
-                    report(e.body);
+                if self.is_candidate_through(body, &axes, e.body, a, proxies) {
+                    report(e.body, window.intersect(proxies.window_of(e.body as usize)));
                 }
             };
-            let (x, y) = (centre.dot(list.across), centre.dot(list.up));
+            let (x, y) = (midpoint.dot(list.across), midpoint.dot(list.up));
             let tiling = &self.tiling;
             let rows = tiling.coordinate(x - distance, list.origin[0])..=tiling.coordinate(x + distance, list.origin[0]);
             for row in rows {
@@ -450,25 +462,18 @@ impl SweepPrune {
             }
             list.pending.iter().for_each(&mut visit);
         }
+        self.query_axes = axes;
     }
 
-    /// True when bodies `i` and `j` use at least one common axis (the invariant that makes
-    /// pruning safe: a pair is only ever pruned on a true separating axis).
-    pub fn shares_axis(&self, i: u32, j: u32) -> bool {
-        let (axes_i, axes_j) = (self.axes_of(i), self.axes_of(j));
-        let (mut x, mut y) = (0, 0);
-        while x < axes_i.len() && y < axes_j.len() {
-            match axes_i[x].cmp(&axes_j[y]) {
-                std::cmp::Ordering::Less => x += 1,
-                std::cmp::Ordering::Greater => y += 1,
-                std::cmp::Ordering::Equal => return true,
-            }
-        }
-        false
+    /// Reports the body's candidate partners on its new axes against the lists as they were, then
+    /// enters its fresh entries.
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window)) {
+        self.query(body, proxies, skip, report);
+        self.enter_entries(body as usize, proxies);
     }
 
     /// Bytes held by the lists and axis sets (capacity, not just length).
-    pub fn memory_bytes(&self) -> usize {
+    fn memory_bytes(&self) -> usize {
         let lists: usize = self
             .lists
             .iter()

@@ -1,0 +1,47 @@
+//! Every pair is a candidate: the brute-force oracle, O(n^2) per window.
+//!
+//! It owns nothing but the list of live bodies, and must never prune: the tests compare every
+//! other broad phase's contacts with the ones found through it.
+
+use super::{BroadPhase, PrepareCounts};
+use crate::proxy::ProxyTable;
+use crate::window::Window;
+
+/// All pairs.
+#[derive(Debug, Default)]
+pub struct BruteForce {
+    live: Vec<u32>,
+}
+
+impl BroadPhase for BruteForce {
+    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
+        self.live.clear();
+        self.live.extend((0..proxies.slots() as u32).filter(|&i| proxies.live[i as usize]));
+        PrepareCounts { moves: 0, entries: self.live.len() as u64 }
+    }
+
+    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(u32, u32, Window)) {
+        for (k, &i) in self.live.iter().enumerate() {
+            for &j in &self.live[k + 1..] {
+                report(i, j, proxies.window_of(i as usize).intersect(proxies.window_of(j as usize)));
+            }
+        }
+    }
+
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window)) {
+        self.query(body, proxies, skip, report);
+    }
+
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(u32, Window)) {
+        let window = proxies.window_of(body as usize);
+        for other in 0..proxies.slots() as u32 {
+            if other != body && Some(other) != skip && proxies.live[other as usize] {
+                report(other, window.intersect(proxies.window_of(other as usize)));
+            }
+        }
+    }
+
+    fn memory_bytes(&self) -> usize {
+        self.live.capacity() * 4
+    }
+}

@@ -1,0 +1,52 @@
+//! Broad phases: which pairs of bodies might touch within a window, found from the proxy table.
+//!
+//! Every broad phase implements [`BroadPhase`] over the same flat [`ProxyTable`]: at a window's
+//! start it bins or sorts every proxy and reports each candidate pair once; when a body changes
+//! velocity mid-window it enters the body's new proxy and reports that body's candidate partners,
+//! at a cost that grows with the bodies near the new path. A broad phase may report a pair that
+//! never touches, never misses one that does, and never reads a body's shape, mass or velocity
+//! stamp history: bounds come from the proxies. Each candidate comes with the time window over
+//! which the reported bounds hold, and only contacts inside it may be predicted from it, so a
+//! pair reported through several pieces of a long path still yields each contact once.
+//!
+//! - [`grid::Grid`]: a hierarchical uniform grid over swept boxes, long paths cut into pieces;
+//! - [`sweep_prune::SweepPrune`]: the paper's VADOP sweep and prune over a pool of axes (and its
+//!   swept-k-DOP and swept-AABB variants);
+//! - [`brute_force::BruteForce`]: every pair, the oracle.
+
+pub mod brute_force;
+pub mod grid;
+pub mod sweep_prune;
+
+use crate::proxy::ProxyTable;
+use crate::window::Window;
+
+/// Counters of a broad phase's window-start work.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct PrepareCounts {
+    /// Entries moved by insertion sort (sweep and prune) or binned (grid).
+    pub moves: u64,
+    /// Entries held after the preparation.
+    pub entries: u64,
+}
+
+/// The interface every broad phase offers the frame pipeline.
+pub trait BroadPhase {
+    /// Window start: every live proxy has just been refreshed; bin or sort them (c_sort).
+    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts;
+
+    /// Calls `report(i, j, window)` (i < j) for every candidate pair of the window (c_test),
+    /// each pair and piece of path once. Call right after [`Self::prepare`].
+    fn for_each_pair(&mut self, proxies: &ProxyTable, report: impl FnMut(u32, u32, Window));
+
+    /// Calls `report(other, window)` for every candidate partner of body `body`'s current proxy
+    /// other than `skip`, without entering the proxy.
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window));
+
+    /// Body `body`'s proxy was just refreshed (it was added or changed velocity): reports its
+    /// candidate partners other than `skip` as [`Self::query`] does, then enters it.
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window));
+
+    /// Bytes held (capacity, not just length).
+    fn memory_bytes(&self) -> usize;
+}

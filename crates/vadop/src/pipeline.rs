@@ -1,0 +1,464 @@
+//! The frame pipeline of the continuous methods: proxies → candidate pairs → predicted contacts →
+//! the event loop, window after window.
+//!
+//! It owns the broad-phase window, the proxy table, the event queue and the contact rules, and
+//! the loop that ties the stages together. A *window* is the stretch of time one broad-phase pass
+//! covers; it is chosen from the bodies' speeds, not from the caller's frames, so a window may
+//! span many short frames or a long frame many windows, and the cost of a frame does not depend
+//! on its length beyond the contacts in it. At a window's start every proxy is refreshed, the
+//! broad phase reports its candidate pairs and every pair and wall contact inside the window is
+//! predicted into the queue. The loop then pops contacts in time order up to the frame's end:
+//! a contact is reported, resolved (simulate mode), and every body whose velocity changed gets a
+//! fresh proxy and is re-tested against its candidate partners for the rest of the window. Events
+//! left in the queue at a frame's end stay valid for the next frame.
+//!
+//! Exactness: contact times are canonical (see [`crate::narrow_phase`]) and each prediction is
+//! kept only inside the window its bounds hold for, so every contact is predicted, and reported
+//! once, in the frame whose `[start, end)` holds its time, whichever window, frame length or
+//! method finds it. It never validates input (the world does) and never reads a broad phase's
+//! internals.
+
+use crate::bodies::Bodies;
+use crate::broad_phase::BroadPhase;
+use crate::collapse::{ContactRules, Rule};
+use crate::event_queue::{Event, EventQueue, Partner};
+use crate::narrow_phase::{direction, pair_contact_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE};
+use crate::proxy::ProxyTable;
+use crate::response::{pair_impulse, wall_bounce};
+use crate::window::Window;
+use crate::world::{BoxBounds, Contact, FrameStats, Mode, Touched};
+use glam::DVec3;
+use std::time::Instant;
+
+/// A window ends early once this many proxies per live body were refreshed within it: the broad
+/// phase's mid-window entries then cost more than starting afresh.
+const UPDATES_PER_BODY: usize = 2;
+/// Windows last as long as the fastest tenth of the bodies takes to travel this many of their
+/// own diameters (then halved while windows keep ending early).
+const WINDOW_DIAMETERS: f64 = 1.0;
+/// A proxy reaches this many typical diameters along its path at most; then it is renewed, so a
+/// fast body's retest covers only where it can go before its next contact is likely.
+const REACH_DIAMETERS: f64 = 8.0;
+/// The quantile of travel times that sets the window.
+const WINDOW_QUANTILE: f64 = 0.1;
+/// Windows are kept within this factor of the caller's frame either way.
+const FRAME_RATIO: f64 = 64.0;
+
+/// How a pipeline picks its windows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum WindowRule {
+    /// One window per frame (the oracle: nothing adaptive between it and the truth).
+    Frame,
+    /// From the bodies' speeds (see [`WINDOW_DIAMETERS`]).
+    Adaptive,
+}
+
+/// The physics a frame is stepped with.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Physics {
+    pub bounds: BoxBounds,
+    pub mode: Mode,
+    pub restitution: f64,
+    pub contact_duration: f64,
+}
+
+/// What a frame produces.
+pub(crate) struct Output<'a> {
+    pub contacts: &'a mut Vec<Contact>,
+    pub stats: &'a mut FrameStats,
+}
+
+/// A continuous method: one broad phase in the frame pipeline.
+#[derive(Debug)]
+pub(crate) struct Pipeline<B: BroadPhase> {
+    broad: B,
+    rule: WindowRule,
+    proxies: ProxyTable,
+    queue: EventQueue,
+    pub(crate) rules: ContactRules,
+    /// The current window (empty before the first).
+    window: Window,
+    /// Proxies refreshed since the window started.
+    updates: usize,
+    /// Halved each time a window ends early, doubled back when windows pass calmly.
+    shrink: f64,
+    /// Scratch: travel times for the window rule, predictions of a window's start.
+    travel: Vec<f64>,
+    predicted: Vec<Event>,
+    /// Scratch of the jam rule: the cluster being frozen, its members' marks, query results.
+    cluster: Vec<u32>,
+    cluster_mark: Vec<u32>,
+    cluster_epoch: u32,
+    near: Vec<u32>,
+}
+
+impl<B: BroadPhase> Pipeline<B> {
+    pub(crate) fn new(broad: B, rule: WindowRule, bounds: &BoxBounds) -> Pipeline<B> {
+        let mut proxies = ProxyTable::new(bounds.min, bounds.max);
+        if rule == WindowRule::Adaptive {
+            proxies.set_reach_diameters(REACH_DIAMETERS);
+        }
+        Pipeline {
+            broad,
+            rule,
+            proxies,
+            queue: EventQueue::default(),
+            rules: ContactRules::default(),
+            window: Window::default(),
+            updates: 0,
+            shrink: 1.0,
+            travel: Vec::new(),
+            predicted: Vec::new(),
+            cluster: Vec::new(),
+            cluster_mark: Vec::new(),
+            cluster_epoch: 0,
+            near: Vec::new(),
+        }
+    }
+
+    /// The broad phase (for inspection and tests).
+    pub(crate) fn broad(&self) -> &B {
+        &self.broad
+    }
+
+    /// Bytes held by the broad phase, the proxies, the queue and the rules.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.broad.memory_bytes()
+            + self.proxies.memory_bytes()
+            + self.queue.memory_bytes()
+            + self.rules.memory_bytes()
+            + (self.travel.capacity() * 8 + self.predicted.capacity() * std::mem::size_of::<Event>())
+            + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
+    }
+
+    /// Body `i` was added or changed velocity between frames at time `t`: it enters the window
+    /// under way (if any) with its candidates predicted; otherwise the next window takes it.
+    pub(crate) fn enter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        self.rules.resize(bodies.slots());
+        if self.window.end > t {
+            self.retest(i, None, bodies, physics, t, stats);
+        } else {
+            self.proxies.enter(i as usize, bodies, t);
+        }
+    }
+
+    /// Body `i` was removed: its predictions and broad-phase entries are void.
+    pub(crate) fn remove(&mut self, i: u32) {
+        self.proxies.remove(i as usize);
+        self.rules.forget(i as usize);
+    }
+
+    /// Steps from `t0` to `t1`: every contact with a time in `[t0, t1)`, in time order.
+    pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        self.rules.resize(bodies.slots());
+        self.rules.next_step();
+        let mut now = t0;
+        loop {
+            if !(self.window.end > now) {
+                self.start_window(bodies, physics, now, t1 - t0, out.stats);
+            }
+            let until = t1.min(self.window.end);
+            let start = Instant::now();
+            self.process_events(bodies, physics, until, out);
+            out.stats.response_seconds += start.elapsed().as_secs_f64();
+            if t1 <= self.window.end {
+                break;
+            }
+            now = self.window.end;
+        }
+    }
+
+    /// The length of the window starting at `now`, for frames of length `frame`.
+    fn window_length(&mut self, bodies: &Bodies, frame: f64) -> f64 {
+        if self.rule == WindowRule::Frame {
+            return frame;
+        }
+        self.travel.clear();
+        for i in 0..bodies.slots() {
+            if self.proxies.is_live(i) {
+                let speed = bodies.velocity[i].length();
+                if speed > 0.0 {
+                    self.travel.push(2.0 * bodies.bounding_radius(i) / speed);
+                }
+            }
+        }
+        if self.travel.is_empty() {
+            return frame;
+        }
+        let k = ((self.travel.len() as f64 * WINDOW_QUANTILE) as usize).min(self.travel.len() - 1);
+        let (_, quick, _) = self.travel.select_nth_unstable_by(k, f64::total_cmp);
+        (*quick * WINDOW_DIAMETERS * self.shrink).clamp(frame / FRAME_RATIO, frame * FRAME_RATIO)
+    }
+
+    /// Starts a window at `now`: refreshes every proxy (c_update), prepares the broad phase
+    /// (c_sort) and predicts every pair and wall contact inside the window (c_test).
+    fn start_window(&mut self, bodies: &Bodies, physics: &Physics, now: f64, frame: f64, stats: &mut FrameStats) {
+        let length = self.window_length(bodies, frame);
+        let mut end = now + length;
+        if !(end > now) {
+            // A window too short to move the clock on (a time far beyond the frame length).
+            end = now + frame;
+        }
+        if !(end > now) {
+            end = now.next_up();
+        }
+        self.window = Window::new(now, end);
+        self.updates = 0;
+        stats.windows += 1;
+
+        let start = Instant::now();
+        self.proxies.refresh_all(bodies, self.window);
+        stats.update_seconds += start.elapsed().as_secs_f64();
+
+        let start = Instant::now();
+        let counts = self.broad.prepare(&self.proxies);
+        stats.endpoint_swaps += counts.moves;
+        stats.list_entries = counts.entries;
+        stats.sort_seconds += start.elapsed().as_secs_f64();
+
+        let start = Instant::now();
+        self.queue.clear();
+        let mut predicted = std::mem::take(&mut self.predicted);
+        let mut candidates = 0u64;
+        let mut tests = 0u64;
+        self.broad.for_each_pair(&self.proxies, |i, j, window| {
+            candidates += 1;
+            tests += 1;
+            if let Some(event) = predict_pair(bodies, i, j, window) {
+                predicted.push(event);
+            }
+        });
+        for i in 0..bodies.slots() {
+            if self.proxies.live[i] {
+                if let Some(event) = predict_wall(bodies, &physics.bounds, i as u32, self.window) {
+                    predicted.push(event);
+                }
+                if self.proxies.expires[i] {
+                    predicted.push(renewal(bodies, &self.proxies, i as u32));
+                }
+            }
+        }
+        self.queue.extend(&mut predicted);
+        self.predicted = predicted;
+        stats.candidate_pairs += candidates;
+        stats.narrow_tests += tests;
+        stats.test_seconds += start.elapsed().as_secs_f64();
+    }
+
+    /// Pops and handles contacts with a time before `until`; may end the window early.
+    fn process_events(&mut self, bodies: &mut Bodies, physics: &Physics, until: f64, out: &mut Output) {
+        while let Some(time) = self.queue.peek_time() {
+            if !(time < until) {
+                break;
+            }
+            let event = self.queue.pop().expect("peeked");
+            let partner_current = match event.partner {
+                Partner::Body(j) => bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp,
+                Partner::Wall(_) | Partner::Renew => true,
+            };
+            let i = event.body as usize;
+            if !(bodies.alive[i] && bodies.stamp[i] == event.body_stamp && partner_current) {
+                out.stats.invalidations += 1;
+                continue;
+            }
+            match event.partner {
+                Partner::Body(j) => self.pair_contact(bodies, physics, event.body, j, event.time, out),
+                Partner::Wall(wall) => self.wall_contact(bodies, physics, event.body, wall, event.time, out),
+                Partner::Renew => {
+                    bodies.renew(i);
+                    self.retest(event.body, None, bodies, physics, event.time, out.stats);
+                }
+            }
+            // Too many fresh proxies: start afresh at the next event's time, strictly after this
+            // one, so nothing already handled is predicted again.
+            if self.updates > UPDATES_PER_BODY * self.proxies.slots().max(64) {
+                if let Some(next) = self.queue.peek_time() {
+                    if next > event.time && next < self.window.end {
+                        self.window.end = next;
+                        self.shrink *= 0.5;
+                        return;
+                    }
+                }
+            }
+        }
+        if self.updates * 4 < UPDATES_PER_BODY * self.proxies.slots().max(64) {
+            self.shrink = (self.shrink * 2.0).min(1.0);
+        }
+    }
+
+    fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, b: u32, t: f64, out: &mut Output) {
+        let (i, j) = (a as usize, b as usize);
+        let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
+        // Coincident centres have no normal; the relative velocity gives one.
+        let normal = direction(pj - pi).or_else(|| direction(bodies.velocity[i] - bodies.velocity[j])).unwrap_or(DVec3::X);
+        let mut impulse = 0.0;
+        if physics.mode == Mode::Simulate {
+            match self.rules.pair(a, b, t, physics.restitution, physics.contact_duration) {
+                Rule::Jam => {
+                    let before = bodies.velocity[i];
+                    out.stats.jam_contacts += 1;
+                    self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
+                    impulse = (bodies.mass[i] * (before - bodies.velocity[i]).dot(normal)).max(0.0);
+                }
+                Rule::Impulse { restitution, changed } => {
+                    let (vi, vj) = (bodies.velocity[i], bodies.velocity[j]);
+                    let (wi, wj) = (bodies.inv_mass[i], bodies.inv_mass[j]);
+                    impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
+                    // Zero impulse changes nothing; re-testing would find the same touch again.
+                    if impulse > 0.0 {
+                        out.stats.tc_contacts += changed as u64;
+                        bodies.set_velocity_at(i, t, vi - impulse * wi * normal);
+                        bodies.set_velocity_at(j, t, vj + impulse * wj * normal);
+                        // The pair itself is re-tested once, by the second body, when both
+                        // proxies are fresh (a rounding residue may still approach).
+                        self.retest(a, Some(b), bodies, physics, t, out.stats);
+                        self.retest(b, None, bodies, physics, t, out.stats);
+                    }
+                }
+            }
+        }
+        out.stats.pair_contacts += 1;
+        out.contacts.push(Contact { time: t, body: a, touched: Touched::Body(b), point: pi + normal * bodies.radius[i], normal, impulse });
+    }
+
+    fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
+        let i = a as usize;
+        let normal = wall.outward_normal();
+        let point = bodies.position_at(i, t) + normal * bodies.radius[i];
+        // The TC model is for collapse between bodies; detect mode only needs the jam rule
+        // (a body exactly as wide as the box).
+        let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
+        let impulse = match self.rules.wall(a, t, physics.restitution, duration) {
+            Rule::Jam => {
+                let before = bodies.velocity[i];
+                out.stats.jam_contacts += 1;
+                self.freeze_cluster(bodies, physics, &[a], t, out.stats);
+                bodies.mass[i] * (before - bodies.velocity[i]).length()
+            }
+            Rule::Impulse { restitution, changed } => {
+                out.stats.tc_contacts += changed as u64;
+                let v = bodies.velocity[i];
+                let bounced = wall_bounce(v, wall.axis(), restitution);
+                bodies.set_velocity_at(i, t, bounced);
+                self.retest(a, None, bodies, physics, t, out.stats);
+                bodies.mass[i] * (v - bounced).length()
+            }
+        };
+        out.contacts.push(Contact { time: t, body: a, touched: Touched::Wall(wall), point, normal, impulse });
+    }
+
+    /// The jam rule (see [`crate::collapse`]): every body touching `seeds` at `t`, directly or
+    /// through each other, without separating, moves on with the cluster's centre-of-mass
+    /// velocity less any component into a wall a member touches.
+    fn freeze_cluster(&mut self, bodies: &mut Bodies, physics: &Physics, seeds: &[u32], t: f64, stats: &mut FrameStats) {
+        let mut cluster = std::mem::take(&mut self.cluster);
+        let mut near = std::mem::take(&mut self.near);
+        cluster.clear();
+        self.cluster_epoch = self.cluster_epoch.wrapping_add(1);
+        self.cluster_mark.resize(bodies.slots(), 0);
+        for &seed in seeds {
+            self.cluster_mark[seed as usize] = self.cluster_epoch;
+            cluster.push(seed);
+        }
+        let (mut mass, mut momentum) = (0.0, DVec3::ZERO);
+        let (mut touches_min, mut touches_max) = ([false; 3], [false; 3]);
+        let mut k = 0;
+        while k < cluster.len() {
+            let m = cluster[k] as usize;
+            k += 1;
+            let (pm, vm, rm) = (bodies.position_at(m, t), bodies.velocity[m], bodies.radius[m]);
+            mass += bodies.mass[m];
+            momentum += bodies.mass[m] * vm;
+            for axis in 0..3 {
+                let slack = 4.0 * CONTACT_TOLERANCE * rm;
+                touches_min[axis] |= pm[axis] - rm <= physics.bounds.min[axis] + slack;
+                touches_max[axis] |= pm[axis] + rm >= physics.bounds.max[axis] - slack;
+            }
+            near.clear();
+            self.broad.query(m as u32, &self.proxies, None, |o, _| near.push(o));
+            for &o in &near {
+                let o = o as usize;
+                if self.cluster_mark[o] == self.cluster_epoch {
+                    continue;
+                }
+                let reach = (rm + bodies.radius[o]) * (1.0 + 4.0 * CONTACT_TOLERANCE);
+                let scale = unit_scale(reach);
+                let offset = (bodies.position_at(o, t) - pm) * scale;
+                let separating = (bodies.velocity[o] - vm).dot(offset) > 0.0;
+                if offset.length_squared() <= (reach * scale) * (reach * scale) && !separating {
+                    self.cluster_mark[o] = self.cluster_epoch;
+                    cluster.push(o as u32);
+                }
+            }
+        }
+        let mut velocity = momentum / mass;
+        for axis in 0..3 {
+            if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {
+                velocity[axis] = 0.0;
+            }
+        }
+        for &m in &cluster {
+            self.rules.freeze(m, t);
+            bodies.set_velocity_at(m as usize, t, velocity);
+        }
+        for &m in &cluster {
+            self.retest(m, None, bodies, physics, t, stats);
+        }
+        self.cluster = cluster;
+        self.near = near;
+    }
+
+    /// After `body` changed velocity at `t`: a fresh proxy, and its contacts with the walls and
+    /// its candidate partners (except `skip`, tested by the partner) for the rest of the window.
+    fn retest(&mut self, body: u32, skip: Option<u32>, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        self.proxies.enter(body as usize, bodies, t);
+        self.updates += 1;
+        stats.retests += 1;
+        let window = self.window.from(t);
+        let queue = &mut self.queue;
+        let mut tests = 0u64;
+        self.broad.update(body, &self.proxies, skip, |other, bounds_window| {
+            tests += 1;
+            if let Some(event) = predict_pair(bodies, body, other, bounds_window.intersect(window)) {
+                queue.push(event);
+            }
+        });
+        stats.narrow_tests += tests;
+        if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
+            queue.push(event);
+        }
+        if self.proxies.expires[body as usize] {
+            queue.push(renewal(bodies, &self.proxies, body));
+        }
+    }
+}
+
+/// The contact of bodies `i` and `j` if its canonical time lies in `window`.
+#[inline]
+fn predict_pair(bodies: &Bodies, i: u32, j: u32, window: Window) -> Option<Event> {
+    // Always the lower id first, so every method does bit-identical arithmetic for a pair.
+    let (a, b) = if i < j { (i as usize, j as usize) } else { (j as usize, i as usize) };
+    let time = pair_contact_time(&bodies.motion(a), &bodies.motion(b), bodies.radius[a] + bodies.radius[b])?;
+    window.contains(time).then(|| Event {
+        time,
+        body: a as u32,
+        partner: Partner::Body(b as u32),
+        body_stamp: bodies.stamp[a],
+        partner_stamp: bodies.stamp[b],
+    })
+}
+
+/// The renewal of body `body`'s proxy at its end.
+#[inline]
+fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
+    let i = body as usize;
+    Event { time: proxies.end[i], body, partner: Partner::Renew, body_stamp: bodies.stamp[i], partner_stamp: 0 }
+}
+
+/// Body `body`'s wall contact if its canonical time lies in `window`.
+#[inline]
+fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+    let i = body as usize;
+    let (time, wall) = wall_contact_time(&bodies.motion(i), bodies.radius[i], bounds.min, bounds.max)?;
+    window.contains(time).then_some(Event { time, body, partner: Partner::Wall(wall), body_stamp: bodies.stamp[i], partner_stamp: 0 })
+}

@@ -1,0 +1,203 @@
+//! The proxy table: what the broad phase knows of each body, in flat arrays indexed by body id.
+//!
+//! A proxy bounds one body over the rest of the current broad-phase window: its straight motion
+//! from `start` (the window's start, or the instant the body last changed velocity) until `end`,
+//! the window's end or, when sooner, the instant the body reaches a wall (where its velocity
+//! changes and it gets a fresh proxy) or has travelled its `reach` (then the pipeline renews the
+//! proxy at its end), its bounding radius and its swept box. Ending at the wall keeps every path
+//! inside the box, and the reach keeps a fast body's proxy local, however fast it is: a body
+//! that will soon hit another never pays for the rest of its path. It is the only thing a broad phase reads,
+//! so broad phases know nothing of shapes: a body of any shape is bounded by the sphere about its
+//! centre that contains it. The table never decides what is a candidate and never moves a body;
+//! the pipeline refreshes every proxy at a window's start and a body's proxy when it changes
+//! velocity.
+
+use crate::bodies::Bodies;
+use crate::narrow_phase::{wall_contact_time, Motion};
+use crate::window::Window;
+use glam::DVec3;
+
+/// Relative padding of swept boxes, far above the rounding of a position update, so a box always
+/// holds its body whichever instant the body's position is computed from.
+pub const RELATIVE_PADDING: f64 = 1e-12;
+
+/// Flat table of proxies.
+#[derive(Debug, Default, Clone)]
+pub struct ProxyTable {
+    /// The broad-phase window every proxy lies in.
+    window: Window,
+    /// The box the bodies live in.
+    box_min: DVec3,
+    box_max: DVec3,
+    /// Longest path a proxy may cover before it must be renewed.
+    reach: f64,
+    /// Median bounding radius of the live bodies at the window's start.
+    typical_radius: f64,
+    /// Centre of the body at `start`.
+    pub origin: Vec<DVec3>,
+    pub velocity: Vec<DVec3>,
+    /// Radius of the sphere about the centre that holds the whole body.
+    pub radius: Vec<f64>,
+    /// The proxy bounds its body over `[start, end)`.
+    pub start: Vec<f64>,
+    pub end: Vec<f64>,
+    /// Swept box over `[start, end]`, padded.
+    pub low: Vec<DVec3>,
+    pub high: Vec<DVec3>,
+    /// The body's velocity stamp when the proxy was built: broad-phase entries carrying another
+    /// stamp are stale.
+    pub stamp: Vec<u32>,
+    /// False for removed bodies and bodies not entered yet.
+    pub live: Vec<bool>,
+    /// True when the proxy ends before the window because of its reach: it must be renewed.
+    pub expires: Vec<bool>,
+    /// Scratch for the median radius.
+    radii: Vec<f64>,
+}
+
+/// Swept box of a sphere of `radius` moving from `a` to `b`, padded for rounding.
+#[inline]
+pub fn swept_box(a: DVec3, b: DVec3, radius: f64) -> (DVec3, DVec3) {
+    let pad = radius + RELATIVE_PADDING * (a.abs().max(b.abs()).max_element() + radius);
+    (a.min(b) - pad, a.max(b) + pad)
+}
+
+impl ProxyTable {
+    /// An empty table for bodies in the box `[min, max]`.
+    pub fn new(min: DVec3, max: DVec3) -> ProxyTable {
+        ProxyTable { box_min: min, box_max: max, reach: f64::INFINITY, ..ProxyTable::default() }
+    }
+
+    /// Sets how far a proxy may reach, in typical diameters (infinity: to the window's end).
+    pub fn set_reach_diameters(&mut self, diameters: f64) {
+        self.reach = diameters;
+    }
+
+    /// Median bounding radius of the live bodies at the window's start: the length scale the
+    /// broad phases size their cells and pieces by.
+    #[inline]
+    pub fn typical_radius(&self) -> f64 {
+        self.typical_radius
+    }
+
+    /// The current window.
+    #[inline]
+    pub fn window(&self) -> Window {
+        self.window
+    }
+
+    /// Number of slots (live or not).
+    #[inline]
+    pub fn slots(&self) -> usize {
+        self.live.len()
+    }
+
+    /// The window proxy `i` bounds its body over.
+    #[inline]
+    pub fn window_of(&self, i: usize) -> Window {
+        Window::new(self.start[i], self.end[i])
+    }
+
+    /// The body's motion as the proxy holds it.
+    #[inline]
+    pub fn motion(&self, i: usize) -> Motion {
+        Motion { position: self.origin[i], since: self.start[i], velocity: self.velocity[i] }
+    }
+
+    /// True when the proxies of `i` and `j` have overlapping swept boxes.
+    #[inline]
+    pub fn boxes_overlap(&self, i: usize, j: usize) -> bool {
+        self.low[i].cmple(self.high[j]).all() && self.low[j].cmple(self.high[i]).all()
+    }
+
+    /// True when body `i` has a proxy.
+    #[inline]
+    pub fn is_live(&self, i: usize) -> bool {
+        self.live.get(i).copied().unwrap_or(false)
+    }
+
+    /// True when a broad-phase entry of body `i` made with `stamp` is current.
+    #[inline]
+    pub fn is_current(&self, i: usize, stamp: u32) -> bool {
+        self.live[i] && self.stamp[i] == stamp
+    }
+
+    /// Window start: every live body's proxy over `window`, bodies at their positions at its start.
+    pub fn refresh_all(&mut self, bodies: &Bodies, window: Window) {
+        self.window = window;
+        self.resize(bodies.slots());
+        self.radii.clear();
+        self.radii.extend((0..bodies.slots()).filter(|&i| self.live[i]).map(|i| bodies.bounding_radius(i)));
+        if !self.radii.is_empty() {
+            let middle = self.radii.len() / 2;
+            self.typical_radius = *self.radii.select_nth_unstable_by(middle, f64::total_cmp).1;
+        }
+        for i in 0..bodies.slots() {
+            if self.live[i] {
+                self.refresh(i, bodies, window.start);
+            }
+        }
+    }
+
+    /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on.
+    pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
+        self.resize(bodies.slots());
+        self.live[i] = true;
+        self.refresh(i, bodies, t);
+    }
+
+    /// Drops body `i` (removed): its broad-phase entries become stale.
+    pub fn remove(&mut self, i: usize) {
+        if i < self.live.len() {
+            self.live[i] = false;
+        }
+    }
+
+    #[inline]
+    fn refresh(&mut self, i: usize, bodies: &Bodies, t: f64) {
+        let start = t.max(self.window.start);
+        let origin = bodies.position_at(i, start);
+        let velocity = bodies.velocity[i];
+        let radius = bodies.bounding_radius(i);
+        // Up to and including the wall contact: a pair touching at that very instant is still
+        // found with the motion before the bounce, whichever of the two events comes first.
+        let mut end = match wall_contact_time(&bodies.motion(i), radius, self.box_min, self.box_max) {
+            Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
+            _ => self.window.end,
+        };
+        let reached = start + 2.0 * self.typical_radius * self.reach / velocity.length();
+        self.expires[i] = reached < end && reached > start;
+        if self.expires[i] {
+            end = reached;
+        }
+        let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
+        self.origin[i] = origin;
+        self.velocity[i] = velocity;
+        self.radius[i] = radius;
+        self.start[i] = start;
+        self.end[i] = end;
+        self.low[i] = low;
+        self.high[i] = high;
+        self.stamp[i] = bodies.stamp[i];
+    }
+
+    fn resize(&mut self, slots: usize) {
+        if self.live.len() < slots {
+            self.origin.resize(slots, DVec3::ZERO);
+            self.velocity.resize(slots, DVec3::ZERO);
+            self.radius.resize(slots, 0.0);
+            self.start.resize(slots, 0.0);
+            self.end.resize(slots, 0.0);
+            self.low.resize(slots, DVec3::ZERO);
+            self.high.resize(slots, DVec3::ZERO);
+            self.stamp.resize(slots, 0);
+            self.live.resize(slots, false);
+            self.expires.resize(slots, false);
+        }
+    }
+
+    /// Bytes held (capacity).
+    pub fn memory_bytes(&self) -> usize {
+        self.live.capacity() * (4 * 24 + 4 * 8 + 4 + 2) + self.radii.capacity() * 8
+    }
+}
