@@ -102,6 +102,7 @@ const PIPELINES: &[(&str, bool, Program)] = &[
     ("fcl-ccd", true, Program::Fcl),
     ("rapier", false, Program::Rapier),
     ("parry-ccd", true, Program::Rapier),
+    ("parry-ccd-refit", true, Program::Rapier),
 ];
 
 #[derive(Debug, Clone, Copy)]
@@ -631,7 +632,9 @@ fn colour(pipeline: &str) -> &'static str {
         "fcl-sap" => "#98df8a",
         "fcl-ccd" => "#00441b",
         "rapier" => "#9467bd",
-        _ => "#8c564b",
+        "parry-ccd" => "#8c564b",
+        "parry-ccd-refit" => "#c49c94",
+        _ => "#7f7f7f",
     }
 }
 
