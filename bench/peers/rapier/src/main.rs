@@ -237,7 +237,7 @@ fn rapier(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String
 }
 
 /// How the continuous pipeline keeps parry's Bvh over the swept boxes from frame to frame.
-#[derive(Clone, Copy, PartialEq)]
+#[derive(Clone, Copy)]
 enum Upkeep {
     /// Rebuild the whole tree (binned SAH) over the new boxes, in the tree's own buffers.
     Rebuild,
