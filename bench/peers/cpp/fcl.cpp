@@ -1,12 +1,14 @@
 // FCL 0.7 pipelines of vadop's peer benchmark, each as an FCL user would assemble them:
-//  fcl-dtree  discrete: DynamicAABBTreeCollisionManager, fcl::collide on each candidate pair at
-//             frame instants;
-//  fcl-sap    discrete: the same with SaPCollisionManager;
-//  fcl-ccd    continuous: a DynamicAABBTreeCollisionManager over each body's swept box, then
-//             fcl::continuousCollide (conservative advancement, translation motion) on each
-//             candidate pair for the time of contact. FCL's default continuous solver samples 10
-//             instants, which is no continuous test; conservative advancement is its exact one
-//             for primitive shapes.
+//  fcl-dtree        discrete: DynamicAABBTreeCollisionManager, each object's leaf reinserted
+//                   every frame, fcl::collide on each candidate pair at frame instants;
+//  fcl-dtree-refit  the same, the tree refitted in place every frame (FCL's update());
+//  fcl-sap          discrete: the same with SaPCollisionManager;
+//  fcl-ccd          continuous: a DynamicAABBTreeCollisionManager over each body's swept box
+//                   (leaves reinserted every frame), then fcl::continuousCollide (conservative
+//                   advancement, translation motion) on each candidate pair for the time of
+//                   contact. FCL's default continuous solver samples 10 instants, which is no
+//                   continuous test; conservative advancement is its exact one for primitive shapes;
+//  fcl-ccd-refit    the same, the tree refitted in place every frame.
 #include <fcl/fcl.h>
 #include <memory>
 #include "trajectory.h"
@@ -24,21 +26,36 @@ class SweptObject : public fcl::CollisionObjectd {
   }
 };
 
+// How a manager learns that its objects moved. All: update(), where a dynamic tree refits its
+// nodes in place (plus a few rebalancing passes), cheap while bodies move little, but the tree's
+// shape stops fitting once they have travelled far (SaP re-sorts its endpoints). Each:
+// update(objects), where a dynamic tree reinserts every leaf, which keeps it tight at any speed
+// for a higher cost per leaf.
+enum class Update { All, Each };
+
+static void update(fcl::BroadPhaseCollisionManagerd& manager, const std::vector<fcl::CollisionObjectd*>& objects, Update how) {
+  if (how == Update::Each)
+    manager.update(objects);
+  else
+    manager.update();
+}
+
 static uint32_t index_of(fcl::CollisionObjectd* object) { return uint32_t(reinterpret_cast<uint64_t>(object->getUserData())); }
 
 struct DiscreteData {
   NewOverlaps* overlaps;
   fcl::CollisionRequestd request;
+  fcl::CollisionResultd result;  // reused: a touching pair adds a contact to its vector
 };
 
 static bool discrete_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, void* data) {
   auto* d = static_cast<DiscreteData*>(data);
-  fcl::CollisionResultd result;
-  if (fcl::collide(a, b, d->request, result) > 0) d->overlaps->add(index_of(a), index_of(b));
+  d->result.clear();
+  if (fcl::collide(a, b, d->request, d->result) > 0) d->overlaps->add(index_of(a), index_of(b));
   return false;  // keep going: every pair is wanted
 }
 
-static void discrete(fcl::BroadPhaseCollisionManagerd& manager, Trajectory& trajectory, Report& report) {
+static void discrete(fcl::BroadPhaseCollisionManagerd& manager, Update how, Trajectory& trajectory, Report& report) {
   auto sphere = std::make_shared<fcl::Sphered>(trajectory.radius);
   std::vector<std::unique_ptr<fcl::CollisionObjectd>> objects(trajectory.n);
   std::vector<fcl::CollisionObjectd*> registered(trajectory.n);
@@ -56,7 +73,7 @@ static void discrete(fcl::BroadPhaseCollisionManagerd& manager, Trajectory& traj
   manager.registerObjects(registered);
   manager.setup();
   NewOverlaps overlaps;
-  DiscreteData data{&overlaps, fcl::CollisionRequestd()};
+  DiscreteData data{&overlaps, fcl::CollisionRequestd(), fcl::CollisionResultd()};
   for (; loaded; loaded = trajectory.next_frame()) {
     report.begin_frame();
     for (uint64_t i = 0; i < trajectory.n; ++i) {
@@ -64,7 +81,7 @@ static void discrete(fcl::BroadPhaseCollisionManagerd& manager, Trajectory& traj
       objects[i]->setTranslation(fcl::Vector3d(p[0], p[1], p[2]));
       objects[i]->computeAABB();
     }
-    manager.update();
+    update(manager, registered, how);
     manager.collide(&data, discrete_pair);
     overlaps.end_frame(report, trajectory.frame());
     report.end_frame();
@@ -87,8 +104,10 @@ static bool continuous_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, 
     to_a.translation() = fcl::Vector3d(a1[0], a1[1], a1[2]);
     from_b.translation() = fcl::Vector3d(b0[0], b0[1], b0[2]);
     to_b.translation() = fcl::Vector3d(b1[0], b1[1], b1[2]);
+    // The motions live on the stack: the overload taking transforms allocates both on the heap.
+    fcl::TranslationMotiond motion_a(from_a, to_a), motion_b(from_b, to_b);
     fcl::ContinuousCollisionResultd result;
-    fcl::continuousCollide(d->sphere, from_a, to_a, d->sphere, from_b, to_b, d->request, result);
+    fcl::continuousCollide(d->sphere, &motion_a, d->sphere, &motion_b, d->request, result);
     fraction = result.time_of_contact;
     return result.is_collide;
   };
@@ -97,7 +116,7 @@ static bool continuous_pair(fcl::CollisionObjectd* a, fcl::CollisionObjectd* b, 
   return false;
 }
 
-static void continuous(Trajectory& trajectory, Report& report) {
+static void continuous(Update how, Trajectory& trajectory, Report& report) {
   fcl::Sphered sphere(trajectory.radius);
   auto shared = std::make_shared<fcl::Sphered>(trajectory.radius);
   std::vector<std::unique_ptr<SweptObject>> objects(trajectory.n);
@@ -124,7 +143,7 @@ static void continuous(Trajectory& trajectory, Report& report) {
       trajectory.swept_box(i, lo, hi);
       objects[i]->set_box(lo, hi);
     }
-    manager.update();
+    update(manager, registered, how);
     manager.collide(&data, continuous_pair);
     report.end_frame();
     loaded = trajectory.next_frame();
@@ -133,14 +152,14 @@ static void continuous(Trajectory& trajectory, Report& report) {
 
 int main(int argc, char** argv) {
   return peer_main(argc, argv, [](const std::string& pipeline, Trajectory& trajectory, Report& report) {
-    if (pipeline == "fcl-dtree") {
+    if (pipeline == "fcl-dtree" || pipeline == "fcl-dtree-refit") {
       fcl::DynamicAABBTreeCollisionManagerd manager;
-      discrete(manager, trajectory, report);
+      discrete(manager, pipeline == "fcl-dtree" ? Update::Each : Update::All, trajectory, report);
     } else if (pipeline == "fcl-sap") {
       fcl::SaPCollisionManagerd manager;
-      discrete(manager, trajectory, report);
-    } else if (pipeline == "fcl-ccd") {
-      continuous(trajectory, report);
+      discrete(manager, Update::All, trajectory, report);
+    } else if (pipeline == "fcl-ccd" || pipeline == "fcl-ccd-refit") {
+      continuous(pipeline == "fcl-ccd" ? Update::Each : Update::All, trajectory, report);
     } else {
       return false;
     }

@@ -10,11 +10,11 @@
 //! force). Every pipeline, vadop's own included, then runs in its own child pinned to one core
 //! with a timeout, and its contact set is compared with the reference: found, missed, false.
 //!
-//! It owns the build of the peer programs (`bench/peers/cpp`, `bench/peers/rapier`, installing
-//! Debian's libbullet-dev and libfcl-dev when missing), the trajectory format's writer (the
-//! reader is `bench/peers/cpp/trajectory.h`; keep them in step), the runs, and the table, CSV and
-//! plot it writes. It never touches BENCHMARKS.md outside its markers, and a failed or timed-out
-//! run becomes a row saying so.
+//! It owns the build of the peer programs (`bench/peers/cpp`, `bench/peers/rapier`; it only
+//! checks that Debian's libbullet-dev and libfcl-dev are present, scripts/install-peers.sh
+//! installs them), the trajectory format's writer (the reader is `bench/peers/cpp/trajectory.h`;
+//! keep them in step), the runs, and the table, CSV and plot it writes. It never touches
+//! BENCHMARKS.md outside its markers, and a failed or timed-out run becomes a row saying so.
 
 use crate::bench::{finish_child, machine, merge_marked_section};
 use crate::report;
@@ -98,10 +98,13 @@ const PIPELINES: &[(&str, bool, Program)] = &[
     ("bullet-sap", false, Program::Bullet),
     ("bullet-ccd", true, Program::Bullet),
     ("fcl-dtree", false, Program::Fcl),
+    ("fcl-dtree-refit", false, Program::Fcl),
     ("fcl-sap", false, Program::Fcl),
     ("fcl-ccd", true, Program::Fcl),
+    ("fcl-ccd-refit", true, Program::Fcl),
     ("rapier", false, Program::Rapier),
     ("parry-ccd", true, Program::Rapier),
+    ("parry-ccd-refit", true, Program::Rapier),
 ];
 
 #[derive(Debug, Clone, Copy)]
@@ -293,18 +296,26 @@ impl Programs {
     }
 }
 
-/// Installs Debian's Bullet, FCL and gnuplot when missing, then builds the C++ and rapier peers
-/// (both builds do nothing when up to date).
+/// Checks that the peers' libraries and tools are present, then builds the C++ and rapier peers
+/// (both builds do nothing when up to date). Installing system packages is left to
+/// scripts/install-peers.sh, run as root: this program only says what is missing.
 fn build_peers(root: &Path) -> CliResult<Programs> {
-    let missing = !Path::new("/usr/include/bullet/btBulletCollisionCommon.h").is_file()
-        || !Path::new("/usr/include/fcl/fcl.h").is_file()
-        || Command::new("gnuplot").arg("--version").output().is_err()
-        || Command::new("pkg-config").arg("--version").output().is_err();
-    if missing {
-        eprintln!("installing libbullet-dev libfcl-dev gnuplot-nox pkg-config with apt-get");
-        let install = "apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
-                       build-essential pkg-config libbullet-dev libfcl-dev gnuplot-nox";
-        checked(Command::new("sh").args(["-c", install]), "apt-get install (run as root, or install those packages yourself)")?;
+    let runs = |program: &str| Command::new(program).arg("--version").output().is_ok();
+    // Each requirement by the Debian package that brings it.
+    let present = [
+        ("libbullet-dev", Path::new("/usr/include/bullet/btBulletCollisionCommon.h").is_file()),
+        ("libfcl-dev", Path::new("/usr/include/fcl/fcl.h").is_file()),
+        ("build-essential", runs("g++") && runs("make")),
+        ("pkg-config", runs("pkg-config")),
+        ("gnuplot-nox", runs("gnuplot")),
+    ];
+    let missing: Vec<&str> = present.iter().filter(|p| !p.1).map(|p| p.0).collect();
+    if !missing.is_empty() {
+        return Err(format!(
+            "the peers need Debian's {}, missing here: run `{}` as root (it installs them with apt-get), then run this again",
+            missing.join(", "),
+            root.join("scripts/install-peers.sh").display()
+        ));
     }
     let cpp = root.join("bench/peers/cpp");
     eprintln!("building the Bullet and FCL peers (make -C {})", cpp.display());
@@ -620,10 +631,14 @@ fn colour(pipeline: &str) -> &'static str {
         "bullet-sap" => "#6baed6",
         "bullet-ccd" => "#08306b",
         "fcl-dtree" => "#2ca02c",
+        "fcl-dtree-refit" => "#74c476",
         "fcl-sap" => "#98df8a",
         "fcl-ccd" => "#00441b",
+        "fcl-ccd-refit" => "#238b45",
         "rapier" => "#9467bd",
-        _ => "#8c564b",
+        "parry-ccd" => "#8c564b",
+        "parry-ccd-refit" => "#c49c94",
+        _ => "#7f7f7f",
     }
 }
 

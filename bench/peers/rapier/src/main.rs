@@ -1,16 +1,20 @@
 //! The rapier / parry side of vadop's peer benchmark (the f64 builds, rapier3d-f64 and the
 //! parry3d-f64 it re-exports, so positions keep the precision vadop uses):
-//!  rapier     discrete: rapier's CollisionPipeline with every sphere a sensor collider (sensors
-//!             are rapier's overlap-only colliders), overlaps at frame instants;
-//!  parry-ccd  continuous: a parry Bvh built over each body's swept box every frame, its leaf
-//!             pairs, then parry's cast_shapes on every pair for the time of impact.
+//!  rapier           discrete: rapier's CollisionPipeline with every sphere a sensor collider
+//!                   (sensors are rapier's overlap-only colliders), overlaps at frame instants;
+//!  parry-ccd        continuous: parry's Bvh over each body's swept box, rebuilt every frame in
+//!                   its own buffers, its overlapping leaf pairs from the single-tree traversal,
+//!                   then parry's ball-ball cast on each pair for the time of impact;
+//!  parry-ccd-refit  the same, but the first frame's tree is kept and refitted to the new boxes
+//!                   (cheap while bodies move little; the tree degrades as they travel far).
 //! It reads the trajectory file written by `vadop peers` (format in ../cpp/trajectory.h, which
 //! this file mirrors) and reports exactly as the C++ peers do: contacts as (frame, i, j) u32
 //! triples in a file, and one JSON line with per-frame milliseconds and peak memory.
 //! Usage: vadop-peer-rapier PIPELINE TRAJECTORY CONTACTS_OUT.
 
-use rapier3d_f64::parry::partitioning::{Bvh, BvhBuildStrategy};
-use rapier3d_f64::parry::query::{cast_shapes, ShapeCastOptions};
+use rapier3d_f64::parry::partitioning::{Bvh, BvhBuildStrategy, BvhWorkspace};
+use rapier3d_f64::parry::query::details::cast_shapes_ball_ball;
+use rapier3d_f64::parry::query::ShapeCastOptions;
 use rapier3d_f64::parry::shape::Ball;
 use rapier3d_f64::parry::bounding_volume::Aabb;
 use rapier3d_f64::prelude::*;
@@ -67,33 +71,36 @@ impl Trajectory {
         Ok(())
     }
 
-    fn read_frame(&mut self) -> Result<Frame, String> {
-        let mut start = vec![[0.0; 6]; self.n];
-        for s in &mut start {
+    /// Reads the next frame into `frame`, reusing its buffers.
+    fn read_frame(&mut self, frame: &mut Frame) -> Result<(), String> {
+        for s in &mut frame.start {
             self.f64s(s)?;
         }
-        let mut end = vec![[0.0; 3]; self.n];
-        for e in &mut end {
+        for e in &mut frame.end {
             self.f64s(e)?;
         }
         let count = self.u64()? as usize;
-        let mut bounces = Vec::with_capacity(count);
-        let mut first_bounce = vec![0usize; self.n + 1];
+        frame.bounces.clear();
+        frame.first_bounce.fill(0);
         for _ in 0..count {
             let body = self.u64()? as usize;
             let mut knot = [0.0; 4];
             self.f64s(&mut knot)?;
-            bounces.push((knot[0], [knot[1], knot[2], knot[3]]));
-            first_bounce[body + 1] += 1;
+            frame.bounces.push((knot[0], [knot[1], knot[2], knot[3]]));
+            frame.first_bounce[body + 1] += 1;
         }
         for i in 0..self.n {
-            first_bounce[i + 1] += first_bounce[i];
+            frame.first_bounce[i + 1] += frame.first_bounce[i];
         }
-        Ok(Frame { start, end, bounces, first_bounce })
+        Ok(())
     }
 }
 
 impl Frame {
+    fn new(n: usize) -> Frame {
+        Frame { start: vec![[0.0; 6]; n], end: vec![[0.0; 3]; n], bounces: Vec::new(), first_bounce: vec![0; n + 1] }
+    }
+
     fn bounces(&self, i: usize) -> &[(f64, [f64; 3])] {
         &self.bounces[self.first_bounce[i]..self.first_bounce[i + 1]]
     }
@@ -126,6 +133,27 @@ impl Frame {
             hi = hi.max(v);
         }
         Aabb::new(lo - Vector::splat(radius), hi + Vector::splat(radius))
+    }
+
+    /// Whether bodies i and j begin touching during the frame: parry's ball-ball cast over each
+    /// piece of the frame in which both move in a straight line (split at either body's wall
+    /// bounces). A touch at a piece's start means the pair still overlaps from before, so only a
+    /// later touch is a new contact (possibly in a later piece: overlapping pairs can separate and
+    /// meet again after a bounce). `cuts` is scratch space, reused from pair to pair.
+    fn new_contact(&self, i: usize, j: usize, dt: f64, ball: &Ball, cuts: &mut Vec<f64>) -> bool {
+        cuts.clear();
+        cuts.extend([0.0, dt]);
+        cuts.extend(self.bounces(i).iter().chain(self.bounces(j)).map(|(t, _)| *t));
+        cuts.sort_unstable_by(f64::total_cmp);
+        let options = ShapeCastOptions { max_time_of_impact: 1.0, stop_at_penetration: true, ..Default::default() };
+        cuts.windows(2).filter(|piece| piece[1] > piece[0]).any(|piece| {
+            let (ta, tb) = (piece[0], piece[1]);
+            let (a0, b0) = (self.position(i, ta, dt), self.position(j, ta, dt));
+            let (a1, b1) = (self.position(i, tb, dt), self.position(j, tb, dt));
+            // The cast works in i's frame: j's offset and velocity relative to i.
+            let hit = cast_shapes_ball_ball(&Pose::from_translation(b0 - a0), (b1 - b0) - (a1 - a0), ball, ball, options);
+            hit.is_some_and(|hit| hit.time_of_impact > 0.0)
+        })
     }
 }
 
@@ -164,12 +192,14 @@ fn rapier(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String
     let mut colliders = ColliderSet::new();
     let mut handles = Vec::with_capacity(trajectory.n);
     // Colliders start at their first frame's start: all at the origin, every pair would overlap.
-    let mut data = trajectory.read_frame()?;
+    let mut data = Frame::new(trajectory.n);
+    trajectory.read_frame(&mut data)?;
     for i in 0..trajectory.n {
         let s = data.start[i];
         let collider = ColliderBuilder::ball(trajectory.radius)
             .translation(Vector::new(s[0], s[1], s[2]))
             .sensor(true)
+            // Colliders without a body are fixed, and rapier skips fixed-fixed pairs by default.
             .active_collision_types(ActiveCollisionTypes::all())
             .user_data(i as u128)
             .build();
@@ -179,76 +209,71 @@ fn rapier(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String
     let mut broad_phase = BroadPhaseBvh::new();
     let mut narrow_phase = NarrowPhase::new();
     let mut pipeline = CollisionPipeline::new();
-    let mut previous: Vec<u64> = Vec::new();
+    let (mut previous, mut current): (Vec<u64>, Vec<u64>) = (Vec::new(), Vec::new());
     for frame in 0..trajectory.frames {
         if frame > 0 {
-            data = trajectory.read_frame()?;
+            trajectory.read_frame(&mut data)?;
         }
         let started = Instant::now();
-        for (i, &handle) in handles.iter().enumerate() {
-            let p = data.end[i];
-            if let Some(collider) = colliders.get_mut(handle) {
-                collider.set_translation(Vector::new(p[0], p[1], p[2]));
-            }
+        for (&handle, p) in handles.iter().zip(&data.end) {
+            colliders[handle].set_translation(Vector::new(p[0], p[1], p[2]));
         }
         pipeline.step(0.0, &mut islands, &mut broad_phase, &mut narrow_phase, &mut bodies, &mut colliders, &(), &());
-        let mut current: Vec<u64> = narrow_phase
-            .intersection_pairs()
-            .filter(|&(_, _, intersecting)| intersecting)
-            .map(|(a, b, _)| {
-                let (i, j) = (colliders[a].user_data as u64, colliders[b].user_data as u64);
-                i.min(j) << 32 | i.max(j)
-            })
-            .collect();
+        current.clear();
+        current.extend(narrow_phase.intersection_pairs().filter(|&(_, _, intersecting)| intersecting).map(|(a, b, _)| {
+            let (i, j) = (colliders[a].user_data as u64, colliders[b].user_data as u64);
+            i.min(j) << 32 | i.max(j)
+        }));
         current.sort_unstable();
         for &key in &current {
             if previous.binary_search(&key).is_err() {
                 report.contact(frame as u32, (key >> 32) as usize, (key & 0xffff_ffff) as usize);
             }
         }
-        previous = current;
+        std::mem::swap(&mut previous, &mut current);
         report.frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
     }
     Ok(())
 }
 
-/// Continuous: parry's Bvh over the swept boxes, then cast_shapes over each piece of the frame in
-/// which both bodies move in a straight line (split at either body's wall bounces). A touch at a
-/// piece's start means the pair still overlaps from before, so only a later touch is a new
-/// contact (possibly in a later piece: overlapping pairs can separate and meet again after a
-/// bounce).
-fn parry_ccd(trajectory: &mut Trajectory, report: &mut Report) -> Result<(), String> {
+/// How the continuous pipeline keeps parry's Bvh over the swept boxes from frame to frame.
+#[derive(Clone, Copy)]
+enum Upkeep {
+    /// Rebuild the whole tree (binned SAH) over the new boxes, in the tree's own buffers.
+    Rebuild,
+    /// Keep the first frame's tree, move its leaves to the new boxes and refit the nodes above.
+    Refit,
+}
+
+/// Continuous: parry's Bvh over each body's swept box, its overlapping leaf pairs from parry's
+/// single-tree traversal (each pair once), then the exact ball-ball cast on each pair.
+fn parry_ccd(trajectory: &mut Trajectory, report: &mut Report, upkeep: Upkeep) -> Result<(), String> {
+    let (n, dt) = (trajectory.n, trajectory.dt);
     let ball = Ball::new(trajectory.radius);
-    let (dt, radius) = (trajectory.dt, trajectory.radius);
+    let mut data = Frame::new(n);
+    let mut bvh = Bvh::new();
+    let mut workspace = BvhWorkspace::default();
+    let mut cuts = Vec::new();
     for frame in 0..trajectory.frames {
-        let data = trajectory.read_frame()?;
+        trajectory.read_frame(&mut data)?;
         let started = Instant::now();
-        let boxes: Vec<Aabb> = (0..trajectory.n).map(|i| data.swept_box(i, radius)).collect();
-        let bvh = Bvh::from_leaves(BvhBuildStrategy::Binned, &boxes);
-        for (a, b) in bvh.leaf_pairs(&bvh, |x, y| x.intersects(y)) {
-            let (i, j) = (a as usize, b as usize);
-            if i >= j || !boxes[i].intersects(&boxes[j]) {
-                continue;
+        if frame == 0 {
+            bvh = Bvh::from_iter(BvhBuildStrategy::Binned, (0..n).map(|i| (i, data.swept_box(i, ball.radius))));
+        } else {
+            // Margin 0: leaves hold the exact boxes, so every reported pair's boxes overlap.
+            for i in 0..n {
+                bvh.insert_or_update_partially(data.swept_box(i, ball.radius), i as u32, 0.0);
             }
-            let mut cuts: Vec<f64> = vec![0.0, dt];
-            cuts.extend(data.bounces(i).iter().chain(data.bounces(j)).map(|(t, _)| *t));
-            cuts.sort_by(f64::total_cmp);
-            for piece in cuts.windows(2) {
-                let (ta, tb) = (piece[0], piece[1]);
-                if tb <= ta {
-                    continue;
-                }
-                let (a0, b0) = (data.position(i, ta, dt), data.position(j, ta, dt));
-                let (a1, b1) = (data.position(i, tb, dt), data.position(j, tb, dt));
-                let options = ShapeCastOptions { max_time_of_impact: 1.0, stop_at_penetration: true, ..Default::default() };
-                let hit = cast_shapes(&Pose::from_translation(a0), a1 - a0, &ball, &Pose::from_translation(b0), b1 - b0, &ball, options)
-                    .map_err(|_| "parry cannot cast a ball against a ball".to_string())?;
-                if hit.is_some_and(|hit| hit.time_of_impact > 0.0) {
-                    report.contact(frame as u32, i, j);
-                    break;
-                }
+            match upkeep {
+                Upkeep::Rebuild => bvh.rebuild(&mut workspace, BvhBuildStrategy::Binned),
+                Upkeep::Refit => bvh.refit(&mut workspace),
             }
         }
+        bvh.traverse_bvtt_single_tree::<false>(&mut workspace, &mut |a, b| {
+            if data.new_contact(a as usize, b as usize, dt, &ball, &mut cuts) {
+                report.contact(frame as u32, a as usize, b as usize);
+            }
+        });
         report.frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
     }
     Ok(())
@@ -264,7 +289,8 @@ fn main() {
         let mut report = Report::default();
         match args[1].as_str() {
             "rapier" => rapier(&mut trajectory, &mut report)?,
-            "parry-ccd" => parry_ccd(&mut trajectory, &mut report)?,
+            "parry-ccd" => parry_ccd(&mut trajectory, &mut report, Upkeep::Rebuild)?,
+            "parry-ccd-refit" => parry_ccd(&mut trajectory, &mut report, Upkeep::Refit)?,
             other => return Err(format!("unknown pipeline {other}")),
         }
         report.finish(&args[3])
