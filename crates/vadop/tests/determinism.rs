@@ -129,6 +129,25 @@ fn damaged_or_foreign_files_are_errors() {
         let err = World::load(&path).unwrap_err();
         assert!(!err.to_string().is_empty(), "case {k}");
     }
+    // Well-formed files that stepping could never have produced: the state is checked as a whole.
+    let json: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let edited = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut value = json.clone();
+        edit(&mut value);
+        value.to_string()
+    };
+    let impossible = [
+        (edited(&|v| v["slots"][0]["since"] = serde_json::json!(1.0)), "since must be finite and <= time"),
+        (edited(&|v| v["slots"][0]["last_contact"] = serde_json::json!(5.0)), "last contact must be finite and <= time"),
+        (edited(&|v| v["slots"][1] = v["slots"][0].clone()), "overlap"),
+        (edited(&|v| v["slots"][0]["velocity"] = serde_json::json!([1e3, 0.0, 0.0])), "does not fit inside the box"),
+        (edited(&|v| v["time"] = serde_json::json!(-1.0)), "time must be finite"),
+    ];
+    for (bad, message) in impossible {
+        std::fs::write(&path, bad).unwrap();
+        let err = World::load(&path).map(|_| format!("loaded, but it should say {message}")).unwrap_or_else(|e| e.to_string());
+        assert!(err.contains(message), "{err} should say {message}");
+    }
     std::fs::remove_file(&path).unwrap();
     assert!(matches!(World::load(&path), Err(VadopError::Io { .. })));
     // A save into a missing directory is an error, and leaves no file behind.

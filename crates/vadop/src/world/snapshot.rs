@@ -124,13 +124,6 @@ impl World {
         world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack };
         for (i, slot) in snapshot.slots.iter().enumerate() {
             let at = |position: DVec3| Sphere { position, velocity: slot.velocity, radius: slot.radius, mass: slot.mass };
-            // A removed body's slot only keeps its id; a live one must be where stepping put it.
-            let now = slot.position + (time - slot.since) * slot.velocity;
-            let checked = world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
-                true => world.check_sphere(&at(now)),
-                false => Ok(()),
-            });
-            checked.map_err(|e| bad(format!("slot {i}: {e}")))?;
             if !(slot.since.is_finite() && slot.since <= time) {
                 return Err(bad(format!("slot {i}: since must be finite and <= time {time}, got {}", slot.since)));
             }
@@ -139,6 +132,13 @@ impl World {
                     return Err(bad(format!("slot {i}: last contact must be finite and <= time {time}, got {last}")));
                 }
             }
+            // A removed body's slot only keeps its id; a live one must be where stepping put it.
+            let now = slot.position + (time - slot.since) * slot.velocity;
+            let checked = world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
+                true => world.check_sphere(&at(now)),
+                false => Ok(()),
+            });
+            checked.map_err(|e| bad(format!("slot {i}: {e}")))?;
             world.bodies.put(i, at(slot.position), slot.since);
             world.bodies.alive[i] = slot.alive;
         }
