@@ -33,6 +33,7 @@ pub mod collapse;
 pub mod coherent_sort;
 pub mod error;
 pub mod event_queue;
+pub mod memory;
 pub mod narrow_phase;
 pub mod overlap;
 pub mod pseudo_dynamic;
