@@ -316,15 +316,16 @@ impl Files {
             seen.push((flag, target));
         }
         let replaced = |flag: &str, path: &Option<PathBuf>| -> CliResult<Option<PathBuf>> {
-            let Some(path) = path else { return Ok(None) };
-            let target = destination(path)?;
-            match std::fs::metadata(&target) {
-                Ok(meta) if !meta.is_file() => Err(format!(
+            let (Some(path), Some((_, target))) = (path, seen.iter().find(|(seen, _)| *seen == flag)) else {
+                return Ok(None);
+            };
+            if std::fs::metadata(target).is_ok_and(|meta| !meta.is_file()) {
+                return Err(format!(
                     "{flag} {}: not a regular file; saving replaces the file with a new one, which would destroy a device, FIFO, socket or directory",
                     path.display()
-                )),
-                _ => Ok(Some(target)),
+                ));
             }
+            Ok(Some(target.clone()))
         };
         Ok(Files { save_scene: replaced("--save-scene", &args.save_scene)?, save_state: replaced("--save-state", &args.save_state)? })
     }
