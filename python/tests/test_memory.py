@@ -1,7 +1,11 @@
-"""No memory growth over many steps, in Rust allocations (resident size) or Python objects."""
+"""No memory growth over many steps, in Rust allocations (resident size) or Python objects; a
+request that cannot fit in the memory left raises MemoryError and the interpreter lives on."""
 
 import gc
 import os
+import subprocess
+import sys
+import textwrap
 import weakref
 
 import numpy as np
@@ -43,3 +47,52 @@ def test_arrays_handed_out_are_not_kept_alive():
     del contacts
     gc.collect()
     assert all(ref() is None for ref in columns + read_back)
+
+
+# Runs in a fresh interpreter whose address space is capped at what it uses plus 256 MiB (as
+# `ulimit -v` would), so that these requests cannot fit whatever the machine's memory.
+LIMITED = """
+import resource
+import numpy as np
+import vadop
+
+def vm_size():
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
+
+hard = resource.getrlimit(resource.RLIMIT_AS)[1]
+resource.setrlimit(resource.RLIMIT_AS, (vm_size() + (256 << 20), hard))
+
+def refused(call):
+    try:
+        call()
+    except MemoryError as e:
+        print("MemoryError:", e)
+    else:
+        print("no error")
+"""
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux /proc")
+def test_requests_too_large_for_the_memory_left_raise_memory_error():
+    body = textwrap.dedent("""
+        refused(lambda: vadop.scene(10**8))
+        refused(lambda: vadop.scene(10**6))
+        n = 10**6
+        rng = np.random.default_rng(1)
+        refused(lambda: vadop.World(rng.uniform(1, 99, (n, 3)), np.zeros((n, 3)), np.full(n, 0.01), box=100.0))
+        # One body crossing its box a thousand times a frame: 5000 wall contacts per frame.
+        one = (np.array([[0.5, 0.5, 0.5]]), np.array([[1000.0, 0, 0]]), np.array([0.4]))
+        refused(lambda: vadop.detect(*one, box=1.0, dt=1.0, frames=10**6))
+        print("alive", len(vadop.scene(100)))
+    """)
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    result = subprocess.run([sys.executable, "-c", LIMITED + body], capture_output=True, text=True, env=env, timeout=120)
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == 5, result.stdout
+    assert lines[0].startswith("MemoryError: a world of 100000000 bodies needs about 59.6 GiB of memory, but only ")
+    assert lines[1].startswith("MemoryError: a world of 1000000 bodies needs about 610.4 MiB of memory")
+    assert lines[2].startswith("MemoryError: a world of 1000000 bodies needs about")
+    assert lines[3].startswith("MemoryError: detect: room for ") and "contacts needs about" in lines[3]
+    assert lines[4] == "alive 100"

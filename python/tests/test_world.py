@@ -1,5 +1,7 @@
 """World round trips: arrays in and out, bodies added and removed, settings, statistics, contacts."""
 
+import os
+import signal
 import threading
 
 import numpy as np
@@ -170,3 +172,42 @@ def test_step_releases_the_gil():
     worker.join()
     # Holding the GIL for the whole step would leave this loop a few thousand turns at most.
     assert spins > 50_000
+
+
+def test_ctrl_c_interrupts_a_long_detect():
+    # One slow body in a big box: frames without contacts, about a minute of them if not stopped.
+    one = (np.array([[5.0, 5, 5]]), np.array([[1e-3, 0, 0]]), np.array([0.5]))
+    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    found = None
+    with pytest.raises(KeyboardInterrupt):
+        found = vadop.detect(*one, box=10.0, dt=1e-3, frames=10**8)
+    timer.join()
+    assert found is None
+
+
+def test_two_threads_stepping_one_world_take_turns():
+    world = vadop.scene(2000, 0.1, 2.0)
+    alone = vadop.scene(2000, 0.1, 2.0)
+    failures = []
+
+    def run():
+        try:
+            for _ in range(15):
+                world.step(1 / 30)
+                assert world.positions.shape == (2000, 3) and len(world) == 2000
+        except Exception as e:  # noqa: BLE001 - any failure in the thread fails the test
+            failures.append(e)
+
+    threads = [threading.Thread(target=run) for _ in range(2)]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
+    assert failures == []
+    # Thirty whole steps, one after the other, whichever thread made them.
+    for _ in range(30):
+        alone.step(1 / 30)
+    assert world.time == alone.time
+    np.testing.assert_array_equal(world.positions, alone.positions)
+    np.testing.assert_array_equal(world.velocities, alone.velocities)

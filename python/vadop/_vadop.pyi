@@ -38,7 +38,12 @@ class Contacts:
 
 @final
 class World:
-    """Spheres in a box, stepped frame by frame; every contact inside a frame is found."""
+    """Spheres in a box, stepped frame by frame; every contact inside a frame is found.
+
+    Threads may share a world: calls on it take turns. A thread that calls while another steps
+    waits, without holding the GIL, until that step is done. A world that would not fit in the
+    memory left raises MemoryError before anything is allocated.
+    """
 
     def __new__(
         cls,
@@ -63,7 +68,12 @@ class World:
     ) -> _Int64Array: ...
     def remove(self, ids: _Ids) -> None: ...
     def set_velocities(self, ids: _Ids, velocities: _Float64Array) -> None: ...
-    def step(self, dt: float) -> Contacts: ...
+    def step(self, dt: float) -> Contacts:
+        """Advances the world by dt; the frame's contacts in time order.
+
+        Runs without the GIL. A Ctrl-C pressed before it starts raises KeyboardInterrupt and
+        leaves the world as it was; another thread's call on this world waits for the step.
+        """
     @property
     def ids(self) -> _Int64Array: ...
     @property
@@ -108,7 +118,9 @@ def scene(
     pool_axes: Optional[int] = None,
     phi: Optional[float] = None,
     restitution: float = 1.0,
-) -> World: ...
+) -> World:
+    """The paper's scene as a World; MemoryError when it would not fit in the memory left."""
+
 def detect(
     positions: _Float64Array,
     velocities: _Float64Array,
@@ -120,4 +132,9 @@ def detect(
     method: _MethodName = "vadop",
     pool_axes: Optional[int] = None,
     phi: Optional[float] = None,
-) -> Contacts: ...
+) -> Contacts:
+    """Every contact over `frames` frames of `dt` on straight paths, in time order.
+
+    Runs without the GIL; Ctrl-C raises KeyboardInterrupt within 50 ms (or a frame, if longer).
+    MemoryError when the contacts found so far outgrow the memory left.
+    """

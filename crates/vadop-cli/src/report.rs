@@ -1,9 +1,11 @@
-//! Reporting: the per-frame rows, the run summary (built once from the rows, printed as text,
-//! written as JSON and read back by the benchmark from its child runs), the CSV and JSON files,
-//! and the small measurement helpers they need (order statistics, peak memory, progress bars,
-//! writing to stdout). It owns every number format the user sees. It never steps a world or
-//! decides what to run, and it never produces NaN in a summary, because JSON has no NaN and the
-//! benchmark must be able to read every summary back.
+//! Reporting: the per-frame rows, the run summary (built once from totals accumulated frame by
+//! frame, printed as text, written as JSON and read back by the benchmark from its child runs),
+//! the CSV and JSON files, streamed as the frames come, and the small measurement helpers they
+//! need (order statistics, peak memory, progress bars, writing to stdout). It owns every number
+//! format the user sees. Nothing here grows with the number of frames, so a run of any length
+//! takes the same memory. It never steps a world or decides what to run, and it never produces
+//! NaN in a summary, because JSON has no NaN and the benchmark must be able to read every summary
+//! back.
 
 use crate::CliResult;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -11,7 +13,8 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use vadop::memory::format_bytes;
 use vadop::scene::Scene;
 use vadop::FrameStats;
 
@@ -175,19 +178,142 @@ pub struct Spread {
     pub p95: f64,
 }
 
-impl Spread {
+/// Order statistics of a stream of non-negative values (milliseconds) in bounded memory: exact
+/// for the first `EXACT_VALUES` values, so short runs and the benchmark's runs are exact; beyond,
+/// every value goes into a histogram of logarithmic bins `BIN_RATIO` wide, and a median or p95 is
+/// the geometric middle of its bin, within 0.5% of a value of that rank (for values between
+/// `LOWEST_MS` and `HIGHEST_MS`; beyond, the extremes seen stand in). The mean is always exact.
+#[derive(Debug, Clone, Default)]
+pub struct Quantiles {
+    values: Vec<f64>,
+    bins: Vec<u64>,
+    count: u64,
+    sum: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Quantiles {
+    /// 512 KiB of values.
+    const EXACT_VALUES: usize = 1 << 16;
+    const BIN_RATIO: f64 = 1.01;
+    /// A nanosecond to eleven days: 3472 bins, 27 KiB.
+    const LOWEST_MS: f64 = 1e-6;
+    const HIGHEST_MS: f64 = 1e9;
+
+    pub fn add(&mut self, value: f64) {
+        (self.min, self.max) = if self.count == 0 { (value, value) } else { (self.min.min(value), self.max.max(value)) };
+        self.count += 1;
+        self.sum += value;
+        if self.bins.is_empty() {
+            self.values.push(value);
+            if self.values.len() == Self::EXACT_VALUES {
+                self.bins = vec![0; Self::bin_count()];
+                for value in std::mem::take(&mut self.values) {
+                    self.bins[Self::bin(value)] += 1;
+                }
+            }
+        } else {
+            self.bins[Self::bin(value)] += 1;
+        }
+    }
+
+    fn bin(value: f64) -> usize {
+        let bin = ((value / Self::LOWEST_MS).ln() / Self::BIN_RATIO.ln()).floor();
+        // NaN and values below the lowest (0 too) go to the first bin.
+        if bin > 0.0 { (bin as usize).min(Self::bin_count() - 1) } else { 0 }
+    }
+
+    fn bin_count() -> usize {
+        ((Self::HIGHEST_MS / Self::LOWEST_MS).ln() / Self::BIN_RATIO.ln()).floor() as usize + 1
+    }
+
+    /// The value of nearest rank `rank` (1-based): the smallest with at least `rank` values at
+    /// or below it.
+    fn ranked(&self, sorted: &[f64], rank: u64) -> f64 {
+        if self.bins.is_empty() {
+            return sorted[rank as usize - 1];
+        }
+        let mut seen = 0;
+        for (bin, &count) in self.bins.iter().enumerate() {
+            seen += count;
+            if seen >= rank {
+                // The end bins also hold what lies beyond the range: the extremes seen stand in.
+                return match bin {
+                    0 => self.min,
+                    _ if bin == self.bins.len() - 1 => self.max,
+                    _ => (Self::LOWEST_MS * Self::BIN_RATIO.powf(bin as f64 + 0.5)).clamp(self.min, self.max),
+                };
+            }
+        }
+        self.max
+    }
+
     /// All zero for no values, so a summary never holds NaN.
-    fn of(values: impl Iterator<Item = f64>) -> Spread {
-        let mut values: Vec<f64> = values.collect();
-        if values.is_empty() {
+    pub fn spread(&self) -> Spread {
+        let n = self.count;
+        if n == 0 {
             return Spread::default();
         }
-        values.sort_unstable_by(f64::total_cmp);
-        let n = values.len();
-        let median = if n % 2 == 1 { values[n / 2] } else { 0.5 * (values[n / 2 - 1] + values[n / 2]) };
+        let mut sorted = self.values.clone();
+        sorted.sort_unstable_by(f64::total_cmp);
+        let median = if n % 2 == 1 {
+            self.ranked(&sorted, n / 2 + 1)
+        } else {
+            0.5 * (self.ranked(&sorted, n / 2) + self.ranked(&sorted, n / 2 + 1))
+        };
         // Nearest rank: the smallest value with at least 95% of the values at or below it.
-        let rank = ((0.95 * n as f64).ceil() as usize).clamp(1, n);
-        Spread { median, mean: values.iter().sum::<f64>() / n as f64, p95: values[rank - 1] }
+        let rank = ((0.95 * n as f64).ceil() as u64).clamp(1, n);
+        Spread { median, mean: self.sum / n as f64, p95: self.ranked(&sorted, rank) }
+    }
+}
+
+/// What the summary needs from the frames, accumulated one row at a time.
+#[derive(Debug, Clone, Default)]
+pub struct FrameTotals {
+    pub frames: u64,
+    pub contacts: u64,
+    pub pair_contacts: u64,
+    pub list_entries: u64,
+    endpoint_swaps: u64,
+    candidate_pairs: u64,
+    narrow_tests: u64,
+    invalidations: u64,
+    update_ms: f64,
+    sort_ms: f64,
+    test_ms: f64,
+    response_ms: f64,
+    broad_phase_bytes: u64,
+    c_total_ms: Quantiles,
+    wall_ms: Quantiles,
+}
+
+impl FrameTotals {
+    pub fn add(&mut self, row: &FrameRow) {
+        self.frames += 1;
+        self.contacts += row.contacts;
+        self.pair_contacts += row.pair_contacts;
+        self.list_entries += row.list_entries;
+        self.endpoint_swaps += row.endpoint_swaps;
+        self.candidate_pairs += row.candidate_pairs;
+        self.narrow_tests += row.narrow_tests;
+        self.invalidations += row.invalidations;
+        self.update_ms += row.update_ms;
+        self.sort_ms += row.sort_ms;
+        self.test_ms += row.test_ms;
+        self.response_ms += row.response_ms;
+        self.broad_phase_bytes = self.broad_phase_bytes.max(row.broad_phase_bytes);
+        self.c_total_ms.add(row.ms);
+        self.wall_ms.add(row.wall_ms);
+    }
+
+    /// The per-frame mean of a total, 0 for no frames.
+    fn mean(&self, total: f64) -> f64 {
+        if self.frames == 0 {
+            0.0
+        } else {
+            total / self.frames as f64
+        }
     }
 }
 
@@ -246,20 +372,17 @@ pub struct Summary {
 impl Summary {
     pub fn new(
         run: RunInfo,
-        rows: &[FrameRow],
+        frames: &FrameTotals,
         pool: Option<PoolInfo>,
         accuracy: Option<Accuracy>,
         conservation: Option<Conservation>,
         error: Option<String>,
     ) -> Summary {
-        let frames = rows.len() as u64;
-        let mean = |value: fn(&FrameRow) -> f64| if rows.is_empty() { 0.0 } else { rows.iter().map(value).sum::<f64>() / rows.len() as f64 };
-        let total: u64 = rows.iter().map(|r| r.contacts).sum();
-        let pairs: u64 = rows.iter().map(|r| r.pair_contacts).sum();
-        let wall_seconds: f64 = rows.iter().map(|r| r.wall_ms).sum::<f64>() / 1e3;
+        let (total, pairs) = (frames.contacts, frames.pair_contacts);
+        let wall_seconds = frames.wall_ms.sum / 1e3;
         Summary {
-            frames_completed: frames,
-            simulated_seconds: frames as f64 * run.dt,
+            frames_completed: frames.frames,
+            simulated_seconds: frames.frames as f64 * run.dt,
             pool,
             contacts: ContactTotals {
                 total,
@@ -268,22 +391,22 @@ impl Summary {
                 per_wall_second: if wall_seconds > 0.0 { total as f64 / wall_seconds } else { 0.0 },
             },
             accuracy,
-            c_total_ms: Spread::of(rows.iter().map(|r| r.ms)),
-            wall_ms: Spread::of(rows.iter().map(|r| r.wall_ms)),
+            c_total_ms: frames.c_total_ms.spread(),
+            wall_ms: frames.wall_ms.spread(),
             cost_split: CostSplit {
-                update_ms: mean(|r| r.update_ms),
-                sort_ms: mean(|r| r.sort_ms),
-                test_ms: mean(|r| r.test_ms),
-                response_ms: mean(|r| r.response_ms),
+                update_ms: frames.mean(frames.update_ms),
+                sort_ms: frames.mean(frames.sort_ms),
+                test_ms: frames.mean(frames.test_ms),
+                response_ms: frames.mean(frames.response_ms),
             },
             per_frame: PerFrame {
-                contacts: mean(|r| r.contacts as f64),
-                endpoint_swaps: mean(|r| r.endpoint_swaps as f64),
-                candidate_pairs: mean(|r| r.candidate_pairs as f64),
-                narrow_tests: mean(|r| r.narrow_tests as f64),
-                invalidations: mean(|r| r.invalidations as f64),
+                contacts: frames.mean(total as f64),
+                endpoint_swaps: frames.mean(frames.endpoint_swaps as f64),
+                candidate_pairs: frames.mean(frames.candidate_pairs as f64),
+                narrow_tests: frames.mean(frames.narrow_tests as f64),
+                invalidations: frames.mean(frames.invalidations as f64),
             },
-            broad_phase_bytes: rows.iter().map(|r| r.broad_phase_bytes).max().unwrap_or(0),
+            broad_phase_bytes: frames.broad_phase_bytes,
             peak_memory_mib: peak_memory_mib(),
             conservation,
             error,
@@ -390,22 +513,6 @@ impl fmt::Display for Summary {
     }
 }
 
-/// Bytes in the largest binary unit that keeps the number at or above 1.
-pub fn format_bytes(bytes: u64) -> String {
-    const UNITS: [&str; 4] = ["B", "KiB", "MiB", "GiB"];
-    let mut value = bytes as f64;
-    let mut unit = 0;
-    while value >= 1024.0 && unit + 1 < UNITS.len() {
-        value /= 1024.0;
-        unit += 1;
-    }
-    if unit == 0 {
-        format!("{bytes} B")
-    } else {
-        format!("{value:.1} {}", UNITS[unit])
-    }
-}
-
 /// Peak resident memory of this process in MiB (VmHWM), or `None` off Linux.
 pub fn peak_memory_mib() -> Option<f64> {
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
@@ -424,26 +531,91 @@ pub fn create_file(path: &Path) -> CliResult<File> {
     File::create(path).map_err(|e| io_error(path, e))
 }
 
-/// Writes the per-frame CSV: a header and one line per frame.
-pub fn write_frames_csv(file: File, path: &Path, rows: &[FrameRow]) -> CliResult<()> {
-    let mut out = BufWriter::new(file);
-    writeln!(out, "{}", FrameRow::CSV_HEADER).map_err(|e| io_error(path, e))?;
-    for row in rows {
-        writeln!(out, "{}", row.csv_line()).map_err(|e| io_error(path, e))?;
-    }
-    out.flush().map_err(|e| io_error(path, e))
+/// An output file written as the run goes, through a buffer.
+pub struct OutputFile {
+    out: BufWriter<File>,
+    path: PathBuf,
 }
 
-/// Writes `{"summary": ..., "frames": [...]}`.
-pub fn write_json(file: File, path: &Path, summary: &Summary, rows: &[FrameRow]) -> CliResult<()> {
-    #[derive(Serialize)]
-    struct Report<'a> {
-        summary: &'a Summary,
-        frames: &'a [FrameRow],
+impl OutputFile {
+    /// Creates (truncates) the file; called before a run so a bad path fails before the work.
+    pub fn create(path: &Path) -> CliResult<OutputFile> {
+        create_file(path).map(|file| OutputFile::new(file, path))
     }
-    let mut out = BufWriter::new(file);
-    serde_json::to_writer_pretty(&mut out, &Report { summary, frames: rows }).map_err(|e| io_error(path, e))?;
-    out.flush().map_err(|e| io_error(path, e))
+
+    /// Writes to `file`, already open, which `path` names in messages.
+    pub fn new(file: File, path: &Path) -> OutputFile {
+        OutputFile { out: BufWriter::new(file), path: path.to_path_buf() }
+    }
+
+    pub fn line(&mut self, line: fmt::Arguments<'_>) -> CliResult<()> {
+        writeln!(self.out, "{line}").map_err(|e| io_error(&self.path, e))
+    }
+
+    fn json(&mut self, value: &impl Serialize, pretty: bool) -> CliResult<()> {
+        let written = if pretty { serde_json::to_writer_pretty(&mut self.out, value) } else { serde_json::to_writer(&mut self.out, value) };
+        written.map_err(|e| io_error(&self.path, e))
+    }
+
+    /// Hands what is buffered to the system.
+    pub fn flush(&mut self) -> CliResult<()> {
+        self.out.flush().map_err(|e| io_error(&self.path, e))
+    }
+
+    /// Flushes, then waits until the data is on the disk.
+    pub fn sync(&mut self) -> CliResult<()> {
+        self.flush()?;
+        self.out.get_ref().sync_data().map_err(|e| io_error(&self.path, e))
+    }
+}
+
+/// The per-frame CSV: a header, then one line per frame as it completes.
+pub struct FramesCsv(OutputFile);
+
+impl FramesCsv {
+    pub fn create(path: &Path) -> CliResult<FramesCsv> {
+        let mut file = OutputFile::create(path)?;
+        file.line(format_args!("{}", FrameRow::CSV_HEADER))?;
+        Ok(FramesCsv(file))
+    }
+
+    pub fn row(&mut self, row: &FrameRow) -> CliResult<()> {
+        self.0.line(format_args!("{}", row.csv_line()))
+    }
+
+    pub fn finish(mut self) -> CliResult<()> {
+        self.0.flush()
+    }
+}
+
+/// The JSON report, `{"frames": [...], "summary": {...}}`: the frames as they complete, the
+/// summary last, once it is known.
+pub struct JsonReport {
+    file: OutputFile,
+    rows: u64,
+}
+
+impl JsonReport {
+    pub fn create(path: &Path) -> CliResult<JsonReport> {
+        let mut file = OutputFile::create(path)?;
+        file.line(format_args!("{{\"frames\": ["))?;
+        Ok(JsonReport { file, rows: 0 })
+    }
+
+    pub fn row(&mut self, row: &FrameRow) -> CliResult<()> {
+        if self.rows > 0 {
+            self.file.line(format_args!(","))?;
+        }
+        self.rows += 1;
+        self.file.json(row, false)
+    }
+
+    pub fn finish(mut self, summary: &Summary) -> CliResult<()> {
+        self.file.line(format_args!("\n],\n\"summary\":"))?;
+        self.file.json(summary, true)?;
+        self.file.line(format_args!("\n}}"))?;
+        self.file.flush()
+    }
 }
 
 /// Writes to stdout, turning a closed pipe into an error message instead of a panic.
@@ -475,18 +647,44 @@ pub fn reveal(bar: &ProgressBar) {
 mod tests {
     use super::*;
 
+    fn spread_of(values: impl Iterator<Item = f64>) -> Spread {
+        let mut quantiles = Quantiles::default();
+        values.for_each(|v| quantiles.add(v));
+        quantiles.spread()
+    }
+
     #[test]
     fn spread_uses_nearest_rank_and_never_nan() {
-        let s = Spread::of((1..=20).map(f64::from));
+        let s = spread_of((1..=20).map(f64::from));
         assert_eq!((s.median, s.mean, s.p95), (10.5, 10.5, 19.0));
-        let empty = Spread::of(std::iter::empty());
+        let empty = spread_of(std::iter::empty());
         assert_eq!((empty.median, empty.mean, empty.p95), (0.0, 0.0, 0.0));
     }
 
     #[test]
-    fn bytes_read_well() {
-        assert_eq!(format_bytes(512), "512 B");
-        assert_eq!(format_bytes(1536), "1.5 KiB");
-        assert_eq!(format_bytes(3 << 20), "3.0 MiB");
+    fn long_streams_keep_bounded_memory_and_half_a_percent() {
+        // Ten times more values than are kept exactly, spread over six decades, shuffled.
+        let n = 10 * Quantiles::EXACT_VALUES as u64;
+        let value = |i: u64| 1e-3 * 10f64.powf(6.0 * ((i * 7919) % n) as f64 / n as f64);
+        let mut quantiles = Quantiles::default();
+        (0..n).for_each(|i| quantiles.add(value(i)));
+        assert!(quantiles.values.capacity() == 0 && quantiles.bins.len() == Quantiles::bin_count());
+        let mut sorted: Vec<f64> = (0..n).map(value).collect();
+        sorted.sort_unstable_by(f64::total_cmp);
+        let s = quantiles.spread();
+        let exact_mean = sorted.iter().sum::<f64>() / n as f64;
+        assert!((s.mean - exact_mean).abs() <= 1e-9 * exact_mean);
+        for (estimate, rank) in [(s.median, n / 2), (s.p95, (0.95 * n as f64).ceil() as u64)] {
+            let exact = sorted[rank as usize - 1];
+            assert!((estimate / exact - 1.0).abs() <= 0.005, "{estimate} vs {exact}");
+        }
+        // Values beyond the bins' range (zero too) come back as the extremes seen.
+        let mut edges = Quantiles::default();
+        for i in 0..Quantiles::EXACT_VALUES as u64 + 11 {
+            edges.add(if i % 2 == 0 { 0.0 } else { 1e12 });
+        }
+        let s = edges.spread();
+        assert_eq!((s.median, s.p95), (0.0, 1e12));
     }
+
 }

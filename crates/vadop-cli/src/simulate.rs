@@ -1,19 +1,22 @@
-//! `vadop simulate`: builds the scene and the world, steps it frame by frame (with a reference
-//! method stepped alongside when asked, to count missed and extra pair contacts), streams the
-//! contacts file, and hands the frames to the report. It owns the frame loop and the accuracy
-//! comparison. It never validates physics input itself: the core library checks scenes, pools,
-//! angles, restitution and time steps, and its messages are what the user sees. A frame that
-//! fails stops the run, but what was simulated before it is still reported and written.
+//! `vadop simulate`: checks the files it will read and write, builds the scene and the world,
+//! steps it frame by frame (with a reference method stepped alongside when asked, to count missed
+//! and extra pair contacts), streams the contacts and the per-frame rows to their files, and
+//! hands the totals to the report. It owns the frame loop, the accuracy comparison, the rules on
+//! output files and the agreement of the contacts file with the saved state. It never validates
+//! physics input itself: the core library checks scenes, pools, angles, restitution and time
+//! steps, and its messages are what the user sees. A frame that fails stops the run, but what was
+//! simulated before it is still reported and written. Nothing it keeps grows with the frames.
 
-use crate::report::{self, Accuracy, Conservation, FrameRow, PoolInfo, RunInfo, SceneInfo, Summary};
+use crate::report::{self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, JsonReport, OutputFile, PoolInfo, RunInfo, SceneInfo, Summary};
 use crate::CliResult;
 use clap::{Args, ValueEnum};
-use std::fs::File;
-use std::io::{BufWriter, Write};
-use std::path::PathBuf;
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Seek, SeekFrom};
+use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
-use vadop::scene::{PaperScene, Scene, FRAMES_PER_SECOND};
+use vadop::memory;
+use vadop::scene::{PaperScene, Scene, FRAMES_PER_SECOND, MAX_SCENE_BODIES};
 use vadop::{Contact, Method, Mode, Touched, VadopError, World, WorldConfig};
 
 /// Scenes up to this many bodies are checked against brute force unless told otherwise.
@@ -22,6 +25,16 @@ const DEFAULT_REFERENCE_MAX_BODIES: usize = 3000;
 const PROGRESS_DELAY: Duration = Duration::from_secs(2);
 
 #[derive(Debug, Args)]
+#[command(after_help = "\
+Output files: --csv, --json and --contacts are written as the run goes, into whatever their path
+names (a FIFO or /dev/stdout too). --save-scene and --save-state replace their file through a
+rename, so that a killed run never leaves half a file; they refuse anything but a regular file (a
+device, FIFO, socket or directory would be replaced by it). A symbolic link is followed: the file
+it points to is replaced and the link stays. No two outputs may name one file, and none may
+overwrite --scene or --resume, except --save-state, which saves over the state it resumed from.
+
+Memory: a run that needs more memory than is available (free memory, cgroup limit, ulimit -v) is
+refused before it starts; the estimate is about 640 bytes per body, twice with a reference method.")]
 pub struct SimulateArgs {
     /// Scene file (JSON: {"bounds": {"min": [x,y,z], "max": [x,y,z]}, "spheres": [{"position",
     /// "velocity", "radius", "mass"}, ...]}) instead of the paper's scene
@@ -40,7 +53,8 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "K", default_value_t = 1, conflicts_with = "scene", help_heading = "Scene")]
     seed: u64,
     /// Continue a run saved with --save-state for --frames more frames, bit-exactly; the
-    /// world's method, mode, pool, phi and restitution come from the file
+    /// world's method, mode, pool, phi and restitution come from the file. Frame numbers go on
+    /// from the saved run's, so --dt must be the one it was saved with
     #[arg(long, value_name = "FILE", conflicts_with_all = ["scene", "bodies", "packing", "max_speed", "seed"], help_heading = "Scene")]
     resume: Option<PathBuf>,
 
@@ -86,14 +100,17 @@ pub struct SimulateArgs {
     /// Write the summary and the per-frame rows as JSON
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     json: Option<PathBuf>,
-    /// Write every contact as CSV (frame, time, body, what it touched, point, normal, impulse)
+    /// Write every contact as CSV (frame, time, body, what it touched, point, normal, impulse).
+    /// With --resume an existing file is continued: rows of frames after the saved state are
+    /// dropped, and the new frames' rows appended
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     contacts: Option<PathBuf>,
-    /// Save the scene, before stepping, as a scene file
+    /// Save the scene, before stepping, as a scene file (a regular file; links are followed)
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     save_scene: Option<PathBuf>,
     /// Save the whole world after every frame (atomically: a run killed mid-way loses at most
-    /// the frame in progress), to continue with --resume
+    /// the frame in progress), to continue with --resume. The contacts file is flushed to disk
+    /// first, so it holds every contact up to the saved frame (a regular file; links are followed)
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     save_state: Option<PathBuf>,
     /// Print no summary and no progress bar (errors still go to stderr)
@@ -167,17 +184,10 @@ fn describe(error: VadopError) -> String {
 }
 
 pub fn run(args: &SimulateArgs) -> CliResult<()> {
+    let files = Files::check(args)?;
     if let Some(path) = &args.resume {
-        return resume(path, args);
+        return resume(path, files, args);
     }
-    let (scene, source) = match &args.scene {
-        Some(path) => (Scene::load(path).map_err(describe)?, format!("scene file {}", path.display())),
-        None => {
-            let paper = PaperScene { seed: args.seed, ..PaperScene::new(args.bodies, args.packing, args.max_speed) };
-            let source = format!("paper scene (seed {}, speeds up to {} diameters/frame)", args.seed, args.max_speed);
-            (paper.build().map_err(describe)?, source)
-        }
-    };
     let config = WorldConfig {
         method: args.method.method(),
         mode: match args.mode {
@@ -189,38 +199,182 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         restitution: args.restitution,
         contact_duration: args.contact_duration,
     };
-    let reference = match args.reference {
-        Some(ReferenceArg::Brute) => Some(Method::Brute),
-        Some(ReferenceArg::Vadop) => Some(Method::Vadop),
-        Some(ReferenceArg::None) => None,
-        // Checking brute force against itself would only double the cost.
-        None => (scene.spheres.len() <= DEFAULT_REFERENCE_MAX_BODIES && config.method != Method::Brute).then_some(Method::Brute),
+    let (scene, source, reference) = match &args.scene {
+        Some(path) => {
+            let scene = Scene::load(path).map_err(describe)?;
+            let reference = reference_method(args, scene.spheres.len(), config.method);
+            check_memory(scene.spheres.len(), reference)?;
+            (scene, format!("scene file {}", path.display()), reference)
+        }
+        None => {
+            let paper = PaperScene { seed: args.seed, ..PaperScene::new(args.bodies, args.packing, args.max_speed) };
+            let reference = reference_method(args, paper.bodies, config.method);
+            // Only a valid scene's size is worth checking: the core names bad parameters better.
+            if paper.bodies <= MAX_SCENE_BODIES {
+                check_memory(paper.bodies, reference)?;
+            }
+            let source = format!("paper scene (seed {}, speeds up to {} diameters/frame)", args.seed, args.max_speed);
+            (paper.build().map_err(describe)?, source, reference)
+        }
     };
     let world = scene.world(config).map_err(describe)?;
     let reference_world = match reference {
         Some(method) => Some(scene.world(WorldConfig { method, ..config }).map_err(describe)?),
         None => None,
     };
-    run_world(world, reference_world, scene, source, args)
+    run_world(world, reference_world, scene, source, 0, files, args)
+}
+
+/// The method stepped alongside a run of `bodies` bodies, if any.
+fn reference_method(args: &SimulateArgs, bodies: usize, method: Method) -> Option<Method> {
+    match args.reference {
+        Some(ReferenceArg::Brute) => Some(Method::Brute),
+        Some(ReferenceArg::Vadop) => Some(Method::Vadop),
+        Some(ReferenceArg::None) => None,
+        // Checking brute force against itself would only double the cost.
+        None => (bodies <= DEFAULT_REFERENCE_MAX_BODIES && method != Method::Brute).then_some(Method::Brute),
+    }
+}
+
+/// Refuses a run whose worlds (the run's, and the reference's) cannot fit in the memory left.
+fn check_memory(bodies: usize, reference: Option<Method>) -> CliResult<()> {
+    let worlds = if reference.is_some() { 2 } else { 1 };
+    let needed = memory::world_bytes(bodies).saturating_mul(worlds);
+    let with = if reference.is_some() { " with its reference world" } else { "" };
+    memory::check(needed).map_err(|shortfall| format!("a run of {bodies} bodies{with} {shortfall}"))
 }
 
 /// `--resume FILE`: the saved world, stepped on without a reference (a reference would need the
-/// state it had when the world was saved).
-fn resume(path: &std::path::Path, args: &SimulateArgs) -> CliResult<()> {
+/// state it had when the world was saved), its frames numbered on from the saved run's.
+fn resume(path: &Path, files: Files, args: &SimulateArgs) -> CliResult<()> {
     if matches!(args.reference, Some(ReferenceArg::Brute | ReferenceArg::Vadop)) {
         return Err("--resume cannot be combined with --reference: the reference's state was not saved".to_string());
     }
     let world = World::load(path).map_err(describe)?;
+    if !(args.dt.is_finite() && args.dt > 0.0) {
+        return Err(describe(VadopError::BadTimeStep(args.dt)));
+    }
+    let frames_done = whole_frames(world.time(), args.dt).ok_or_else(|| {
+        format!(
+            "--resume {}: the saved time {} is not a whole number of frames of --dt {}; resume with the --dt the run was saved with, so that frame numbers go on",
+            path.display(),
+            world.time(),
+            args.dt
+        )
+    })?;
     let scene = Scene { bounds: world.bounds(), spheres: world.spheres().map(|(_, s)| s).collect() };
-    let source = format!("saved world {} at time {}", path.display(), world.time());
-    run_world(world, None, scene, source, args)
+    let source = format!("saved world {} at time {} (frame {frames_done})", path.display(), world.time());
+    run_world(world, None, scene, source, frames_done, files, args)
 }
 
-/// Steps `world` (and `reference_world` alongside), then reports and writes the outputs.
-fn run_world(world: World, reference_world: Option<World>, scene: Scene, source: String, args: &SimulateArgs) -> CliResult<()> {
+/// Time a frame may end off `frames * dt` in a world that added `dt` frame after frame: a
+/// hundredth of a frame, plus a millionth of the time for the rounding that piles up over
+/// millions of frames.
+fn slack(time: f64, dt: f64) -> f64 {
+    0.01 * dt + 1e-6 * time.abs()
+}
+
+/// How many frames of `dt` make `time`, when it is a whole number of them.
+fn whole_frames(time: f64, dt: f64) -> Option<u64> {
+    let frames = (time / dt).round();
+    ((0.0..9e15).contains(&frames) && (time - frames * dt).abs() <= slack(time, dt)).then_some(frames as u64)
+}
+
+/// Whether a contact at `time` belongs to frame `frame` (numbered from 1) of `dt`.
+fn in_frame(time: f64, frame: u64, dt: f64) -> bool {
+    let (start, end) = ((frame.max(1) - 1) as f64 * dt, frame as f64 * dt);
+    time >= start - slack(start, dt) && time <= end + slack(end, dt)
+}
+
+/// The files a run reads and writes, checked before any work is done.
+struct Files {
+    /// Where `--save-scene` and `--save-state` land, links followed.
+    save_scene: Option<PathBuf>,
+    save_state: Option<PathBuf>,
+}
+
+impl Files {
+    /// No two outputs may name one file, and none may overwrite an input, except the state saved
+    /// over the state resumed from. A file the core saves by renaming a new one over it must be a
+    /// regular file (or not exist yet): the rename would replace a device, FIFO or socket.
+    fn check(args: &SimulateArgs) -> CliResult<Files> {
+        let inputs = [("--scene", &args.scene), ("--resume", &args.resume)];
+        let outputs = [
+            ("--csv", &args.csv),
+            ("--json", &args.json),
+            ("--contacts", &args.contacts),
+            ("--save-scene", &args.save_scene),
+            ("--save-state", &args.save_state),
+        ];
+        let mut seen: Vec<(&str, PathBuf)> = Vec::new();
+        for (flag, path) in inputs {
+            if let Some(path) = path {
+                seen.push((flag, destination(path)?));
+            }
+        }
+        for (flag, path) in outputs {
+            let Some(path) = path else { continue };
+            let target = destination(path)?;
+            if let Some((other, _)) = seen.iter().find(|(_, seen)| *seen == target) {
+                if (*other, flag) != ("--resume", "--save-state") {
+                    let role = if inputs.iter().any(|(input, _)| input == other) { "reads" } else { "writes" };
+                    return Err(format!("{flag} {} is the file {other} {role}: give every output a file of its own", path.display()));
+                }
+            }
+            seen.push((flag, target));
+        }
+        let replaced = |flag: &str, path: &Option<PathBuf>| -> CliResult<Option<PathBuf>> {
+            let (Some(path), Some((_, target))) = (path, seen.iter().find(|(seen, _)| *seen == flag)) else {
+                return Ok(None);
+            };
+            if std::fs::metadata(target).is_ok_and(|meta| !meta.is_file()) {
+                return Err(format!(
+                    "{flag} {}: not a regular file; saving replaces the file with a new one, which would destroy a device, FIFO, socket or directory",
+                    path.display()
+                ));
+            }
+            Ok(Some(target.clone()))
+        };
+        Ok(Files { save_scene: replaced("--save-scene", &args.save_scene)?, save_state: replaced("--save-state", &args.save_state)? })
+    }
+}
+
+/// Where a write to `path` lands: symbolic links followed (the last may point to a file not yet
+/// there) and the directory made canonical, so that two spellings of one file compare equal.
+fn destination(path: &Path) -> CliResult<PathBuf> {
+    let mut at = path.to_path_buf();
+    // The kernel's own limit on links followed in a path.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&at) {
+            Ok(meta) if meta.file_type().is_symlink() => {
+                let target = std::fs::read_link(&at).map_err(|e| report::io_error(path, e))?;
+                // A relative target is relative to the link's directory; join keeps an absolute one.
+                at = at.parent().map_or(target.clone(), |dir| dir.join(&target));
+            }
+            _ => {
+                let Some(name) = at.file_name() else { return Ok(at) };
+                let dir = at.parent().filter(|dir| !dir.as_os_str().is_empty()).unwrap_or(Path::new("."));
+                return std::fs::canonicalize(dir).map(|dir| dir.join(name)).map_err(|e| report::io_error(path, e));
+            }
+        }
+    }
+    Err(format!("{}: too many levels of symbolic links", path.display()))
+}
+
+/// Steps `world` (and `reference_world` alongside) from frame `frames_done` on, streaming the
+/// outputs, then reports.
+fn run_world(
+    world: World,
+    reference_world: Option<World>,
+    scene: Scene,
+    source: String,
+    frames_done: u64,
+    files: Files,
+    args: &SimulateArgs,
+) -> CliResult<()> {
     let config = world.config();
-    let outputs = Outputs::open(args)?;
-    if let Some(path) = &args.save_scene {
+    let mut outputs = Outputs::open(args, frames_done)?;
+    if let Some(path) = &files.save_scene {
         scene.save(path).map_err(describe)?;
     }
     let info = RunInfo {
@@ -237,66 +391,132 @@ fn run_world(world: World, reference_world: Option<World>, scene: Scene, source:
     };
     // The scene is no longer needed; at a million bodies it is worth giving back before stepping.
     drop(scene);
-    let outcome = step_frames(world, reference_world, args, outputs.contacts)?;
-
-    let summary = Summary::new(
-        info,
-        &outcome.rows,
-        outcome.pool,
-        outcome.accuracy,
-        outcome.conservation,
-        outcome.failure.clone(),
-    );
-    if !args.quiet && !outcome.rows.is_empty() {
+    let frames = frames_done + 1..=frames_done + args.frames;
+    let mut outcome = step_frames(world, reference_world, args, frames, files.save_state.as_deref(), &mut outputs);
+    // A failed flush loses contacts or rows, not frames: it is reported like a failed frame.
+    for finished in [outputs.contacts.map(ContactWriter::finish), outputs.csv.map(FramesCsv::finish)].into_iter().flatten() {
+        if let Err(e) = finished {
+            outcome.failure.get_or_insert(e);
+        }
+    }
+    let summary = Summary::new(info, &outcome.frames, outcome.pool, outcome.accuracy, outcome.conservation, outcome.failure.clone());
+    if !args.quiet && outcome.frames.frames > 0 {
         report::print(&summary.to_string())?;
     }
-    if let Some((file, path)) = outputs.csv {
-        report::write_frames_csv(file, &path, &outcome.rows)?;
-    }
-    if let Some((file, path)) = outputs.json {
-        report::write_json(file, &path, &summary, &outcome.rows)?;
-    }
+    let written = outputs.json.map_or(Ok(()), |json| json.finish(&summary));
     match outcome.failure {
         Some(message) => Err(message),
-        None => Ok(()),
+        None => written,
     }
 }
 
 /// Output files, created before the run so that a bad path fails before any work is done.
 struct Outputs {
-    csv: Option<(File, PathBuf)>,
-    json: Option<(File, PathBuf)>,
+    csv: Option<FramesCsv>,
+    json: Option<JsonReport>,
     contacts: Option<ContactWriter>,
 }
 
 impl Outputs {
-    fn open(args: &SimulateArgs) -> CliResult<Outputs> {
-        let open = |path: &Option<PathBuf>| -> CliResult<Option<(File, PathBuf)>> {
-            path.as_ref().map(|p| report::create_file(p).map(|file| (file, p.clone()))).transpose()
+    fn open(args: &SimulateArgs, frames_done: u64) -> CliResult<Outputs> {
+        let contacts = match (&args.contacts, &args.resume) {
+            (Some(path), Some(_)) => Some(ContactWriter::resume(path, frames_done, args.dt)?),
+            (Some(path), None) => Some(ContactWriter::create(path)?),
+            (None, _) => None,
         };
         Ok(Outputs {
-            csv: open(&args.csv)?,
-            json: open(&args.json)?,
-            contacts: open(&args.contacts)?.map(|(file, path)| ContactWriter::new(file, path)).transpose()?,
+            csv: args.csv.as_deref().map(FramesCsv::create).transpose()?,
+            json: args.json.as_deref().map(JsonReport::create).transpose()?,
+            contacts,
         })
+    }
+
+    fn row(&mut self, row: &FrameRow) -> CliResult<()> {
+        if let Some(csv) = &mut self.csv {
+            csv.row(row)?;
+        }
+        match &mut self.json {
+            Some(json) => json.row(row),
+            None => Ok(()),
+        }
     }
 }
 
 /// The contacts CSV, streamed frame by frame because it can be far larger than memory allows.
 struct ContactWriter {
-    out: BufWriter<File>,
-    path: PathBuf,
+    file: OutputFile,
+    /// A regular file, which a sync puts on the disk (a FIFO or a terminal cannot be synced).
+    regular: bool,
 }
 
 impl ContactWriter {
-    fn new(file: File, path: PathBuf) -> CliResult<ContactWriter> {
-        let mut writer = ContactWriter { out: BufWriter::new(file), path };
-        writer.line(format_args!("frame,time,body,touched,other,point_x,point_y,point_z,normal_x,normal_y,normal_z,impulse"))?;
+    const HEADER: &'static str = "frame,time,body,touched,other,point_x,point_y,point_z,normal_x,normal_y,normal_z,impulse";
+
+    fn create(path: &Path) -> CliResult<ContactWriter> {
+        let file = report::create_file(path)?;
+        ContactWriter::start(file, path, 0)
+    }
+
+    /// Writes from byte `keep` of `file` on, with a header when the file is to be empty.
+    fn start(file: File, path: &Path, keep: u64) -> CliResult<ContactWriter> {
+        let regular = file.metadata().is_ok_and(|m| m.is_file());
+        let mut writer = ContactWriter { file: OutputFile::new(file, path), regular };
+        if keep == 0 {
+            writer.file.line(format_args!("{}", ContactWriter::HEADER))?;
+        }
         Ok(writer)
     }
 
-    fn line(&mut self, line: std::fmt::Arguments<'_>) -> CliResult<()> {
-        writeln!(self.out, "{line}").map_err(|e| report::io_error(&self.path, e))
+    /// The contacts file of a run resumed after `frames_done` frames of `dt`. An existing regular
+    /// file is continued: its rows of later frames (written after the state was saved, and the
+    /// partial row of a killed run) are dropped, so that it holds each contact exactly once.
+    fn resume(path: &Path, frames_done: u64, dt: f64) -> CliResult<ContactWriter> {
+        if !std::fs::metadata(path).is_ok_and(|m| m.is_file()) {
+            return ContactWriter::create(path);
+        }
+        let io = |e: std::io::Error| report::io_error(path, e);
+        let mut file = OpenOptions::new().read(true).write(true).open(path).map_err(io)?;
+        let keep = ContactWriter::rows_up_to(&file, path, frames_done, dt)?;
+        file.set_len(keep).map_err(io)?;
+        file.seek(SeekFrom::End(0)).map_err(io)?;
+        ContactWriter::start(file, path, keep)
+    }
+
+    /// The length of the header and the complete rows of frames up to `last` at the start of
+    /// `file`; 0 when it holds no complete header.
+    fn rows_up_to(file: &File, path: &Path, last: u64, dt: f64) -> CliResult<u64> {
+        let mut reader = BufReader::new(file);
+        let (mut line, mut keep, mut number) = (Vec::new(), 0u64, 0u64);
+        loop {
+            line.clear();
+            let read = reader.read_until(b'\n', &mut line).map_err(|e| report::io_error(path, e))?;
+            number += 1;
+            // The end, or a row cut short by a kill.
+            if read == 0 || line.last() != Some(&b'\n') {
+                let header_cut_short = number == 1 && format!("{}\n", ContactWriter::HEADER).as_bytes().starts_with(&line);
+                return if number > 1 || header_cut_short { Ok(keep) } else { Err(not_contacts(path, number)) };
+            }
+            let text = std::str::from_utf8(&line[..line.len() - 1]).map_err(|_| not_contacts(path, number))?;
+            if number == 1 {
+                if text != ContactWriter::HEADER {
+                    return Err(not_contacts(path, number));
+                }
+            } else {
+                let mut cells = text.split(',');
+                let frame: u64 = cells.next().and_then(|c| c.parse().ok()).ok_or_else(|| not_contacts(path, number))?;
+                let time: f64 = cells.next().and_then(|c| c.parse().ok()).ok_or_else(|| not_contacts(path, number))?;
+                if frame > last {
+                    return Ok(keep);
+                }
+                if !in_frame(time, frame, dt) {
+                    return Err(format!(
+                        "--contacts {} line {number}: a contact at time {time} is not in frame {frame} of --dt {dt}, so the file was not written with the state resumed: give --contacts that run's file or a new one",
+                        path.display()
+                    ));
+                }
+            }
+            keep += read as u64;
+        }
     }
 
     fn frame(&mut self, frame: u64, contacts: &[Contact]) -> CliResult<()> {
@@ -306,7 +526,7 @@ impl ContactWriter {
                 Touched::Wall(wall) => ("wall", format!("{wall:?}")),
             };
             let (p, n) = (c.point, c.normal);
-            self.line(format_args!(
+            self.file.line(format_args!(
                 "{frame},{},{},{kind},{other},{},{},{},{},{},{},{}",
                 c.time, c.body, p.x, p.y, p.z, n.x, n.y, n.z, c.impulse
             ))?;
@@ -314,14 +534,28 @@ impl ContactWriter {
         Ok(())
     }
 
-    fn finish(mut self) -> CliResult<()> {
-        self.out.flush().map_err(|e| report::io_error(&self.path, e))
+    /// Puts every row written so far on the disk (where the file is one), so that a state saved
+    /// next never runs ahead of its contacts.
+    fn sync(&mut self) -> CliResult<()> {
+        if self.regular {
+            self.file.sync()
+        } else {
+            self.file.flush()
+        }
     }
+
+    fn finish(mut self) -> CliResult<()> {
+        self.file.flush()
+    }
+}
+
+fn not_contacts(path: &Path, line: u64) -> String {
+    format!("--contacts {} line {line}: not a vadop contacts file; give --contacts a contacts file or a new one", path.display())
 }
 
 /// What the frame loop produced.
 struct Outcome {
-    rows: Vec<FrameRow>,
+    frames: FrameTotals,
     pool: Option<PoolInfo>,
     accuracy: Option<Accuracy>,
     conservation: Option<Conservation>,
@@ -329,13 +563,16 @@ struct Outcome {
     failure: Option<String>,
 }
 
-/// Steps `world` (and `reference` alongside) for the requested frames, or until a frame fails.
+/// Steps `world` (and `reference` alongside) through `frames`, or until a frame fails, writing
+/// each frame's contacts and row as it completes.
 fn step_frames(
     mut world: World,
     mut reference: Option<World>,
     args: &SimulateArgs,
-    mut contacts_out: Option<ContactWriter>,
-) -> CliResult<Outcome> {
+    frames: std::ops::RangeInclusive<u64>,
+    save_state: Option<&Path>,
+    outputs: &mut Outputs,
+) -> Outcome {
     let simulate = world.config().mode == Mode::Simulate;
     let (kinetic_start, momentum_start) = (world.kinetic_energy(), world.momentum());
     let mut accuracy = reference.as_ref().map(|r| Accuracy {
@@ -343,12 +580,12 @@ fn step_frames(
         identical_paths: !simulate,
         ..Accuracy::default()
     });
-    let mut rows = Vec::new();
+    let mut totals = FrameTotals::default();
     let mut failure = None;
     let bar = report::progress_bar(args.frames, "frames");
     let started = Instant::now();
     let mut may_reveal = !args.quiet;
-    for frame in 1..=args.frames {
+    for frame in frames {
         let start = Instant::now();
         let contacts = match world.step(args.dt) {
             Ok(contacts) => contacts,
@@ -358,7 +595,7 @@ fn step_frames(
             }
         };
         let wall_seconds = start.elapsed().as_secs_f64();
-        if let Some(out) = &mut contacts_out {
+        if let Some(out) = &mut outputs.contacts {
             if let Err(e) = out.frame(frame, contacts) {
                 failure = Some(e);
                 break;
@@ -383,13 +620,20 @@ fn step_frames(
                 }
             }
         }
-        if let Some(path) = &args.save_state {
-            if let Err(e) = world.save(path) {
-                failure = Some(format!("frame {frame}: {}", describe(e)));
+        if let Some(path) = save_state {
+            // The contacts first: a state on disk must never be ahead of the contacts file.
+            let synced = outputs.contacts.as_mut().map_or(Ok(()), ContactWriter::sync);
+            if let Err(e) = synced.and_then(|()| world.save(path).map_err(|e| format!("frame {frame}: {}", describe(e)))) {
+                failure = Some(e);
                 break;
             }
         }
-        rows.push(FrameRow::new(frame, world.time(), world.stats(), wall_seconds));
+        let row = FrameRow::new(frame, world.time(), world.stats(), wall_seconds);
+        totals.add(&row);
+        if let Err(e) = outputs.row(&row) {
+            failure = Some(e);
+            break;
+        }
         bar.inc(1);
         if may_reveal && started.elapsed() > PROGRESS_DELAY {
             report::reveal(&bar);
@@ -397,21 +641,14 @@ fn step_frames(
         }
     }
     bar.finish_and_clear();
-    if let Some(out) = contacts_out {
-        // A failed flush loses contacts, not frames: it is reported like a failed frame.
-        if let Err(e) = out.finish() {
-            failure.get_or_insert(e);
-        }
-    }
 
     let pool = Some(world.pool()).filter(|_| matches!(world.config().method, Method::Vadop | Method::SweptKdop)).map(|pool| {
         let rho = pool.covering_radius();
-        let entries: u64 = rows.iter().map(|r| r.list_entries).sum();
         PoolInfo {
             axes: pool.len(),
             covering_radius_deg: rho.to_degrees(),
             phi_deg: world.config().phi.unwrap_or(rho).to_degrees(),
-            axes_per_body: entries as f64 / (rows.len().max(1) * world.len()) as f64,
+            axes_per_body: totals.list_entries as f64 / (totals.frames.max(1) as f64 * world.len() as f64),
         }
     });
     let conservation = simulate.then(|| {
@@ -425,7 +662,7 @@ fn step_frames(
             momentum_change: (momentum_end - momentum_start).length(),
         }
     });
-    Ok(Outcome { rows, pool, accuracy, conservation, failure })
+    Outcome { frames: totals, pool, accuracy, conservation, failure }
 }
 
 /// The body-body contacts of a frame as sorted (lower id, higher id) pairs.

@@ -1,7 +1,12 @@
 //! Reliability of the `vadop` binary: save and resume give the same contacts and state as one
-//! uninterrupted run, a run killed mid-way leaves a state file that resumes, the short soak
-//! passes, and every bad value of the reliability options ends in `error:` and exit code 2.
+//! uninterrupted run, a run killed mid-way leaves a state file and a contacts file that agree and
+//! resume, saved files never replace what is not a regular file, outputs never overwrite each
+//! other or the inputs, memory stays flat over long runs and a run too large for the memory left
+//! is refused, the short soak passes, and every bad value of the reliability options ends in
+//! `error:` and exit code 2.
 
+#[cfg(unix)]
+use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -25,36 +30,51 @@ fn ok(output: Output) -> String {
     String::from_utf8_lossy(&output.stdout).into_owned()
 }
 
-/// The contacts file without its frame column (frames restart at 1 after a resume).
-fn contact_rows(path: &Path) -> Vec<String> {
-    let all = std::fs::read_to_string(path).expect("contacts written");
-    all.lines().skip(1).map(|line| line.split_once(',').expect("csv row").1.to_string()).collect()
+fn bytes(path: &Path) -> Vec<u8> {
+    std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn assert_error(output: Output, expected: &str) {
+    let err = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{err}");
+    assert!(err.starts_with("error: ") && err.contains(expected), "expected {expected:?} in {err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+}
+
+/// `vadop args` under an address-space limit (`ulimit -v`), which the allocator cannot exceed.
+fn vadop_within(kib: u64, args: &[&str]) -> Output {
+    let script = format!("ulimit -v {kib} && exec \"$0\" \"$@\"");
+    Command::new("sh").arg("-c").arg(script).arg(env!("CARGO_BIN_EXE_vadop")).args(args).output().expect("sh runs")
 }
 
 #[test]
 fn resumed_runs_match_one_uninterrupted_run() {
     let d = dir("resume");
     let (whole, half) = (d.join("whole.json"), d.join("half.json"));
+    let (whole_contacts, contacts) = (d.join("whole.csv"), d.join("contacts.csv"));
     let scene = ["--bodies", "150", "--packing", "0.2", "--max-speed", "2", "--restitution", "0.8", "--quiet"];
     let run = |extra: &[&str]| ok(vadop(&[&["simulate"], &scene[..], extra].concat()));
-    run(&["--frames", "12", "--save-state", &text(&whole), "--contacts", &text(&d.join("whole.csv"))]);
-    run(&["--frames", "5", "--save-state", &text(&half), "--contacts", &text(&d.join("first.csv"))]);
+    run(&["--frames", "12", "--save-state", &text(&whole), "--contacts", &text(&whole_contacts)]);
+    run(&["--frames", "5", "--save-state", &text(&half), "--contacts", &text(&contacts)]);
+    // The contacts file is continued, its frame numbers going on from the saved run's.
     let resumed = ["simulate", "--resume", &text(&half), "--frames", "7", "--quiet"];
-    ok(vadop(&[&resumed[..], &["--save-state", &text(&half), "--contacts", &text(&d.join("second.csv"))]].concat()));
-    assert_eq!(std::fs::read(&whole).unwrap(), std::fs::read(&half).unwrap(), "the saved states differ");
-    let mut parts = contact_rows(&d.join("first.csv"));
-    parts.extend(contact_rows(&d.join("second.csv")));
-    assert_eq!(contact_rows(&d.join("whole.csv")), parts, "the contacts differ");
-    assert!(parts.len() > 100);
+    ok(vadop(&[&resumed[..], &["--save-state", &text(&half), "--contacts", &text(&contacts)]].concat()));
+    assert_eq!(bytes(&whole), bytes(&half), "the saved states differ");
+    assert_eq!(bytes(&whole_contacts), bytes(&contacts), "the contacts differ");
+    assert!(bytes(&contacts).iter().filter(|&&b| b == b'\n').count() > 100);
     std::fs::remove_dir_all(d).ok();
 }
 
 #[test]
-fn a_killed_run_leaves_a_state_that_resumes() {
+fn a_killed_run_leaves_a_state_and_contacts_that_agree_and_resume() {
     let d = dir("killed");
-    let state = d.join("state.json");
+    let (state, contacts, whole) = (d.join("state.json"), d.join("contacts.csv"), d.join("whole.csv"));
+    // Fast, dense bodies: a frame's contacts overflow the write buffer, so a kill may leave rows
+    // of a frame the state has not reached, or half a row.
+    let scene = ["--bodies", "1000", "--packing", "0.2", "--max-speed", "3", "--reference", "none", "--quiet"];
     let mut child = Command::new(env!("CARGO_BIN_EXE_vadop"))
-        .args(["simulate", "--bodies", "2000", "--frames", "100000", "--quiet", "--reference", "none", "--save-state", &text(&state)])
+        .args(["simulate", "--frames", "100000", "--save-state", &text(&state), "--contacts", &text(&contacts)])
+        .args(scene)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -67,9 +87,116 @@ fn a_killed_run_leaves_a_state_that_resumes() {
     std::thread::sleep(Duration::from_millis(300));
     child.kill().expect("killed");
     child.wait().expect("reaped");
-    let summary = ok(vadop(&["simulate", "--resume", &text(&state), "--frames", "2"]));
+    let saved: serde_json::Value = serde_json::from_slice(&bytes(&state)).expect("the state parses");
+    let frames_saved = (saved["time"].as_f64().expect("a time") * 30.0).round() as u64;
+    let summary = ok(vadop(&["simulate", "--resume", &text(&state), "--frames", "2", "--contacts", &text(&contacts)]));
     assert!(summary.contains("frames      2 of 2"), "{summary}");
+    assert!(summary.contains(&format!("(frame {frames_saved})")), "{summary}");
+    // The same frames in one go give the same contacts, numbered the same, each exactly once.
+    let total = (frames_saved + 2).to_string();
+    ok(vadop(&[&["simulate", "--frames", &total, "--contacts", &text(&whole)], &scene[..]].concat()));
+    assert_eq!(bytes(&whole), bytes(&contacts), "{frames_saved} frames saved");
     std::fs::remove_dir_all(d).ok();
+}
+
+#[test]
+fn resuming_drops_contact_rows_beyond_the_saved_state() {
+    let d = dir("rows-beyond");
+    let (state, contacts, whole) = (d.join("state.json"), d.join("contacts.csv"), d.join("whole.csv"));
+    let scene = ["--bodies", "200", "--packing", "0.2", "--max-speed", "2", "--quiet"];
+    let run = |extra: &[&str]| ok(vadop(&[&["simulate"], &scene[..], extra].concat()));
+    run(&["--frames", "6", "--contacts", &text(&whole)]);
+    run(&["--frames", "4", "--save-state", &text(&state), "--contacts", &text(&contacts)]);
+    // What a run killed in frame 5 leaves behind: rows of frame 5 and one cut short.
+    let frame_five: String = String::from_utf8(bytes(&whole)).unwrap().lines().filter(|l| l.starts_with("5,")).map(|l| format!("{l}\n")).collect();
+    assert!(!frame_five.is_empty());
+    let mut killed = bytes(&contacts);
+    killed.extend_from_slice(frame_five.as_bytes());
+    killed.extend_from_slice(b"5,0.16");
+    std::fs::write(&contacts, killed).unwrap();
+    ok(vadop(&["simulate", "--resume", &text(&state), "--frames", "2", "--quiet", "--contacts", &text(&contacts)]));
+    assert_eq!(bytes(&whole), bytes(&contacts));
+
+    // A contacts file that is not this run's, or another --dt, is refused and left as it was.
+    let foreign = d.join("foreign.csv");
+    std::fs::write(&foreign, "frame,time\n1,0.5\n").unwrap();
+    let resume = |contacts: &Path, dt: &str| vadop(&["simulate", "--resume", &text(&state), "--frames", "1", "--dt", dt, "--contacts", &text(contacts)]);
+    assert_error(resume(&foreign, "0.03333333333333333"), "not a vadop contacts file");
+    assert_eq!(bytes(&foreign), b"frame,time\n1,0.5\n");
+    assert_error(resume(&contacts, "0.025"), "not a whole number of frames");
+    assert_error(resume(&contacts, "0.016666666666666666"), "is not in frame");
+    assert_eq!(bytes(&whole), bytes(&contacts));
+    std::fs::remove_dir_all(d).ok();
+}
+
+#[cfg(unix)]
+#[test]
+fn saved_files_replace_only_regular_files() {
+    let d = dir("targets");
+    let fifo = d.join("fifo");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    let run = |flag: &str, path: &Path| vadop(&["simulate", "--bodies", "20", "--frames", "1", "--quiet", flag, &text(path)]);
+    for flag in ["--save-state", "--save-scene"] {
+        for target in [fifo.as_path(), Path::new("/dev/null"), d.as_path()] {
+            assert_error(run(flag, target), "not a regular file");
+        }
+    }
+    assert!(std::fs::symlink_metadata(&fifo).unwrap().file_type().is_fifo());
+    assert!(std::fs::metadata("/dev/null").unwrap().file_type().is_char_device());
+    // A link is followed: the file it points to is written, even one not there yet, and the
+    // link stays a link.
+    let (link, file) = (d.join("link.json"), d.join("file.json"));
+    std::os::unix::fs::symlink("file.json", &link).unwrap();
+    ok(run("--save-state", &link));
+    assert!(std::fs::symlink_metadata(&link).unwrap().file_type().is_symlink());
+    assert!(bytes(&file).starts_with(b"{\"format\":\"vadop-world\""));
+    let fifo_link = d.join("fifo-link");
+    std::os::unix::fs::symlink(&fifo, &fifo_link).unwrap();
+    assert_error(run("--save-scene", &fifo_link), "not a regular file");
+    // Streamed outputs write into what the path names.
+    ok(run("--contacts", Path::new("/dev/null")));
+    std::fs::remove_dir_all(d).ok();
+}
+
+#[test]
+fn outputs_never_overwrite_each_other_or_the_inputs() {
+    let d = dir("same-file");
+    let (state, out) = (d.join("state.json"), d.join("out"));
+    ok(vadop(&["simulate", "--bodies", "20", "--frames", "1", "--quiet", "--save-state", &text(&state)]));
+    let saved = bytes(&state);
+    let spelled_again = d.join(".").join("out");
+    let cases: [(&[&str], &str); 6] = [
+        (&["--csv", &text(&out), "--json", &text(&spelled_again)], "--json"),
+        (&["--contacts", &text(&out), "--save-scene", &text(&out)], "--save-scene"),
+        (&["--json", &text(&out), "--save-state", &text(&out)], "--save-state"),
+        (&["--resume", &text(&state), "--contacts", &text(&state)], "is the file --resume reads"),
+        (&["--resume", &text(&state), "--csv", &text(&state)], "is the file --resume reads"),
+        (&["--scene", &text(&state), "--save-scene", &text(&state)], "is the file --scene reads"),
+    ];
+    for (args, expected) in cases {
+        assert_error(vadop(&[&["simulate", "--frames", "1", "--quiet"], args].concat()), expected);
+        assert!(!out.exists(), "{args:?} wrote before refusing");
+    }
+    assert_eq!(bytes(&state), saved, "the resumed state changed");
+    // Saving over the state resumed from is how a run goes on.
+    ok(vadop(&["simulate", "--resume", &text(&state), "--frames", "1", "--quiet", "--save-state", &text(&state)]));
+    std::fs::remove_dir_all(d).ok();
+}
+
+#[cfg(unix)]
+#[test]
+fn long_quiet_runs_keep_memory_flat_and_huge_ones_are_refused() {
+    // Half a million frames of one body in 64 MiB of address space (it needs about 12): keeping
+    // a 136-byte row per frame would take 71 MiB and abort.
+    let long = vadop_within(64 << 10, &["simulate", "--bodies", "1", "--frames", "500000", "--reference", "none", "--quiet"]);
+    assert!(long.status.success(), "{:?}: {}", long.status, String::from_utf8_lossy(&long.stderr));
+    for bodies in ["100000000", "1000000"] {
+        let huge = vadop_within(256 << 10, &["simulate", "--bodies", bodies, "--frames", "1", "--reference", "none"]);
+        assert_error(huge, &format!("a run of {bodies} bodies needs about"));
+    }
+    // One world of 300000 bodies fits in 256 MiB (192 MB), two do not.
+    let checked = vadop_within(256 << 10, &["simulate", "--bodies", "300000", "--frames", "1", "--reference", "vadop"]);
+    assert_error(checked, "a run of 300000 bodies with its reference world needs about");
 }
 
 #[test]

@@ -11,18 +11,34 @@ use glam::DVec3;
 use numpy::ndarray::{Array1, Array2};
 use numpy::prelude::*;
 use numpy::{PyArray1, PyArray2, PyArrayDescr, PyUntypedArray};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::sync::{Mutex, MutexGuard, TryLockError};
+use std::time::{Duration, Instant};
 use vadop::bounding_volume::interval;
-use vadop::scene::PaperScene;
+use vadop::memory;
+use vadop::scene::{PaperScene, MAX_SCENE_BODIES};
 use vadop::{BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
 
 /// Names of the six walls, indexed by the `wall` column of [`Contacts`].
 const WALLS: [&str; 6] = ["min_x", "max_x", "min_y", "max_y", "min_z", "max_z"];
 
+/// How long a call steps without the GIL before it looks at signals (Ctrl-C).
+const SIGNAL_CHECK: Duration = Duration::from_millis(50);
+
 fn value_error(e: VadopError) -> PyErr {
     PyValueError::new_err(e.to_string())
+}
+
+/// `MemoryError` unless `bytes` fit in the memory left; `what` names the request.
+fn check_memory(what: &str, bytes: u64) -> PyResult<()> {
+    memory::check(bytes).map_err(|shortfall| PyMemoryError::new_err(format!("{what} {shortfall}")))
+}
+
+/// `MemoryError` unless a world of `bodies` bodies fits in the memory left.
+fn check_world_memory(bodies: usize) -> PyResult<()> {
+    check_memory(&format!("a world of {bodies} bodies"), memory::world_bytes(bodies))
 }
 
 /// A numpy shape written the way Python prints it: `(4,)`, `(4, 3)`.
@@ -108,7 +124,7 @@ fn also_accepts(py: Python<'_>, error: PyErr, alternative: &str) -> PyErr {
 }
 
 /// Body ids: a Python int or an int64 array of shape (k,).
-fn ids(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
+fn ids_of(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
     if let Ok(id) = obj.extract::<i64>() {
         if !obj.is_instance_of::<PyUntypedArray>() {
             return Ok(vec![id]);
@@ -271,9 +287,12 @@ impl Contacts {
 /// >>> c = w.step(0.25)
 /// >>> int(c.i[0]), int(c.j[0]), round(float(c.time[0]), 6)
 /// (0, 1, 0.166667)
-#[pyclass(name = "World", module = "vadop._vadop")]
+///
+/// Threads may share a world: calls on it take turns. A thread that calls while another steps
+/// waits, without holding the GIL, until that step is done.
+#[pyclass(name = "World", module = "vadop._vadop", frozen)]
 struct PyWorld {
-    world: World,
+    world: Mutex<World>,
 }
 
 #[pymethods]
@@ -296,137 +315,152 @@ impl PyWorld {
         let bounds = bounds(r#box)?;
         let config = config(method, mode, pool_axes, phi, restitution)?;
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
+        check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
         world.add_spheres(&spheres).map_err(value_error)?;
-        Ok(PyWorld { world })
+        Ok(PyWorld { world: Mutex::new(world) })
     }
 
     /// Adds bodies (all or none) and returns their ids as an int64 array.
     #[pyo3(signature = (positions, velocities, radii, masses = None))]
     fn add<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         positions: &Bound<'py, PyAny>,
         velocities: &Bound<'py, PyAny>,
         radii: &Bound<'py, PyAny>,
         masses: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let spheres = spheres(positions, velocities, radii, masses, &self.world.bounds())?;
-        let added = self.world.add_spheres(&spheres).map_err(value_error)?;
+        let bounds = self.lock(py)?.bounds();
+        let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
+        check_world_memory(spheres.len())?;
+        let added = self.lock(py)?.add_spheres(&spheres).map_err(value_error)?;
         Ok(Array1::from_iter(added.into_iter().map(i64::from)).into_pyarray(py))
     }
 
     /// Removes bodies by id (an int or an int64 array), all or none.
-    fn remove(&mut self, ids: &Bound<'_, PyAny>) -> PyResult<()> {
-        let ids = self.live_ids(ids, "ids")?;
-        for id in ids {
-            self.world.remove_sphere(id).map_err(value_error)?;
+    fn remove(&self, py: Python<'_>, ids: &Bound<'_, PyAny>) -> PyResult<()> {
+        let ids = ids_of(ids, "ids")?;
+        let mut world = self.lock(py)?;
+        for id in live_ids(&world, &ids, "ids")? {
+            world.remove_sphere(id).map_err(value_error)?;
         }
         Ok(())
     }
 
     /// Sets the velocities of bodies ``ids`` (an int or an int64 array of k ids) to the rows of
     /// ``velocities`` (float64 (k, 3)), all or none.
-    fn set_velocities(&mut self, ids: &Bound<'_, PyAny>, velocities: &Bound<'_, PyAny>) -> PyResult<()> {
-        let ids = self.live_ids(ids, "ids")?;
+    fn set_velocities(&self, py: Python<'_>, ids: &Bound<'_, PyAny>, velocities: &Bound<'_, PyAny>) -> PyResult<()> {
+        let ids = ids_of(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
-        self.world.set_velocities(&ids, &velocities).map_err(value_error)
+        let mut world = self.lock(py)?;
+        let ids = live_ids(&world, &ids, "ids")?;
+        world.set_velocities(&ids, &velocities).map_err(value_error)
     }
 
-    /// Advances the world by ``dt`` and returns the frame's contacts in time order.
-    fn step(&mut self, py: Python<'_>, dt: f64) -> PyResult<Contacts> {
-        let world = &mut self.world;
-        let contacts = py.allow_threads(|| world.step(dt).map(|c| c.to_vec())).map_err(value_error)?;
+    /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
+    /// the GIL; a Ctrl-C pressed before it starts raises ``KeyboardInterrupt`` and leaves the
+    /// world as it was. Another thread's call on this world waits until the step is done.
+    fn step(&self, py: Python<'_>, dt: f64) -> PyResult<Contacts> {
+        py.check_signals()?;
+        let contacts = py.allow_threads(|| {
+            let mut world = self.world.lock().map_err(|_| poisoned())?;
+            world.step(dt).map(|c| c.to_vec()).map_err(value_error)
+        })?;
         Ok(Contacts::new(py, &contacts))
     }
 
     /// Ids of the live bodies, ascending (the row order of every array read back).
     #[getter]
-    fn ids<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
-        Array1::from_iter(self.world.spheres().map(|(id, _)| i64::from(id))).into_pyarray(py)
+    fn ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let ids: Vec<i64> = self.lock(py)?.spheres().map(|(id, _)| i64::from(id)).collect();
+        Ok(Array1::from_vec(ids).into_pyarray(py))
     }
 
     /// Centres now, float64 (n, 3).
     #[getter]
-    fn positions<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        vectors_array(py, &self.world.spheres().map(|(_, s)| s.position).collect::<Vec<_>>())
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let positions: Vec<DVec3> = self.lock(py)?.spheres().map(|(_, s)| s.position).collect();
+        Ok(vectors_array(py, &positions))
     }
 
     /// Velocities now, float64 (n, 3).
     #[getter]
-    fn velocities<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        vectors_array(py, &self.world.spheres().map(|(_, s)| s.velocity).collect::<Vec<_>>())
+    fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let velocities: Vec<DVec3> = self.lock(py)?.spheres().map(|(_, s)| s.velocity).collect();
+        Ok(vectors_array(py, &velocities))
     }
 
     /// Radii, float64 (n,).
     #[getter]
-    fn radii<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        Array1::from_iter(self.world.spheres().map(|(_, s)| s.radius)).into_pyarray(py)
+    fn radii<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let radii: Vec<f64> = self.lock(py)?.spheres().map(|(_, s)| s.radius).collect();
+        Ok(Array1::from_vec(radii).into_pyarray(py))
     }
 
     /// Masses, float64 (n,).
     #[getter]
-    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        Array1::from_iter(self.world.spheres().map(|(_, s)| s.mass)).into_pyarray(py)
+    fn masses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let masses: Vec<f64> = self.lock(py)?.spheres().map(|(_, s)| s.mass).collect();
+        Ok(Array1::from_vec(masses).into_pyarray(py))
     }
 
     /// The box as float64 [[min x, y, z], [max x, y, z]].
     #[getter(r#box)]
-    fn get_box<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let b = self.world.bounds();
-        vectors_array(py, &[b.min, b.max])
+    fn get_box<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let b = self.lock(py)?.bounds();
+        Ok(vectors_array(py, &[b.min, b.max]))
     }
 
     /// Simulation time now.
     #[getter]
-    fn time(&self) -> f64 {
-        self.world.time()
+    fn time(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(self.lock(py)?.time())
     }
 
     /// The method's name: 'vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or 'grid'.
     #[getter]
-    fn method(&self) -> &'static str {
-        self.world.config().method.name()
+    fn method(&self, py: Python<'_>) -> PyResult<&'static str> {
+        Ok(self.lock(py)?.config().method.name())
     }
 
     /// 'simulate' or 'detect'.
     #[getter]
-    fn mode(&self) -> &'static str {
-        match self.world.config().mode {
-            Mode::Simulate => "simulate",
-            Mode::Detect => "detect",
-        }
+    fn mode(&self, py: Python<'_>) -> PyResult<&'static str> {
+        Ok(mode_name(self.lock(py)?.config().mode))
     }
 
     /// Number of axes in the pool.
     #[getter]
-    fn pool_axes(&self) -> usize {
-        self.world.pool().len()
+    fn pool_axes(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.lock(py)?.pool().len())
     }
 
     /// The alignment angle phi in use, in radians.
     #[getter]
-    fn phi(&self) -> f64 {
-        self.world.config().phi.unwrap_or(self.world.pool().covering_radius())
+    fn phi(&self, py: Python<'_>) -> PyResult<f64> {
+        let world = self.lock(py)?;
+        Ok(world.config().phi.unwrap_or(world.pool().covering_radius()))
     }
 
     /// Coefficient of restitution.
     #[getter]
-    fn restitution(&self) -> f64 {
-        self.world.config().restitution
+    fn restitution(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(self.lock(py)?.config().restitution)
     }
 
     /// The pool's axes as unit vectors, float64 (pool_axes, 3).
     #[getter]
-    fn axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        vectors_array(py, self.world.pool().axes())
+    fn axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let pool = self.lock(py)?.pool().clone();
+        Ok(vectors_array(py, pool.axes()))
     }
 
     /// Statistics of the last frame: seconds per stage (update, sort, test, response, total) and
     /// counters (endpoint swaps, list entries, candidate pairs, narrow tests, contacts, pair
     /// contacts, invalidations, broad-phase bytes).
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = self.world.stats();
+        let s = *self.lock(py)?.stats();
         let d = PyDict::new(py);
         d.set_item("update_seconds", s.update_seconds)?;
         d.set_item("sort_seconds", s.sort_seconds)?;
@@ -445,13 +479,14 @@ impl PyWorld {
     }
 
     /// Total kinetic energy.
-    fn kinetic_energy(&self) -> f64 {
-        self.world.kinetic_energy()
+    fn kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(self.lock(py)?.kinetic_energy())
     }
 
     /// Total linear momentum, float64 (3,).
-    fn momentum<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        Array1::from_vec(self.world.momentum().to_array().to_vec()).into_pyarray(py)
+    fn momentum<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let momentum = self.lock(py)?.momentum();
+        Ok(Array1::from_vec(momentum.to_array().to_vec()).into_pyarray(py))
     }
 
     /// The VADOP volumes the next frame of length ``dt`` will use, one row per (body, axis):
@@ -468,15 +503,16 @@ impl PyWorld {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(value_error(VadopError::BadTimeStep(dt)));
         }
-        let Some(sap) = self.world.sweep_prune() else {
+        let world = self.lock(py)?;
+        let Some(sap) = world.sweep_prune() else {
             return Err(PyValueError::new_err(format!(
                 "volumes exist only for method 'vadop' after the first step (method {:?}, time {})",
-                self.method(),
-                self.world.time()
+                world.config().method.name(),
+                world.time()
             )));
         };
         let (mut body, mut axis, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (id, s) in self.world.spheres() {
+        for (id, s) in world.spheres() {
             for &a in sap.axes_of(id) {
                 let iv = interval(sap.pool().axis(a), s.position, s.velocity, s.radius, dt);
                 body.push(i64::from(id));
@@ -485,40 +521,67 @@ impl PyWorld {
                 hi.push(iv.hi);
             }
         }
+        drop(world);
         Ok((Array1::from_vec(body).into_pyarray(py), Array1::from_vec(axis).into_pyarray(py), Array1::from_vec(lo).into_pyarray(py), Array1::from_vec(hi).into_pyarray(py)))
     }
 
-    fn __len__(&self) -> usize {
-        self.world.len()
+    fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.lock(py)?.len())
     }
 
-    fn __repr__(&self) -> String {
-        format!("<World: {} bodies, method {}, mode {}, time {}>", self.world.len(), self.method(), self.mode(), self.world.time())
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let world = self.lock(py)?;
+        let config = world.config();
+        Ok(format!("<World: {} bodies, method {}, mode {}, time {}>", world.len(), config.method.name(), mode_name(config.mode), world.time()))
     }
 }
 
 impl PyWorld {
-    /// Ids that all name distinct live bodies, or an error naming the first that does not.
-    fn live_ids(&self, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<u32>> {
-        let ids = ids(obj, name)?;
-        let mut seen = std::collections::HashSet::new();
-        ids.iter()
-            .map(|&id| {
-                let live = u32::try_from(id).ok().filter(|&u| self.world.sphere(u).is_some());
-                match live {
-                    Some(u) if seen.insert(u) => Ok(u),
-                    Some(_) => Err(PyValueError::new_err(format!("{name} must not repeat an id, got {id} twice"))),
-                    None => Err(PyValueError::new_err(format!("{name} must name live bodies, got {id}"))),
-                }
-            })
-            .collect()
+    /// The world, once no other thread is using it. A step holds it without the GIL, so the wait
+    /// happens without the GIL too, or that step could never hand it back.
+    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, World>> {
+        loop {
+            match self.world.try_lock() {
+                Ok(world) => return Ok(world),
+                Err(TryLockError::WouldBlock) => py.allow_threads(|| drop(self.world.lock())),
+                Err(TryLockError::Poisoned(_)) => return Err(poisoned()),
+            }
+        }
     }
+}
+
+/// A world whose lock a panic left poisoned may be half-way through a change.
+fn poisoned() -> PyErr {
+    PyRuntimeError::new_err("this world is unusable: an earlier call on it failed inside the engine (a bug, please report it)")
+}
+
+fn mode_name(mode: Mode) -> &'static str {
+    match mode {
+        Mode::Simulate => "simulate",
+        Mode::Detect => "detect",
+    }
+}
+
+/// Ids that all name distinct live bodies of `world`, or an error naming the first that does not.
+fn live_ids(world: &World, ids: &[i64], name: &str) -> PyResult<Vec<u32>> {
+    let mut seen = std::collections::HashSet::new();
+    ids.iter()
+        .map(|&id| {
+            let live = u32::try_from(id).ok().filter(|&u| world.sphere(u).is_some());
+            match live {
+                Some(u) if seen.insert(u) => Ok(u),
+                Some(_) => Err(PyValueError::new_err(format!("{name} must not repeat an id, got {id} twice"))),
+                None => Err(PyValueError::new_err(format!("{name} must name live bodies, got {id}"))),
+            }
+        })
+        .collect()
 }
 
 /// The paper's scene as a world: ``bodies`` spheres of radius ``radius`` at ``packing_fraction``
 /// in a cube, random directions, speeds uniform up to ``max_speed`` diameters per frame at 30
 /// frames per second (so step with ``dt = 1/30``), generated from ``seed``; the world settings
-/// as for ``World``.
+/// as for ``World``. Raises ``MemoryError``, before allocating anything, when the world would not
+/// fit in the memory left (about 640 bytes a body).
 ///
 /// >>> import vadop
 /// >>> w = vadop.scene(1000, 0.05, 0.5)
@@ -541,16 +604,22 @@ fn scene(
     restitution: f64,
 ) -> PyResult<PyWorld> {
     let config = config(method, mode, pool_axes, phi, restitution)?;
+    // Only a valid count is worth checking: the core names a bad one better.
+    if bodies <= MAX_SCENE_BODIES {
+        check_world_memory(bodies)?;
+    }
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
-    Ok(PyWorld { world })
+    Ok(PyWorld { world: Mutex::new(world) })
 }
 
 /// Detect mode on given paths: bodies start at ``positions`` with ``velocities`` and move in
 /// straight lines, passing through each other and bouncing only off the box walls, for
 /// ``frames`` frames of ``dt``; returns every contact of the run in time order. ``method``
 /// chooses how they are found ('vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or
-/// 'grid'; all but 'discrete' find the same contacts).
+/// 'grid'; all but 'discrete' find the same contacts). Steps without the GIL; Ctrl-C raises
+/// ``KeyboardInterrupt`` within 50 ms (or a frame, if longer). Raises ``MemoryError`` when the contacts found
+/// so far outgrow the memory left: run fewer frames at a time, or step a ``World``.
 ///
 /// >>> import numpy as np, vadop
 /// >>> c = vadop.detect(np.array([[1.0, 1, 1], [4, 1, 1]]), np.array([[40.0, 0, 0], [0, 0, 0]]),
@@ -575,17 +644,38 @@ fn detect(
     let bounds = bounds(r#box)?;
     let config = config(method, "detect", pool_axes, phi, 1.0)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
-    let run = || -> vadop::Result<Vec<Contact>> {
-        let mut world = World::new(bounds, config)?;
-        world.add_spheres(&spheres)?;
-        let mut all = Vec::new();
-        for _ in 0..frames {
-            all.extend_from_slice(world.step(dt)?);
-        }
-        Ok(all)
-    };
-    let contacts = py.allow_threads(run).map_err(value_error)?;
-    Ok(Contacts::new(py, &contacts))
+    check_world_memory(spheres.len())?;
+    let mut world = World::new(bounds, config).map_err(value_error)?;
+    world.add_spheres(&spheres).map_err(value_error)?;
+    let (mut all, mut done) = (Vec::new(), 0);
+    while done < frames {
+        // Steps without the GIL, looking at signals between frames every SIGNAL_CHECK.
+        py.allow_threads(|| -> PyResult<()> {
+            let start = Instant::now();
+            while done < frames && start.elapsed() < SIGNAL_CHECK {
+                let contacts = world.step(dt).map_err(value_error)?;
+                make_room(&mut all, contacts.len())?;
+                all.extend_from_slice(contacts);
+                done += 1;
+            }
+            Ok(())
+        })?;
+        py.check_signals()?;
+    }
+    Ok(Contacts::new(py, &all))
+}
+
+/// Room for `more` contacts in `all`, or `MemoryError` when the grown list and the arrays made
+/// from it at the end (as large again, with temporaries) would not fit in the memory left.
+fn make_room(all: &mut Vec<Contact>, more: usize) -> PyResult<()> {
+    let wanted = all.len() + more;
+    if wanted > all.capacity() {
+        let capacity = wanted.max(2 * all.capacity());
+        let bytes = 3 * (capacity * std::mem::size_of::<Contact>()) as u64;
+        check_memory(&format!("detect: room for {capacity} contacts"), bytes)?;
+        all.reserve_exact(capacity - all.len());
+    }
+    Ok(())
 }
 
 #[pymodule]

@@ -38,6 +38,7 @@ pub mod coherent_sort;
 pub mod collapse;
 pub mod error;
 pub mod event_queue;
+pub mod memory;
 pub mod narrow_phase;
 pub mod overlap;
 pub mod pipeline;
