@@ -56,7 +56,7 @@ def world_with(**changes):
         (dict(box=np.array([[0, 0, 0], [10, 10, 10]])), TypeError, "box must be a number (cube side) or a float64 array of shape (2, 3), got int64"),
         (dict(box="big"), TypeError, "box must be a number (cube side) or a float64 array of shape (2, 3), got str"),
         (dict(box=np.array([[0.0, 0, 10], [10, 10, 0]])), ValueError, "box must have finite corners with min < max"),
-        (dict(method="fast"), ValueError, "method must be one of 'vadop', 'swept-aabb', 'swept-kdop', 'grid', 'discrete', 'brute', got \"fast\""),
+        (dict(method="fast"), ValueError, "method must be one of 'auto', 'vadop', 'grid', 'swept-aabb', 'swept-kdop', 'discrete', 'brute', got \"fast\""),
         (dict(mode="both"), ValueError, "mode must be 'simulate' or 'detect', got \"both\""),
         (dict(pool_axes=2), ValueError, "axis pool size must be between 3 and 100000, got 2"),
         (dict(pool_axes=-5), ValueError, "pool_axes must be an int between 3 and 100000, got -5"),
@@ -237,13 +237,13 @@ def test_edge_values_that_are_accepted():
     # Empty arrays: a world with no bodies (stepping it raises), adding or removing nothing.
     empty = vadop.World(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), box=10.0)
     assert len(empty) == 0
-    world = world_with()
+    world = world_with(method="vadop")
     assert world.add(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0)).tolist() == []
     world.remove(np.array([], dtype=np.int64))
     world.set_velocities(np.array([], dtype=np.int64), np.zeros((0, 3)))
     assert len(world) == 2
     # Extremes inside the limits, negative coordinates in a box that holds them, the settings' ends.
-    world_with(velocities=np.array([[1e50, 0, 0], [0, 0, 0]]), masses=np.array([1e-50, 1e50]), radii=np.array([0.5, 1e-300]))
+    world_with(velocities=np.array([[1e50, 0, 0], [0, 0, 0]]), masses=np.array([1e-50, 1e50]), radii=np.array([0.5, 1e-50]))
     world_with(positions=np.array([[-4.0, -4, -4], [0, 0, 0]]), box=np.array([[-5.0, -5, -5], [5, 5, 5]]))
     world_with(box=10, restitution=0.0, phi=np.pi / 2, pool_axes=np.int64(3))
     world_with(positions=np.asfortranarray(GOOD["positions"]), velocities=np.zeros((2, 3)))

@@ -16,7 +16,7 @@ from vadop.viewer import main, record, write_html
 
 
 def test_recording_holds_frames_contacts_and_honest_volumes():
-    world = vadop.scene(80, 0.1, 2.0, pool_axes=7)
+    world = vadop.scene(80, 0.1, 2.0, method="vadop", pool_axes=7)
     run = record(world, frames=6, watch=[3, 5])
     assert len(run["frames"]) == 7 and run["frames"][0]["v"] is None
     assert len(run["axes"]) == 7 and run["ids"] == list(range(80))
@@ -68,7 +68,7 @@ def browse(page, fragment, *args):
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory):
-    world = vadop.scene(150, 0.08, 1.5, seed=2)
+    world = vadop.scene(150, 0.08, 1.5, seed=2, method="vadop")
     return write_html(record(world, frames=40), tmp_path_factory.mktemp("viewer") / "run.html")
 
 

@@ -56,7 +56,7 @@ def test_settings_are_reported():
     assert world.axes.shape == (13, 3)
     np.testing.assert_allclose(np.linalg.norm(world.axes, axis=1), 1.0)
     default = two_bodies()
-    assert default.method == "vadop" and default.mode == "simulate" and default.restitution == 1.0
+    assert default.method == "auto" and default.mode == "simulate" and default.restitution == 1.0
     assert 0 < default.phi <= np.pi / 2
 
 
@@ -125,8 +125,8 @@ def test_stats_is_a_dict_of_the_last_frame():
     world.step(1 / 30)
     stats = world.stats()
     expected = {"update_seconds", "sort_seconds", "test_seconds", "response_seconds", "total_seconds",
-                "endpoint_swaps", "list_entries", "candidate_pairs", "narrow_tests", "contacts",
-                "pair_contacts", "invalidations", "broad_phase_bytes"}
+                "windows", "endpoint_swaps", "list_entries", "candidate_pairs", "narrow_tests", "retests",
+                "contacts", "pair_contacts", "invalidations", "broad_phase_bytes", "tc_contacts", "jam_contacts"}
     assert set(stats) == expected
     parts = sum(stats[k] for k in ("update_seconds", "sort_seconds", "test_seconds", "response_seconds"))
     assert stats["total_seconds"] == pytest.approx(parts)
@@ -135,7 +135,7 @@ def test_stats_is_a_dict_of_the_last_frame():
 
 
 def test_volumes_bound_each_body_on_its_axes():
-    world = vadop.scene(200, 0.1, 2.0, pool_axes=13)
+    world = vadop.scene(200, 0.1, 2.0, method="vadop", pool_axes=13)
     world.step(1 / 30)
     body, axis, lo, hi = world.volumes(1 / 30)
     assert set(body.tolist()) == set(world.ids.tolist())

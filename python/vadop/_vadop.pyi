@@ -9,7 +9,7 @@ _Float64Array = npt.NDArray[np.float64]
 _Int64Array = npt.NDArray[np.int64]
 _Box = Union[float, _Float64Array]
 _Ids = Union[int, _Int64Array]
-_MethodName = Literal["vadop", "brute", "discrete", "swept-aabb", "swept-kdop", "grid"]
+_MethodName = Literal["auto", "vadop", "grid", "brute", "discrete", "swept-aabb", "swept-kdop"]
 _ModeName = Literal["simulate", "detect"]
 
 __all__ = ["WALLS", "Contacts", "World", "detect", "scene"]
@@ -53,11 +53,12 @@ class World:
         masses: Optional[_Float64Array] = None,
         *,
         box: _Box,
-        method: _MethodName = "vadop",
+        method: _MethodName = "auto",
         mode: _ModeName = "simulate",
         pool_axes: Optional[int] = None,
         phi: Optional[float] = None,
         restitution: float = 1.0,
+        contact_duration: float = 1e-05,
     ) -> World: ...
     def add(
         self,
@@ -113,11 +114,12 @@ def scene(
     *,
     radius: float = 0.5,
     seed: int = 1,
-    method: _MethodName = "vadop",
+    method: _MethodName = "auto",
     mode: _ModeName = "simulate",
     pool_axes: Optional[int] = None,
     phi: Optional[float] = None,
     restitution: float = 1.0,
+    contact_duration: float = 1e-05,
 ) -> World:
     """The paper's scene as a World; MemoryError when it would not fit in the memory left."""
 
@@ -129,7 +131,7 @@ def detect(
     box: _Box,
     dt: float,
     frames: int,
-    method: _MethodName = "vadop",
+    method: _MethodName = "auto",
     pool_axes: Optional[int] = None,
     phi: Optional[float] = None,
 ) -> Contacts:

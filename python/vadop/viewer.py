@@ -119,7 +119,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--open", action="store_true", help="open the page in the default browser")
     args = parser.parse_args(argv)
     try:
-        world = scene(args.bodies, args.packing_fraction, args.max_speed, seed=args.seed, mode=args.mode, pool_axes=args.pool_axes)
+        world = scene(args.bodies, args.packing_fraction, args.max_speed, seed=args.seed, method="vadop", mode=args.mode, pool_axes=args.pool_axes)
         path = write_html(record(world, args.frames), args.out)
     except (ValueError, OverflowError, OSError) as e:
         # Out-of-range integers and unwritable paths are the user's input too: one line, exit 2.

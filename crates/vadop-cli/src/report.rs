@@ -40,11 +40,17 @@ pub struct FrameRow {
     /// Wall-clock milliseconds of the step call, which also covers work outside the four stages.
     pub wall_ms: f64,
     pub broad_phase_bytes: u64,
+    pub windows: u64,
+    pub retests: u64,
+    /// Contacts whose physics a rule changed: made elastic by the TC model, resolved by the jam rule.
+    pub tc_contacts: u64,
+    pub jam_contacts: u64,
 }
 
 impl FrameRow {
     const CSV_HEADER: &'static str = "frame,time,contacts,pair_contacts,ms,update_ms,sort_ms,test_ms,response_ms,\
-        endpoint_swaps,list_entries,candidate_pairs,narrow_tests,invalidations,wall_ms,broad_phase_bytes";
+        endpoint_swaps,list_entries,candidate_pairs,narrow_tests,invalidations,wall_ms,broad_phase_bytes,\
+        windows,retests,tc_contacts,jam_contacts";
 
     pub fn new(frame: u64, time: f64, stats: &FrameStats, wall_seconds: f64) -> FrameRow {
         FrameRow {
@@ -64,13 +70,17 @@ impl FrameRow {
             invalidations: stats.invalidations,
             wall_ms: wall_seconds * 1e3,
             broad_phase_bytes: stats.broad_phase_bytes,
+            windows: stats.windows,
+            retests: stats.retests,
+            tc_contacts: stats.tc_contacts,
+            jam_contacts: stats.jam_contacts,
         }
     }
 
     /// The row in the order of `CSV_HEADER`.
     fn csv_line(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.time,
             self.contacts,
@@ -86,7 +96,11 @@ impl FrameRow {
             self.narrow_tests,
             self.invalidations,
             self.wall_ms,
-            self.broad_phase_bytes
+            self.broad_phase_bytes,
+            self.windows,
+            self.retests,
+            self.tc_contacts,
+            self.jam_contacts
         )
     }
 }
@@ -279,6 +293,10 @@ pub struct FrameTotals {
     candidate_pairs: u64,
     narrow_tests: u64,
     invalidations: u64,
+    windows: u64,
+    retests: u64,
+    tc_contacts: u64,
+    jam_contacts: u64,
     update_ms: f64,
     sort_ms: f64,
     test_ms: f64,
@@ -298,6 +316,10 @@ impl FrameTotals {
         self.candidate_pairs += row.candidate_pairs;
         self.narrow_tests += row.narrow_tests;
         self.invalidations += row.invalidations;
+        self.windows += row.windows;
+        self.retests += row.retests;
+        self.tc_contacts += row.tc_contacts;
+        self.jam_contacts += row.jam_contacts;
         self.update_ms += row.update_ms;
         self.sort_ms += row.sort_ms;
         self.test_ms += row.test_ms;
@@ -344,6 +366,17 @@ pub struct PerFrame {
     pub candidate_pairs: f64,
     pub narrow_tests: f64,
     pub invalidations: f64,
+    pub windows: f64,
+    pub retests: f64,
+}
+
+/// Every contact whose physics a rule changed (see the core's `collapse` module).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RuleCounts {
+    /// Made elastic by the TC model (restitution below 1).
+    pub tc_contacts: u64,
+    /// Resolved by the jam rule (a jammed cluster frozen).
+    pub jam_contacts: u64,
 }
 
 /// Everything a run reports, built once and then printed, written as JSON or read back.
@@ -359,6 +392,7 @@ pub struct Summary {
     pub wall_ms: Spread,
     pub cost_split: CostSplit,
     pub per_frame: PerFrame,
+    pub rules: RuleCounts,
     /// Largest broad-phase footprint over the frames.
     pub broad_phase_bytes: u64,
     /// Peak resident memory of the whole process (VmHWM), where the system reports it.
@@ -405,7 +439,10 @@ impl Summary {
                 candidate_pairs: frames.mean(frames.candidate_pairs as f64),
                 narrow_tests: frames.mean(frames.narrow_tests as f64),
                 invalidations: frames.mean(frames.invalidations as f64),
+                windows: frames.mean(frames.windows as f64),
+                retests: frames.mean(frames.retests as f64),
             },
+            rules: RuleCounts { tc_contacts: frames.tc_contacts, jam_contacts: frames.jam_contacts },
             broad_phase_bytes: frames.broad_phase_bytes,
             peak_memory_mib: peak_memory_mib(),
             conservation,
@@ -434,7 +471,7 @@ impl fmt::Display for Summary {
                 "pool        m = {} axes, rho = {:.4} deg, phi = {:.4} deg, {:.2} axes per body",
                 p.axes, p.covering_radius_deg, p.phi_deg, p.axes_per_body
             )?,
-            None => writeln!(f, "pool        none (the {} method does not use axes)", run.method)?,
+            None => writeln!(f, "pool        none ({} uses no axis pool)", run.method)?,
         }
         writeln!(
             f,
@@ -486,8 +523,16 @@ impl fmt::Display for Summary {
         let p = &self.per_frame;
         writeln!(
             f,
-            "per frame   {:.1} endpoint swaps, {:.1} candidate pairs, {:.1} narrow tests, {:.1} invalidations",
-            p.endpoint_swaps, p.candidate_pairs, p.narrow_tests, p.invalidations
+            "per frame   {:.2} broad-phase windows, {:.1} endpoint swaps, {:.1} candidate pairs, {:.1} narrow tests, {:.1} re-tests, {:.1} invalidations",
+            p.windows, p.endpoint_swaps, p.candidate_pairs, p.narrow_tests, p.retests, p.invalidations
+        )?;
+        let r = &self.rules;
+        writeln!(
+            f,
+            "rules       {} contacts made elastic by the TC model, {} resolved by the jam rule{}",
+            r.tc_contacts,
+            r.jam_contacts,
+            if r.tc_contacts + r.jam_contacts == 0 { " (the physics was never changed)" } else { "" }
         )?;
         let peak = match self.peak_memory_mib {
             Some(mib) if self.accuracy.is_some() => format!("{mib:.1} MiB (whole process, reference world included)"),

@@ -379,7 +379,10 @@ fn run_world(
     }
     let info = RunInfo {
         scene: SceneInfo::of(&scene, source, args.dt),
-        method: config.method.name().to_string(),
+        method: match config.method {
+            Method::Auto => format!("auto ({})", config.method.resolve(&scene.spheres).name()),
+            method => method.name().to_string(),
+        },
         mode: match config.mode {
             Mode::Detect => "detect",
             Mode::Simulate => "simulate",
@@ -642,7 +645,7 @@ fn step_frames(
     }
     bar.finish_and_clear();
 
-    let pool = Some(world.pool()).filter(|_| matches!(world.config().method, Method::Vadop | Method::SweptKdop)).map(|pool| {
+    let pool = Some(world.pool()).filter(|_| matches!(world.method(), Method::Vadop | Method::SweptKdop)).map(|pool| {
         let rho = pool.covering_radius();
         PoolInfo {
             axes: pool.len(),

@@ -17,6 +17,7 @@ use pyo3::types::PyDict;
 use std::sync::{Mutex, MutexGuard, TryLockError};
 use std::time::{Duration, Instant};
 use vadop::bounding_volume::interval;
+use vadop::collapse::DEFAULT_CONTACT_DURATION;
 use vadop::memory;
 use vadop::scene::{PaperScene, MAX_SCENE_BODIES};
 use vadop::{BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
@@ -199,13 +200,13 @@ fn parse_mode(mode: &str) -> PyResult<Mode> {
     }
 }
 
-fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, restitution: f64) -> PyResult<WorldConfig> {
+fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, restitution: f64, contact_duration: f64) -> PyResult<WorldConfig> {
     let pool_axes = match pool_axes {
         Some(m) if m < 0 => return Err(PyValueError::new_err(format!("pool_axes must be an int between 3 and 100000, got {m}"))),
         Some(m) => Some(m as usize),
         None => None,
     };
-    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution, ..WorldConfig::default() })
+    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution, contact_duration })
 }
 
 fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f64>> {
@@ -271,12 +272,14 @@ impl Contacts {
 ///
 /// Bodies are given as numpy columns: ``positions`` and ``velocities`` float64 (n, 3), ``radii``
 /// and ``masses`` float64 (n,) (``masses`` defaults to 1). ``box`` is a cube side or a float64
-/// array ``[[min x, y, z], [max x, y, z]]``. Settings: ``method`` ('vadop', 'brute' — every pair,
-/// the oracle —, 'discrete' — overlap checks at frame instants only — or the continuous
-/// baselines 'swept-aabb', 'swept-kdop' and 'grid'), ``mode`` ('simulate' or
-/// 'detect': bodies pass through each other and bounce only off the walls), ``pool_axes`` (None
-/// picks the engine's default), ``phi`` in radians (None: the pool's covering radius) and
-/// ``restitution`` in [0, 1].
+/// array ``[[min x, y, z], [max x, y, z]]``. Settings: ``method`` ('auto', the fastest broad
+/// phase for the scene; 'vadop', the paper's velocity-aligned sweep and prune; 'grid'; 'brute' —
+/// every pair, the oracle —; 'discrete' — overlap checks at frame instants only — or the
+/// continuous baselines 'swept-aabb' and 'swept-kdop'), ``mode`` ('simulate' or 'detect': bodies
+/// pass through each other and bounce only off the walls), ``pool_axes`` (None picks the engine's
+/// default), ``phi`` in radians (None: the pool's covering radius), ``restitution`` in [0, 1] and
+/// ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
+/// body's previous one is elastic — the TC model that ends inelastic collapse).
 ///
 /// Body ids start at 0 in row order; ids of removed bodies are reused, lowest first. Arrays read
 /// back (``positions``, ``velocities`` ...) hold the live bodies in ascending id order (``ids``).
@@ -298,7 +301,7 @@ struct PyWorld {
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "vadop", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0))]
+    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         positions: &Bound<'_, PyAny>,
@@ -311,9 +314,10 @@ impl PyWorld {
         pool_axes: Option<i64>,
         phi: Option<f64>,
         restitution: f64,
+        contact_duration: f64,
     ) -> PyResult<PyWorld> {
         let bounds = bounds(r#box)?;
-        let config = config(method, mode, pool_axes, phi, restitution)?;
+        let config = config(method, mode, pool_axes, phi, restitution, contact_duration)?;
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
@@ -457,8 +461,10 @@ impl PyWorld {
     }
 
     /// Statistics of the last frame: seconds per stage (update, sort, test, response, total) and
-    /// counters (endpoint swaps, list entries, candidate pairs, narrow tests, contacts, pair
-    /// contacts, invalidations, broad-phase bytes).
+    /// counters (broad-phase windows, endpoint swaps, list entries, candidate pairs, narrow tests,
+    /// re-tests, contacts, pair contacts, invalidations, broad-phase bytes) and the contacts whose
+    /// physics a rule changed (``tc_contacts``: made elastic by the TC model; ``jam_contacts``:
+    /// resolved by the jam rule).
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = *self.lock(py)?.stats();
         let d = PyDict::new(py);
@@ -467,14 +473,18 @@ impl PyWorld {
         d.set_item("test_seconds", s.test_seconds)?;
         d.set_item("response_seconds", s.response_seconds)?;
         d.set_item("total_seconds", s.total_seconds())?;
+        d.set_item("windows", s.windows)?;
         d.set_item("endpoint_swaps", s.endpoint_swaps)?;
         d.set_item("list_entries", s.list_entries)?;
         d.set_item("candidate_pairs", s.candidate_pairs)?;
         d.set_item("narrow_tests", s.narrow_tests)?;
+        d.set_item("retests", s.retests)?;
         d.set_item("contacts", s.contacts)?;
         d.set_item("pair_contacts", s.pair_contacts)?;
         d.set_item("invalidations", s.invalidations)?;
         d.set_item("broad_phase_bytes", s.broad_phase_bytes)?;
+        d.set_item("tc_contacts", s.tc_contacts)?;
+        d.set_item("jam_contacts", s.jam_contacts)?;
         Ok(d)
     }
 
@@ -588,7 +598,7 @@ fn live_ids(world: &World, ids: &[i64], name: &str) -> PyResult<Vec<u32>> {
 /// >>> len(w), w.positions.shape
 /// (1000, (1000, 3))
 #[pyfunction]
-#[pyo3(signature = (bodies = 1000, packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = 1, method = "vadop", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0))]
+#[pyo3(signature = (bodies = 1000, packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = 1, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5))]
 #[allow(clippy::too_many_arguments)]
 fn scene(
     py: Python<'_>,
@@ -602,8 +612,9 @@ fn scene(
     pool_axes: Option<i64>,
     phi: Option<f64>,
     restitution: f64,
+    contact_duration: f64,
 ) -> PyResult<PyWorld> {
-    let config = config(method, mode, pool_axes, phi, restitution)?;
+    let config = config(method, mode, pool_axes, phi, restitution, contact_duration)?;
     // Only a valid count is worth checking: the core names a bad one better.
     if bodies <= MAX_SCENE_BODIES {
         check_world_memory(bodies)?;
@@ -616,8 +627,8 @@ fn scene(
 /// Detect mode on given paths: bodies start at ``positions`` with ``velocities`` and move in
 /// straight lines, passing through each other and bouncing only off the box walls, for
 /// ``frames`` frames of ``dt``; returns every contact of the run in time order. ``method``
-/// chooses how they are found ('vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or
-/// 'grid'; all but 'discrete' find the same contacts). Steps without the GIL; Ctrl-C raises
+/// chooses how they are found ('auto', 'vadop', 'grid', 'brute', 'discrete', 'swept-aabb' or
+/// 'swept-kdop'; all but 'discrete' find the same contacts). Steps without the GIL; Ctrl-C raises
 /// ``KeyboardInterrupt`` within 50 ms (or a frame, if longer). Raises ``MemoryError`` when the contacts found
 /// so far outgrow the memory left: run fewer frames at a time, or step a ``World``.
 ///
@@ -627,7 +638,7 @@ fn scene(
 /// >>> c.j.tolist(), c.time.tolist()   # the gap of 2 closes at 40 units/s
 /// ([1], [0.05])
 #[pyfunction]
-#[pyo3(signature = (positions, velocities, radii, *, r#box, dt, frames, method = "vadop", pool_axes = None, phi = None))]
+#[pyo3(signature = (positions, velocities, radii, *, r#box, dt, frames, method = "auto", pool_axes = None, phi = None))]
 #[allow(clippy::too_many_arguments)]
 fn detect(
     py: Python<'_>,
@@ -642,7 +653,7 @@ fn detect(
     phi: Option<f64>,
 ) -> PyResult<Contacts> {
     let bounds = bounds(r#box)?;
-    let config = config(method, "detect", pool_axes, phi, 1.0)?;
+    let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
     check_world_memory(spheres.len())?;
     let mut world = World::new(bounds, config).map_err(value_error)?;
