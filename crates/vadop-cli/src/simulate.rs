@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 use vadop::memory;
-use vadop::scene::{PaperScene, Scene, FRAMES_PER_SECOND, MAX_SCENE_BODIES};
+use vadop::scene::{GeneratedScene, Scene, Velocities, FRAMES_PER_SECOND, MAX_SCENE_BODIES};
 use vadop::{Contact, Method, Mode, Touched, VadopError, World, WorldConfig};
 
 /// Scenes up to this many bodies are checked against brute force unless told otherwise.
@@ -46,9 +46,18 @@ pub struct SimulateArgs {
     /// Fraction of the box volume the spheres fill, in (0, 0.6]
     #[arg(long, value_name = "F", default_value_t = 0.05, allow_negative_numbers = true, conflicts_with = "scene", help_heading = "Scene")]
     packing: f64,
-    /// Speeds are uniform in [0, S] sphere diameters per frame (at 30 frames per second)
+    /// Speeds are uniform in [0, S] sphere diameters per frame (at 30 frames per second); with
+    /// --kind gas S is the rms speed, stream the speed of every body, heavy-tail the median speed
     #[arg(long, value_name = "S", default_value_t = 0.5, allow_negative_numbers = true, conflicts_with = "scene", help_heading = "Scene")]
     max_speed: f64,
+    /// The velocities of the generated scene: paper (random directions, uniform speeds), gas (an
+    /// equilibrium gas: Maxwell velocities, no net momentum), stream (every body within --spread
+    /// of +x, as bullets, rain or a beam), heavy-tail (Pareto speeds: a few bodies far faster)
+    #[arg(long, value_enum, default_value_t = KindArg::Paper, conflicts_with = "scene", help_heading = "Scene")]
+    kind: KindArg,
+    /// Half-angle of a stream's directions, in degrees
+    #[arg(long, value_name = "DEGREES", default_value_t = 10.0, allow_negative_numbers = true, help_heading = "Scene")]
+    spread: f64,
     /// Seed of the scene generator
     #[arg(long, value_name = "K", default_value_t = 1, conflicts_with = "scene", help_heading = "Scene")]
     seed: u64,
@@ -144,6 +153,14 @@ impl MethodArg {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum KindArg {
+    Paper,
+    Gas,
+    Stream,
+    HeavyTail,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ModeArg {
     Detect,
     Simulate,
@@ -207,14 +224,26 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
             (scene, format!("scene file {}", path.display()), reference)
         }
         None => {
-            let paper = PaperScene { seed: args.seed, ..PaperScene::new(args.bodies, args.packing, args.max_speed) };
-            let reference = reference_method(args, paper.bodies, config.method);
+            let (velocities, what) = match args.kind {
+                KindArg::Paper => (Velocities::Uniform { max_speed: args.max_speed }, format!("paper scene (speeds up to {} diameters/frame", args.max_speed)),
+                KindArg::Gas => (Velocities::Maxwell { rms_speed: args.max_speed }, format!("equilibrium gas (rms speed {} diameters/frame", args.max_speed)),
+                KindArg::Stream => (
+                    Velocities::Stream { speed: args.max_speed, spread: args.spread.to_radians() },
+                    format!("stream ({} diameters/frame within {} degrees of +x", args.max_speed, args.spread),
+                ),
+                KindArg::HeavyTail => (
+                    Velocities::HeavyTail { median_speed: args.max_speed, tail_index: 1.5 },
+                    format!("heavy-tailed speeds (median {} diameters/frame, tail index 1.5", args.max_speed),
+                ),
+            };
+            let generated = GeneratedScene { bodies: args.bodies, packing_fraction: args.packing, velocities, radius: 0.5, seed: args.seed };
+            let reference = reference_method(args, generated.bodies, config.method);
             // Only a valid scene's size is worth checking: the core names bad parameters better.
-            if paper.bodies <= MAX_SCENE_BODIES {
-                check_memory(paper.bodies, reference)?;
+            if generated.bodies <= MAX_SCENE_BODIES {
+                check_memory(generated.bodies, reference)?;
             }
-            let source = format!("paper scene (seed {}, speeds up to {} diameters/frame)", args.seed, args.max_speed);
-            (paper.build().map_err(describe)?, source, reference)
+            let source = format!("{what}, seed {})", args.seed);
+            (generated.build().map_err(describe)?, source, reference)
         }
     };
     let world = scene.world(config).map_err(describe)?;

@@ -95,7 +95,11 @@ impl Ord for Event {
 /// ```
 #[derive(Debug, Default)]
 pub struct EventQueue {
+    /// Events pushed one at a time.
     heap: BinaryHeap<Event>,
+    /// Events predicted all at once (a window's start), sorted latest first and popped from the
+    /// end: one sort is cheaper than as many heap pushes, and most never move again.
+    bulk: Vec<Event>,
     /// The last event popped, to drop repeats of it.
     last: Option<Event>,
 }
@@ -106,21 +110,37 @@ impl EventQueue {
     pub fn push(&mut self, event: Event) {
         self.heap.push(event);
     }
-    /// Adds many predicted contacts at once (a heap rebuild when they outnumber the queue).
-    pub fn extend(&mut self, events: &mut Vec<Event>) {
-        self.heap.extend(events.drain(..));
+    /// Replaces the bulk part by `events` (left empty, its allocation kept for the caller), to be
+    /// popped in order with everything pushed.
+    pub fn set_bulk(&mut self, events: &mut Vec<Event>) {
+        std::mem::swap(&mut self.bulk, events);
+        events.clear();
+        // Ascending in `Ord`, which is reversed: the earliest event ends up last.
+        self.bulk.sort_unstable();
+    }
+    /// The earliest event (valid or not), from whichever part holds it.
+    #[inline]
+    fn peek(&self) -> Option<&Event> {
+        match (self.heap.peek(), self.bulk.last()) {
+            (Some(h), Some(b)) => Some(if h > b { h } else { b }),
+            (h, b) => h.or(b),
+        }
     }
     /// Time of the earliest event (valid or not).
     #[inline]
     pub fn peek_time(&self) -> Option<f64> {
-        self.heap.peek().map(|e| e.time)
+        self.peek().map(|e| e.time)
     }
     /// Removes and returns the earliest event (valid or not: the caller checks stamps), dropping
     /// repeats of the event popped before it.
     #[inline]
     pub fn pop(&mut self) -> Option<Event> {
         loop {
-            let event = self.heap.pop()?;
+            let from_heap = match (self.heap.peek(), self.bulk.last()) {
+                (Some(h), Some(b)) => h > b,
+                (h, _) => h.is_some(),
+            };
+            let event = if from_heap { self.heap.pop() } else { self.bulk.pop() }?;
             if self.last != Some(event) {
                 self.last = Some(event);
                 return Some(event);
@@ -130,19 +150,20 @@ impl EventQueue {
     /// Drops every event, keeping the allocation.
     pub fn clear(&mut self) {
         self.heap.clear();
+        self.bulk.clear();
         self.last = None;
     }
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        self.heap.capacity() * std::mem::size_of::<Event>()
+        (self.heap.capacity() + self.bulk.capacity()) * std::mem::size_of::<Event>()
     }
     /// Number of queued events, void ones included.
     pub fn len(&self) -> usize {
-        self.heap.len()
+        self.heap.len() + self.bulk.len()
     }
     /// True when no event is queued.
     pub fn is_empty(&self) -> bool {
-        self.heap.is_empty()
+        self.len() == 0
     }
 }
 

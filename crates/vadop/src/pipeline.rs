@@ -23,7 +23,7 @@ use crate::broad_phase::BroadPhase;
 use crate::collapse::{ContactRules, Rule};
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::narrow_phase::{direction, pair_contact_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE};
-use crate::proxy::ProxyTable;
+use crate::proxy::{ProxyTable, Reported};
 use crate::response::{pair_impulse, wall_bounce};
 use crate::window::Window;
 use crate::world::{BoxBounds, Contact, FrameStats, Mode, Touched};
@@ -34,8 +34,9 @@ use std::time::Instant;
 /// phase's mid-window entries then cost more than starting afresh.
 const UPDATES_PER_BODY: usize = 2;
 /// Windows last as long as the fastest tenth of the bodies takes to travel this many of their
-/// own diameters (then halved while windows keep ending early).
-const WINDOW_DIAMETERS: f64 = 1.0;
+/// own diameters (then halved while windows keep ending early): long enough to amortise a window's
+/// start over many events, short enough that paths stay a piece or two.
+const WINDOW_DIAMETERS: f64 = 2.0;
 /// A proxy reaches this many typical diameters along its path at most; then it is renewed, so a
 /// fast body's retest covers only where it can go before its next contact is likely.
 const REACH_DIAMETERS: f64 = 8.0;
@@ -221,13 +222,15 @@ impl<B: BroadPhase> Pipeline<B> {
         let mut predicted = std::mem::take(&mut self.predicted);
         let mut candidates = 0u64;
         let mut tests = 0u64;
-        self.broad.for_each_pair(&self.proxies, |i, j, window| {
+        let proxies = &self.proxies;
+        self.broad.for_each_pair(proxies, |a, b, window| {
             candidates += 1;
             tests += 1;
-            if let Some(event) = predict_pair(bodies, i, j, window) {
+            if let Some(event) = predict_pair(a, b, window) {
                 predicted.push(event);
             }
         });
+        
         for i in 0..bodies.slots() {
             if self.proxies.live[i] {
                 if let Some(event) = predict_wall(bodies, &physics.bounds, i as u32, self.window) {
@@ -238,7 +241,9 @@ impl<B: BroadPhase> Pipeline<B> {
                 }
             }
         }
-        self.queue.extend(&mut predicted);
+        
+        self.queue.set_bulk(&mut predicted);
+        
         self.predicted = predicted;
         stats.candidate_pairs += candidates;
         stats.narrow_tests += tests;
@@ -375,7 +380,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 touches_max[axis] |= pm[axis] + rm >= physics.bounds.max[axis] - slack;
             }
             near.clear();
-            self.broad.query(m as u32, &self.proxies, None, |o, _| near.push(o));
+            self.broad.query(m as u32, &self.proxies, None, |o, _| near.push(o.body));
             for &o in &near {
                 let o = o as usize;
                 if self.cluster_mark[o] == self.cluster_epoch {
@@ -415,11 +420,12 @@ impl<B: BroadPhase> Pipeline<B> {
         self.updates += 1;
         stats.retests += 1;
         let window = self.window.from(t);
-        let queue = &mut self.queue;
+        let (queue, proxies) = (&mut self.queue, &self.proxies);
         let mut tests = 0u64;
-        self.broad.update(body, &self.proxies, skip, |other, bounds_window| {
+        let own = proxies.reported(body as usize);
+        self.broad.update(body, proxies, skip, |other, bounds_window| {
             tests += 1;
-            if let Some(event) = predict_pair(bodies, body, other, bounds_window.intersect(window)) {
+            if let Some(event) = predict_pair(own, other, bounds_window.intersect(window)) {
                 queue.push(event);
             }
         });
@@ -433,18 +439,21 @@ impl<B: BroadPhase> Pipeline<B> {
     }
 }
 
-/// The contact of bodies `i` and `j` if its canonical time lies in `window`.
+/// The contact of two reported bodies if its canonical time lies in `window`, from the motions
+/// the broad phase reported (the bodies' own), stamped with the stamps of the proxies they came
+/// from: a prediction made from a proxy not yet refreshed after a velocity change is void when
+/// it pops.
 #[inline]
-fn predict_pair(bodies: &Bodies, i: u32, j: u32, window: Window) -> Option<Event> {
+fn predict_pair(x: Reported, y: Reported, window: Window) -> Option<Event> {
     // Always the lower id first, so every method does bit-identical arithmetic for a pair.
-    let (a, b) = if i < j { (i as usize, j as usize) } else { (j as usize, i as usize) };
-    let time = pair_contact_time(&bodies.motion(a), &bodies.motion(b), bodies.radius[a] + bodies.radius[b])?;
-    window.contains(time).then(|| Event {
+    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
+    let time = pair_contact_time(&a.proxy.motion, &b.proxy.motion, a.proxy.radius + b.proxy.radius)?;
+    window.contains(time).then_some(Event {
         time,
-        body: a as u32,
-        partner: Partner::Body(b as u32),
-        body_stamp: bodies.stamp[a],
-        partner_stamp: bodies.stamp[b],
+        body: a.body,
+        partner: Partner::Body(b.body),
+        body_stamp: a.stamp,
+        partner_stamp: b.stamp,
     })
 }
 

@@ -6,11 +6,13 @@
 //! changes and it gets a fresh proxy) or has travelled its `reach` (then the pipeline renews the
 //! proxy at its end), its bounding radius and its swept box. Ending at the wall keeps every path
 //! inside the box, and the reach keeps a fast body's proxy local, however fast it is: a body
-//! that will soon hit another never pays for the rest of its path. It is the only thing a broad phase reads,
-//! so broad phases know nothing of shapes: a body of any shape is bounded by the sphere about its
-//! centre that contains it. The table never decides what is a candidate and never moves a body;
-//! the pipeline refreshes every proxy at a window's start and a body's proxy when it changes
-//! velocity.
+//! that will soon hit another never pays for the rest of its path. It is the only thing a broad
+//! phase reads, so broad phases know nothing of shapes: a body of any shape is bounded by the
+//! sphere about its centre that contains it. The motion is the body's own (its position at its last
+//! velocity change), one cache line per body, so the narrow phase reads a candidate pair's
+//! inputs from here with two memory accesses and gets the same bits as from the bodies. The table
+//! never decides what is a candidate and never moves a body; the pipeline refreshes every proxy at
+//! a window's start and a body's proxy when it changes velocity.
 
 use crate::bodies::Bodies;
 use crate::narrow_phase::{wall_contact_time, Motion};
@@ -20,6 +22,32 @@ use glam::DVec3;
 /// Relative padding of swept boxes, far above the rounding of a position update, so a box always
 /// holds its body whichever instant the body's position is computed from.
 pub const RELATIVE_PADDING: f64 = 1e-12;
+
+/// What the narrow phase needs of a body, in one cache line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(64))]
+pub struct Proxy {
+    /// The body's straight motion since its last velocity change.
+    pub motion: Motion,
+    /// Radius of the sphere about the centre that holds the whole body.
+    pub radius: f64,
+}
+
+impl Default for Proxy {
+    fn default() -> Self {
+        Proxy { motion: Motion { position: DVec3::ZERO, since: 0.0, velocity: DVec3::ZERO }, radius: 0.0 }
+    }
+}
+
+/// A body as a broad phase reports it: its id, the stamp of the proxy the report comes from, and
+/// the motion that proxy holds. A broad phase may keep its own copy of the motion next to its
+/// other data, so the narrow phase reads it without a trip to memory.
+#[derive(Debug, Clone, Copy)]
+pub struct Reported<'a> {
+    pub body: u32,
+    pub stamp: u32,
+    pub proxy: &'a Proxy,
+}
 
 /// Flat table of proxies.
 #[derive(Debug, Default, Clone)]
@@ -33,11 +61,8 @@ pub struct ProxyTable {
     reach: f64,
     /// Median bounding radius of the live bodies at the window's start.
     typical_radius: f64,
-    /// Centre of the body at `start`.
-    pub origin: Vec<DVec3>,
-    pub velocity: Vec<DVec3>,
-    /// Radius of the sphere about the centre that holds the whole body.
-    pub radius: Vec<f64>,
+    /// Motion and bounding radius of each body.
+    pub proxies: Vec<Proxy>,
     /// The proxy bounds its body over `[start, end)`.
     pub start: Vec<f64>,
     pub end: Vec<f64>,
@@ -100,8 +125,32 @@ impl ProxyTable {
 
     /// The body's motion as the proxy holds it.
     #[inline]
-    pub fn motion(&self, i: usize) -> Motion {
-        Motion { position: self.origin[i], since: self.start[i], velocity: self.velocity[i] }
+    pub fn motion(&self, i: usize) -> &Motion {
+        &self.proxies[i].motion
+    }
+
+    /// Body `i` as a broad phase reports it from this table.
+    #[inline]
+    pub fn reported(&self, i: usize) -> Reported<'_> {
+        Reported { body: i as u32, stamp: self.stamp[i], proxy: &self.proxies[i] }
+    }
+
+    /// Bounding radius of body `i`.
+    #[inline]
+    pub fn radius(&self, i: usize) -> f64 {
+        self.proxies[i].radius
+    }
+
+    /// Velocity of body `i`.
+    #[inline]
+    pub fn velocity(&self, i: usize) -> DVec3 {
+        self.proxies[i].motion.velocity
+    }
+
+    /// Centre of body `i` at its proxy's start.
+    #[inline]
+    pub fn origin(&self, i: usize) -> DVec3 {
+        self.proxies[i].motion.at(self.start[i])
     }
 
     /// True when the proxies of `i` and `j` have overlapping swept boxes.
@@ -156,12 +205,13 @@ impl ProxyTable {
     #[inline]
     fn refresh(&mut self, i: usize, bodies: &Bodies, t: f64) {
         let start = t.max(self.window.start);
-        let origin = bodies.position_at(i, start);
-        let velocity = bodies.velocity[i];
+        let motion = bodies.motion(i);
+        let origin = motion.at(start);
+        let velocity = motion.velocity;
         let radius = bodies.bounding_radius(i);
         // Up to and including the wall contact: a pair touching at that very instant is still
         // found with the motion before the bounce, whichever of the two events comes first.
-        let mut end = match wall_contact_time(&bodies.motion(i), radius, self.box_min, self.box_max) {
+        let mut end = match wall_contact_time(&motion, radius, self.box_min, self.box_max) {
             Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
@@ -171,9 +221,7 @@ impl ProxyTable {
             end = reached;
         }
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
-        self.origin[i] = origin;
-        self.velocity[i] = velocity;
-        self.radius[i] = radius;
+        self.proxies[i] = Proxy { motion, radius };
         self.start[i] = start;
         self.end[i] = end;
         self.low[i] = low;
@@ -183,9 +231,7 @@ impl ProxyTable {
 
     fn resize(&mut self, slots: usize) {
         if self.live.len() < slots {
-            self.origin.resize(slots, DVec3::ZERO);
-            self.velocity.resize(slots, DVec3::ZERO);
-            self.radius.resize(slots, 0.0);
+            self.proxies.resize(slots, Proxy::default());
             self.start.resize(slots, 0.0);
             self.end.resize(slots, 0.0);
             self.low.resize(slots, DVec3::ZERO);
@@ -198,6 +244,6 @@ impl ProxyTable {
 
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        self.live.capacity() * (4 * 24 + 4 * 8 + 4 + 2) + self.radii.capacity() * 8
+        self.proxies.capacity() * std::mem::size_of::<Proxy>() + self.live.capacity() * (2 * 24 + 2 * 8 + 4 + 2) + self.radii.capacity() * 8
     }
 }

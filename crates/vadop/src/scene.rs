@@ -1,6 +1,7 @@
 //! Scenes: the paper's test scene (spheres in a cube at a given packing fraction, random
-//! directions, speeds up to a maximum in diameters per frame, 30 frames per second) and the scene
-//! file format.
+//! directions, speeds up to a maximum in diameters per frame, 30 frames per second), the same
+//! placement with other velocities (an equilibrium gas, a stream, heavy-tailed speeds), and the
+//! scene file format.
 //!
 //! It owns scene generation, which is seeded and deterministic, and reading and writing scene
 //! files. It never steps anything. Generated spheres never overlap: centres sit on a jittered
@@ -30,6 +31,112 @@ pub const FRAMES_PER_SECOND: f64 = 30.0;
 pub struct Scene {
     pub bounds: BoxBounds,
     pub spheres: Vec<Sphere>,
+}
+
+/// How a generated scene's velocities are drawn. Speeds are in diameters per frame at
+/// [`FRAMES_PER_SECOND`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Velocities {
+    /// The paper's: random directions, speeds uniform in `[0, max_speed]`.
+    Uniform { max_speed: f64 },
+    /// An equilibrium gas: Maxwell–Boltzmann velocities (each component normal) with this
+    /// root-mean-square speed, total momentum zero.
+    Maxwell { rms_speed: f64 },
+    /// A stream, as bullets, rain or a particle beam: every body at `speed`, its direction within
+    /// `spread` radians of +x.
+    Stream { speed: f64, spread: f64 },
+    /// Heavy-tailed: random directions, Pareto speeds with this median and tail index (smaller
+    /// is heavier: at 1.5 one body in a hundred is 20 times faster than the median).
+    HeavyTail { median_speed: f64, tail_index: f64 },
+}
+
+impl Velocities {
+    /// Checks the parameters.
+    fn check(&self) -> Result<()> {
+        let bad = |what: &str, value: f64| Err(VadopError::Scene(format!("{what} must be finite and >= 0, got {value}")));
+        match *self {
+            Velocities::Uniform { max_speed } if !(max_speed.is_finite() && max_speed >= 0.0) => bad("max speed", max_speed),
+            Velocities::Maxwell { rms_speed } if !(rms_speed.is_finite() && rms_speed >= 0.0) => bad("rms speed", rms_speed),
+            Velocities::Stream { speed, spread } if !(speed.is_finite() && speed >= 0.0) || !(0.0..=std::f64::consts::PI).contains(&spread) => {
+                Err(VadopError::Scene(format!("a stream needs a finite speed >= 0 and a spread in [0, pi], got {speed} and {spread}")))
+            }
+            Velocities::HeavyTail { median_speed, tail_index }
+                if !(median_speed.is_finite() && median_speed >= 0.0) || !(tail_index.is_finite() && tail_index >= 1.0) =>
+            {
+                Err(VadopError::Scene(format!("heavy-tailed speeds need a finite median >= 0 and a tail index >= 1, got {median_speed} and {tail_index}")))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// One velocity, in diameters per frame.
+    fn draw(&self, rng: &mut ChaCha8Rng) -> DVec3 {
+        match *self {
+            Velocities::Uniform { max_speed } => random_direction(rng) * rng.random_range(0.0..=1.0) * max_speed,
+            Velocities::Maxwell { rms_speed } => {
+                let sigma = rms_speed / 3f64.sqrt();
+                DVec3::new(normal(rng), normal(rng), normal(rng)) * sigma
+            }
+            Velocities::Stream { speed, spread } => {
+                // Uniform over the cap of half-angle `spread` around +x.
+                let cos = 1.0 - rng.random_range(0.0..=1.0) * (1.0 - spread.cos());
+                let sin = (1.0 - cos * cos).max(0.0).sqrt();
+                let angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+                DVec3::new(cos, sin * angle.cos(), sin * angle.sin()) * speed
+            }
+            Velocities::HeavyTail { median_speed, tail_index } => {
+                // Pareto with P(s > x) = (m / x)^a for x >= m, m set so the median is `median_speed`.
+                let scale = median_speed / 2f64.powf(1.0 / tail_index);
+                let u: f64 = rng.random_range(f64::EPSILON..=1.0);
+                random_direction(rng) * scale / u.powf(1.0 / tail_index)
+            }
+        }
+    }
+}
+
+/// A standard normal number (Box–Muller).
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u: f64 = rng.random_range(f64::EPSILON..=1.0);
+    let angle: f64 = rng.random_range(0.0..std::f64::consts::TAU);
+    (-2.0 * u.ln()).sqrt() * angle.cos()
+}
+
+/// The paper's placement with any velocities: `bodies` spheres of `radius` at `packing_fraction`
+/// in a cube, velocities drawn from `velocities`, generated from `seed`.
+///
+/// ```
+/// use vadop::scene::{GeneratedScene, Velocities};
+/// // An equilibrium gas: rms travel of 0.2 diameters a frame, no net momentum.
+/// let gas = GeneratedScene { bodies: 1000, packing_fraction: 0.3, velocities: Velocities::Maxwell { rms_speed: 0.2 }, radius: 0.5, seed: 1 };
+/// let scene = gas.build().unwrap();
+/// let momentum: glam::DVec3 = scene.spheres.iter().map(|s| s.velocity * s.mass).sum();
+/// assert!(momentum.length() < 1e-9);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct GeneratedScene {
+    pub bodies: usize,
+    pub packing_fraction: f64,
+    pub velocities: Velocities,
+    pub radius: f64,
+    pub seed: u64,
+}
+
+impl GeneratedScene {
+    /// Generates the scene.
+    pub fn build(&self) -> Result<Scene> {
+        self.velocities.check()?;
+        let paper = PaperScene { bodies: self.bodies, packing_fraction: self.packing_fraction, max_speed: 0.0, radius: self.radius, seed: self.seed };
+        let mut scene = paper.place(|rng| self.velocities.draw(rng))?;
+        if let Velocities::Maxwell { .. } = self.velocities {
+            // An equilibrium gas at rest as a whole.
+            let mass: f64 = scene.spheres.iter().map(|s| s.mass).sum();
+            let drift = scene.spheres.iter().map(|s| s.mass * s.velocity).sum::<DVec3>() / mass;
+            for s in &mut scene.spheres {
+                s.velocity -= drift;
+            }
+        }
+        Ok(scene)
+    }
 }
 
 /// Parameters of the paper's scene.
@@ -70,6 +177,16 @@ impl PaperScene {
     /// assert!(fastest <= 0.5 * 1.0 * 30.0);
     /// ```
     pub fn build(&self) -> Result<Scene> {
+        if !(self.max_speed.is_finite() && self.max_speed >= 0.0) {
+            return Err(VadopError::Scene(format!("max speed must be finite and >= 0, got {}", self.max_speed)));
+        }
+        let velocities = Velocities::Uniform { max_speed: self.max_speed };
+        self.place(|rng| velocities.draw(rng))
+    }
+
+    /// The placement of this scene's spheres, with velocities in diameters per frame from
+    /// `velocity`.
+    fn place(&self, mut velocity: impl FnMut(&mut ChaCha8Rng) -> DVec3) -> Result<Scene> {
         if self.bodies == 0 {
             return Err(VadopError::Scene("a scene needs at least one sphere".into()));
         }
@@ -78,9 +195,6 @@ impl PaperScene {
         }
         if !(self.packing_fraction > 0.0 && self.packing_fraction <= 0.6) {
             return Err(VadopError::Scene(format!("packing fraction must be in (0, 0.6], got {}", self.packing_fraction)));
-        }
-        if !(self.max_speed.is_finite() && self.max_speed >= 0.0) {
-            return Err(VadopError::Scene(format!("max speed must be finite and >= 0, got {}", self.max_speed)));
         }
         if !(self.radius.is_finite() && self.radius > 0.0) {
             return Err(VadopError::BadRadius(self.radius));
@@ -125,7 +239,7 @@ impl PaperScene {
                     rng.random_range(-1.0..=1.0),
                 ) * jitter;
                 let position = (lattice + offset).clamp(DVec3::splat(low), DVec3::splat(high));
-                let velocity = random_direction(&mut rng) * rng.random_range(0.0..=1.0) * self.max_speed * speed_unit;
+                let velocity = velocity(&mut rng) * speed_unit;
                 Sphere { position, velocity, radius: self.radius, mass }
             })
             .collect();

@@ -4,7 +4,7 @@
 //! other broad phase's contacts with the ones found through it.
 
 use super::{BroadPhase, PrepareCounts};
-use crate::proxy::ProxyTable;
+use crate::proxy::{ProxyTable, Reported};
 use crate::window::Window;
 
 /// All pairs.
@@ -20,23 +20,24 @@ impl BroadPhase for BruteForce {
         PrepareCounts { moves: 0, entries: self.live.len() as u64 }
     }
 
-    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(u32, u32, Window)) {
+    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
         for (k, &i) in self.live.iter().enumerate() {
             for &j in &self.live[k + 1..] {
-                report(i, j, proxies.window_of(i as usize).intersect(proxies.window_of(j as usize)));
+                let (i, j) = (i as usize, j as usize);
+                report(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)));
             }
         }
     }
 
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window)) {
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
     }
 
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(u32, Window)) {
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let window = proxies.window_of(body as usize);
         for other in 0..proxies.slots() as u32 {
             if other != body && Some(other) != skip && proxies.live[other as usize] {
-                report(other, window.intersect(proxies.window_of(other as usize)));
+                report(proxies.reported(other as usize), window.intersect(proxies.window_of(other as usize)));
             }
         }
     }

@@ -8,18 +8,22 @@
 //! sized to the typical body), into the cell holding its low corner, found by index: no hashing.
 //! Two overlapping boxes of one level then lie in the same or adjacent cells, so the window's
 //! pairs come from each cell against itself and 13 of its neighbours, and from each piece against
-//! the few cells of coarser levels that can hold an overlapping box. A body that changes velocity
-//! mid-window gets fresh pieces on per-cell linked lists, and its query visits only the cells its
-//! new path can reach. It never reads shapes or computes contact times.
+//! the few cells of coarser levels that can hold an overlapping box. Boxes are kept in single
+//! precision relative to the grid's origin, rounded outwards, so they stay conservative while a
+//! cell's pieces fit a few cache lines, and each piece's motion is copied beside it in cell order:
+//! a candidate pair reaches the narrow phase without a trip to memory. A body that changes velocity mid-window gets fresh pieces
+//! on per-cell linked lists, and its query visits only the cells its new path can reach. It never
+//! reads shapes or computes contact times.
 
 use super::{BroadPhase, PrepareCounts};
-use crate::proxy::{swept_box, ProxyTable};
+use crate::proxy::{swept_box, Proxy, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
 
-/// Base cells are this many typical diameters wide: a path moving less than one diameter more
-/// stays in one piece.
-const BASE_CELL_DIAMETERS: f64 = 2.0;
+/// Base cells are this many times the median swept-box extent of the window's proxies (and at
+/// least two typical diameters): small enough that a query in a dense gas meets few bodies, large
+/// enough that a typical path stays one piece.
+const BASE_CELL_EXTENTS: f64 = 1.5;
 /// A level holds at most this many cells per piece (and at least [`MIN_CELLS`]), so memory stays
 /// linear in the bodies however sparse the scene.
 const CELLS_PER_PIECE: f64 = 2.0;
@@ -29,60 +33,91 @@ const MAX_CELLS_PER_AXIS: f64 = (1u32 << 20) as f64;
 /// End of a late list.
 const NONE: u32 = u32::MAX;
 
-/// A stretch of one body's path: the body is inside `[low, high]` over `[start, end)`.
-#[derive(Debug, Clone, Copy)]
-struct Piece {
-    low: DVec3,
-    high: DVec3,
-    start: f64,
-    end: f64,
+/// A stretch of one body's path: the body is inside the box over its window. The box is relative
+/// to the grid's origin, in single precision rounded outwards.
+#[derive(Debug, Clone, Copy, Default)]
+struct Entry {
+    low: [f32; 3],
+    high: [f32; 3],
     body: u32,
     stamp: u32,
 }
 
-impl Piece {
+impl Entry {
     #[inline]
-    fn overlaps(&self, other: &Piece) -> bool {
-        self.low.cmple(other.high).all() && other.low.cmple(self.high).all()
+    fn new(low: DVec3, high: DVec3, origin: DVec3, body: u32, stamp: u32) -> Entry {
+        let (low, high) = (low - origin, high - origin);
+        Entry {
+            low: [down(low.x), down(low.y), down(low.z)],
+            high: [up(high.x), up(high.y), up(high.z)],
+            body,
+            stamp,
+        }
     }
+
+    /// Branch-free box overlap test.
     #[inline]
-    fn extent(&self) -> f64 {
-        (self.high - self.low).max_element()
-    }
-    #[inline]
-    fn window(&self) -> Window {
-        Window::new(self.start, self.end)
+    fn overlaps(&self, other: &Entry) -> bool {
+        (self.low[0] <= other.high[0])
+            & (other.low[0] <= self.high[0])
+            & (self.low[1] <= other.high[1])
+            & (other.low[1] <= self.high[1])
+            & (self.low[2] <= other.high[2])
+            & (other.low[2] <= self.high[2])
     }
 }
 
+/// `x` in single precision, rounded down (up): the box only ever grows.
+#[inline]
+fn down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x { f.next_down() } else { f }
+}
+#[inline]
+fn up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
+}
+
 /// One level of the hierarchy: cubic cells of one size.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 struct Level {
     /// log2 of the nominal cell size in base cells.
     exponent: i32,
     cell: f64,
     inverse: f64,
     dims: [usize; 3],
-    /// Binned pieces of cell c: `binned[first + cell_start[c]..first + cell_start[c + 1]]`.
+    /// Binned pieces of cell c: `entries[first + cell_start[c]..first + cell_start[c + 1]]`.
     first: usize,
     cell_start: Vec<u32>,
     /// Head of each cell's list of late pieces in `Grid::late`.
     late_head: Vec<u32>,
+    /// Pieces binned into this level at the window's start.
+    count: usize,
 }
 
 impl Level {
-    fn new(exponent: i32, base_cell: f64, pieces: usize, extent: DVec3) -> Level {
+    /// Sizes the level for `pieces` pieces in a box of `extent`, reusing its storage.
+    fn reset(&mut self, exponent: i32, base_cell: f64, pieces: usize, extent: DVec3) {
         let nominal = base_cell * 2f64.powi(exponent);
         let most_cells = (CELLS_PER_PIECE * pieces as f64).max(MIN_CELLS);
         let cell = nominal.max((extent.x * extent.y * extent.z / most_cells).cbrt()).max(extent.max_element() / MAX_CELLS_PER_AXIS);
-        let dims = [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1));
-        let cells = dims.iter().product::<usize>();
-        Level { exponent, cell, inverse: 1.0 / cell, dims, first: 0, cell_start: vec![0; cells + 1], late_head: vec![NONE; cells] }
+        self.exponent = exponent;
+        self.cell = cell;
+        self.inverse = 1.0 / cell;
+        self.dims = [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1));
+        let cells = self.dims.iter().product::<usize>();
+        self.cell_start.clear();
+        self.cell_start.resize(cells + 1, 0);
+        self.late_head.clear();
+        self.late_head.resize(cells, NONE);
+        self.count = 0;
     }
 
     #[inline]
     fn coordinate(&self, value: f64, axis: usize) -> usize {
-        (value * self.inverse).floor().clamp(0.0, (self.dims[axis] - 1) as f64) as usize
+        // Truncation is the floor of a non-negative value; `as` saturates huge ones (and NaN to 0).
+        ((value * self.inverse).max(0.0) as usize).min(self.dims[axis] - 1)
     }
 
     /// Cell coordinates of a point given relative to the grid origin.
@@ -105,6 +140,12 @@ impl Level {
         let [_, ny, nz] = self.dims;
         (a[0]..=b[0]).flat_map(move |x| (a[1]..=b[1]).flat_map(move |y| ((x * ny + y) * nz + a[2])..=((x * ny + y) * nz + b[2])))
     }
+
+    /// The binned pieces of cell `c`, as a range of `Grid::entries`.
+    #[inline]
+    fn run(&self, c: usize) -> std::ops::Range<usize> {
+        self.first + self.cell_start[c] as usize..self.first + self.cell_start[c + 1] as usize
+    }
 }
 
 /// The grid broad phase.
@@ -113,15 +154,25 @@ pub struct Grid {
     origin: DVec3,
     extent: DVec3,
     base_cell: f64,
-    /// Ascending by exponent.
+    /// Levels in use, ascending by exponent; `spare` keeps the storage of unused ones.
     levels: Vec<Level>,
-    /// This window's pieces, by level then cell.
-    binned: Vec<Piece>,
-    /// Pieces entered mid-window, chained per cell.
-    late: Vec<(Piece, u32)>,
-    /// Scratch: pieces with their (level, cell) before binning; one body's pieces.
-    unsorted: Vec<(u32, u32, Piece)>,
-    pieces: Vec<Piece>,
+    spare: Vec<Level>,
+    /// This window's pieces, by level then cell, with the window and the motion of each.
+    entries: Vec<Entry>,
+    windows: Vec<Window>,
+    motions: Vec<Proxy>,
+    /// Pieces entered mid-window, chained per cell: the piece, its window, the next in the chain.
+    late: Vec<(Entry, Window, u32)>,
+    late_motions: Vec<Proxy>,
+    /// Scratch: each body's piece count, level and (for a single piece) cell; pieces per level
+    /// exponent; one body's pieces.
+    plan: Vec<(u32, u32, u32)>,
+    per_exponent: Vec<(i32, usize)>,
+    extents: Vec<f64>,
+    /// Each body's binned slot when its path is one piece: a fresh piece in the same cell
+    /// replaces it there instead of joining a late list.
+    home: Vec<u32>,
+    pieces: Vec<(DVec3, DVec3, Window)>,
 }
 
 impl Grid {
@@ -132,9 +183,16 @@ impl Grid {
             extent: (max - min).max(DVec3::splat(f64::MIN_POSITIVE)),
             base_cell: 1.0,
             levels: Vec::new(),
-            binned: Vec::new(),
+            spare: Vec::new(),
+            entries: Vec::new(),
+            windows: Vec::new(),
+            motions: Vec::new(),
             late: Vec::new(),
-            unsorted: Vec::new(),
+            late_motions: Vec::new(),
+            plan: Vec::new(),
+            per_exponent: Vec::new(),
+            extents: Vec::new(),
+            home: Vec::new(),
             pieces: Vec::new(),
         }
     }
@@ -147,204 +205,298 @@ impl Grid {
         (self.base_cell - 2.0 * radius).max(2.0 * radius) * (1.0 - 1e-6)
     }
 
-    /// Calls `f` with every piece of proxy `i`.
+    /// How many pieces proxy `i` is cut into, and the exponent of the level they all fit.
     #[inline]
-    fn for_each_piece(&self, proxies: &ProxyTable, i: usize, mut f: impl FnMut(Piece)) {
+    fn plan_pieces(&self, proxies: &ProxyTable, i: usize) -> (u32, i32) {
+        let radius = proxies.radius(i);
+        let limit = self.piece_length(radius);
+        let length = proxies.velocity(i).length() * proxies.window_of(i).duration();
+        let count = (length / limit).ceil().clamp(1.0, u32::MAX as f64) as u32;
+        // The largest piece box: the diameter plus the longest stretch, with the padding.
+        let extent = (2.0 * radius + length.min(limit)) * (1.0 + 4.0 * crate::proxy::RELATIVE_PADDING)
+            + 4.0 * crate::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element();
+        (count, self.exponent_for(extent))
+    }
+
+    /// Calls `f` with the box and window of every piece of proxy `i`, cut into `count` pieces.
+    #[inline]
+    fn for_each_piece(proxies: &ProxyTable, i: usize, count: u32, mut f: impl FnMut(DVec3, DVec3, Window)) {
         let window = proxies.window_of(i);
-        let (origin, velocity, radius) = (proxies.origin[i], proxies.velocity[i], proxies.radius[i]);
-        let length = velocity.length() * window.duration();
-        let count = (length / self.piece_length(radius)).ceil().clamp(1.0, u32::MAX as f64) as u32;
-        let stamp = proxies.stamp[i];
         if count == 1 {
-            let (low, high) = (proxies.low[i], proxies.high[i]);
-            f(Piece { low, high, start: window.start, end: window.end, body: i as u32, stamp });
+            f(proxies.low[i], proxies.high[i], window);
             return;
         }
+        let (origin, velocity, radius) = (proxies.origin(i), proxies.velocity(i), proxies.radius(i));
         let step = window.duration() / count as f64;
-        let mut from = origin;
-        let mut start = window.start;
+        let (mut from, mut start) = (origin, window.start);
         for k in 1..=count {
             let end = if k == count { window.end } else { window.start + step * k as f64 };
             let to = origin + velocity * (end - window.start);
             let (low, high) = swept_box(from, to, radius);
-            f(Piece { low, high, start, end, body: i as u32, stamp });
+            f(low, high, Window::new(start, end));
             (from, start) = (to, end);
         }
     }
 
-    /// The exponent of the level whose cells hold a box of `extent`.
+    /// The exponent of the level whose nominal cells hold a box of `extent`.
     #[inline]
     fn exponent_for(&self, extent: f64) -> i32 {
         let mut exponent = 0;
         let mut cell = self.base_cell;
-        while cell < extent {
+        while cell < extent && exponent < 1100 {
             cell *= 2.0;
             exponent += 1;
         }
         exponent
     }
 
-    /// The level for a piece: the one of its exponent, or the closest coarser one (coarsened
-    /// cells are never smaller than nominal ones), created when the piece is larger than all.
-    fn level_for(&mut self, piece: &Piece) -> usize {
-        let exponent = self.exponent_for(piece.extent());
-        if let Some(k) = self.levels.iter().position(|l| l.exponent >= exponent && l.cell >= piece.extent()) {
+    /// The level for pieces of `exponent`: the one of that exponent or the next coarser (cells
+    /// are never smaller than nominal), created when the pieces are larger than all.
+    fn level_for(&mut self, exponent: i32) -> usize {
+        if let Some(k) = self.levels.iter().position(|l| l.exponent >= exponent) {
             return k;
         }
-        let first = self.binned.len();
-        let mut level = Level::new(exponent, self.base_cell, 1, self.extent);
-        level.first = first;
+        let mut level = self.spare.pop().unwrap_or_default();
+        level.reset(exponent, self.base_cell, 1, self.extent);
+        level.first = self.entries.len();
         self.levels.push(level);
         self.levels.len() - 1
     }
 
-    /// Calls `visit(piece)` for every binned piece in the cells of `level` that can hold the low
-    /// corner of a box of that level overlapping `[low, high]`.
+    /// Calls `visit(entry, window, motion)` for every current piece, binned or late, of level `k`
+    /// whose box overlaps `query` (absolute corners `low`, `high`), unlinking the stale late
+    /// pieces it passes, so a busy cell's list stays short.
     #[inline]
-    fn for_each_binned_near(&self, level: &Level, low: DVec3, high: DVec3, mut visit: impl FnMut(&Piece)) {
-        for c in level.cells_near(low - self.origin, high - self.origin) {
-            let run = level.first + level.cell_start[c] as usize..level.first + level.cell_start[c + 1] as usize;
-            self.binned[run].iter().for_each(&mut visit);
-        }
-    }
-
-    /// Calls `visit(piece)` for every current piece, binned or late, near `[low, high]` in level
-    /// `k`, unlinking the stale late pieces it passes, so a busy cell's list stays short.
-    #[inline]
-    fn for_each_current_near(&mut self, k: usize, low: DVec3, high: DVec3, proxies: &ProxyTable, mut visit: impl FnMut(&Piece)) {
-        let Grid { levels, late, binned, origin, .. } = self;
+    fn for_each_overlapping(&mut self, k: usize, query: &Entry, low: DVec3, high: DVec3, proxies: &ProxyTable, mut visit: impl FnMut(&Entry, Window, &Proxy)) {
+        let Grid { levels, late, late_motions, entries, windows, motions, origin, .. } = self;
         let level = &mut levels[k];
-        for c in level.cells_near(low - *origin, high - *origin) {
-            let run = level.first + level.cell_start[c] as usize..level.first + level.cell_start[c + 1] as usize;
-            for piece in &binned[run] {
-                if proxies.is_current(piece.body as usize, piece.stamp) {
-                    visit(piece);
+        let a = level.coordinates(low - *origin - level.cell);
+        let b = level.coordinates(high - *origin);
+        let [_, ny, nz] = level.dims;
+        for x in a[0]..=b[0] {
+            for y in a[1]..=b[1] {
+                let column = (x * ny + y) * nz;
+                // The binned pieces of cells z = a..=b of a column are one run.
+                let run = level.first + level.cell_start[column + a[2]] as usize..level.first + level.cell_start[column + b[2] + 1] as usize;
+                for e in run {
+                    let entry = &entries[e];
+                    if query.overlaps(entry) && proxies.is_current(entry.body as usize, entry.stamp) {
+                        visit(entry, windows[e], &motions[e]);
+                    }
+                }
+                for c in column + a[2]..=column + b[2] {
+                    let (mut previous, mut current) = (NONE, level.late_head[c]);
+                    while current != NONE {
+                        let (entry, window, next) = late[current as usize];
+                        if proxies.is_current(entry.body as usize, entry.stamp) {
+                            if query.overlaps(&entry) {
+                                visit(&entry, window, &late_motions[current as usize]);
+                            }
+                            previous = current;
+                        } else if previous == NONE {
+                            level.late_head[c] = next;
+                        } else {
+                            late[previous as usize].2 = next;
+                        }
+                        current = next;
+                    }
                 }
             }
-            let (mut previous, mut current) = (NONE, level.late_head[c]);
-            while current != NONE {
-                let (piece, next) = late[current as usize];
-                if proxies.is_current(piece.body as usize, piece.stamp) {
-                    visit(&piece);
-                    previous = current;
-                } else if previous == NONE {
-                    level.late_head[c] = next;
-                } else {
-                    late[previous as usize].1 = next;
-                }
-                current = next;
-            }
-        }
-    }
-}
-
-/// Reports the pair of two overlapping pieces of different bodies, with their common window.
-#[inline]
-fn report_pair(a: &Piece, b: &Piece, report: &mut impl FnMut(u32, u32, Window)) {
-    if a.body != b.body && a.overlaps(b) {
-        let window = a.window().intersect(b.window());
-        if !window.is_empty() {
-            report(a.body.min(b.body), a.body.max(b.body), window);
         }
     }
 }
 
 impl BroadPhase for Grid {
     fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
-        // Base cell from the median bounding diameter: robust to a few giant or tiny bodies.
-        if proxies.typical_radius() > 0.0 {
-            self.base_cell = 2.0 * BASE_CELL_DIAMETERS * proxies.typical_radius();
+        // Base cell from the median extent of the swept boxes: robust to a few giant, tiny or
+        // fast bodies.
+        let mut extents = std::mem::take(&mut self.extents);
+        extents.clear();
+        extents.extend((0..proxies.slots()).filter(|&i| proxies.live[i]).map(|i| (proxies.high[i] - proxies.low[i]).max_element()));
+        if !extents.is_empty() {
+            let middle = extents.len() / 2;
+            let median = *extents.select_nth_unstable_by(middle, f64::total_cmp).1;
+            self.base_cell = (BASE_CELL_EXTENTS * median).max(4.0 * proxies.typical_radius());
         }
-        // Pieces of every live proxy, with their level exponent.
-        let mut unsorted = std::mem::take(&mut self.unsorted);
-        unsorted.clear();
+        self.extents = extents;
+        // Pass 1: each body's piece count and level exponent, and the pieces per exponent.
+        let mut plan = std::mem::take(&mut self.plan);
+        plan.clear();
+        let mut per_exponent = std::mem::take(&mut self.per_exponent);
+        per_exponent.clear();
         for i in 0..proxies.slots() {
-            if proxies.live[i] {
-                self.for_each_piece(proxies, i, |piece| unsorted.push((self.exponent_for(piece.extent()) as u32, 0, piece)));
+            if !proxies.live[i] {
+                plan.push((0, 0, 0));
+                continue;
+            }
+            let (count, exponent) = self.plan_pieces(proxies, i);
+            plan.push((count, exponent as u32, 0));
+            match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
+                Some((_, n)) => *n += count as usize,
+                None => per_exponent.push((exponent, count as usize)),
             }
         }
-        // Levels, each sized to its pieces; then bin by counting sort on (level, cell).
-        unsorted.sort_unstable_by_key(|&(exponent, _, _)| exponent);
-        self.levels.clear();
+        per_exponent.sort_unstable();
+        // Levels sized to their pieces, storage reused; each body's plan now names its level.
+        self.spare.append(&mut self.levels);
         let mut first = 0;
-        while first < unsorted.len() {
-            let exponent = unsorted[first].0;
-            let count = unsorted[first..].partition_point(|&(e, _, _)| e == exponent);
-            let mut level = Level::new(exponent as i32, self.base_cell, count, self.extent);
+        for &(exponent, count) in &per_exponent {
+            let mut level = self.spare.pop().unwrap_or_default();
+            level.reset(exponent, self.base_cell, count, self.extent);
             level.first = first;
-            for entry in &mut unsorted[first..first + count] {
-                let cell = level.index(level.coordinates(entry.2.low - self.origin));
-                entry.1 = cell as u32;
-                level.cell_start[cell + 1] += 1;
+            first += count;
+            self.levels.push(level);
+        }
+        for entry in &mut plan {
+            if entry.0 > 0 {
+                entry.1 = per_exponent.partition_point(|&(e, _)| e < entry.1 as i32) as u32;
             }
-            for c in 0..level.cell_start.len() - 1 {
+        }
+        // Pass 2: count the pieces of each cell; pass 3: scatter them (counting sort, no hashing).
+        // A single piece's cell is kept from pass 2; longer paths are cut again in pass 3.
+        let origin = self.origin;
+        for (i, plan) in plan.iter_mut().enumerate() {
+            let (count, k) = (plan.0, plan.1 as usize);
+            if count == 1 {
+                let level = &mut self.levels[k];
+                let c = level.index(level.coordinates(proxies.low[i] - origin));
+                level.cell_start[c + 1] += 1;
+                plan.2 = c as u32;
+            } else if count > 1 {
+                let level = &mut self.levels[k];
+                Grid::for_each_piece(proxies, i, count, |low, _, _| {
+                    let c = level.index(level.coordinates(low - origin));
+                    level.cell_start[c + 1] += 1;
+                });
+            }
+        }
+        for level in &mut self.levels {
+            for c in 0..level.late_head.len() {
                 level.cell_start[c + 1] += level.cell_start[c];
             }
-            self.levels.push(level);
-            first += count;
         }
-        self.binned.clear();
-        self.binned.resize(unsorted.len(), Piece { low: DVec3::ZERO, high: DVec3::ZERO, start: 0.0, end: 0.0, body: 0, stamp: 0 });
-        for level in &mut self.levels {
-            let count = level.cell_start[level.cell_start.len() - 1] as usize;
-            // Scatter: cell c's pieces go from cell_start[c] on, shifting it to the next cell's
-            // start; shifting back by one cell restores the starts.
-            for &(_, cell, piece) in &unsorted[level.first..level.first + count] {
-                let slot = &mut level.cell_start[cell as usize];
-                self.binned[level.first + *slot as usize] = piece;
-                *slot += 1;
+        // Every slot is written below: no need to clear what a longer window left.
+        self.entries.resize(first, Entry::default());
+        self.entries.truncate(first);
+        self.windows.resize(first, Window::default());
+        self.windows.truncate(first);
+        self.motions.resize(first, Proxy::default());
+        self.motions.truncate(first);
+        let mut home = std::mem::take(&mut self.home);
+        home.clear();
+        home.resize(plan.len(), NONE);
+        for (i, &(count, k, cell)) in plan.iter().enumerate() {
+            if count == 0 {
+                continue;
             }
+            let level = &mut self.levels[k as usize];
+            let (entries, windows, motions) = (&mut self.entries, &mut self.windows, &mut self.motions);
+            // Cell c's pieces go from cell_start[c] on, shifting it to the next cell's start.
+            let mut place = |c: usize, low: DVec3, high: DVec3, window: Window| {
+                let slot = level.first + level.cell_start[c] as usize;
+                level.cell_start[c] += 1;
+                entries[slot] = Entry::new(low, high, origin, i as u32, proxies.stamp[i]);
+                windows[slot] = window;
+                motions[slot] = proxies.proxies[i];
+                slot
+            };
+            if count == 1 {
+                home[i] = place(cell as usize, proxies.low[i], proxies.high[i], proxies.window_of(i)) as u32;
+            } else {
+                let (exponent_level_dims, inverse) = (level.dims, level.inverse);
+                let coordinate = |value: f64, axis: usize| ((value * inverse).max(0.0) as usize).min(exponent_level_dims[axis] - 1);
+                Grid::for_each_piece(proxies, i, count, |low, high, window| {
+                    let p = low - origin;
+                    let [_, ny, nz] = exponent_level_dims;
+                    let c = (coordinate(p.x, 0) * ny + coordinate(p.y, 1)) * nz + coordinate(p.z, 2);
+                    place(c, low, high, window);
+                });
+            }
+        }
+        self.home = home;
+        for level in &mut self.levels {
+            // Shifting back by one cell restores the starts.
             let cells = level.late_head.len();
             level.cell_start.copy_within(0..cells, 1);
             level.cell_start[0] = 0;
+            level.count = level.cell_start[cells] as usize;
         }
         self.late.clear();
-        let moves = unsorted.len() as u64;
-        self.unsorted = unsorted;
-        PrepareCounts { moves, entries: moves }
+        self.late_motions.clear();
+        self.plan = plan;
+        self.per_exponent = per_exponent;
+        PrepareCounts { moves: first as u64, entries: first as u64 }
     }
 
-    fn for_each_pair(&mut self, _proxies: &ProxyTable, mut report: impl FnMut(u32, u32, Window)) {
-        // Half of the 26 neighbours, so each pair of adjacent cells is swept once.
-        const FORWARD: [[usize; 3]; 13] = [
-            [1, 0, 0], [1, 0, 1], [1, 0, 2], [1, 1, 0], [1, 1, 1], [1, 1, 2], [1, 2, 0], [1, 2, 1], [1, 2, 2],
-            [0, 2, 0], [0, 2, 1], [0, 2, 2], [0, 1, 2],
-        ];
+    fn for_each_pair(&mut self, _proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
+        // Half of the 26 neighbours, so each pair of adjacent cells is swept once. Cells along z
+        // are adjacent in memory, so the 13 cells are 5 contiguous runs: the next cell of this
+        // column, then z - 1 ..= z + 1 of the columns (x, y + 1) and (x + 1, y - 1 ..= y + 1);
+        // column offsets are stored +1 in y so that -1 needs no signed arithmetic.
+        const COLUMNS: [[usize; 2]; 4] = [[0, 2], [1, 0], [1, 1], [1, 2]];
+        let (entries, windows, motions) = (&self.entries[..], &self.windows[..], &self.motions[..]);
+        // Reports binned pieces a and b when they belong to different bodies and their windows
+        // meet (their boxes are known to overlap).
+        let mut hit = |a: usize, b: usize| {
+            let (ea, eb) = (&entries[a], &entries[b]);
+            let window = windows[a].intersect(windows[b]);
+            if ea.body != eb.body && !window.is_empty() {
+                let x = Reported { body: ea.body, stamp: ea.stamp, proxy: &motions[a] };
+                let y = Reported { body: eb.body, stamp: eb.stamp, proxy: &motions[b] };
+                report(x, y, window);
+            }
+        };
         for (k, level) in self.levels.iter().enumerate() {
             let [nx, ny, nz] = level.dims;
+            let starts = &level.cell_start[..];
             for x in 0..nx {
                 for y in 0..ny {
                     for z in 0..nz {
-                        let c = level.index([x, y, z]);
-                        let (from, to) = (level.cell_start[c] as usize, level.cell_start[c + 1] as usize);
+                        let c = (x * ny + y) * nz + z;
+                        let (from, to) = (level.first + starts[c] as usize, level.first + starts[c + 1] as usize);
                         if from == to {
                             continue;
                         }
-                        let run = &self.binned[level.first + from..level.first + to];
-                        for (m, a) in run.iter().enumerate() {
-                            for b in &run[m + 1..] {
-                                report_pair(a, b, &mut report);
-                            }
-                        }
-                        // Offsets are stored +1 so that -1 needs no signed arithmetic.
-                        for [dx, dy, dz] in FORWARD {
-                            let (x2, y2, z2) = (x + dx, (y + dy).wrapping_sub(1), (z + dz).wrapping_sub(1));
-                            if x2 >= nx || y2 >= ny || z2 >= nz {
-                                continue;
-                            }
-                            let c2 = level.index([x2, y2, z2]);
-                            let other = &self.binned[level.first + level.cell_start[c2] as usize..level.first + level.cell_start[c2 + 1] as usize];
-                            for a in run {
-                                for b in other {
-                                    report_pair(a, b, &mut report);
+                        let run = &entries[from..to];
+                        for (m, ea) in run.iter().enumerate() {
+                            for (n, eb) in run[m + 1..].iter().enumerate() {
+                                if ea.overlaps(eb) {
+                                    hit(from + m, from + m + 1 + n);
                                 }
                             }
+                        }
+                        let mut sweep = |other_from: usize, other_to: usize| {
+                            for (m, ea) in run.iter().enumerate() {
+                                for (n, eb) in entries[other_from..other_to].iter().enumerate() {
+                                    if ea.overlaps(eb) {
+                                        hit(from + m, other_from + n);
+                                    }
+                                }
+                            }
+                        };
+                        if z + 1 < nz {
+                            sweep(to, level.first + starts[c + 2] as usize);
+                        }
+                        for [dx, dy] in COLUMNS {
+                            let (x2, y2) = (x + dx, (y + dy).wrapping_sub(1));
+                            if x2 >= nx || y2 >= ny {
+                                continue;
+                            }
+                            let column = (x2 * ny + y2) * nz;
+                            let (z_from, z_to) = (z.saturating_sub(1), (z + 1).min(nz - 1));
+                            sweep(level.first + starts[column + z_from] as usize, level.first + starts[column + z_to + 1] as usize);
                         }
                         // Coarser levels: each piece against the cells that can hold an
                         // overlapping box there.
                         for coarser in &self.levels[k + 1..] {
-                            for a in run {
-                                self.for_each_binned_near(coarser, a.low, a.high, |b| report_pair(a, b, &mut report));
+                            for (m, ea) in run.iter().enumerate() {
+                                for c2 in coarser.cells_near(unpack(ea.low), unpack(ea.high)) {
+                                    for b in coarser.run(c2) {
+                                        if ea.overlaps(&entries[b]) {
+                                            hit(from + m, b);
+                                        }
+                                    }
+                                }
                             }
                         }
                     }
@@ -353,17 +505,20 @@ impl BroadPhase for Grid {
         }
     }
 
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(u32, Window)) {
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
-        self.for_each_piece(proxies, body as usize, |piece| pieces.push(piece));
-        for piece in &pieces {
+        let (count, _) = self.plan_pieces(proxies, body as usize);
+        Grid::for_each_piece(proxies, body as usize, count, |low, high, window| pieces.push((low, high, window)));
+        let origin = self.origin;
+        for &(low, high, window) in &pieces {
+            let piece = Entry::new(low, high, origin, body, 0);
             for k in 0..self.levels.len() {
-                self.for_each_current_near(k, piece.low, piece.high, proxies, |other| {
-                    if other.body != body && Some(other.body) != skip && piece.overlaps(other) {
-                        let window = piece.window().intersect(other.window());
-                        if !window.is_empty() {
-                            report(other.body, window);
+                self.for_each_overlapping(k, &piece, low, high, proxies, |other, other_window, motion| {
+                    if other.body != body && Some(other.body) != skip {
+                        let common = window.intersect(other_window);
+                        if !common.is_empty() {
+                            report(Reported { body: other.body, stamp: other.stamp, proxy: motion }, common);
                         }
                     }
                 });
@@ -372,27 +527,54 @@ impl BroadPhase for Grid {
         self.pieces = pieces;
     }
 
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window)) {
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
         // The pieces the query just built.
-        for k in 0..self.pieces.len() {
-            let piece = self.pieces[k];
-            let level = self.level_for(&piece);
-            let level = &mut self.levels[level];
-            let cell = level.index(level.coordinates(piece.low - self.origin));
-            self.late.push((piece, level.late_head[cell]));
+        let i = body as usize;
+        let (_, exponent) = self.plan_pieces(proxies, i);
+        let k = self.level_for(exponent);
+        let (entries, windows, motions) = (&mut self.entries, &mut self.windows, &mut self.motions);
+        let level = &mut self.levels[k];
+        if self.home.len() <= i {
+            self.home.resize(i + 1, NONE);
+        }
+        for n in 0..self.pieces.len() {
+            let (low, high, window) = self.pieces[n];
+            let cell = level.index(level.coordinates(low - self.origin));
+            let entry = Entry::new(low, high, self.origin, body, proxies.stamp[i]);
+            let home = self.home[i] as usize;
+            let run = level.run(cell);
+            if self.pieces.len() == 1 && run.contains(&home) {
+                // Still one piece in the same cell: replace the binned one where it lies.
+                entries[home] = entry;
+                windows[home] = window;
+                motions[home] = proxies.proxies[i];
+                continue;
+            }
+            self.home[i] = NONE;
+            self.late.push((entry, window, level.late_head[cell]));
+            self.late_motions.push(proxies.proxies[i]);
             level.late_head[cell] = (self.late.len() - 1) as u32;
         }
     }
 
     fn memory_bytes(&self) -> usize {
-        let piece = std::mem::size_of::<Piece>();
-        let levels: usize = self.levels.iter().map(|l| (l.cell_start.capacity() + l.late_head.capacity()) * 4).sum();
-        self.binned.capacity() * piece
-            + self.late.capacity() * (piece + 4)
-            + self.unsorted.capacity() * (piece + 8)
-            + self.pieces.capacity() * piece
-
+        let levels: usize = self.levels.iter().chain(&self.spare).map(|l| (l.cell_start.capacity() + l.late_head.capacity()) * 4).sum();
+        self.entries.capacity() * std::mem::size_of::<Entry>()
+            + self.windows.capacity() * std::mem::size_of::<Window>()
+            + self.motions.capacity() * std::mem::size_of::<Proxy>()
+            + self.late.capacity() * std::mem::size_of::<(Entry, Window, u32)>()
+            + self.late_motions.capacity() * std::mem::size_of::<Proxy>()
+            + self.plan.capacity() * 12
+            + self.extents.capacity() * 8
+            + self.home.capacity() * 4
+            + self.pieces.capacity() * std::mem::size_of::<(DVec3, DVec3, Window)>()
             + levels
     }
+}
+
+/// A single-precision box corner back in double precision.
+#[inline]
+fn unpack(c: [f32; 3]) -> DVec3 {
+    DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)
 }

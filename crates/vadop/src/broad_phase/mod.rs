@@ -18,7 +18,7 @@ pub mod brute_force;
 pub mod grid;
 pub mod sweep_prune;
 
-use crate::proxy::ProxyTable;
+use crate::proxy::{ProxyTable, Reported};
 use crate::window::Window;
 
 /// Counters of a broad phase's window-start work.
@@ -35,17 +35,17 @@ pub trait BroadPhase {
     /// Window start: every live proxy has just been refreshed; bin or sort them (c_sort).
     fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts;
 
-    /// Calls `report(i, j, window)` (i < j) for every candidate pair of the window (c_test),
-    /// each pair and piece of path once. Call right after [`Self::prepare`].
-    fn for_each_pair(&mut self, proxies: &ProxyTable, report: impl FnMut(u32, u32, Window));
+    /// Calls `report(a, b, window)` for every candidate pair of the window (c_test), each pair
+    /// and piece of path once. Call right after [`Self::prepare`].
+    fn for_each_pair(&mut self, proxies: &ProxyTable, report: impl FnMut(Reported, Reported, Window));
 
     /// Calls `report(other, window)` for every candidate partner of body `body`'s current proxy
     /// other than `skip`, without entering the proxy.
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window));
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window));
 
     /// Body `body`'s proxy was just refreshed (it was added or changed velocity): reports its
     /// candidate partners other than `skip` as [`Self::query`] does, then enters it.
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window));
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window));
 
     /// Bytes held (capacity, not just length).
     fn memory_bytes(&self) -> usize;

@@ -23,7 +23,7 @@ use super::{BroadPhase, PrepareCounts};
 use crate::axis_pool::AxisPool;
 use crate::bounding_volume::{interval, select_axes, Interval};
 use crate::coherent_sort::coherent_sort;
-use crate::proxy::ProxyTable;
+use crate::proxy::{ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
 use std::sync::Arc;
@@ -119,7 +119,7 @@ fn ordered(a: u32, b: u32) -> (u32, u32) {
 /// Midpoint of body `b`'s path over its proxy window: the point its tile is taken from.
 #[inline]
 fn path_midpoint(proxies: &ProxyTable, b: usize) -> DVec3 {
-    proxies.origin[b] + proxies.velocity[b] * (0.5 * proxies.window_of(b).duration())
+    proxies.origin(b) + proxies.velocity(b) * (0.5 * proxies.window_of(b).duration())
 }
 
 /// How far body `b`'s surface can be from its path midpoint over its proxy window: its bounding
@@ -127,13 +127,13 @@ fn path_midpoint(proxies: &ProxyTable, b: usize) -> DVec3 {
 /// fast bodies need.
 #[inline]
 fn reach(proxies: &ProxyTable, b: usize) -> f64 {
-    proxies.radius[b] + proxies.velocity[b].length() * 0.5 * proxies.window_of(b).duration()
+    proxies.radius(b) + proxies.velocity(b).length() * 0.5 * proxies.window_of(b).duration()
 }
 
 /// Body `b`'s interval on `axis` over its proxy window.
 #[inline]
 fn body_interval(axis: DVec3, proxies: &ProxyTable, b: usize) -> Interval {
-    interval(axis, proxies.origin[b], proxies.velocity[b], proxies.radius[b], proxies.window_of(b).duration())
+    interval(axis, proxies.origin(b), proxies.velocity(b), proxies.radius(b), proxies.window_of(b).duration())
 }
 
 impl AxisList {
@@ -235,7 +235,7 @@ impl SweepPrune {
             self.entered.resize(b + 1, None);
         }
         let mut axes = std::mem::take(&mut self.axes_of[b]);
-        select_axes(&self.pool, proxies.velocity[b], self.sin_phi, &mut axes);
+        select_axes(&self.pool, proxies.velocity(b), self.sin_phi, &mut axes);
         let midpoint = path_midpoint(proxies, b);
         self.max_reach = self.max_reach.max(reach(proxies, b));
         for &a in &axes {
@@ -383,14 +383,15 @@ impl BroadPhase for SweepPrune {
         counts
     }
 
-    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(u32, u32, Window)) {
+    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
         let side = self.tiling.side;
         for (a, list) in self.lists.iter().enumerate() {
             let axis = a as u32;
             let mut check = |e: &Entry, f: &Entry| {
                 let (i, j) = ordered(e.body, f.body);
                 if self.is_candidate(i, j, axis, proxies) {
-                    report(i, j, proxies.window_of(i as usize).intersect(proxies.window_of(j as usize)));
+                    let (i, j) = (i as usize, j as usize);
+                    report(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)));
                 }
             };
             let mut start = 0;
@@ -430,10 +431,10 @@ impl BroadPhase for SweepPrune {
 
     /// Picks the body's axes for its new velocity, adds fresh entries (its old ones carry an old
     /// stamp and are void) and reports its candidate partners.
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(u32, Window)) {
+    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let b = body as usize;
         let mut axes = std::mem::take(&mut self.query_axes);
-        select_axes(&self.pool, proxies.velocity[b], self.sin_phi, &mut axes);
+        select_axes(&self.pool, proxies.velocity(b), self.sin_phi, &mut axes);
         let midpoint = path_midpoint(proxies, b);
         let body_reach = reach(proxies, b);
         let window = proxies.window_of(b);
@@ -446,7 +447,7 @@ impl BroadPhase for SweepPrune {
                     return;
                 }
                 if self.is_candidate_through(body, &axes, e.body, a, proxies) {
-                    report(e.body, window.intersect(proxies.window_of(e.body as usize)));
+                    report(proxies.reported(e.body as usize), window.intersect(proxies.window_of(e.body as usize)));
                 }
             };
             let (x, y) = (midpoint.dot(list.across), midpoint.dot(list.up));
@@ -467,7 +468,7 @@ impl BroadPhase for SweepPrune {
 
     /// Reports the body's candidate partners on its new axes against the lists as they were, then
     /// enters its fresh entries.
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(u32, Window)) {
+    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
         self.enter_entries(body as usize, proxies);
     }
