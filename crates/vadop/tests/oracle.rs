@@ -5,7 +5,7 @@
 
 use glam::DVec3;
 use proptest::prelude::*;
-use vadop::scene::{PaperScene, Scene, FRAMES_PER_SECOND};
+use vadop::scene::{GeneratedScene, PaperScene, Scene, Velocities, FRAMES_PER_SECOND};
 use vadop::{BoxBounds, Contact, Method, Mode, Sphere, WorldConfig};
 
 const DT: f64 = 1.0 / FRAMES_PER_SECOND;
@@ -52,9 +52,31 @@ fn paper(bodies: usize, packing_fraction: f64, max_speed: f64, seed: u64) -> Sce
     }
 }
 
-/// The continuous methods under test, VADOP most often.
+/// The continuous methods under test, the default and the paper's most often.
 fn continuous_method() -> impl Strategy<Value = Method> {
-    prop_oneof![3 => Just(Method::Vadop), 1 => Just(Method::SweptAabb), 1 => Just(Method::SweptKdop), 1 => Just(Method::Grid)]
+    prop_oneof![2 => Just(Method::Auto), 2 => Just(Method::Vadop), 1 => Just(Method::SweptAabb), 1 => Just(Method::SweptKdop), 1 => Just(Method::Grid)]
+}
+
+/// Velocities beyond the paper's uniform speeds: an equilibrium gas, a stream (most bodies fast
+/// in nearly one direction) and heavy-tailed speeds (a few bodies far faster than the rest).
+fn other_velocities() -> impl Strategy<Value = Velocities> {
+    prop_oneof![
+        (0.01f64..3.0).prop_map(|rms_speed| Velocities::Maxwell { rms_speed }),
+        (0.1f64..20.0, 0.0f64..0.5).prop_map(|(speed, spread)| Velocities::Stream { speed, spread }),
+        (0.01f64..1.0, 1.1f64..3.0).prop_map(|(median_speed, tail_index)| Velocities::HeavyTail { median_speed, tail_index }),
+    ]
+}
+
+/// A generated scene with `velocities`, thinned like [`paper`] when too dense to place.
+fn generated(bodies: usize, packing_fraction: f64, velocities: Velocities, seed: u64) -> Scene {
+    let mut fraction = packing_fraction;
+    loop {
+        match (GeneratedScene { bodies, packing_fraction: fraction, velocities, radius: 0.5, seed }).build() {
+            Ok(scene) => return scene,
+            Err(_) if fraction > 1e-3 => fraction *= 0.8,
+            Err(e) => panic!("{e}"),
+        }
+    }
 }
 
 proptest! {
@@ -71,6 +93,19 @@ proptest! {
     ) {
         let scene = paper(bodies, packing_fraction, max_speed, seed);
         assert_same_contacts(&scene, method, Mode::Detect, pool_axes, 12);
+    }
+
+    #[test]
+    fn gas_stream_and_heavy_tailed_scenes_match_brute_force(
+        bodies in 2usize..300,
+        packing_fraction in 0.01f64..0.4,
+        velocities in other_velocities(),
+        method in continuous_method(),
+        simulate in any::<bool>(),
+        seed in any::<u64>(),
+    ) {
+        let scene = generated(bodies, packing_fraction, velocities, seed);
+        assert_same_contacts(&scene, method, if simulate { Mode::Simulate } else { Mode::Detect }, None, 12);
     }
 
     #[test]
