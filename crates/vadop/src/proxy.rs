@@ -61,6 +61,7 @@ pub struct ProxyTable {
     reach: f64,
     /// Median bounding radius of the live bodies at the window's start.
     typical_radius: f64,
+
     /// Motion and bounding radius of each body.
     pub proxies: Vec<Proxy>,
     /// The proxy bounds its body over `[start, end)`.
@@ -78,6 +79,54 @@ pub struct ProxyTable {
     pub expires: Vec<bool>,
     /// Scratch for the median radius.
     radii: Vec<f64>,
+}
+
+/// A box in single precision relative to an origin, rounded outwards: it only ever grows, so it
+/// stays conservative, and it takes half the room of a double-precision one — a broad phase keeps
+/// it next to its entries for a cheap overlap test.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CompactBox {
+    pub low: [f32; 3],
+    pub high: [f32; 3],
+}
+
+impl CompactBox {
+    /// The box `[low, high]` relative to `origin`.
+    #[inline]
+    pub fn new(low: DVec3, high: DVec3, origin: DVec3) -> CompactBox {
+        let (low, high) = (low - origin, high - origin);
+        CompactBox { low: [down(low.x), down(low.y), down(low.z)], high: [up(high.x), up(high.y), up(high.z)] }
+    }
+
+    /// Branch-free overlap test.
+    #[inline]
+    pub fn overlaps(&self, other: &CompactBox) -> bool {
+        (self.low[0] <= other.high[0])
+            & (other.low[0] <= self.high[0])
+            & (self.low[1] <= other.high[1])
+            & (other.low[1] <= self.high[1])
+            & (self.low[2] <= other.high[2])
+            & (other.low[2] <= self.high[2])
+    }
+
+    /// The corners back in double precision, relative to the origin.
+    #[inline]
+    pub fn corners(&self) -> (DVec3, DVec3) {
+        let wide = |c: [f32; 3]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
+        (wide(self.low), wide(self.high))
+    }
+}
+
+/// `x` in single precision, rounded down (up).
+#[inline]
+fn down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x { f.next_down() } else { f }
+}
+#[inline]
+fn up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
 }
 
 /// Swept box of a sphere of `radius` moving from `a` to `b`, padded for rounding.
@@ -103,6 +152,18 @@ impl ProxyTable {
     #[inline]
     pub fn typical_radius(&self) -> f64 {
         self.typical_radius
+    }
+
+    /// The corner of the box the bodies live in: the origin of compact boxes.
+    #[inline]
+    pub fn box_min(&self) -> DVec3 {
+        self.box_min
+    }
+
+    /// Proxy `i`'s swept box as a compact box relative to [`Self::box_min`].
+    #[inline]
+    pub fn compact_box(&self, i: usize) -> CompactBox {
+        CompactBox::new(self.low[i], self.high[i], self.box_min)
     }
 
     /// The current window.
@@ -206,7 +267,6 @@ impl ProxyTable {
     fn refresh(&mut self, i: usize, bodies: &Bodies, t: f64) {
         let start = t.max(self.window.start);
         let motion = bodies.motion(i);
-        let origin = motion.at(start);
         let velocity = motion.velocity;
         let radius = bodies.bounding_radius(i);
         // Up to and including the wall contact: a pair touching at that very instant is still
@@ -220,6 +280,7 @@ impl ProxyTable {
         if self.expires[i] {
             end = reached;
         }
+        let origin = motion.at(start);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         self.proxies[i] = Proxy { motion, radius };
         self.start[i] = start;

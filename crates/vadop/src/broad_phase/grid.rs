@@ -16,7 +16,7 @@
 //! reads shapes or computes contact times.
 
 use super::{BroadPhase, PrepareCounts};
-use crate::proxy::{swept_box, Proxy, ProxyTable, Reported};
+use crate::proxy::{swept_box, CompactBox, Proxy, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -33,12 +33,10 @@ const MAX_CELLS_PER_AXIS: f64 = (1u32 << 20) as f64;
 /// End of a late list.
 const NONE: u32 = u32::MAX;
 
-/// A stretch of one body's path: the body is inside the box over its window. The box is relative
-/// to the grid's origin, in single precision rounded outwards.
+/// A stretch of one body's path: the body is inside the box over its window.
 #[derive(Debug, Clone, Copy, Default)]
 struct Entry {
-    low: [f32; 3],
-    high: [f32; 3],
+    bbox: CompactBox,
     body: u32,
     stamp: u32,
 }
@@ -46,37 +44,13 @@ struct Entry {
 impl Entry {
     #[inline]
     fn new(low: DVec3, high: DVec3, origin: DVec3, body: u32, stamp: u32) -> Entry {
-        let (low, high) = (low - origin, high - origin);
-        Entry {
-            low: [down(low.x), down(low.y), down(low.z)],
-            high: [up(high.x), up(high.y), up(high.z)],
-            body,
-            stamp,
-        }
+        Entry { bbox: CompactBox::new(low, high, origin), body, stamp }
     }
 
-    /// Branch-free box overlap test.
     #[inline]
     fn overlaps(&self, other: &Entry) -> bool {
-        (self.low[0] <= other.high[0])
-            & (other.low[0] <= self.high[0])
-            & (self.low[1] <= other.high[1])
-            & (other.low[1] <= self.high[1])
-            & (self.low[2] <= other.high[2])
-            & (other.low[2] <= self.high[2])
+        self.bbox.overlaps(&other.bbox)
     }
-}
-
-/// `x` in single precision, rounded down (up): the box only ever grows.
-#[inline]
-fn down(x: f64) -> f32 {
-    let f = x as f32;
-    if f as f64 > x { f.next_down() } else { f }
-}
-#[inline]
-fn up(x: f64) -> f32 {
-    let f = x as f32;
-    if (f as f64) < x { f.next_up() } else { f }
 }
 
 /// One level of the hierarchy: cubic cells of one size.
@@ -490,7 +464,8 @@ impl BroadPhase for Grid {
                         // overlapping box there.
                         for coarser in &self.levels[k + 1..] {
                             for (m, ea) in run.iter().enumerate() {
-                                for c2 in coarser.cells_near(unpack(ea.low), unpack(ea.high)) {
+                                let (low, high) = ea.bbox.corners();
+                                for c2 in coarser.cells_near(low, high) {
                                     for b in coarser.run(c2) {
                                         if ea.overlaps(&entries[b]) {
                                             hit(from + m, b);
@@ -571,10 +546,4 @@ impl BroadPhase for Grid {
             + self.pieces.capacity() * std::mem::size_of::<(DVec3, DVec3, Window)>()
             + levels
     }
-}
-
-/// A single-precision box corner back in double precision.
-#[inline]
-fn unpack(c: [f32; 3]) -> DVec3 {
-    DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)
 }

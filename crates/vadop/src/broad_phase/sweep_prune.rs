@@ -23,7 +23,7 @@ use super::{BroadPhase, PrepareCounts};
 use crate::axis_pool::AxisPool;
 use crate::bounding_volume::{interval, select_axes, Interval};
 use crate::coherent_sort::coherent_sort;
-use crate::proxy::{ProxyTable, Reported};
+use crate::proxy::{CompactBox, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
 use std::sync::Arc;
@@ -33,7 +33,8 @@ const REACH_MARGIN: f64 = 1e-9;
 /// Most tiles along one side of an axis plane, so tile ids fit in 32 bits.
 const MAX_TILES_PER_SIDE: f64 = 60_000.0;
 
-/// One body's interval on one axis, valid while the body's stamp equals `stamp`.
+/// One body's interval on one axis, valid while the body's stamp equals `stamp`, with the body's
+/// axis set (pools of at most 64 axes) and its swept box, so a pair is pruned on the spot.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
     lo: f64,
@@ -41,6 +42,8 @@ struct Entry {
     body: u32,
     stamp: u32,
     tile: u32,
+    mask: u64,
+    bbox: CompactBox,
 }
 
 impl Entry {
@@ -93,6 +96,9 @@ pub struct SweepPrune {
     lists: Vec<AxisList>,
     /// Ascending pool-axis ids per body slot.
     axes_of: Vec<Vec<u32>>,
+    /// True when the pool has at most 64 axes: axis sets are bit masks and a pair's lowest shared
+    /// axis is one `trailing_zeros` away.
+    masked: bool,
     /// The proxy stamp each body's entries were made with (`None`: no entries yet).
     entered: Vec<Option<u32>>,
     /// Scratch: the axes of the body being queried.
@@ -111,10 +117,6 @@ fn is_live(entry: &Entry, proxies: &ProxyTable) -> bool {
     proxies.is_current(entry.body as usize, entry.stamp)
 }
 
-#[inline]
-fn ordered(a: u32, b: u32) -> (u32, u32) {
-    if a < b { (a, b) } else { (b, a) }
-}
 
 /// Midpoint of body `b`'s path over its proxy window: the point its tile is taken from.
 #[inline]
@@ -203,11 +205,13 @@ impl SweepPrune {
     pub fn new(pool: Arc<AxisPool>, sin_phi: f64, min: DVec3, max: DVec3, tiled: bool) -> SweepPrune {
         let lists = pool.axes().iter().map(|&a| AxisList::new(a, min, max)).collect();
         let plane_extent = (max - min).length();
+        let masked = pool.len() <= 64;
         SweepPrune {
             pool,
             sin_phi,
             lists,
             axes_of: Vec::new(),
+            masked,
             entered: Vec::new(),
             query_axes: Vec::new(),
             tiling: Tiling { size: plane_extent, side: 1 },
@@ -228,8 +232,10 @@ impl SweepPrune {
     }
 
     /// Picks body `b`'s axes for its proxy's velocity and adds fresh entries to the lists' pending
-    /// parts (its old entries carry an old stamp and are void).
-    fn enter_entries(&mut self, b: usize, proxies: &ProxyTable) {
+    /// parts (its old entries carry an old stamp and are void). Mid-window (`absorb`), a pending
+    /// part that grows beyond small is merged in at once, because queries scan it linearly; at a
+    /// window's start the sort merges everything once.
+    fn enter_entries(&mut self, b: usize, proxies: &ProxyTable, absorb: bool) {
         if self.axes_of.len() <= b {
             self.axes_of.resize_with(b + 1, Vec::new);
             self.entered.resize(b + 1, None);
@@ -238,13 +244,13 @@ impl SweepPrune {
         select_axes(&self.pool, proxies.velocity(b), self.sin_phi, &mut axes);
         let midpoint = path_midpoint(proxies, b);
         self.max_reach = self.max_reach.max(reach(proxies, b));
+        let (mask, bbox) = (self.mask_of(&axes), proxies.compact_box(b));
         for &a in &axes {
             let iv = body_interval(self.pool.axis(a), proxies, b);
             let list = &mut self.lists[a as usize];
             let tile = list.tile_of(&self.tiling, midpoint);
-            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body: b as u32, stamp: proxies.stamp[b], tile });
-            // Queries scan `pending` linearly: once it is no longer small, merge it into `sorted`.
-            if list.pending.len() > 64 + list.sorted.len() / 128 {
+            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body: b as u32, stamp: proxies.stamp[b], tile, mask, bbox });
+            if absorb && list.pending.len() > 64 + list.sorted.len() / 128 {
                 list.absorb_pending(proxies);
             }
         }
@@ -252,17 +258,43 @@ impl SweepPrune {
         self.entered[b] = Some(proxies.stamp[b]);
     }
 
-    /// True when bodies `i < j` overlap on every axis they share and `axis` is the first of those.
+    /// The bit mask of an axis set (0 for pools of more than 64 axes, which use the lists).
     #[inline]
-    fn is_candidate(&self, i: u32, j: u32, axis: u32, proxies: &ProxyTable) -> bool {
-        self.is_candidate_through(i, &self.axes_of[i as usize], j, axis, proxies)
+    fn mask_of(&self, axes: &[u32]) -> u64 {
+        if self.masked { axes.iter().fold(0, |m, &a| m | 1 << a) } else { 0 }
     }
 
-    /// The same rule with body `i`'s axes given (`axes_i`): the pair is reported only through
-    /// its lowest shared axis, and only when the two intervals overlap on every shared axis.
+    /// True when the pair of entries `e` (of body `i`, whose axes are `axes_i`) and `f` is a
+    /// candidate through `axis`: their swept boxes overlap, `axis` is the lowest axis the two
+    /// bodies share (so the pair is reported once), and their intervals overlap on every other
+    /// shared axis.
     #[inline]
-    fn is_candidate_through(&self, i: u32, axes_i: &[u32], j: u32, axis: u32, proxies: &ProxyTable) -> bool {
-        let axes_j = &self.axes_of[j as usize];
+    fn is_candidate(&self, e: &Entry, axes_i: &[u32], f: &Entry, axis: u32, proxies: &ProxyTable) -> bool {
+        if !e.bbox.overlaps(&f.bbox) {
+            return false;
+        }
+        let (i, j) = (e.body as usize, f.body as usize);
+        if !self.masked {
+            return self.shared_axes_overlap(i, axes_i, j, axis, proxies);
+        }
+        let shared = e.mask & f.mask;
+        if shared.trailing_zeros() != axis {
+            return false;
+        }
+        let mut rest = shared & (shared - 1);
+        while rest != 0 {
+            let a = self.pool.axis(rest.trailing_zeros());
+            if !body_interval(a, proxies, i).overlaps(body_interval(a, proxies, j)) {
+                return false;
+            }
+            rest &= rest - 1;
+        }
+        true
+    }
+
+    /// [`Self::is_candidate`]'s axis rule for pools of more than 64 axes, on the sorted lists.
+    fn shared_axes_overlap(&self, i: usize, axes_i: &[u32], j: usize, axis: u32, proxies: &ProxyTable) -> bool {
+        let axes_j = &self.axes_of[j];
         let (mut x, mut y) = (0, 0);
         let mut first = true;
         while x < axes_i.len() && y < axes_j.len() {
@@ -280,7 +312,7 @@ impl SweepPrune {
                     first = false;
                 } else {
                     let a = self.pool.axis(ai);
-                    if !body_interval(a, proxies, i as usize).overlaps(body_interval(a, proxies, j as usize)) {
+                    if !body_interval(a, proxies, i).overlaps(body_interval(a, proxies, j)) {
                         return false;
                     }
                 }
@@ -314,7 +346,7 @@ impl BroadPhase for SweepPrune {
     fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
         for b in 0..proxies.slots() {
             if proxies.live[b] && self.entered.get(b).copied().flatten() != Some(proxies.stamp[b]) {
-                self.enter_entries(b, proxies);
+                self.enter_entries(b, proxies, false);
             }
         }
         let mut max_reach: f64 = 0.0;
@@ -344,6 +376,7 @@ impl BroadPhase for SweepPrune {
                 let iv = body_interval(axis, proxies, b);
                 e.lo = iv.lo;
                 e.hi = iv.hi;
+                e.bbox = proxies.compact_box(b);
                 let midpoint = path_midpoint(proxies, b);
                 e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
                     + tiling.coordinate(midpoint.dot(up), origin[1]);
@@ -388,9 +421,8 @@ impl BroadPhase for SweepPrune {
         for (a, list) in self.lists.iter().enumerate() {
             let axis = a as u32;
             let mut check = |e: &Entry, f: &Entry| {
-                let (i, j) = ordered(e.body, f.body);
-                if self.is_candidate(i, j, axis, proxies) {
-                    let (i, j) = (i as usize, j as usize);
+                if self.is_candidate(e, &self.axes_of[e.body as usize], f, axis, proxies) {
+                    let (i, j) = (e.body as usize, f.body as usize);
                     report(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)));
                 }
             };
@@ -439,14 +471,16 @@ impl BroadPhase for SweepPrune {
         let body_reach = reach(proxies, b);
         let window = proxies.window_of(b);
         let distance = (body_reach + self.max_reach.max(body_reach)) * (1.0 + REACH_MARGIN) + REACH_MARGIN * midpoint.abs().max_element();
+        let mask = self.mask_of(&axes);
         for &a in &axes {
             let query = body_interval(self.pool.axis(a), proxies, b);
+            let own = Entry { lo: query.lo, hi: query.hi, body, stamp: proxies.stamp[b], tile: 0, mask, bbox: proxies.compact_box(b) };
             let list = &self.lists[a as usize];
             let mut visit = |e: &Entry| {
                 if e.body == body || Some(e.body) == skip || e.hi < query.lo || e.lo > query.hi || !is_live(e, proxies) {
                     return;
                 }
-                if self.is_candidate_through(body, &axes, e.body, a, proxies) {
+                if self.is_candidate(&own, &axes, e, a, proxies) {
                     report(proxies.reported(e.body as usize), window.intersect(proxies.window_of(e.body as usize)));
                 }
             };
@@ -470,7 +504,7 @@ impl BroadPhase for SweepPrune {
     /// enters its fresh entries.
     fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
-        self.enter_entries(body as usize, proxies);
+        self.enter_entries(body as usize, proxies, true);
     }
 
     /// Bytes held by the lists and axis sets (capacity, not just length).
