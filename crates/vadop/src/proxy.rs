@@ -67,9 +67,8 @@ pub struct ProxyTable {
     /// The proxy bounds its body over `[start, end)`.
     pub start: Vec<f64>,
     pub end: Vec<f64>,
-    /// Swept box over `[start, end]`, padded.
-    pub low: Vec<DVec3>,
-    pub high: Vec<DVec3>,
+    /// Swept box over `[start, end]`, padded, relative to [`ProxyTable::box_min`].
+    pub bbox: Vec<CompactBox>,
     /// The body's velocity stamp when the proxy was built: broad-phase entries carrying another
     /// stamp are stale.
     pub stamp: Vec<u32>,
@@ -114,6 +113,13 @@ impl CompactBox {
     pub fn corners(&self) -> (DVec3, DVec3) {
         let wide = |c: [f32; 3]| DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64);
         (wide(self.low), wide(self.high))
+    }
+
+    /// The largest side.
+    #[inline]
+    pub fn extent(&self) -> f64 {
+        let (low, high) = self.corners();
+        (high - low).max_element()
     }
 }
 
@@ -160,10 +166,12 @@ impl ProxyTable {
         self.box_min
     }
 
-    /// Proxy `i`'s swept box as a compact box relative to [`Self::box_min`].
+    /// A swept box of a sphere of `radius` from `a` to `b` as a compact box relative to
+    /// [`Self::box_min`].
     #[inline]
-    pub fn compact_box(&self, i: usize) -> CompactBox {
-        CompactBox::new(self.low[i], self.high[i], self.box_min)
+    pub fn compact_swept_box(&self, a: DVec3, b: DVec3, radius: f64) -> CompactBox {
+        let (low, high) = swept_box(a, b, radius);
+        CompactBox::new(low, high, self.box_min)
     }
 
     /// The current window.
@@ -212,12 +220,6 @@ impl ProxyTable {
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
         self.proxies[i].motion.at(self.start[i])
-    }
-
-    /// True when the proxies of `i` and `j` have overlapping swept boxes.
-    #[inline]
-    pub fn boxes_overlap(&self, i: usize, j: usize) -> bool {
-        self.low[i].cmple(self.high[j]).all() && self.low[j].cmple(self.high[i]).all()
     }
 
     /// True when body `i` has a proxy.
@@ -281,12 +283,10 @@ impl ProxyTable {
             end = reached;
         }
         let origin = motion.at(start);
-        let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
+        self.bbox[i] = self.compact_swept_box(origin, origin + velocity * (end - start), radius);
         self.proxies[i] = Proxy { motion, radius };
         self.start[i] = start;
         self.end[i] = end;
-        self.low[i] = low;
-        self.high[i] = high;
         self.stamp[i] = bodies.stamp[i];
     }
 
@@ -295,8 +295,7 @@ impl ProxyTable {
             self.proxies.resize(slots, Proxy::default());
             self.start.resize(slots, 0.0);
             self.end.resize(slots, 0.0);
-            self.low.resize(slots, DVec3::ZERO);
-            self.high.resize(slots, DVec3::ZERO);
+            self.bbox.resize(slots, CompactBox::default());
             self.stamp.resize(slots, 0);
             self.live.resize(slots, false);
             self.expires.resize(slots, false);
@@ -305,6 +304,6 @@ impl ProxyTable {
 
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        self.proxies.capacity() * std::mem::size_of::<Proxy>() + self.live.capacity() * (2 * 24 + 2 * 8 + 4 + 2) + self.radii.capacity() * 8
+        self.proxies.capacity() * std::mem::size_of::<Proxy>() + self.live.capacity() * (std::mem::size_of::<CompactBox>() + 2 * 8 + 4 + 2) + self.radii.capacity() * 8
     }
 }

@@ -9,14 +9,14 @@
 //! Two overlapping boxes of one level then lie in the same or adjacent cells, so the window's
 //! pairs come from each cell against itself and 13 of its neighbours, and from each piece against
 //! the few cells of coarser levels that can hold an overlapping box. Boxes are kept in single
-//! precision relative to the grid's origin, rounded outwards, so they stay conservative while a
+//! precision relative to the box's low corner (the grid's origin), rounded outwards, so they stay conservative while a
 //! cell's pieces fit a few cache lines, and each piece's motion is copied beside it in cell order:
 //! a candidate pair reaches the narrow phase without a trip to memory. A body that changes velocity mid-window gets fresh pieces
 //! on per-cell linked lists, and its query visits only the cells its new path can reach. It never
 //! reads shapes or computes contact times.
 
 use super::{BroadPhase, PrepareCounts};
-use crate::proxy::{swept_box, CompactBox, Proxy, ProxyTable, Reported};
+use crate::proxy::{CompactBox, Proxy, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -42,11 +42,6 @@ struct Entry {
 }
 
 impl Entry {
-    #[inline]
-    fn new(low: DVec3, high: DVec3, origin: DVec3, body: u32, stamp: u32) -> Entry {
-        Entry { bbox: CompactBox::new(low, high, origin), body, stamp }
-    }
-
     #[inline]
     fn overlaps(&self, other: &Entry) -> bool {
         self.bbox.overlaps(&other.bbox)
@@ -125,7 +120,7 @@ impl Level {
 /// The grid broad phase.
 #[derive(Debug)]
 pub struct Grid {
-    origin: DVec3,
+    /// Size of the box the bodies live in; boxes are relative to its low corner.
     extent: DVec3,
     base_cell: f64,
     /// Levels in use, ascending by exponent; `spare` keeps the storage of unused ones.
@@ -146,14 +141,13 @@ pub struct Grid {
     /// Each body's binned slot when its path is one piece: a fresh piece in the same cell
     /// replaces it there instead of joining a late list.
     home: Vec<u32>,
-    pieces: Vec<(DVec3, DVec3, Window)>,
+    pieces: Vec<(CompactBox, Window)>,
 }
 
 impl Grid {
     /// An empty grid over the box `[min, max]` the bodies live in.
     pub fn new(min: DVec3, max: DVec3) -> Grid {
         Grid {
-            origin: min,
             extent: (max - min).max(DVec3::splat(f64::MIN_POSITIVE)),
             base_cell: 1.0,
             levels: Vec::new(),
@@ -186,18 +180,20 @@ impl Grid {
         let limit = self.piece_length(radius);
         let length = proxies.velocity(i).length() * proxies.window_of(i).duration();
         let count = (length / limit).ceil().clamp(1.0, u32::MAX as f64) as u32;
-        // The largest piece box: the diameter plus the longest stretch, with the padding.
+        // The largest piece box: the diameter plus the longest stretch, with the padding and
+        // the single-precision rounding of the compact box (a few ulps of its coordinates).
         let extent = (2.0 * radius + length.min(limit)) * (1.0 + 4.0 * crate::proxy::RELATIVE_PADDING)
-            + 4.0 * crate::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element();
+            + 4.0 * crate::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element()
+            + 4.0 * f32::EPSILON as f64 * (self.extent.max_element() + 2.0 * radius + length);
         (count, self.exponent_for(extent))
     }
 
     /// Calls `f` with the box and window of every piece of proxy `i`, cut into `count` pieces.
     #[inline]
-    fn for_each_piece(proxies: &ProxyTable, i: usize, count: u32, mut f: impl FnMut(DVec3, DVec3, Window)) {
+    fn for_each_piece(proxies: &ProxyTable, i: usize, count: u32, mut f: impl FnMut(CompactBox, Window)) {
         let window = proxies.window_of(i);
         if count == 1 {
-            f(proxies.low[i], proxies.high[i], window);
+            f(proxies.bbox[i], window);
             return;
         }
         let (origin, velocity, radius) = (proxies.origin(i), proxies.velocity(i), proxies.radius(i));
@@ -206,8 +202,7 @@ impl Grid {
         for k in 1..=count {
             let end = if k == count { window.end } else { window.start + step * k as f64 };
             let to = origin + velocity * (end - window.start);
-            let (low, high) = swept_box(from, to, radius);
-            f(low, high, Window::new(start, end));
+            f(proxies.compact_swept_box(from, to, radius), Window::new(start, end));
             (from, start) = (to, end);
         }
     }
@@ -238,14 +233,15 @@ impl Grid {
     }
 
     /// Calls `visit(entry, window, motion)` for every current piece, binned or late, of level `k`
-    /// whose box overlaps `query` (absolute corners `low`, `high`), unlinking the stale late
+    /// whose box overlaps `query`, unlinking the stale late
     /// pieces it passes, so a busy cell's list stays short.
     #[inline]
-    fn for_each_overlapping(&mut self, k: usize, query: &Entry, low: DVec3, high: DVec3, proxies: &ProxyTable, mut visit: impl FnMut(&Entry, Window, &Proxy)) {
-        let Grid { levels, late, late_motions, entries, windows, motions, origin, .. } = self;
+    fn for_each_overlapping(&mut self, k: usize, query: &Entry, proxies: &ProxyTable, mut visit: impl FnMut(&Entry, Window, &Proxy)) {
+        let Grid { levels, late, late_motions, entries, windows, motions, .. } = self;
         let level = &mut levels[k];
-        let a = level.coordinates(low - *origin - level.cell);
-        let b = level.coordinates(high - *origin);
+        let (low, high) = query.bbox.corners();
+        let a = level.coordinates(low - level.cell);
+        let b = level.coordinates(high);
         let [_, ny, nz] = level.dims;
         for x in a[0]..=b[0] {
             for y in a[1]..=b[1] {
@@ -286,7 +282,7 @@ impl BroadPhase for Grid {
         // fast bodies.
         let mut extents = std::mem::take(&mut self.extents);
         extents.clear();
-        extents.extend((0..proxies.slots()).filter(|&i| proxies.live[i]).map(|i| (proxies.high[i] - proxies.low[i]).max_element()));
+        extents.extend((0..proxies.slots()).filter(|&i| proxies.live[i]).map(|i| proxies.bbox[i].extent()));
         if !extents.is_empty() {
             let middle = extents.len() / 2;
             let median = *extents.select_nth_unstable_by(middle, f64::total_cmp).1;
@@ -328,18 +324,17 @@ impl BroadPhase for Grid {
         }
         // Pass 2: count the pieces of each cell; pass 3: scatter them (counting sort, no hashing).
         // A single piece's cell is kept from pass 2; longer paths are cut again in pass 3.
-        let origin = self.origin;
         for (i, plan) in plan.iter_mut().enumerate() {
             let (count, k) = (plan.0, plan.1 as usize);
             if count == 1 {
                 let level = &mut self.levels[k];
-                let c = level.index(level.coordinates(proxies.low[i] - origin));
+                let c = level.index(level.coordinates(proxies.bbox[i].corners().0));
                 level.cell_start[c + 1] += 1;
                 plan.2 = c as u32;
             } else if count > 1 {
                 let level = &mut self.levels[k];
-                Grid::for_each_piece(proxies, i, count, |low, _, _| {
-                    let c = level.index(level.coordinates(low - origin));
+                Grid::for_each_piece(proxies, i, count, |bbox, _| {
+                    let c = level.index(level.coordinates(bbox.corners().0));
                     level.cell_start[c + 1] += 1;
                 });
             }
@@ -366,24 +361,24 @@ impl BroadPhase for Grid {
             let level = &mut self.levels[k as usize];
             let (entries, windows, motions) = (&mut self.entries, &mut self.windows, &mut self.motions);
             // Cell c's pieces go from cell_start[c] on, shifting it to the next cell's start.
-            let mut place = |c: usize, low: DVec3, high: DVec3, window: Window| {
+            let mut place = |c: usize, bbox: CompactBox, window: Window| {
                 let slot = level.first + level.cell_start[c] as usize;
                 level.cell_start[c] += 1;
-                entries[slot] = Entry::new(low, high, origin, i as u32, proxies.stamp[i]);
+                entries[slot] = Entry { bbox, body: i as u32, stamp: proxies.stamp[i] };
                 windows[slot] = window;
                 motions[slot] = proxies.proxies[i];
                 slot
             };
             if count == 1 {
-                home[i] = place(cell as usize, proxies.low[i], proxies.high[i], proxies.window_of(i)) as u32;
+                home[i] = place(cell as usize, proxies.bbox[i], proxies.window_of(i)) as u32;
             } else {
                 let (exponent_level_dims, inverse) = (level.dims, level.inverse);
                 let coordinate = |value: f64, axis: usize| ((value * inverse).max(0.0) as usize).min(exponent_level_dims[axis] - 1);
-                Grid::for_each_piece(proxies, i, count, |low, high, window| {
-                    let p = low - origin;
+                Grid::for_each_piece(proxies, i, count, |bbox, window| {
+                    let p = bbox.corners().0;
                     let [_, ny, nz] = exponent_level_dims;
                     let c = (coordinate(p.x, 0) * ny + coordinate(p.y, 1)) * nz + coordinate(p.z, 2);
-                    place(c, low, high, window);
+                    place(c, bbox, window);
                 });
             }
         }
@@ -484,12 +479,11 @@ impl BroadPhase for Grid {
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
         let (count, _) = self.plan_pieces(proxies, body as usize);
-        Grid::for_each_piece(proxies, body as usize, count, |low, high, window| pieces.push((low, high, window)));
-        let origin = self.origin;
-        for &(low, high, window) in &pieces {
-            let piece = Entry::new(low, high, origin, body, 0);
+        Grid::for_each_piece(proxies, body as usize, count, |bbox, window| pieces.push((bbox, window)));
+        for &(bbox, window) in &pieces {
+            let piece = Entry { bbox, body, stamp: 0 };
             for k in 0..self.levels.len() {
-                self.for_each_overlapping(k, &piece, low, high, proxies, |other, other_window, motion| {
+                self.for_each_overlapping(k, &piece, proxies, |other, other_window, motion| {
                     if other.body != body && Some(other.body) != skip {
                         let common = window.intersect(other_window);
                         if !common.is_empty() {
@@ -514,9 +508,9 @@ impl BroadPhase for Grid {
             self.home.resize(i + 1, NONE);
         }
         for n in 0..self.pieces.len() {
-            let (low, high, window) = self.pieces[n];
-            let cell = level.index(level.coordinates(low - self.origin));
-            let entry = Entry::new(low, high, self.origin, body, proxies.stamp[i]);
+            let (bbox, window) = self.pieces[n];
+            let cell = level.index(level.coordinates(bbox.corners().0));
+            let entry = Entry { bbox, body, stamp: proxies.stamp[i] };
             let home = self.home[i] as usize;
             let run = level.run(cell);
             if self.pieces.len() == 1 && run.contains(&home) {
@@ -543,7 +537,7 @@ impl BroadPhase for Grid {
             + self.plan.capacity() * 12
             + self.extents.capacity() * 8
             + self.home.capacity() * 4
-            + self.pieces.capacity() * std::mem::size_of::<(DVec3, DVec3, Window)>()
+            + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels
     }
 }

@@ -244,7 +244,7 @@ impl SweepPrune {
         select_axes(&self.pool, proxies.velocity(b), self.sin_phi, &mut axes);
         let midpoint = path_midpoint(proxies, b);
         self.max_reach = self.max_reach.max(reach(proxies, b));
-        let (mask, bbox) = (self.mask_of(&axes), proxies.compact_box(b));
+        let (mask, bbox) = (self.mask_of(&axes), proxies.bbox[b]);
         for &a in &axes {
             let iv = body_interval(self.pool.axis(a), proxies, b);
             let list = &mut self.lists[a as usize];
@@ -376,7 +376,7 @@ impl BroadPhase for SweepPrune {
                 let iv = body_interval(axis, proxies, b);
                 e.lo = iv.lo;
                 e.hi = iv.hi;
-                e.bbox = proxies.compact_box(b);
+                e.bbox = proxies.bbox[b];
                 let midpoint = path_midpoint(proxies, b);
                 e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
                     + tiling.coordinate(midpoint.dot(up), origin[1]);
@@ -474,7 +474,7 @@ impl BroadPhase for SweepPrune {
         let mask = self.mask_of(&axes);
         for &a in &axes {
             let query = body_interval(self.pool.axis(a), proxies, b);
-            let own = Entry { lo: query.lo, hi: query.hi, body, stamp: proxies.stamp[b], tile: 0, mask, bbox: proxies.compact_box(b) };
+            let own = Entry { lo: query.lo, hi: query.hi, body, stamp: proxies.stamp[b], tile: 0, mask, bbox: proxies.bbox[b] };
             let list = &self.lists[a as usize];
             let mut visit = |e: &Entry| {
                 if e.body == body || Some(e.body) == skip || e.hi < query.lo || e.lo > query.hi || !is_live(e, proxies) {
