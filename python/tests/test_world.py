@@ -211,3 +211,14 @@ def test_two_threads_stepping_one_world_take_turns():
     assert world.time == alone.time
     np.testing.assert_array_equal(world.positions, alone.positions)
     np.testing.assert_array_equal(world.velocities, alone.velocities)
+
+
+def test_any_thread_count_gives_the_same_contacts():
+    runs = []
+    for threads in (1, 2, 3):
+        world = vadop.scene(400, 0.2, 2.0, threads=threads)
+        steps = [world.step(1 / 30) for _ in range(8)]
+        runs.append([(c.time.tolist(), c.i.tolist(), c.j.tolist()) for c in steps])
+    assert runs[0] == runs[1] == runs[2]
+    with pytest.raises(ValueError, match="threads must be an int >= 1"):
+        vadop.scene(10, threads=0)

@@ -59,6 +59,7 @@ class World:
         phi: Optional[float] = None,
         restitution: float = 1.0,
         contact_duration: float = 1e-05,
+        threads: Optional[int] = None,
     ) -> World: ...
     def add(
         self,
@@ -120,6 +121,7 @@ def scene(
     phi: Optional[float] = None,
     restitution: float = 1.0,
     contact_duration: float = 1e-05,
+    threads: Optional[int] = None,
 ) -> World:
     """The paper's scene as a World; MemoryError when it would not fit in the memory left."""
 
@@ -134,6 +136,7 @@ def detect(
     method: _MethodName = "auto",
     pool_axes: Optional[int] = None,
     phi: Optional[float] = None,
+    threads: Optional[int] = None,
 ) -> Contacts:
     """Every contact over `frames` frames of `dt` on straight paths, in time order.
 

@@ -99,6 +99,10 @@ pub struct SimulateArgs {
     /// collapse
     #[arg(long, value_name = "SECONDS", default_value_t = vadop::collapse::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
     contact_duration: f64,
+    /// Threads a step shares its work among [default: every core]; the results are bit-identical
+    /// whatever the number
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(usize), help_heading = "World")]
+    threads: Option<usize>,
     /// Frame length in seconds
     #[arg(long, value_name = "SECONDS", default_value_t = 1.0 / FRAMES_PER_SECOND, allow_negative_numbers = true, help_heading = "World")]
     dt: f64,
@@ -215,6 +219,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         phi: args.phi.map(f64::to_radians),
         restitution: args.restitution,
         contact_duration: args.contact_duration,
+        threads: args.threads,
     };
     let (scene, source, reference) = match &args.scene {
         Some(path) => {

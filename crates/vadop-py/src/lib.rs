@@ -200,13 +200,19 @@ fn parse_mode(mode: &str) -> PyResult<Mode> {
     }
 }
 
-fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, restitution: f64, contact_duration: f64) -> PyResult<WorldConfig> {
+#[allow(clippy::too_many_arguments)]
+fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, restitution: f64, contact_duration: f64, threads: Option<i64>) -> PyResult<WorldConfig> {
     let pool_axes = match pool_axes {
         Some(m) if m < 0 => return Err(PyValueError::new_err(format!("pool_axes must be an int between 3 and 100000, got {m}"))),
         Some(m) => Some(m as usize),
         None => None,
     };
-    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution, contact_duration })
+    let threads = match threads {
+        Some(n) if n < 1 => return Err(PyValueError::new_err(format!("threads must be an int >= 1 or None (every core), got {n}"))),
+        Some(n) => Some(n as usize),
+        None => None,
+    };
+    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution, contact_duration, threads })
 }
 
 fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f64>> {
@@ -279,7 +285,9 @@ impl Contacts {
 /// pass through each other and bounce only off the walls), ``pool_axes`` (None picks the engine's
 /// default), ``phi`` in radians (None: the pool's covering radius), ``restitution`` in [0, 1] and
 /// ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
-/// body's previous one is elastic — the TC model that ends inelastic collapse).
+/// body's previous one is elastic — the TC model that ends inelastic collapse) and ``threads``
+/// (how many threads a step shares its work among; None: every core; results are bit-identical
+/// whatever the number).
 ///
 /// Body ids start at 0 in row order; ids of removed bodies are reused, lowest first. Arrays read
 /// back (``positions``, ``velocities`` ...) hold the live bodies in ascending id order (``ids``).
@@ -301,7 +309,7 @@ struct PyWorld {
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5))]
+    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         positions: &Bound<'_, PyAny>,
@@ -315,9 +323,10 @@ impl PyWorld {
         phi: Option<f64>,
         restitution: f64,
         contact_duration: f64,
+        threads: Option<i64>,
     ) -> PyResult<PyWorld> {
         let bounds = bounds(r#box)?;
-        let config = config(method, mode, pool_axes, phi, restitution, contact_duration)?;
+        let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads)?;
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
@@ -598,7 +607,7 @@ fn live_ids(world: &World, ids: &[i64], name: &str) -> PyResult<Vec<u32>> {
 /// >>> len(w), w.positions.shape
 /// (1000, (1000, 3))
 #[pyfunction]
-#[pyo3(signature = (bodies = 1000, packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = 1, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5))]
+#[pyo3(signature = (bodies = 1000, packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = 1, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None))]
 #[allow(clippy::too_many_arguments)]
 fn scene(
     py: Python<'_>,
@@ -613,8 +622,9 @@ fn scene(
     phi: Option<f64>,
     restitution: f64,
     contact_duration: f64,
+    threads: Option<i64>,
 ) -> PyResult<PyWorld> {
-    let config = config(method, mode, pool_axes, phi, restitution, contact_duration)?;
+    let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads)?;
     // Only a valid count is worth checking: the core names a bad one better.
     if bodies <= MAX_SCENE_BODIES {
         check_world_memory(bodies)?;
@@ -638,7 +648,7 @@ fn scene(
 /// >>> c.j.tolist(), c.time.tolist()   # the gap of 2 closes at 40 units/s
 /// ([1], [0.05])
 #[pyfunction]
-#[pyo3(signature = (positions, velocities, radii, *, r#box, dt, frames, method = "auto", pool_axes = None, phi = None))]
+#[pyo3(signature = (positions, velocities, radii, *, r#box, dt, frames, method = "auto", pool_axes = None, phi = None, threads = None))]
 #[allow(clippy::too_many_arguments)]
 fn detect(
     py: Python<'_>,
@@ -651,9 +661,10 @@ fn detect(
     method: &str,
     pool_axes: Option<i64>,
     phi: Option<f64>,
+    threads: Option<i64>,
 ) -> PyResult<Contacts> {
     let bounds = bounds(r#box)?;
-    let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION)?;
+    let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION, threads)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
     check_world_memory(spheres.len())?;
     let mut world = World::new(bounds, config).map_err(value_error)?;

@@ -32,6 +32,9 @@ pub enum VadopError {
     /// The contact duration of the TC model was negative or not finite.
     #[error("contact duration must be a finite number >= 0 seconds, got {0}")]
     BadContactDuration(f64),
+    /// A thread count of zero.
+    #[error("threads must be at least 1 (or left unset for every core)")]
+    BadThreads,
     /// A length (radius, box side) below the supported range.
     #[error("{what} {value:e} is out of range: radii and box sides must be at least 1e-50 (and at most 1e50)")]
     TooSmall { what: &'static str, value: f64 },

@@ -11,6 +11,7 @@
 //! changes bodies.
 
 use crate::narrow_phase::Wall;
+use crate::parallel::Workers;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -112,11 +113,12 @@ impl EventQueue {
     }
     /// Replaces the bulk part by `events` (left empty, its allocation kept for the caller), to be
     /// popped in order with everything pushed.
-    pub fn set_bulk(&mut self, events: &mut Vec<Event>) {
+    pub fn set_bulk(&mut self, events: &mut Vec<Event>, workers: &Workers) {
         std::mem::swap(&mut self.bulk, events);
         events.clear();
-        // Ascending in `Ord`, which is reversed: the earliest event ends up last.
-        self.bulk.sort_unstable();
+        // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
+        // total, so no two events are equal unless they are the same prediction: unstable is fine.
+        workers.sort_unstable(&mut self.bulk);
     }
     /// The earliest event (valid or not), from whichever part holds it.
     #[inline]

@@ -22,6 +22,7 @@ use crate::bodies::Bodies;
 use crate::broad_phase::BroadPhase;
 use crate::collapse::{ContactRules, Rule};
 use crate::event_queue::{Event, EventQueue, Partner};
+use crate::parallel::Workers;
 use crate::narrow_phase::{direction, pair_contact_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE};
 use crate::proxy::{ProxyTable, Reported};
 use crate::response::{pair_impulse, wall_bounce};
@@ -83,6 +84,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     updates: usize,
     /// Halved each time a window ends early, doubled back when windows pass calmly.
     shrink: f64,
+    /// The threads bulk work is shared among.
+    workers: Workers,
     /// Scratch: travel times for the window rule, predictions of a window's start.
     travel: Vec<f64>,
     predicted: Vec<Event>,
@@ -94,7 +97,7 @@ pub(crate) struct Pipeline<B: BroadPhase> {
 }
 
 impl<B: BroadPhase> Pipeline<B> {
-    pub(crate) fn new(broad: B, rule: WindowRule, bounds: &BoxBounds) -> Pipeline<B> {
+    pub(crate) fn new(broad: B, rule: WindowRule, bounds: &BoxBounds, workers: Workers) -> Pipeline<B> {
         let mut proxies = ProxyTable::new(bounds.min, bounds.max);
         if rule == WindowRule::Adaptive {
             proxies.set_reach_diameters(REACH_DIAMETERS);
@@ -108,6 +111,7 @@ impl<B: BroadPhase> Pipeline<B> {
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
+            workers,
             travel: Vec::new(),
             predicted: Vec::new(),
             cluster: Vec::new(),
@@ -208,11 +212,11 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.windows += 1;
 
         let start = Instant::now();
-        self.proxies.refresh_all(bodies, self.window);
+        self.proxies.refresh_all(bodies, self.window, &self.workers);
         stats.update_seconds += start.elapsed().as_secs_f64();
 
         let start = Instant::now();
-        let counts = self.broad.prepare(&self.proxies);
+        let counts = self.broad.prepare(&self.proxies, &self.workers);
         stats.endpoint_swaps += counts.moves;
         stats.list_entries = counts.entries;
         stats.sort_seconds += start.elapsed().as_secs_f64();
@@ -220,33 +224,25 @@ impl<B: BroadPhase> Pipeline<B> {
         let start = Instant::now();
         self.queue.clear();
         let mut predicted = std::mem::take(&mut self.predicted);
-        let mut candidates = 0u64;
-        let mut tests = 0u64;
-        let proxies = &self.proxies;
-        self.broad.for_each_pair(proxies, |a, b, window| {
-            candidates += 1;
-            tests += 1;
-            if let Some(event) = predict_pair(a, b, window) {
-                predicted.push(event);
+        let candidates = self.broad.find_pairs(&self.proxies, &self.workers, |a, b, window, out| out.extend(predict_pair(a, b, window)), &mut predicted);
+        let (proxies, window) = (&self.proxies, self.window);
+        let walls = self.workers.map_ranges(bodies.slots(), |range| {
+            let mut found = Vec::new();
+            for i in range.filter(|&i| proxies.is_live(i)) {
+                found.extend(predict_wall(bodies, &physics.bounds, i as u32, window));
+                if proxies.expires(i) {
+                    found.push(renewal(bodies, proxies, i as u32));
+                }
             }
+            found
         });
-        
-        for i in 0..bodies.slots() {
-            if self.proxies.live[i] {
-                if let Some(event) = predict_wall(bodies, &physics.bounds, i as u32, self.window) {
-                    predicted.push(event);
-                }
-                if self.proxies.expires[i] {
-                    predicted.push(renewal(bodies, &self.proxies, i as u32));
-                }
-            }
+        for mut part in walls {
+            predicted.append(&mut part);
         }
-        
-        self.queue.set_bulk(&mut predicted);
-        
+        self.queue.set_bulk(&mut predicted, &self.workers);
         self.predicted = predicted;
         stats.candidate_pairs += candidates;
-        stats.narrow_tests += tests;
+        stats.narrow_tests += candidates;
         stats.test_seconds += start.elapsed().as_secs_f64();
     }
 
@@ -433,7 +429,7 @@ impl<B: BroadPhase> Pipeline<B> {
         if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
             queue.push(event);
         }
-        if self.proxies.expires[body as usize] {
+        if self.proxies.expires(body as usize) {
             queue.push(renewal(bodies, &self.proxies, body));
         }
     }
@@ -461,7 +457,7 @@ fn predict_pair(x: Reported, y: Reported, window: Window) -> Option<Event> {
 #[inline]
 fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
     let i = body as usize;
-    Event { time: proxies.end[i], body, partner: Partner::Renew, body_stamp: bodies.stamp[i], partner_stamp: 0 }
+    Event { time: proxies.window_of(i).end, body, partner: Partner::Renew, body_stamp: bodies.stamp[i], partner_stamp: 0 }
 }
 
 /// Body `body`'s wall contact if its canonical time lies in `window`.

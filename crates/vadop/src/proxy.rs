@@ -16,6 +16,7 @@
 
 use crate::bodies::Bodies;
 use crate::narrow_phase::{wall_contact_time, Motion};
+use crate::parallel::Workers;
 use crate::window::Window;
 use glam::DVec3;
 
@@ -49,7 +50,23 @@ pub struct Reported<'a> {
     pub proxy: &'a Proxy,
 }
 
-/// Flat table of proxies.
+/// Where and when a proxy bounds its body: over `[start, end)`, inside `bbox`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Span {
+    pub start: f64,
+    pub end: f64,
+    /// Swept box over `[start, end]`, padded, relative to [`ProxyTable::box_min`].
+    pub bbox: CompactBox,
+    /// The body's velocity stamp when the proxy was built: broad-phase entries carrying another
+    /// stamp are stale.
+    pub stamp: u32,
+    /// False for removed bodies and bodies not entered yet.
+    pub live: bool,
+    /// True when the proxy ends before the window because of its reach: it must be renewed.
+    pub expires: bool,
+}
+
+/// Flat table of proxies: two arrays by body id, the motions (one cache line each) and the spans.
 #[derive(Debug, Default, Clone)]
 pub struct ProxyTable {
     /// The broad-phase window every proxy lies in.
@@ -57,25 +74,13 @@ pub struct ProxyTable {
     /// The box the bodies live in.
     box_min: DVec3,
     box_max: DVec3,
-    /// Longest path a proxy may cover before it must be renewed.
+    /// Longest path a proxy may cover before it must be renewed, in typical diameters.
     reach: f64,
     /// Median bounding radius of the live bodies at the window's start.
     typical_radius: f64,
-
     /// Motion and bounding radius of each body.
     pub proxies: Vec<Proxy>,
-    /// The proxy bounds its body over `[start, end)`.
-    pub start: Vec<f64>,
-    pub end: Vec<f64>,
-    /// Swept box over `[start, end]`, padded, relative to [`ProxyTable::box_min`].
-    pub bbox: Vec<CompactBox>,
-    /// The body's velocity stamp when the proxy was built: broad-phase entries carrying another
-    /// stamp are stale.
-    pub stamp: Vec<u32>,
-    /// False for removed bodies and bodies not entered yet.
-    pub live: Vec<bool>,
-    /// True when the proxy ends before the window because of its reach: it must be renewed.
-    pub expires: Vec<bool>,
+    pub spans: Vec<Span>,
     /// Scratch for the median radius.
     radii: Vec<f64>,
 }
@@ -183,13 +188,31 @@ impl ProxyTable {
     /// Number of slots (live or not).
     #[inline]
     pub fn slots(&self) -> usize {
-        self.live.len()
+        self.spans.len()
     }
 
     /// The window proxy `i` bounds its body over.
     #[inline]
     pub fn window_of(&self, i: usize) -> Window {
-        Window::new(self.start[i], self.end[i])
+        Window::new(self.spans[i].start, self.spans[i].end)
+    }
+
+    /// Proxy `i`'s swept box.
+    #[inline]
+    pub fn bbox(&self, i: usize) -> CompactBox {
+        self.spans[i].bbox
+    }
+
+    /// The velocity stamp proxy `i` was built with.
+    #[inline]
+    pub fn stamp(&self, i: usize) -> u32 {
+        self.spans[i].stamp
+    }
+
+    /// True when proxy `i` ends before the window because of its reach.
+    #[inline]
+    pub fn expires(&self, i: usize) -> bool {
+        self.spans[i].expires
     }
 
     /// The body's motion as the proxy holds it.
@@ -201,7 +224,7 @@ impl ProxyTable {
     /// Body `i` as a broad phase reports it from this table.
     #[inline]
     pub fn reported(&self, i: usize) -> Reported<'_> {
-        Reported { body: i as u32, stamp: self.stamp[i], proxy: &self.proxies[i] }
+        Reported { body: i as u32, stamp: self.spans[i].stamp, proxy: &self.proxies[i] }
     }
 
     /// Bounding radius of body `i`.
@@ -219,54 +242,94 @@ impl ProxyTable {
     /// Centre of body `i` at its proxy's start.
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
-        self.proxies[i].motion.at(self.start[i])
+        self.proxies[i].motion.at(self.spans[i].start)
     }
 
     /// True when body `i` has a proxy.
     #[inline]
     pub fn is_live(&self, i: usize) -> bool {
-        self.live.get(i).copied().unwrap_or(false)
+        self.spans.get(i).is_some_and(|s| s.live)
     }
 
     /// True when a broad-phase entry of body `i` made with `stamp` is current.
     #[inline]
     pub fn is_current(&self, i: usize, stamp: u32) -> bool {
-        self.live[i] && self.stamp[i] == stamp
+        let span = &self.spans[i];
+        span.live && span.stamp == stamp
     }
 
-    /// Window start: every live body's proxy over `window`, bodies at their positions at its start.
-    pub fn refresh_all(&mut self, bodies: &Bodies, window: Window) {
+    /// Window start: every live body's proxy over `window`, bodies at their positions at its
+    /// start; shared among `workers`.
+    pub fn refresh_all(&mut self, bodies: &Bodies, window: Window, workers: &Workers) {
         self.window = window;
         self.resize(bodies.slots());
         self.radii.clear();
-        self.radii.extend((0..bodies.slots()).filter(|&i| self.live[i]).map(|i| bodies.bounding_radius(i)));
+        let spans = &self.spans;
+        self.radii.extend((0..bodies.slots()).filter(|&i| spans[i].live).map(|i| bodies.bounding_radius(i)));
         if !self.radii.is_empty() {
             let middle = self.radii.len() / 2;
             self.typical_radius = *self.radii.select_nth_unstable_by(middle, f64::total_cmp).1;
         }
-        for i in 0..bodies.slots() {
-            if self.live[i] {
-                self.refresh(i, bodies, window.start);
+        let rule = self.rule();
+        workers.zip_chunks(&mut self.proxies, &mut self.spans, |offset, proxies, spans| {
+            for (k, (proxy, span)) in proxies.iter_mut().zip(spans).enumerate() {
+                if span.live {
+                    (*proxy, *span) = rule.proxy(offset + k, bodies, window.start);
+                }
             }
-        }
+        });
     }
 
     /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on.
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
         self.resize(bodies.slots());
-        self.live[i] = true;
-        self.refresh(i, bodies, t);
+        (self.proxies[i], self.spans[i]) = self.rule().proxy(i, bodies, t);
     }
 
     /// Drops body `i` (removed): its broad-phase entries become stale.
     pub fn remove(&mut self, i: usize) {
-        if i < self.live.len() {
-            self.live[i] = false;
+        if let Some(span) = self.spans.get_mut(i) {
+            span.live = false;
         }
     }
 
+    /// What a proxy is made by, copied so workers can share it.
+    fn rule(&self) -> ProxyRule {
+        ProxyRule {
+            window: self.window,
+            box_min: self.box_min,
+            box_max: self.box_max,
+            reach: 2.0 * self.typical_radius * self.reach,
+        }
+    }
+
+    fn resize(&mut self, slots: usize) {
+        if self.spans.len() < slots {
+            self.proxies.resize(slots, Proxy::default());
+            self.spans.resize(slots, Span::default());
+        }
+    }
+
+    /// Bytes held (capacity).
+    pub fn memory_bytes(&self) -> usize {
+        self.proxies.capacity() * std::mem::size_of::<Proxy>() + self.spans.capacity() * std::mem::size_of::<Span>() + self.radii.capacity() * 8
+    }
+}
+
+/// The settings a proxy is built with.
+#[derive(Debug, Clone, Copy)]
+struct ProxyRule {
+    window: Window,
+    box_min: DVec3,
+    box_max: DVec3,
+    /// Longest path a proxy may cover.
+    reach: f64,
+}
+
+impl ProxyRule {
+    /// Body `i`'s proxy from time `t` on.
     #[inline]
-    fn refresh(&mut self, i: usize, bodies: &Bodies, t: f64) {
+    fn proxy(&self, i: usize, bodies: &Bodies, t: f64) -> (Proxy, Span) {
         let start = t.max(self.window.start);
         let motion = bodies.motion(i);
         let velocity = motion.velocity;
@@ -277,33 +340,14 @@ impl ProxyTable {
             Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let reached = start + 2.0 * self.typical_radius * self.reach / velocity.length();
-        self.expires[i] = reached < end && reached > start;
-        if self.expires[i] {
+        let reached = start + self.reach / velocity.length();
+        let expires = reached < end && reached > start;
+        if expires {
             end = reached;
         }
         let origin = motion.at(start);
-        self.bbox[i] = self.compact_swept_box(origin, origin + velocity * (end - start), radius);
-        self.proxies[i] = Proxy { motion, radius };
-        self.start[i] = start;
-        self.end[i] = end;
-        self.stamp[i] = bodies.stamp[i];
-    }
-
-    fn resize(&mut self, slots: usize) {
-        if self.live.len() < slots {
-            self.proxies.resize(slots, Proxy::default());
-            self.start.resize(slots, 0.0);
-            self.end.resize(slots, 0.0);
-            self.bbox.resize(slots, CompactBox::default());
-            self.stamp.resize(slots, 0);
-            self.live.resize(slots, false);
-            self.expires.resize(slots, false);
-        }
-    }
-
-    /// Bytes held (capacity).
-    pub fn memory_bytes(&self) -> usize {
-        self.proxies.capacity() * std::mem::size_of::<Proxy>() + self.live.capacity() * (std::mem::size_of::<CompactBox>() + 2 * 8 + 4 + 2) + self.radii.capacity() * 8
+        let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
+        let bbox = CompactBox::new(low, high, self.box_min);
+        (Proxy { motion, radius }, Span { start, end, bbox, stamp: bodies.stamp[i], live: true, expires })
     }
 }

@@ -16,6 +16,7 @@ use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::collapse::{ContactRules, DEFAULT_CONTACT_DURATION};
 use crate::error::{check_length, check_magnitude, check_vector, Result, VadopError};
 use crate::narrow_phase::Wall;
+use crate::parallel::Workers;
 use crate::pipeline::{Output, Physics, Pipeline, WindowRule};
 use crate::pseudo_dynamic::PseudoDynamic;
 use glam::DVec3;
@@ -114,6 +115,10 @@ pub struct WorldConfig {
     /// body whose previous contact lies less than t_c before is elastic (see [`crate::collapse`]).
     #[serde(default = "default_contact_duration")]
     pub contact_duration: f64,
+    /// Threads the frame pipeline shares its bulk work among; `None`: every core. Results are
+    /// bit-identical whatever the number; with 1, no thread pool is made.
+    #[serde(default)]
+    pub threads: Option<usize>,
 }
 
 fn default_contact_duration() -> f64 {
@@ -129,7 +134,15 @@ impl Default for WorldConfig {
             phi: None,
             restitution: 1.0,
             contact_duration: DEFAULT_CONTACT_DURATION,
+            threads: None,
         }
+    }
+}
+
+impl WorldConfig {
+    /// The number of threads: as configured, or every core the system reports.
+    pub fn thread_count(&self) -> usize {
+        self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
     }
 }
 
@@ -286,6 +299,8 @@ pub struct World {
     /// Added since the last step: validated and entered into the engine at the next step.
     unplaced: Vec<u32>,
     engine: Engine,
+    /// The threads of the frame pipeline (none with one thread).
+    threads: Option<rayon::ThreadPool>,
     pool: Arc<AxisPool>,
     time: f64,
     contacts: Vec<Contact>,
@@ -302,6 +317,9 @@ impl World {
         if !(config.contact_duration.is_finite() && config.contact_duration >= 0.0) {
             return Err(VadopError::BadContactDuration(config.contact_duration));
         }
+        if config.threads == Some(0) {
+            return Err(VadopError::BadThreads);
+        }
         let pool = AxisPool::new(config.pool_axes.unwrap_or(AUTO_POOL_AXES))?;
         check_phi(config.phi.unwrap_or(pool.covering_radius()), &pool)?;
         Ok(World {
@@ -312,6 +330,7 @@ impl World {
             free_slots: Vec::new(),
             unplaced: Vec::new(),
             engine: Engine::Unbuilt,
+            threads: None,
             pool,
             time: 0.0,
             contacts: Vec::new(),
@@ -473,13 +492,18 @@ impl World {
         self.stats = FrameStats::default();
         self.place_new_bodies();
         let physics = self.physics();
-        let mut out = Output { contacts: &mut self.contacts, stats: &mut self.stats };
-        match &mut self.engine {
-            Engine::Grid(p) => p.step(&mut self.bodies, &physics, t0, t1, &mut out),
-            Engine::SweepPrune(p) => p.step(&mut self.bodies, &physics, t0, t1, &mut out),
-            Engine::Brute(p) => p.step(&mut self.bodies, &physics, t0, t1, &mut out),
-            Engine::Discrete(pd) => pd.step(&mut self.bodies, &physics, t0, t1, &mut out),
+        let World { engine, bodies, contacts, stats, threads, .. } = self;
+        let mut out = Output { contacts, stats };
+        let mut run = || match engine {
+            Engine::Grid(p) => p.step(bodies, &physics, t0, t1, &mut out),
+            Engine::SweepPrune(p) => p.step(bodies, &physics, t0, t1, &mut out),
+            Engine::Brute(p) => p.step(bodies, &physics, t0, t1, &mut out),
+            Engine::Discrete(pd) => pd.step(bodies, &physics, t0, t1, &mut out),
             Engine::Unbuilt => unreachable!("built by place_new_bodies"),
+        };
+        match threads {
+            Some(pool) => pool.install(run),
+            None => run(),
         }
         self.time = t1;
         self.stats.contacts = self.contacts.len() as u64;
@@ -588,6 +612,9 @@ impl World {
     fn place_new_bodies(&mut self) {
         if matches!(self.engine, Engine::Unbuilt) {
             let spheres: Vec<Sphere> = self.spheres().map(|(_, s)| s).collect();
+            let threads = self.config.thread_count();
+            // A pool only when there is something to share; a failed pool leaves one thread.
+            self.threads = (threads > 1).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
             self.engine = self.build_engine(self.config.method.resolve(&spheres));
         }
         let physics = self.physics();
@@ -606,25 +633,26 @@ impl World {
 
     fn build_engine(&self, method: Method) -> Engine {
         let (min, max) = (self.bounds.min, self.bounds.max);
+        let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
         match method {
-            Method::Brute => Engine::Brute(Pipeline::new(BruteForce::default(), WindowRule::Frame, &self.bounds)),
+            Method::Brute => Engine::Brute(Pipeline::new(BruteForce::default(), WindowRule::Frame, &self.bounds, workers)),
             Method::Discrete => Engine::Discrete(PseudoDynamic::default()),
-            Method::Grid | Method::Auto => Engine::Grid(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, &self.bounds)),
+            Method::Grid | Method::Auto => Engine::Grid(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, &self.bounds, workers)),
             Method::Vadop => {
                 let phi = self.config.phi.unwrap_or(self.pool.covering_radius());
                 // A hair wider than phi, so rounding never costs a pair its shared axis.
                 let sin_phi = (phi.sin() * (1.0 + 1e-12) + 1e-15).min(1.0);
                 let sap = SweepPrune::new(self.pool.clone(), sin_phi, min, max, true);
-                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds))
+                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds, workers))
             }
             Method::SweptKdop => {
                 let sap = SweepPrune::new(self.pool.clone(), 1.0, min, max, true);
-                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds))
+                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds, workers))
             }
             Method::SweptAabb => {
                 let coordinate_axes = AxisPool::new(3).expect("the 3-axis pool always builds");
                 let sap = SweepPrune::new(coordinate_axes, 1.0, min, max, false);
-                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds))
+                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds, workers))
             }
         }
     }

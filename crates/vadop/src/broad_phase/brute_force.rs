@@ -4,6 +4,7 @@
 //! other broad phase's contacts with the ones found through it.
 
 use super::{BroadPhase, PrepareCounts};
+use crate::parallel::Workers;
 use crate::proxy::{ProxyTable, Reported};
 use crate::window::Window;
 
@@ -14,19 +15,36 @@ pub struct BruteForce {
 }
 
 impl BroadPhase for BruteForce {
-    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
+    fn prepare(&mut self, proxies: &ProxyTable, _workers: &Workers) -> PrepareCounts {
         self.live.clear();
-        self.live.extend((0..proxies.slots() as u32).filter(|&i| proxies.live[i as usize]));
+        self.live.extend((0..proxies.slots() as u32).filter(|&i| proxies.is_live(i as usize)));
         PrepareCounts { moves: 0, entries: self.live.len() as u64 }
     }
 
-    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
-        for (k, &i) in self.live.iter().enumerate() {
-            for &j in &self.live[k + 1..] {
-                let (i, j) = (i as usize, j as usize);
-                report(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)));
+    fn find_pairs<T: Send>(
+        &mut self,
+        proxies: &ProxyTable,
+        workers: &Workers,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+    ) -> u64 {
+        let live = &self.live;
+        let parts = workers.map_ranges(live.len(), |rows| {
+            let mut found = Vec::new();
+            for k in rows {
+                let i = live[k] as usize;
+                for &j in &live[k + 1..] {
+                    let j = j as usize;
+                    predict(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)), &mut found);
+                }
             }
+            found
+        });
+        for mut part in parts {
+            out.append(&mut part);
         }
+        let n = live.len() as u64;
+        n * n.saturating_sub(1) / 2
     }
 
     fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
@@ -36,7 +54,7 @@ impl BroadPhase for BruteForce {
     fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let window = proxies.window_of(body as usize);
         for other in 0..proxies.slots() as u32 {
-            if other != body && Some(other) != skip && proxies.live[other as usize] {
+            if other != body && Some(other) != skip && proxies.is_live(other as usize) {
                 report(proxies.reported(other as usize), window.intersect(proxies.window_of(other as usize)));
             }
         }

@@ -16,6 +16,7 @@
 //! reads shapes or computes contact times.
 
 use super::{BroadPhase, PrepareCounts};
+use crate::parallel::Workers;
 use crate::proxy::{CompactBox, Proxy, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
@@ -193,7 +194,7 @@ impl Grid {
     fn for_each_piece(proxies: &ProxyTable, i: usize, count: u32, mut f: impl FnMut(CompactBox, Window)) {
         let window = proxies.window_of(i);
         if count == 1 {
-            f(proxies.bbox[i], window);
+            f(proxies.bbox(i), window);
             return;
         }
         let (origin, velocity, radius) = (proxies.origin(i), proxies.velocity(i), proxies.radius(i));
@@ -274,15 +275,94 @@ impl Grid {
             }
         }
     }
+    /// Calls `report` for every candidate pair found from the cells of level `k` with x in
+    /// `slabs`: each cell against itself and 13 of its neighbours, each piece against the
+    /// coarser levels.
+    fn slab_pairs(&self, k: usize, slabs: std::ops::Range<usize>, report: &mut impl FnMut(Reported, Reported, Window)) {
+        // Half of the 26 neighbours, so each pair of adjacent cells is swept once. Cells along z
+        // are adjacent in memory, so the 13 cells are 5 contiguous runs: the next cell of this
+        // column, then z - 1 ..= z + 1 of the columns (x, y + 1) and (x + 1, y - 1 ..= y + 1);
+        // column offsets are stored +1 in y so that -1 needs no signed arithmetic.
+        const COLUMNS: [[usize; 2]; 4] = [[0, 2], [1, 0], [1, 1], [1, 2]];
+        let (entries, windows, motions) = (&self.entries[..], &self.windows[..], &self.motions[..]);
+        // Reports binned pieces a and b when they belong to different bodies and their windows
+        // meet (their boxes are known to overlap).
+        let mut hit = |a: usize, b: usize| {
+            let (ea, eb) = (&entries[a], &entries[b]);
+            let window = windows[a].intersect(windows[b]);
+            if ea.body != eb.body && !window.is_empty() {
+                let x = Reported { body: ea.body, stamp: ea.stamp, proxy: &motions[a] };
+                let y = Reported { body: eb.body, stamp: eb.stamp, proxy: &motions[b] };
+                report(x, y, window);
+            }
+        };
+        let level = &self.levels[k];
+        let [nx, ny, nz] = level.dims;
+        let starts = &level.cell_start[..];
+        for x in slabs {
+            for y in 0..ny {
+                for z in 0..nz {
+                    let c = (x * ny + y) * nz + z;
+                    let (from, to) = (level.first + starts[c] as usize, level.first + starts[c + 1] as usize);
+                    if from == to {
+                        continue;
+                    }
+                    let run = &entries[from..to];
+                    for (m, ea) in run.iter().enumerate() {
+                        for (n, eb) in run[m + 1..].iter().enumerate() {
+                            if ea.overlaps(eb) {
+                                hit(from + m, from + m + 1 + n);
+                            }
+                        }
+                    }
+                    let mut sweep = |other_from: usize, other_to: usize| {
+                        for (m, ea) in run.iter().enumerate() {
+                            for (n, eb) in entries[other_from..other_to].iter().enumerate() {
+                                if ea.overlaps(eb) {
+                                    hit(from + m, other_from + n);
+                                }
+                            }
+                        }
+                    };
+                    if z + 1 < nz {
+                        sweep(to, level.first + starts[c + 2] as usize);
+                    }
+                    for [dx, dy] in COLUMNS {
+                        let (x2, y2) = (x + dx, (y + dy).wrapping_sub(1));
+                        if x2 >= nx || y2 >= ny {
+                            continue;
+                        }
+                        let column = (x2 * ny + y2) * nz;
+                        let (z_from, z_to) = (z.saturating_sub(1), (z + 1).min(nz - 1));
+                        sweep(level.first + starts[column + z_from] as usize, level.first + starts[column + z_to + 1] as usize);
+                    }
+                    // Coarser levels: each piece against the cells that can hold an
+                    // overlapping box there.
+                    for coarser in &self.levels[k + 1..] {
+                        for (m, ea) in run.iter().enumerate() {
+                            let (low, high) = ea.bbox.corners();
+                            for c2 in coarser.cells_near(low, high) {
+                                for b in coarser.run(c2) {
+                                    if ea.overlaps(&entries[b]) {
+                                        hit(from + m, b);
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 }
 
 impl BroadPhase for Grid {
-    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
+    fn prepare(&mut self, proxies: &ProxyTable, workers: &Workers) -> PrepareCounts {
         // Base cell from the median extent of the swept boxes: robust to a few giant, tiny or
         // fast bodies.
         let mut extents = std::mem::take(&mut self.extents);
         extents.clear();
-        extents.extend((0..proxies.slots()).filter(|&i| proxies.live[i]).map(|i| proxies.bbox[i].extent()));
+        extents.extend((0..proxies.slots()).filter(|&i| proxies.is_live(i)).map(|i| proxies.bbox(i).extent()));
         if !extents.is_empty() {
             let middle = extents.len() / 2;
             let median = *extents.select_nth_unstable_by(middle, f64::total_cmp).1;
@@ -292,18 +372,30 @@ impl BroadPhase for Grid {
         // Pass 1: each body's piece count and level exponent, and the pieces per exponent.
         let mut plan = std::mem::take(&mut self.plan);
         plan.clear();
+        plan.resize(proxies.slots(), (0, 0, 0));
+        let this = &*self;
+        let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
+            let mut per_exponent: Vec<(i32, usize)> = Vec::new();
+            for (k, plan) in chunk.iter_mut().enumerate() {
+                let i = offset + k;
+                if !proxies.is_live(i) {
+                    continue;
+                }
+                let (count, exponent) = this.plan_pieces(proxies, i);
+                *plan = (count, exponent as u32, 0);
+                match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
+                    Some((_, n)) => *n += count as usize,
+                    None => per_exponent.push((exponent, count as usize)),
+                }
+            }
+            per_exponent
+        });
         let mut per_exponent = std::mem::take(&mut self.per_exponent);
         per_exponent.clear();
-        for i in 0..proxies.slots() {
-            if !proxies.live[i] {
-                plan.push((0, 0, 0));
-                continue;
-            }
-            let (count, exponent) = self.plan_pieces(proxies, i);
-            plan.push((count, exponent as u32, 0));
+        for (exponent, count) in counted.into_iter().flatten() {
             match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
-                Some((_, n)) => *n += count as usize,
-                None => per_exponent.push((exponent, count as usize)),
+                Some((_, n)) => *n += count,
+                None => per_exponent.push((exponent, count)),
             }
         }
         per_exponent.sort_unstable();
@@ -317,20 +409,25 @@ impl BroadPhase for Grid {
             first += count;
             self.levels.push(level);
         }
-        for entry in &mut plan {
-            if entry.0 > 0 {
-                entry.1 = per_exponent.partition_point(|&(e, _)| e < entry.1 as i32) as u32;
+        // Each body's level, and a single piece's cell, found in parallel.
+        let levels = &self.levels;
+        workers.chunks_mut(&mut plan, |offset, chunk| {
+            for (k, entry) in chunk.iter_mut().enumerate() {
+                if entry.0 > 0 {
+                    entry.1 = per_exponent.partition_point(|&(e, _)| e < entry.1 as i32) as u32;
+                }
+                if entry.0 == 1 {
+                    let level = &levels[entry.1 as usize];
+                    entry.2 = level.index(level.coordinates(proxies.bbox(offset + k).corners().0)) as u32;
+                }
             }
-        }
+        });
         // Pass 2: count the pieces of each cell; pass 3: scatter them (counting sort, no hashing).
-        // A single piece's cell is kept from pass 2; longer paths are cut again in pass 3.
-        for (i, plan) in plan.iter_mut().enumerate() {
+        // Longer paths are cut again in pass 3.
+        for (i, plan) in plan.iter().enumerate() {
             let (count, k) = (plan.0, plan.1 as usize);
             if count == 1 {
-                let level = &mut self.levels[k];
-                let c = level.index(level.coordinates(proxies.bbox[i].corners().0));
-                level.cell_start[c + 1] += 1;
-                plan.2 = c as u32;
+                self.levels[k].cell_start[plan.2 as usize + 1] += 1;
             } else if count > 1 {
                 let level = &mut self.levels[k];
                 Grid::for_each_piece(proxies, i, count, |bbox, _| {
@@ -364,13 +461,13 @@ impl BroadPhase for Grid {
             let mut place = |c: usize, bbox: CompactBox, window: Window| {
                 let slot = level.first + level.cell_start[c] as usize;
                 level.cell_start[c] += 1;
-                entries[slot] = Entry { bbox, body: i as u32, stamp: proxies.stamp[i] };
+                entries[slot] = Entry { bbox, body: i as u32, stamp: proxies.stamp(i) };
                 windows[slot] = window;
                 motions[slot] = proxies.proxies[i];
                 slot
             };
             if count == 1 {
-                home[i] = place(cell as usize, proxies.bbox[i], proxies.window_of(i)) as u32;
+                home[i] = place(cell as usize, proxies.bbox(i), proxies.window_of(i)) as u32;
             } else {
                 let (exponent_level_dims, inverse) = (level.dims, level.inverse);
                 let coordinate = |value: f64, axis: usize| ((value * inverse).max(0.0) as usize).min(exponent_level_dims[axis] - 1);
@@ -397,82 +494,31 @@ impl BroadPhase for Grid {
         PrepareCounts { moves: first as u64, entries: first as u64 }
     }
 
-    fn for_each_pair(&mut self, _proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
-        // Half of the 26 neighbours, so each pair of adjacent cells is swept once. Cells along z
-        // are adjacent in memory, so the 13 cells are 5 contiguous runs: the next cell of this
-        // column, then z - 1 ..= z + 1 of the columns (x, y + 1) and (x + 1, y - 1 ..= y + 1);
-        // column offsets are stored +1 in y so that -1 needs no signed arithmetic.
-        const COLUMNS: [[usize; 2]; 4] = [[0, 2], [1, 0], [1, 1], [1, 2]];
-        let (entries, windows, motions) = (&self.entries[..], &self.windows[..], &self.motions[..]);
-        // Reports binned pieces a and b when they belong to different bodies and their windows
-        // meet (their boxes are known to overlap).
-        let mut hit = |a: usize, b: usize| {
-            let (ea, eb) = (&entries[a], &entries[b]);
-            let window = windows[a].intersect(windows[b]);
-            if ea.body != eb.body && !window.is_empty() {
-                let x = Reported { body: ea.body, stamp: ea.stamp, proxy: &motions[a] };
-                let y = Reported { body: eb.body, stamp: eb.stamp, proxy: &motions[b] };
-                report(x, y, window);
-            }
-        };
-        for (k, level) in self.levels.iter().enumerate() {
-            let [nx, ny, nz] = level.dims;
-            let starts = &level.cell_start[..];
-            for x in 0..nx {
-                for y in 0..ny {
-                    for z in 0..nz {
-                        let c = (x * ny + y) * nz + z;
-                        let (from, to) = (level.first + starts[c] as usize, level.first + starts[c + 1] as usize);
-                        if from == to {
-                            continue;
-                        }
-                        let run = &entries[from..to];
-                        for (m, ea) in run.iter().enumerate() {
-                            for (n, eb) in run[m + 1..].iter().enumerate() {
-                                if ea.overlaps(eb) {
-                                    hit(from + m, from + m + 1 + n);
-                                }
-                            }
-                        }
-                        let mut sweep = |other_from: usize, other_to: usize| {
-                            for (m, ea) in run.iter().enumerate() {
-                                for (n, eb) in entries[other_from..other_to].iter().enumerate() {
-                                    if ea.overlaps(eb) {
-                                        hit(from + m, other_from + n);
-                                    }
-                                }
-                            }
-                        };
-                        if z + 1 < nz {
-                            sweep(to, level.first + starts[c + 2] as usize);
-                        }
-                        for [dx, dy] in COLUMNS {
-                            let (x2, y2) = (x + dx, (y + dy).wrapping_sub(1));
-                            if x2 >= nx || y2 >= ny {
-                                continue;
-                            }
-                            let column = (x2 * ny + y2) * nz;
-                            let (z_from, z_to) = (z.saturating_sub(1), (z + 1).min(nz - 1));
-                            sweep(level.first + starts[column + z_from] as usize, level.first + starts[column + z_to + 1] as usize);
-                        }
-                        // Coarser levels: each piece against the cells that can hold an
-                        // overlapping box there.
-                        for coarser in &self.levels[k + 1..] {
-                            for (m, ea) in run.iter().enumerate() {
-                                let (low, high) = ea.bbox.corners();
-                                for c2 in coarser.cells_near(low, high) {
-                                    for b in coarser.run(c2) {
-                                        if ea.overlaps(&entries[b]) {
-                                            hit(from + m, b);
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
+    /// Workers sweep slabs of cells along x; a slab reads the next one, never writes.
+    fn find_pairs<T: Send>(
+        &mut self,
+        _proxies: &ProxyTable,
+        workers: &Workers,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+    ) -> u64 {
+        let mut candidates = 0;
+        for k in 0..self.levels.len() {
+            let this = &*self;
+            let parts = workers.map_ranges(this.levels[k].dims[0], |slabs| {
+                let (mut found, mut count) = (Vec::new(), 0u64);
+                this.slab_pairs(k, slabs, &mut |x, y, window| {
+                    count += 1;
+                    predict(x, y, window, &mut found);
+                });
+                (found, count)
+            });
+            for (mut part, count) in parts {
+                out.append(&mut part);
+                candidates += count;
             }
         }
+        candidates
     }
 
     fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
@@ -510,7 +556,7 @@ impl BroadPhase for Grid {
         for n in 0..self.pieces.len() {
             let (bbox, window) = self.pieces[n];
             let cell = level.index(level.coordinates(bbox.corners().0));
-            let entry = Entry { bbox, body, stamp: proxies.stamp[i] };
+            let entry = Entry { bbox, body, stamp: proxies.stamp(i) };
             let home = self.home[i] as usize;
             let run = level.run(cell);
             if self.pieces.len() == 1 && run.contains(&home) {

@@ -18,6 +18,7 @@ pub mod brute_force;
 pub mod grid;
 pub mod sweep_prune;
 
+use crate::parallel::Workers;
 use crate::proxy::{ProxyTable, Reported};
 use crate::window::Window;
 
@@ -32,12 +33,21 @@ pub struct PrepareCounts {
 
 /// The interface every broad phase offers the frame pipeline.
 pub trait BroadPhase {
-    /// Window start: every live proxy has just been refreshed; bin or sort them (c_sort).
-    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts;
+    /// Window start: every live proxy has just been refreshed; bin or sort them (c_sort),
+    /// spreading the work over `workers`.
+    fn prepare(&mut self, proxies: &ProxyTable, workers: &Workers) -> PrepareCounts;
 
-    /// Calls `report(a, b, window)` for every candidate pair of the window (c_test), each pair
-    /// and piece of path once. Call right after [`Self::prepare`].
-    fn for_each_pair(&mut self, proxies: &ProxyTable, report: impl FnMut(Reported, Reported, Window));
+    /// Calls `predict(a, b, window, out)` for every candidate pair of the window (c_test), each
+    /// pair and piece of path once, spread over `workers`: each worker writes into an `out` of
+    /// its own, and the outputs are appended to `out` in an order that does not depend on the
+    /// number of workers. Returns the number of candidates. Call right after [`Self::prepare`].
+    fn find_pairs<T: Send>(
+        &mut self,
+        proxies: &ProxyTable,
+        workers: &Workers,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+    ) -> u64;
 
     /// Calls `report(other, window)` for every candidate partner of body `body`'s current proxy
     /// other than `skip`, without entering the proxy.

@@ -23,6 +23,7 @@ use super::{BroadPhase, PrepareCounts};
 use crate::axis_pool::AxisPool;
 use crate::bounding_volume::{interval, select_axes, Interval};
 use crate::coherent_sort::coherent_sort;
+use crate::parallel::Workers;
 use crate::proxy::{CompactBox, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
@@ -244,18 +245,18 @@ impl SweepPrune {
         select_axes(&self.pool, proxies.velocity(b), self.sin_phi, &mut axes);
         let midpoint = path_midpoint(proxies, b);
         self.max_reach = self.max_reach.max(reach(proxies, b));
-        let (mask, bbox) = (self.mask_of(&axes), proxies.bbox[b]);
+        let (mask, bbox) = (self.mask_of(&axes), proxies.bbox(b));
         for &a in &axes {
             let iv = body_interval(self.pool.axis(a), proxies, b);
             let list = &mut self.lists[a as usize];
             let tile = list.tile_of(&self.tiling, midpoint);
-            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body: b as u32, stamp: proxies.stamp[b], tile, mask, bbox });
+            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body: b as u32, stamp: proxies.stamp(b), tile, mask, bbox });
             if absorb && list.pending.len() > 64 + list.sorted.len() / 128 {
                 list.absorb_pending(proxies);
             }
         }
         self.axes_of[b] = axes;
-        self.entered[b] = Some(proxies.stamp[b]);
+        self.entered[b] = Some(proxies.stamp(b));
     }
 
     /// The bit mask of an axis set (0 for pools of more than 64 axes, which use the lists).
@@ -323,6 +324,52 @@ impl SweepPrune {
         !first
     }
 
+    /// Calls `report` for every candidate pair reported through axis `axis` (the lowest axis of
+    /// the pair's shared ones): sweeps each tile of its list against itself and half of its
+    /// neighbours.
+    fn list_pairs(&self, axis: u32, proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
+        let side = self.tiling.side;
+        let list = &self.lists[axis as usize];
+        let mut check = |e: &Entry, f: &Entry| {
+            if self.is_candidate(e, &self.axes_of[e.body as usize], f, axis, proxies) {
+                let (i, j) = (e.body as usize, f.body as usize);
+                report(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)));
+            }
+        };
+        let mut start = 0;
+        while start < list.sorted.len() {
+            let tile = list.sorted[start].tile;
+            let len = list.sorted[start..].partition_point(|e| e.tile == tile);
+            let run = &list.sorted[start..start + len];
+            start += len;
+            for (k, e) in run.iter().enumerate() {
+                for f in run[k + 1..].iter().take_while(|f| f.lo <= e.hi) {
+                    check(e, f);
+                }
+            }
+            // Half of the 8 neighbours, so each pair of adjacent tiles is swept once.
+            let (row, col) = (tile / side, tile % side);
+            let neighbours = [(row, col + 1), (row + 1, col.wrapping_sub(1)), (row + 1, col), (row + 1, col + 1)];
+            for (r, c) in neighbours {
+                if r >= side || c >= side {
+                    continue;
+                }
+                let other = list.run(r * side + c);
+                let mut first = 0;
+                for e in run {
+                    while first < other.len() && other[first].lo < e.lo - list.max_width {
+                        first += 1;
+                    }
+                    for f in other[first..].iter().take_while(|f| f.lo <= e.hi) {
+                        if f.hi >= e.lo {
+                            check(e, f);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// True when bodies `i` and `j` use at least one common axis (the invariant that makes
     /// pruning safe: a pair is only ever pruned on a true separating axis).
     pub fn shares_axis(&self, i: u32, j: u32) -> bool {
@@ -343,15 +390,15 @@ impl BroadPhase for SweepPrune {
     /// Drops void entries, sizes the tiles for the window, recomputes every interval and tile
     /// (c_update folded in: the intervals are the lists' own), then sorts every list by (tile,
     /// interval start).
-    fn prepare(&mut self, proxies: &ProxyTable) -> PrepareCounts {
+    fn prepare(&mut self, proxies: &ProxyTable, _workers: &Workers) -> PrepareCounts {
         for b in 0..proxies.slots() {
-            if proxies.live[b] && self.entered.get(b).copied().flatten() != Some(proxies.stamp[b]) {
+            if proxies.is_live(b) && self.entered.get(b).copied().flatten() != Some(proxies.stamp(b)) {
                 self.enter_entries(b, proxies, false);
             }
         }
         let mut max_reach: f64 = 0.0;
         for b in 0..proxies.slots() {
-            if proxies.live[b] {
+            if proxies.is_live(b) {
                 max_reach = max_reach.max(reach(proxies, b));
             }
         }
@@ -376,7 +423,7 @@ impl BroadPhase for SweepPrune {
                 let iv = body_interval(axis, proxies, b);
                 e.lo = iv.lo;
                 e.hi = iv.hi;
-                e.bbox = proxies.bbox[b];
+                e.bbox = proxies.bbox(b);
                 let midpoint = path_midpoint(proxies, b);
                 e.tile = tiling.coordinate(midpoint.dot(across), origin[0]) * tiling.side
                     + tiling.coordinate(midpoint.dot(up), origin[1]);
@@ -416,49 +463,31 @@ impl BroadPhase for SweepPrune {
         counts
     }
 
-    fn for_each_pair(&mut self, proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
-        let side = self.tiling.side;
-        for (a, list) in self.lists.iter().enumerate() {
-            let axis = a as u32;
-            let mut check = |e: &Entry, f: &Entry| {
-                if self.is_candidate(e, &self.axes_of[e.body as usize], f, axis, proxies) {
-                    let (i, j) = (e.body as usize, f.body as usize);
-                    report(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)));
-                }
-            };
-            let mut start = 0;
-            while start < list.sorted.len() {
-                let tile = list.sorted[start].tile;
-                let len = list.sorted[start..].partition_point(|e| e.tile == tile);
-                let run = &list.sorted[start..start + len];
-                start += len;
-                for (k, e) in run.iter().enumerate() {
-                    for f in run[k + 1..].iter().take_while(|f| f.lo <= e.hi) {
-                        check(e, f);
-                    }
-                }
-                // Half of the 8 neighbours, so each pair of adjacent tiles is swept once.
-                let (row, col) = (tile / side, tile % side);
-                let neighbours = [(row, col + 1), (row + 1, col.wrapping_sub(1)), (row + 1, col), (row + 1, col + 1)];
-                for (r, c) in neighbours {
-                    if r >= side || c >= side {
-                        continue;
-                    }
-                    let other = list.run(r * side + c);
-                    let mut first = 0;
-                    for e in run {
-                        while first < other.len() && other[first].lo < e.lo - list.max_width {
-                            first += 1;
-                        }
-                        for f in other[first..].iter().take_while(|f| f.lo <= e.hi) {
-                            if f.hi >= e.lo {
-                                check(e, f);
-                            }
-                        }
-                    }
-                }
+    /// The axis lists are independent: workers sweep whole lists.
+    fn find_pairs<T: Send>(
+        &mut self,
+        proxies: &ProxyTable,
+        workers: &Workers,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+    ) -> u64 {
+        let this = &*self;
+        let parts = workers.map_ranges(this.lists.len(), |axes| {
+            let (mut found, mut candidates) = (Vec::new(), 0u64);
+            for a in axes {
+                this.list_pairs(a as u32, proxies, |x, y, window| {
+                    candidates += 1;
+                    predict(x, y, window, &mut found);
+                });
             }
+            (found, candidates)
+        });
+        let mut candidates = 0;
+        for (mut part, count) in parts {
+            out.append(&mut part);
+            candidates += count;
         }
+        candidates
     }
 
     /// Picks the body's axes for its new velocity, adds fresh entries (its old ones carry an old
@@ -474,7 +503,7 @@ impl BroadPhase for SweepPrune {
         let mask = self.mask_of(&axes);
         for &a in &axes {
             let query = body_interval(self.pool.axis(a), proxies, b);
-            let own = Entry { lo: query.lo, hi: query.hi, body, stamp: proxies.stamp[b], tile: 0, mask, bbox: proxies.bbox[b] };
+            let own = Entry { lo: query.lo, hi: query.hi, body, stamp: proxies.stamp(b), tile: 0, mask, bbox: proxies.bbox(b) };
             let list = &self.lists[a as usize];
             let mut visit = |e: &Entry| {
                 if e.body == body || Some(e.body) == skip || e.hi < query.lo || e.lo > query.hi || !is_live(e, proxies) {
