@@ -414,7 +414,7 @@ fn run_world(
     let info = RunInfo {
         scene: SceneInfo::of(&scene, source, args.dt),
         method: match config.method {
-            Method::Auto => format!("auto ({})", config.method.resolve(&scene.spheres).name()),
+            Method::Auto => format!("auto ({})", config.method.resolve().name()),
             method => method.name().to_string(),
         },
         mode: match config.mode {

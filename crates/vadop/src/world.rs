@@ -31,8 +31,7 @@ pub const MAX_BOX_LENGTHS_PER_FRAME: f64 = 1e4;
 /// How candidate pairs are found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Method {
-    /// Continuous: the fastest broad phase for the scene, chosen at the first step (see
-    /// [`Method::resolve`]).
+    /// Continuous: the fastest broad phase (see [`Method::resolve`]).
     Auto,
     /// Continuous: velocity-aligned volumes, sweep and prune over the axis pool (the paper).
     Vadop,
@@ -78,10 +77,14 @@ impl Method {
         self != Method::Discrete
     }
 
-    /// The broad phase [`Method::Auto`] uses for these bodies: the grid. Measured by `vadop bench`
-    /// (BENCHMARKS.md, "where each broad phase wins"): the grid is the fastest on every scene the
-    /// benchmark runs; other methods are returned unchanged.
-    pub fn resolve(self, _bodies: &[Sphere]) -> Method {
+    /// The broad phase a method steps with: [`Method::Auto`] is the grid, the others are
+    /// themselves. Measured by `vadop-bench speed` (BENCHMARKS.md, "where each broad phase wins"):
+    /// on every scene it runs — the paper's at 0.05 to 5 diameters a frame, an equilibrium gas, a
+    /// stream within 1 to 10 degrees of one direction, heavy-tailed speeds — the grid is the
+    /// fastest continuous broad phase, the VADOP sweep and prune 1.3 to 6 times slower (closest in
+    /// streams, as velocity alignment predicts). No scene statistic picked out a case where it
+    /// wins, so Auto does not switch.
+    pub fn resolve(self) -> Method {
         match self {
             Method::Auto => Method::Grid,
             other => other,
@@ -611,11 +614,10 @@ impl World {
     /// Builds the engine on the first step and enters bodies added since the last one.
     fn place_new_bodies(&mut self) {
         if matches!(self.engine, Engine::Unbuilt) {
-            let spheres: Vec<Sphere> = self.spheres().map(|(_, s)| s).collect();
             let threads = self.config.thread_count();
             // A pool only when there is something to share; a failed pool leaves one thread.
             self.threads = (threads > 1).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
-            self.engine = self.build_engine(self.config.method.resolve(&spheres));
+            self.engine = self.build_engine(self.config.method.resolve());
         }
         let physics = self.physics();
         let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);
