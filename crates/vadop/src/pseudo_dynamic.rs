@@ -2,12 +2,14 @@
 //! freeSOLID.
 //!
 //! It owns one list of bodies sorted by the low end of their x extent (kept sorted by insertion
-//! sort across frames) and the pairs found overlapping at the previous instant. At each frame's
-//! start it sweeps the list, confirms AABB overlap on y and z and then sphere overlap, and reports
-//! (or, in simulate mode, resolves) what overlaps at that instant; then bodies move, bouncing off
-//! the walls exactly. It never predicts pair contacts: whatever touches and separates between two
-//! instants is missed, which is exactly what the accuracy comparison measures. A contact found at
-//! a frame's start belongs to that frame, as every contact belongs to the frame holding its time.
+//! sort across frames) and the pairs found overlapping at the previous instant. Bodies move
+//! through the frame, bouncing off the walls exactly; at the frame's end it sweeps the list,
+//! confirms AABB overlap on y and z and then sphere overlap, and reports (or, in simulate mode,
+//! resolves) what overlaps at that instant, as an engine does after its step. It has no contact
+//! times, so an overlap is stamped with the instant it was seen — the frame's end — and reported
+//! with the frame just stepped: the one exception to the rule that a contact belongs to the frame
+//! holding its time. It never predicts pair contacts: whatever touches and separates between two
+//! instants is missed, which is exactly what the accuracy comparison measures.
 
 use crate::bodies::Bodies;
 use crate::coherent_sort::coherent_sort;
@@ -107,36 +109,17 @@ impl PseudoDynamic {
         out.stats.test_seconds += start.elapsed().as_secs_f64();
     }
 
-    /// Steps from `t0` to `t1`: overlaps at `t0`, then straight motion with exact wall bounces.
-    pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+    /// Steps from `t0` to `t1`: straight motion with exact wall bounces, then the overlaps at `t1`.
+    pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, _t0: f64, t1: f64, out: &mut Output) {
         self.rules.resize(bodies.slots());
         self.rules.next_step();
-        self.find_overlaps(bodies, t0, out);
         let start = Instant::now();
-        for k in 0..self.current.len() {
-            let (a, b) = self.current[k];
-            let (i, j) = (a as usize, b as usize);
-            let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
-            let mut impulse = 0.0;
-            if physics.mode == Mode::Simulate {
-                let (vi, vj) = (bodies.velocity[i], bodies.velocity[j]);
-                let (wi, wj) = (bodies.inv_mass[i], bodies.inv_mass[j]);
-                impulse = pair_impulse(normal, vi, vj, wi, wj, physics.restitution);
-                if impulse == 0.0 {
-                    continue;
-                }
-                bodies.set_velocity_at(i, t0, vi - impulse * wi * normal);
-                bodies.set_velocity_at(j, t0, vj + impulse * wj * normal);
-            } else if self.previous.binary_search(&(a, b)).is_ok() {
-                continue;
-            }
-            out.stats.pair_contacts += 1;
-            out.contacts.push(Contact { time: t0, body: a, touched: Touched::Body(b), point: self.centre[i] + normal * bodies.radius[i], normal, impulse });
-        }
         // Walls: each body on its own, every bounce inside the frame, merged in time order.
-        let first_wall = out.contacts.len();
         for &body in &self.order {
             let i = body as usize;
+            if !bodies.alive[i] {
+                continue;
+            }
             while let Some((t, wall)) = wall_contact_time(&bodies.motion(i), bodies.radius[i], physics.bounds.min, physics.bounds.max) {
                 if !(t < t1) {
                     break;
@@ -156,7 +139,30 @@ impl PseudoDynamic {
                 out.contacts.push(Contact { time: t, body, touched: Touched::Wall(wall), point, normal, impulse: bodies.mass[i] * (v - bounced).length() });
             }
         }
-        out.contacts[first_wall..].sort_by(|x, y| x.time.total_cmp(&y.time).then(x.body.cmp(&y.body)));
+        out.contacts.sort_by(|x, y| x.time.total_cmp(&y.time).then(x.body.cmp(&y.body)));
+        out.stats.response_seconds += start.elapsed().as_secs_f64();
+        self.find_overlaps(bodies, t1, out);
+        let start = Instant::now();
+        for k in 0..self.current.len() {
+            let (a, b) = self.current[k];
+            let (i, j) = (a as usize, b as usize);
+            let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
+            let mut impulse = 0.0;
+            if physics.mode == Mode::Simulate {
+                let (vi, vj) = (bodies.velocity[i], bodies.velocity[j]);
+                let (wi, wj) = (bodies.inv_mass[i], bodies.inv_mass[j]);
+                impulse = pair_impulse(normal, vi, vj, wi, wj, physics.restitution);
+                if impulse == 0.0 {
+                    continue;
+                }
+                bodies.set_velocity_at(i, t1, vi - impulse * wi * normal);
+                bodies.set_velocity_at(j, t1, vj + impulse * wj * normal);
+            } else if self.previous.binary_search(&(a, b)).is_ok() {
+                continue;
+            }
+            out.stats.pair_contacts += 1;
+            out.contacts.push(Contact { time: t1, body: a, touched: Touched::Body(b), point: self.centre[i] + normal * bodies.radius[i], normal, impulse });
+        }
         out.stats.response_seconds += start.elapsed().as_secs_f64();
     }
 }
