@@ -3,6 +3,7 @@
 //! the runner; each job prints its result on stdout (one JSON line, or the peers' contacts file).
 
 use crate::peers::trajectory;
+use crate::speed::{candidates, retest};
 use crate::CliResult;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
@@ -18,10 +19,10 @@ pub struct ChildArgs {
     /// Its maximum speed in diameters per frame
     #[arg(long)]
     speed: f64,
-    /// Frames to step
+    /// Frames to step (for retest: before the timed calls)
     #[arg(long, default_value_t = 1)]
     frames: u64,
-    /// The method stepped (peers-time)
+    /// The method stepped (peers-time, retest)
     #[arg(long, default_value = "auto")]
     method: String,
     /// peers-export: the folder of the trajectory and reference files; peers-time: the contacts file
@@ -30,6 +31,9 @@ pub struct ChildArgs {
     /// peers-export: the reference comes from brute force
     #[arg(long)]
     brute: bool,
+    /// retest: timed `set_velocity` calls
+    #[arg(long, default_value_t = 10_000)]
+    calls: usize,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -38,6 +42,10 @@ enum Job {
     PeersExport,
     /// Time one of vadop's methods on the peers' scene and write its contacts.
     PeersTime,
+    /// Count the body pairs whose swept boxes overlap, per frame.
+    Candidates,
+    /// Time `World::set_velocity` between frames.
+    Retest,
 }
 
 pub fn run(args: &ChildArgs) -> CliResult<()> {
@@ -46,5 +54,7 @@ pub fn run(args: &ChildArgs) -> CliResult<()> {
     match args.job {
         Job::PeersExport => trajectory::export(args.bodies, args.speed, args.frames, args.brute, &out()?),
         Job::PeersTime => trajectory::time_method(args.bodies, args.speed, args.frames, method, &out()?),
+        Job::Candidates => candidates::count(args.bodies, args.speed, args.frames),
+        Job::Retest => retest::measure(args.bodies, args.speed, args.frames, method, args.calls),
     }
 }

@@ -105,6 +105,26 @@ pub fn csv_number(value: Option<f64>) -> String {
     value.map_or(String::new(), |v| v.to_string())
 }
 
+/// The median of `values` (`None` when empty).
+pub fn median(values: &[f64]) -> Option<f64> {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let len = sorted.len();
+    match len {
+        0 => None,
+        _ if len % 2 == 1 => Some(sorted[len / 2]),
+        _ => Some(0.5 * (sorted[len / 2 - 1] + sorted[len / 2])),
+    }
+}
+
+/// The value of nearest rank `q` in `values` (`None` when empty).
+pub fn quantile(values: &[f64], q: f64) -> Option<f64> {
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len().max(1));
+    sorted.get(rank - 1).copied()
+}
+
 /// Frames a run of speed `speed` (diameters per frame) needs so that its mean time per frame
 /// covers several broad-phase windows: a window lasts about as long as the fastest tenth of the
 /// bodies take to travel two diameters (the core's window rule), so a frame's cost is bimodal and

@@ -1,5 +1,5 @@
 //! `vadop-bench`: the benchmark harness of vadop, kept apart from the product CLI. Its suites
-//! (`core`, `experiments`, `peers`) run every measurement as a child process pinned to
+//! (`core`, `experiments`, `peers`, `speed`) run every measurement as a child process pinned to
 //! one core, with a timeout and its own peak memory: the product binary's `vadop simulate --json`,
 //! or this binary's hidden `--child` jobs for what must be measured inside the library. Tables
 //! go between their markers in BENCHMARKS.md, CSVs and plots into results/; a `--quick` run writes
@@ -17,6 +17,7 @@ mod peers;
 mod plots;
 mod progress;
 mod runner;
+mod speed;
 mod summary;
 
 use clap::{Parser, Subcommand};
@@ -25,7 +26,7 @@ use std::process::ExitCode;
 /// Every failure is a message for the user.
 pub type CliResult<T> = Result<T, String>;
 
-/// Benchmarks of vadop: the core engine, the paper's experiments and the peers.
+/// Benchmarks of vadop: the core engine, the paper's experiments, the peers and the speed suite.
 #[derive(Debug, Parser)]
 #[command(name = "vadop-bench", version, propagate_version = true)]
 struct Cli {
@@ -43,6 +44,10 @@ enum Command {
     Experiments(experiments::ExperimentsArgs),
     /// vadop side by side with Bullet, FCL and rapier/parry on identical paths.
     Peers(peers::PeersArgs),
+    /// Where the time goes at scale: detect-mode ms/frame against the old engine and the peers,
+    /// narrow tests against swept-box overlaps, re-test cost, simulate-mode throughput, memory per
+    /// body, and where each broad phase wins.
+    Speed(speed::SpeedArgs),
     /// One measurement inside the library, run by the suites as a child process.
     #[command(long_flag = "child", hide = true)]
     Child(child::ChildArgs),
@@ -55,6 +60,7 @@ fn main() -> ExitCode {
         Command::Core(args) => core_benchmark::run(&args),
         Command::Experiments(args) => experiments::run(&args),
         Command::Peers(args) => peers::run(&args),
+        Command::Speed(args) => speed::run(&args),
         Command::Child(args) => child::run(&args),
     };
     match outcome {

@@ -1,6 +1,6 @@
 //! PNG plots of every suite, drawn with plotters and an embedded DejaVu Sans font (a fresh
 //! machine needs no system fonts and no plotting program): log-log line charts in one or more
-//! panels, and stacked bars. It owns chart layout (titles, axis labels with units,
+//! panels, stacked bars and grouped bars. It owns chart layout (titles, axis labels with units,
 //! legends, colours) and never reads or computes measurements.
 
 use crate::CliResult;
@@ -89,13 +89,15 @@ fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(chart: &mut Char
         .map_err(|e| plot_error(path, e))
 }
 
-/// A log-axis range covering the positive `values` with a margin.
+/// A log-axis range covering the positive `values` with a margin, at least a decade wide so
+/// that the axis has labelled ticks.
 fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)));
     if !(lo.is_finite() && hi.is_finite()) {
         return (1.0, 10.0);
     }
-    (lo / 1.5, hi * 1.5)
+    let widen = (10.0 / (hi / lo * 2.25)).max(1.0).sqrt();
+    (lo / 1.5 / widen, hi * 1.5 * widen)
 }
 
 /// A log-log line chart titled `title`.
@@ -132,6 +134,8 @@ pub fn line_panels(path: &Path, title: Option<&str>, panels: &[Panel]) -> CliRes
             .configure_mesh()
             .x_desc(&panel.x_label)
             .y_desc(&panel.y_label)
+            .x_label_formatter(&|x| significant(*x))
+            .y_label_formatter(&|y| significant(*y))
             .label_style(("sans-serif", 16))
             .axis_desc_style(("sans-serif", 18))
             .draw()
@@ -180,6 +184,39 @@ pub fn stacked_bars(path: &Path, title: &str, y_label: &str, parts: &[&str], bar
     let top = segments.iter().map(|s| s.top).fold(0.0, f64::max).max(1e-9) * 1.3;
     let labels: Vec<String> = bars.iter().map(|b| b.0.clone()).collect();
     draw_bars(path, title, "method", y_label, parts, &labels, &segments, 0.0..top, |y| format!("{y}"))
+}
+
+/// Groups of bars on a log axis: one group per entry of `groups`, one bar per entry of `members`
+/// in each (a missing value leaves its place empty).
+pub fn grouped_bars(path: &Path, title: &str, x_label: &str, y_label: &str, members: &[&str], groups: &[(String, Vec<Option<f64>>)]) -> CliResult<()> {
+    // Log values on a linear axis: bars need a common floor, which a log axis has not.
+    let logs: Vec<f64> = groups.iter().flat_map(|g| g.1.iter().flatten()).filter(|v| **v > 0.0).map(|v| v.log10()).collect();
+    let (lo, hi) = logs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+    let (floor, ceiling) = if lo.is_finite() { (lo.floor() - 0.2, hi + 0.3) } else { (0.0, 1.0) };
+    // Each group takes one slot per member and an empty one between groups.
+    let stride = members.len() as u32 + 1;
+    let mut segments = Vec::new();
+    let mut labels = vec![String::new(); groups.len() * stride as usize];
+    for (g, (name, values)) in groups.iter().enumerate() {
+        labels[g * stride as usize + members.len() / 2] = name.clone();
+        for (part, value) in values.iter().enumerate() {
+            if let Some(v) = value.filter(|v| *v > 0.0) {
+                segments.push(Segment { slot: g as u32 * stride + part as u32, bottom: floor, top: v.log10(), part });
+            }
+        }
+    }
+    draw_bars(path, title, x_label, y_label, members, &labels, &segments, floor..ceiling, |y| significant(10f64.powf(*y)))
+}
+
+/// A tick value with at most three significant digits and no trailing zeros.
+fn significant(value: f64) -> String {
+    let decimals = (2.0 - value.abs().log10().floor()).clamp(0.0, 9.0) as usize;
+    let text = format!("{value:.decimals$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        text
+    }
 }
 
 #[allow(clippy::too_many_arguments)]

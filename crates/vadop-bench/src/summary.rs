@@ -6,7 +6,16 @@ use serde::Deserialize;
 
 #[derive(Debug, Clone, Deserialize)]
 pub struct Report {
+    #[serde(default)]
+    pub frames: Vec<Frame>,
     pub summary: Summary,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+pub struct Frame {
+    pub pair_contacts: u64,
+    /// Wall-clock milliseconds of the step.
+    pub wall_ms: f64,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -18,6 +27,8 @@ pub struct Summary {
     pub accuracy: Option<Accuracy>,
     /// c_total = c_update + c_sort + c_test + c_response per frame.
     pub c_total_ms: Spread,
+    /// Wall-clock time of the step per frame.
+    pub wall_ms: Spread,
     pub cost_split: CostSplit,
     pub per_frame: PerFrame,
     pub peak_memory_mib: Option<f64>,
@@ -76,6 +87,7 @@ pub struct PerFrame {
     pub contacts: f64,
     pub endpoint_swaps: f64,
     pub candidate_pairs: f64,
+    pub narrow_tests: f64,
     #[serde(default)]
     pub windows: f64,
 }

@@ -114,6 +114,37 @@ fn quick_experiments_write_tables_csv_and_plots() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// The whole quick speed suite: every section between its markers, with its CSV and plot.
+#[test]
+fn quick_speed_suite_writes_every_section() {
+    let dir = scratch("speed");
+    let output = bench(&dir, &["speed", "--quick", "--output", "B.md", "--results", "results"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = read(&dir.join("B.md"));
+    let sections = [
+        ("detect", "detect", 3),
+        ("candidates", "candidates", 3),
+        ("retest", "retest", 6),
+        ("throughput", "throughput", 3),
+        ("memory", "memory", 1),
+        ("methods", "methods-10000", 6),
+    ];
+    for (name, plot, rows) in sections {
+        let begin = format!("<!-- speed-{name}:begin -->");
+        assert!(text.contains(&begin) && text.contains(&format!("<!-- speed-{name}:end -->")), "{name} markers missing");
+        let section = &text[text.find(&begin).expect("begin")..];
+        assert!(section.contains("1-minute load average"), "{name}: no machine line");
+        let table = table_after(section, "Produced by");
+        assert!(table.len() >= rows, "{name}: {} rows in {section}", table.len());
+        assert!(table.iter().all(|row| !row.contains("failed") && !row.contains("timed out")), "{name}: {table:?}");
+        assert_png(&dir.join(format!("results/speed/{plot}.png")));
+        let csv = read(&dir.join(format!("results/speed/{name}.csv")));
+        let columns = csv.lines().next().expect("header").split(',').count();
+        assert!(csv.lines().skip(1).all(|l| l.split(',').count() == columns && l.ends_with(",ok")), "{name}: {csv}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
 /// The peers' table and plot, redrawn from a CSV (running the peers needs Bullet and FCL).
 #[test]
 fn peers_render_their_table_and_plot_from_a_csv() {
@@ -145,10 +176,11 @@ fn bad_input_is_reported_not_panicked() {
     assert_usage_error(&bench(&dir, &["core", "--timeout", "-1"]), "--timeout");
     assert_usage_error(&bench(&dir, &["core", "--cpu", "4096"]), "--cpu 4096");
     assert_usage_error(&bench(&dir, &["core", "--vadop", "no-such-binary"]), "no such file");
+    assert_usage_error(&bench(&dir, &["speed", "--sections", "nope"]), "invalid value");
     assert_usage_error(&bench(&dir, &["peers", "--render", "missing.csv"]), "missing.csv");
     assert_usage_error(&bench(&dir, &["core", "--publish"]), "--quick");
     std::fs::write(dir.join("B.md"), "<!-- core-benchmark:end -->\n<!-- core-benchmark:begin -->\n").expect("markdown written");
     assert_usage_error(&bench(&dir, &["core", "--output", "B.md"]), "unbalanced");
-    assert_usage_error(&bench(&dir, &["--child", "--job", "peers-time", "--bodies", "0", "--speed", "1", "--out", "c.bin"]), "at least one sphere");
+    assert_usage_error(&bench(&dir, &["--child", "--job", "retest", "--bodies", "0", "--speed", "1"]), "at least one sphere");
     std::fs::remove_dir_all(dir).ok();
 }

@@ -99,6 +99,13 @@ pub struct Measured {
     reference: u64,
 }
 
+impl Row {
+    /// Continuous and neither missing a contact nor adding one.
+    pub fn exact(&self) -> bool {
+        self.continuous && self.outcome.as_ref().is_ok_and(|m| m.missed == 0 && m.false_contacts == 0)
+    }
+}
+
 pub fn run(args: &PeersArgs) -> CliResult<()> {
     let common = &args.common;
     let quick = common.quick;
