@@ -36,10 +36,11 @@ impl Runner {
             Some(path) => Err(format!("--vadop {}: no such file", path.display())),
             None => {
                 let beside = this.with_file_name("vadop");
-                if beside.is_file() {
-                    Ok(beside)
-                } else {
-                    Err(format!("{} not found: build it with `cargo build --release -p vadop-cli` or pass --vadop FILE", beside.display()))
+                let rebuild = "build it with `cargo build --release -p vadop-cli` or pass --vadop FILE";
+                match newer_source(&beside) {
+                    _ if !beside.is_file() => Err(format!("{} not found: {rebuild}", beside.display())),
+                    Some(source) => Err(format!("{} is older than {}: {rebuild}", beside.display(), source.display())),
+                    None => Ok(beside),
                 }
             }
         };
@@ -191,6 +192,26 @@ impl Simulation {
         flags.extend(self.pool.map(|m| ("--pool", m.to_string())));
         flags.into_iter().flat_map(|(flag, value)| [flag.to_string(), value]).collect()
     }
+}
+
+/// A source file of the product binary newer than `binary`, when `binary` sits in the target
+/// folder of a vadop checkout: measuring a stale build would publish another engine's figures.
+fn newer_source(binary: &Path) -> Option<PathBuf> {
+    let built = std::fs::metadata(binary).and_then(|m| m.modified()).ok()?;
+    let root = binary.parent()?.parent()?.parent()?;
+    let mut pending: Vec<PathBuf> = ["crates/vadop", "crates/vadop-cli"].iter().map(|c| root.join(c)).filter(|c| c.join("Cargo.toml").is_file()).collect();
+    while let Some(path) = pending.pop() {
+        if path.is_dir() {
+            // A crate's own target or test folders do not go into the binary.
+            if path.file_name().is_some_and(|name| name == "target" || name == "tests") {
+                continue;
+            }
+            pending.extend(std::fs::read_dir(&path).ok()?.filter_map(|entry| Some(entry.ok()?.path())));
+        } else if std::fs::metadata(&path).and_then(|m| m.modified()).is_ok_and(|modified| modified > built) {
+            return Some(path);
+        }
+    }
+    None
 }
 
 impl Drop for Runner {
