@@ -350,7 +350,7 @@ fn write_csv(path: &Path, rows: &[Row]) -> CliResult<()> {
     write_file(path, &text)
 }
 
-/// Reads the rows of a CSV written by `write_csv` (or by the earlier `vadop peers`, whose times
+/// Reads the rows of a CSV written by `write_csv` (or by the former `vadop peers`, whose times
 /// were medians over frames).
 pub fn read_csv(path: &Path) -> CliResult<Vec<Row>> {
     let text = std::fs::read_to_string(path).map_err(|e| crate::common::io_error(path, e))?;
