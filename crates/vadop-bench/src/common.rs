@@ -21,6 +21,19 @@ pub struct Grid {
     pub frames: Option<u64>,
 }
 
+impl Grid {
+    /// Refuses what no run could measure, before any runs.
+    pub fn check(&self) -> CliResult<()> {
+        if self.bodies.as_ref().is_some_and(|b| b.contains(&0)) {
+            return Err("--bodies: every body count must be at least 1".to_string());
+        }
+        match self.speeds.iter().find(|s| !(s.is_finite() && **s >= 0.0)) {
+            Some(speed) => Err(format!("--speeds: every speed must be finite and at least 0, got {speed}")),
+            None => Ok(()),
+        }
+    }
+}
+
 /// Where quick runs write unless `--publish` is given.
 const QUICK_DIR: &str = "target/bench-quick";
 

@@ -53,6 +53,7 @@ impl Row {
 }
 
 pub fn run(args: &CoreArgs) -> CliResult<()> {
+    args.grid.check()?;
     let common = &args.common;
     let runner = Runner::new(common, common.timeout(600.0)?)?;
     let vadop = runner.product()?;

@@ -179,6 +179,8 @@ fn bad_input_is_reported_not_panicked() {
     assert_usage_error(&bench(&dir, &["speed", "--sections", "nope"]), "invalid value");
     assert_usage_error(&bench(&dir, &["peers", "--render", "missing.csv"]), "missing.csv");
     assert_usage_error(&bench(&dir, &["core", "--publish"]), "--quick");
+    assert_usage_error(&bench(&dir, &["core", "--bodies", "100,0"]), "--bodies");
+    assert_usage_error(&bench(&dir, &["peers", "--speeds", "nan"]), "--speeds");
     std::fs::write(dir.join("B.md"), "<!-- core-benchmark:end -->\n<!-- core-benchmark:begin -->\n").expect("markdown written");
     assert_usage_error(&bench(&dir, &["core", "--output", "B.md"]), "unbalanced");
     assert_usage_error(&bench(&dir, &["--child", "--job", "retest", "--bodies", "0", "--speed", "1"]), "at least one sphere");

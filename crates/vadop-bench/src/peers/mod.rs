@@ -107,6 +107,7 @@ impl Row {
 }
 
 pub fn run(args: &PeersArgs) -> CliResult<()> {
+    args.grid.check()?;
     let common = &args.common;
     let quick = common.quick;
     let runner = Runner::new(common, common.timeout(if quick { 60.0 } else { 120.0 })?)?;
