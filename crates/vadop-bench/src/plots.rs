@@ -144,6 +144,7 @@ pub fn line_panels(path: &Path, title: Option<&str>, panels: &[Panel]) -> CliRes
             let colour = s.colour.unwrap_or(PALETTE[k % PALETTE.len()]);
             let label = if points.is_empty() && !s.points.is_empty() { format!("{} — zero everywhere", s.label) } else { s.label.clone() };
             let line = colour.stroke_width(3);
+            let dashed = s.stroke == Stroke::Dashed;
             let drawn = match s.stroke {
                 Stroke::Solid => chart.draw_series(LineSeries::new(points.iter().copied(), line).point_size(4)),
                 Stroke::Dashed => {
@@ -156,7 +157,13 @@ pub fn line_panels(path: &Path, title: Option<&str>, panels: &[Panel]) -> CliRes
             drawn
                 .map_err(|e| plot_error(path, e))?
                 .label(label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
+                .legend(move |(x, y)| {
+                    // Dashed series show a gap in the middle of their legend line.
+                    let gap = if dashed { 6 } else { 0 };
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (12 - gap / 2, 0)], colour.stroke_width(3))
+                        + PathElement::new(vec![(12 + gap / 2, 0), (24, 0)], colour.stroke_width(3))
+                });
         }
         draw_legend(&mut chart, legend, path)?;
     }
