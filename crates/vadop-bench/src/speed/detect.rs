@@ -48,7 +48,11 @@ pub fn run(context: &Context, baseline: &Path, peers_csv: &Path) -> CliResult<()
     if old.is_none() {
         eprintln!("{} not found: the old engine's column stays empty (build it with scripts/build-baseline.sh)", baseline.display());
     }
-    let peer_rows = if peers_csv.is_file() { peers::read_csv(peers_csv)? } else { Vec::new() };
+    // The peers' columns are a comparison, not the measurement: without a readable CSV they stay empty.
+    let peer_rows = peers::read_csv(peers_csv).unwrap_or_else(|e| {
+        eprintln!("{e}: the peers' columns stay empty");
+        Vec::new()
+    });
     let cells_count = plan.detect_bodies.len() * plan.speeds.len();
     let progress = Progress::new(cells_count * (METHODS.len() + usize::from(old.is_some())));
     let mut cells = Vec::new();
