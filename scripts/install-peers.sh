@@ -1,15 +1,15 @@
 #!/usr/bin/env bash
-# Installs what `vadop peers` needs beyond Rust: a C++ compiler, pkg-config, Debian's Bullet
-# (libbullet-dev 3.24) and FCL (libfcl-dev 0.7) to build bench/peers/cpp, gnuplot for the plot and
-# taskset to pin the runs. Run as root on Debian; it does nothing when everything is present.
-# `vadop peers` itself only checks for them, so the benchmark never installs system packages.
+# Installs what `vadop-bench peers` needs beyond Rust: a C++ compiler, pkg-config, Debian's Bullet
+# (libbullet-dev 3.24) and FCL (libfcl-dev 0.7) to build bench/peers/cpp, and taskset to pin the
+# runs (the plot is drawn in Rust). Run as root on Debian; it does nothing when everything is
+# present. `vadop-bench peers` itself only checks for them, so the benchmark never installs
+# system packages.
 set -euo pipefail
 missing=()
 [ -f /usr/include/bullet/btBulletCollisionCommon.h ] || missing+=(libbullet-dev)
 [ -f /usr/include/fcl/fcl.h ] || missing+=(libfcl-dev)
 command -v g++ >/dev/null 2>&1 && command -v make >/dev/null 2>&1 || missing+=(build-essential)
 command -v pkg-config >/dev/null 2>&1 || missing+=(pkg-config)
-command -v gnuplot >/dev/null 2>&1 || missing+=(gnuplot-nox)
 command -v taskset >/dev/null 2>&1 || missing+=(util-linux)
 if [ ${#missing[@]} = 0 ]; then
   echo "the peers' packages are all present"

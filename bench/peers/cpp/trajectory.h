@@ -1,7 +1,8 @@
 // The peer programs' side of vadop's trajectory file: reads the detect-mode paths one frame at a
 // time, answers where a body is at any instant of the frame, and records and reports what a
-// pipeline found. Owns the file format (written by crates/vadop-cli/src/peers.rs; keep the two
-// in step) and the timing and memory report, so every library is measured the same way.
+// pipeline found. Owns the file format (written by crates/vadop-bench/src/peers/trajectory.rs;
+// keep the two in step) and the timing and memory report, so every library is measured the same
+// way.
 //
 // File (little-endian): "VADOPTR1", n u64, frames u64, dt f64, radius f64, box min 3 f64, box
 // max 3 f64; then per frame: n x (position 3 f64, velocity 3 f64) at the frame start, n x

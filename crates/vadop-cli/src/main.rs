@@ -1,15 +1,11 @@
 //! The `vadop` command-line tool: run the paper's scene or a scene file and report contacts,
-//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), benchmark the engine and
-//! reproduce the paper's experiments with plots (`bench`), and check long runs for drift (`soak`).
+//! accuracy and costs (`simulate`), tabulate axis pools (`pools`), and check long runs for drift
+//! (`soak`). Benchmarks live in their own binary, `vadop-bench` (crates/vadop-bench).
 //! This file owns argument parsing, dispatch and the single place where a failure
 //! becomes an `error: <message>` line on stderr and exit code 2. It must never do a subcommand's
 //! work itself, and nothing a user types may reach a panic or a backtrace: every fallible step
 //! returns its message as an `Err` up to here.
 
-mod bench;
-mod experiments;
-mod plots;
-mod peers;
 mod pools;
 mod report;
 mod simulate;
@@ -34,17 +30,13 @@ struct Cli {
 enum Command {
     /// Run the paper's scene (or a scene file) and report contacts, accuracy against a reference
     /// method, the cost split per frame and memory.
-    Simulate(simulate::SimulateArgs),
+    // Boxed: its many options would make every command as large as it.
+    Simulate(Box<simulate::SimulateArgs>),
     /// Tabulate axis pools: covering radius against the Fejes Tóth bound, build time, band size.
     Pools(pools::PoolsArgs),
-    /// Benchmark vadop against its baselines, the discrete method and brute force, each run in its
-    /// own child process; write tables into a markdown file, CSVs and plots into results/.
-    Bench(bench::BenchArgs),
     /// A long elastic run (10^7 contacts by default) checking after every frame that energy and
     /// momentum do not drift, no body leaves the box and no pair overlaps beyond tolerance.
     Soak(soak::SoakArgs),
-    /// Compare vadop with Bullet, FCL and rapier/parry on identical paths (builds the peers itself).
-    Peers(peers::PeersArgs),
 }
 
 fn main() -> ExitCode {
@@ -53,9 +45,7 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Simulate(args) => simulate::run(&args),
         Command::Pools(args) => pools::run(&args),
-        Command::Bench(args) => bench::run(&args),
         Command::Soak(args) => soak::run(&args),
-        Command::Peers(args) => peers::run(&args),
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,

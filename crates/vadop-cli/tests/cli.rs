@@ -1,7 +1,7 @@
 //! End-to-end tests of the `vadop` binary on small scenes: summaries, accuracy against brute
-//! force, outputs that parse with one row per frame, the benchmark's markdown section, and bad
-//! input that must end in an `error:` line and exit code 2, never a panic. They only run the
-//! built binary and read what it writes; they never depend on timings.
+//! force, outputs that parse with one row per frame, and bad input that must end in an `error:`
+//! line and exit code 2, never a panic. They only run the built binary and read what it writes;
+//! they never depend on timings. The benchmarks' tests are in crates/vadop-bench/tests.
 
 use std::path::PathBuf;
 use std::process::{Command, Output};
@@ -175,63 +175,3 @@ fn pools_tabulate_covering_radius_against_the_bound() {
     assert_usage_error(&vadop(&["pools", "--axes", "2"]), "axis pool size");
 }
 
-#[test]
-fn bench_writes_its_section_between_the_markers() {
-    let dir = scratch("bench");
-    let (markdown, csv) = (dir.join("BENCHMARKS.md"), dir.join("results").join("core.csv"));
-    std::fs::write(&markdown, "# Benchmarks\n\nKept above.\n\n<!-- core-benchmark:begin -->\nold\n<!-- core-benchmark:end -->\n\nKept below.\n")
-        .expect("markdown written");
-    let output = vadop(&[
-        "bench", "--suite", "core", "--bodies", "200", "--speeds", "0.5", "--frames", "3", "--output",
-        markdown.to_str().expect("utf-8 path"), "--csv", csv.to_str().expect("utf-8 path"),
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let text = std::fs::read_to_string(&markdown).expect("markdown");
-    assert!(text.starts_with("# Benchmarks\n\nKept above.\n\n<!-- core-benchmark:begin -->"), "{text}");
-    assert!(text.ends_with("<!-- core-benchmark:end -->\n\nKept below.\n"), "{text}");
-    assert!(!text.contains("\nold\n"), "{text}");
-    assert!(text.contains("vadop bench --suite core --bodies 200"), "{text}");
-    for method in ["| vadop |", "| discrete |", "| brute |"] {
-        assert!(text.contains(method), "{text}");
-    }
-    assert_eq!(std::fs::read_to_string(&csv).expect("csv").lines().count(), 1 + 3);
-
-    // A child that exceeds the timeout is a row that says so, not a failed benchmark.
-    let output = vadop(&[
-        "bench", "--suite", "core", "--bodies", "200", "--speeds", "0.5", "--frames", "3", "--timeout", "0.000001", "--output",
-        markdown.to_str().expect("utf-8 path"), "--csv", csv.to_str().expect("utf-8 path"),
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    assert!(std::fs::read_to_string(&markdown).expect("markdown").contains("timed out"));
-    std::fs::remove_dir_all(dir).ok();
-}
-
-#[test]
-fn quick_experiments_write_tables_csv_and_plots() {
-    let dir = scratch("experiments");
-    let (markdown, plots) = (dir.join("BENCHMARKS.md"), dir.join("results").join("experiments"));
-    std::fs::write(&markdown, "# Benchmarks\n\nKept.\n").expect("markdown written");
-    let output = vadop(&[
-        "bench", "--suite", "experiments", "--quick", "--output", markdown.to_str().expect("utf-8 path"), "--plots",
-        plots.to_str().expect("utf-8 path"),
-    ]);
-    assert!(output.status.success(), "{}", stderr(&output));
-    let text = std::fs::read_to_string(&markdown).expect("markdown");
-    assert!(text.starts_with("# Benchmarks\n\nKept.\n"), "{text}");
-    for needle in ["<!-- experiments:begin -->", "### 1. Contacts found", "| swept-aabb |", "| grid |", "auto ÷ best", "<!-- experiments:end -->"] {
-        assert!(text.contains(needle), "{needle} missing from {text}");
-    }
-    // vadop never misses: the accuracy table's "vadop missed" column is 0 on every row.
-    let accuracy_rows: Vec<&str> = text.lines().skip_while(|l| !l.starts_with("### 1.")).skip(4).take_while(|l| l.starts_with('|')).collect();
-    assert_eq!(accuracy_rows.len(), 3, "{text}");
-    for row in accuracy_rows {
-        assert_eq!(row.split('|').nth(4).map(str::trim), Some("0"), "{row}");
-    }
-    for plot in ["1-contacts-vs-speed", "2-time-vs-n", "3-time-vs-speed", "4-time-vs-pool", "5-cost-split", "6-swaps-vs-speed", "7-memory-vs-n"] {
-        let png = std::fs::read(plots.join(format!("{plot}.png"))).expect("plot written");
-        assert!(png.len() > 10_000 && png.starts_with(b"\x89PNG"), "{plot}: {} bytes", png.len());
-        assert!(text.contains(&format!("results/experiments/{plot}.png")), "{plot} not linked");
-    }
-    assert!(std::fs::read_to_string(plots.join("experiments.csv")).expect("csv").lines().count() > 40);
-    std::fs::remove_dir_all(dir).ok();
-}

@@ -7,7 +7,7 @@
 //!                   then parry's ball-ball cast on each pair for the time of impact;
 //!  parry-ccd-refit  the same, but the first frame's tree is kept and refitted to the new boxes
 //!                   (cheap while bodies move little; the tree degrades as they travel far).
-//! It reads the trajectory file written by `vadop peers` (format in ../cpp/trajectory.h, which
+//! It reads the trajectory file written by `vadop-bench peers` (format in ../cpp/trajectory.h, which
 //! this file mirrors) and reports exactly as the C++ peers do: contacts as (frame, i, j) u32
 //! triples in a file, and one JSON line with per-frame milliseconds and peak memory.
 //! Usage: vadop-peer-rapier PIPELINE TRAJECTORY CONTACTS_OUT.

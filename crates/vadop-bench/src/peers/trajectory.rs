@@ -1,0 +1,180 @@
+//! The files the peers share with vadop, and the child jobs that write them. The trajectory file
+//! holds the paper scene's detect-mode paths: per frame, every body's start position and
+//! velocity, its end position and its wall bounces (time and position), so a path is a polyline
+//! (the reader is `bench/peers/cpp/trajectory.h`; keep them in step). A contacts file holds
+//! (frame, i, j) u32 triples: pairs that begin touching during the frame. Every pipeline prints
+//! one JSON line, `{"frame_ms": [...], "peak_kib": K}`.
+
+use crate::common::io_error;
+use crate::markdown::peak_memory_mib;
+use crate::CliResult;
+use std::io::{BufWriter, Write as _};
+use std::path::Path;
+use std::time::Instant;
+use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
+use vadop::{Method, Mode, Touched, World, WorldConfig};
+
+pub const PACKING: f64 = 0.05;
+const MAGIC: &[u8; 8] = b"VADOPTR1";
+
+/// The paper scene of `n` bodies at `speed` in detect mode with `method`.
+fn detect_world(n: usize, speed: f64, method: Method) -> CliResult<(vadop::scene::Scene, World)> {
+    let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
+    let world = scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
+    Ok((scene, world))
+}
+
+/// The child job of one of vadop's own pipelines: steps the scene with `method`, writes its
+/// contacts to `out` and prints the per-frame times and the peak memory.
+pub fn time_method(n: usize, speed: f64, frames: u64, method: Method, out: &Path) -> CliResult<()> {
+    let (_, mut world) = detect_world(n, speed, method)?;
+    let mut contacts = Vec::new();
+    let mut frame_ms = Vec::new();
+    for frame in 0..frames {
+        let started = Instant::now();
+        let step = world.step(1.0 / FRAMES_PER_SECOND).map_err(|e| e.to_string())?;
+        frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
+        for c in step {
+            if let Touched::Body(j) = c.touched {
+                contacts.push([frame as u32, c.body.min(j), c.body.max(j)]);
+            }
+        }
+    }
+    write_contacts(out, &contacts)?;
+    let peak_kib = peak_memory_mib().map_or(-1, |m| (m * 1024.0) as i64);
+    let times: Vec<String> = frame_ms.iter().map(|t| format!("{t:.6}")).collect();
+    crate::common::print(&format!("{{\"frame_ms\":[{}],\"peak_kib\":{peak_kib}}}\n", times.join(",")))
+}
+
+/// The export child job: steps the paper scene in detect mode and writes `dir`/trajectory.bin and
+/// `dir`/reference.bin, the pair contacts found by brute force (`brute`) or by the default method.
+pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> CliResult<()> {
+    let (scene, mut world) = detect_world(n, speed, if brute { Method::Brute } else { Method::Auto })?;
+    let dt = 1.0 / FRAMES_PER_SECOND;
+    let mut contacts = Vec::new();
+    let path = dir.join("trajectory.bin");
+    let file = std::fs::File::create(&path).map_err(|e| io_error(&path, e))?;
+    let mut file = BufWriter::new(file);
+    let header = [n as u64, frames];
+    let floats = [dt, scene.spheres[0].radius];
+    let corners = [scene.bounds.min.to_array(), scene.bounds.max.to_array()];
+    let mut bytes: Vec<u8> = MAGIC.to_vec();
+    bytes.extend(header.iter().flat_map(|v| v.to_le_bytes()));
+    bytes.extend(floats.iter().chain(corners.iter().flatten()).flat_map(|v| v.to_le_bytes()));
+    file.write_all(&bytes).map_err(|e| io_error(&path, e))?;
+    for frame in 0..frames {
+        let mut bytes = Vec::with_capacity(n * 72);
+        let start: Vec<_> = world.spheres().map(|(_, s)| s).collect();
+        for s in &start {
+            bytes.extend(s.position.to_array().iter().chain(s.velocity.to_array().iter()).flat_map(|v| v.to_le_bytes()));
+        }
+        let t0 = world.time();
+        let mut bounces = Vec::new();
+        for c in world.step(dt).map_err(|e| e.to_string())? {
+            match c.touched {
+                Touched::Body(j) => contacts.push([frame as u32, c.body.min(j), c.body.max(j)]),
+                // The contact point sits one radius out along the normal from the centre.
+                Touched::Wall(_) => bounces.push((c.body as u64, c.time - t0, c.point - c.normal * start[c.body as usize].radius)),
+            }
+        }
+        for (_, s) in world.spheres() {
+            bytes.extend(s.position.to_array().iter().flat_map(|v| v.to_le_bytes()));
+        }
+        bounces.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        bytes.extend((bounces.len() as u64).to_le_bytes());
+        for (body, tau, p) in bounces {
+            bytes.extend(body.to_le_bytes());
+            bytes.extend([tau, p.x, p.y, p.z].iter().flat_map(|v| v.to_le_bytes()));
+        }
+        file.write_all(&bytes).map_err(|e| io_error(&path, e))?;
+    }
+    file.flush().map_err(|e| io_error(&path, e))?;
+    contacts.sort_unstable();
+    contacts.dedup();
+    write_contacts(&dir.join("reference.bin"), &contacts)
+}
+
+/// Reads (frame, i, j) u32 triples, sorted and without duplicates.
+pub fn read_contacts(path: &Path) -> Result<Vec<[u32; 3]>, String> {
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    let word = |k: usize| u32::from_le_bytes([bytes[4 * k], bytes[4 * k + 1], bytes[4 * k + 2], bytes[4 * k + 3]]);
+    let mut triples: Vec<[u32; 3]> = (0..bytes.len() / 12).map(|t| [word(3 * t), word(3 * t + 1), word(3 * t + 2)]).collect();
+    triples.sort_unstable();
+    triples.dedup();
+    Ok(triples)
+}
+
+fn write_contacts(path: &Path, contacts: &[[u32; 3]]) -> CliResult<()> {
+    let bytes: Vec<u8> = contacts.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(path, bytes).map_err(|e| io_error(path, e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contact_files_round_trip_sorted() {
+        let path = std::env::temp_dir().join(format!("vadop-peers-test-{}.bin", std::process::id()));
+        write_contacts(&path, &[[1, 2, 3], [0, 5, 9], [1, 2, 3]]).unwrap();
+        let read = read_contacts(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(read, vec![[0, 5, 9], [1, 2, 3]]);
+    }
+
+    /// Reads the trajectory file the way the peers do and checks that each path is the polyline
+    /// vadop stepped: frames chain up, bounces sit on a wall, and the start velocity leads from
+    /// the start to the first knot.
+    #[test]
+    fn trajectory_file_describes_the_stepped_paths() {
+        let dir = std::env::temp_dir().join(format!("vadop-peers-export-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // 60 bodies at 5 diameters per frame in a box about 8.6 wide: bounces in every frame.
+        export(60, 5.0, 4, true, &dir).unwrap();
+        let bytes = std::fs::read(dir.join("trajectory.bin")).unwrap();
+        let contacts = read_contacts(&dir.join("reference.bin")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let at = std::cell::Cell::new(8);
+        let word = || {
+            at.set(at.get() + 8);
+            u64::from_le_bytes(bytes[at.get() - 8..at.get()].try_into().unwrap())
+        };
+        let float = || f64::from_bits(word());
+        assert_eq!(&bytes[..8], MAGIC);
+        let (n, frames) = (word() as usize, word());
+        let (dt, radius) = (float(), float());
+        let (low, high) = ([float(), float(), float()], [float(), float(), float()]);
+        assert_eq!((n, frames, dt, radius), (60, 4, 1.0 / 30.0, 0.5));
+        let mut previous_end: Option<Vec<[f64; 3]>> = None;
+        let mut bounce_total = 0;
+        for _ in 0..frames {
+            let start: Vec<[f64; 6]> = (0..n).map(|_| std::array::from_fn(|_| float())).collect();
+            let end: Vec<[f64; 3]> = (0..n).map(|_| std::array::from_fn(|_| float())).collect();
+            if let Some(previous) = &previous_end {
+                assert!(start.iter().zip(previous).all(|(s, e)| s[..3] == e[..]));
+            }
+            let count = word();
+            let mut first_knot = vec![None; n];
+            let mut bodies_seen = Vec::new();
+            for _ in 0..count {
+                let body = word() as usize;
+                let (tau, p) = (float(), [float(), float(), float()]);
+                assert!((0.0..dt).contains(&tau));
+                let on_wall = (0..3).any(|a| (p[a] - low[a] - radius).abs() < 1e-9 || (high[a] - p[a] - radius).abs() < 1e-9);
+                assert!(on_wall, "bounce of body {body} at {p:?} is on no wall");
+                first_knot[body].get_or_insert((tau, p));
+                bodies_seen.push(body);
+            }
+            assert!(bodies_seen.windows(2).all(|w| w[0] <= w[1]), "bounces sorted by body");
+            for (i, s) in start.iter().enumerate() {
+                let (tau, p) = first_knot[i].unwrap_or((dt, end[i]));
+                assert!((0..3).all(|a| (s[a] + tau * s[3 + a] - p[a]).abs() < 1e-9), "body {i} leaves its line");
+            }
+            bounce_total += count;
+            previous_end = Some(end);
+        }
+        assert_eq!(at.get(), bytes.len());
+        assert!(bounce_total > 0 && !contacts.is_empty());
+        assert!(contacts.iter().all(|c| (c[0] as u64) < frames && c[1] < c[2] && (c[2] as usize) < n));
+    }
+}
