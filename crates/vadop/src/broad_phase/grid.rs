@@ -166,26 +166,24 @@ impl Grid {
         }
     }
 
-    /// Longest stretch of path one piece of a body of `radius` may cover.
-    #[inline]
-    fn piece_length(&self, radius: f64) -> f64 {
-        // A hair shorter than the room left in a base cell, so the padding of the piece's box
-        // never pushes a typical piece up a level.
-        (self.base_cell - 2.0 * radius).max(2.0 * radius) * (1.0 - 1e-6)
-    }
-
     /// How many pieces proxy `i` is cut into, and the exponent of the level they all fit.
+    ///
+    /// A piece's box is its diameter plus its stretch of path, widened by the padding of the
+    /// swept box and by the single-precision rounding of the compact box (a few ulps of its
+    /// coordinates, which reach across the whole box). The stretch is chosen so this widened box
+    /// still fits a base cell: were the widening left out, every cut piece would land one level
+    /// up, in cells of eight times the volume.
     #[inline]
     fn plan_pieces(&self, proxies: &ProxyTable, i: usize) -> (u32, i32) {
         let radius = proxies.radius(i);
-        let limit = self.piece_length(radius);
         let length = proxies.velocity(i).length() * proxies.window_of(i).duration();
-        let count = (length / limit).ceil().clamp(1.0, u32::MAX as f64) as u32;
-        // The largest piece box: the diameter plus the longest stretch, with the padding and
-        // the single-precision rounding of the compact box (a few ulps of its coordinates).
-        let extent = (2.0 * radius + length.min(limit)) * (1.0 + 4.0 * crate::proxy::RELATIVE_PADDING)
-            + 4.0 * crate::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element()
+        let scale = 1.0 + 4.0 * crate::proxy::RELATIVE_PADDING;
+        let widening = 4.0 * crate::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element()
             + 4.0 * f32::EPSILON as f64 * (self.extent.max_element() + 2.0 * radius + length);
+        // A hair shorter than the room left in a base cell, so rounding never pushes a piece up.
+        let limit = (((self.base_cell - widening) / scale - 2.0 * radius) * (1.0 - 1e-6)).max(2.0 * radius);
+        let count = (length / limit).ceil().clamp(1.0, u32::MAX as f64) as u32;
+        let extent = (2.0 * radius + length.min(limit)) * scale + widening;
         (count, self.exponent_for(extent))
     }
 
