@@ -71,12 +71,24 @@ impl Common {
 
     /// The markdown file the suite's sections go into.
     pub fn markdown(&self) -> PathBuf {
-        self.output.clone().unwrap_or_else(|| if self.scratch() { Path::new(QUICK_DIR).join("BENCHMARKS.md") } else { PathBuf::from("BENCHMARKS.md") })
+        self.output.clone().unwrap_or_else(|| {
+            if self.scratch() {
+                Path::new(QUICK_DIR).join("BENCHMARKS.md")
+            } else {
+                PathBuf::from("BENCHMARKS.md")
+            }
+        })
     }
 
     /// The folder of CSVs and plots, created if missing.
     pub fn results(&self) -> CliResult<PathBuf> {
-        let dir = self.results.clone().unwrap_or_else(|| if self.scratch() { Path::new(QUICK_DIR).join("results") } else { PathBuf::from("results") });
+        let dir = self.results.clone().unwrap_or_else(|| {
+            if self.scratch() {
+                Path::new(QUICK_DIR).join("results")
+            } else {
+                PathBuf::from("results")
+            }
+        });
         create_dir(&dir)?;
         Ok(dir)
     }

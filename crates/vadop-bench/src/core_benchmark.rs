@@ -60,7 +60,11 @@ pub fn run(args: &CoreArgs) -> CliResult<()> {
     let (markdown_path, csv_path) = (common.markdown(), common.results()?.join("core-benchmark.csv"));
     markdown::check(&markdown_path, MARKERS)?;
     let quick = common.quick;
-    let bodies = args.grid.bodies.clone().unwrap_or(if quick { vec![1000, 10_000] } else { vec![1000, 10_000, 100_000, 1_000_000] });
+    let bodies = args.grid.bodies.clone().unwrap_or(if quick {
+        vec![1000, 10_000]
+    } else {
+        vec![1000, 10_000, 100_000, 1_000_000]
+    });
     let brute_max = args.brute_max.unwrap_or(if quick { 1000 } else { 10_000 });
     let frames_for = |n: usize, speed: f64, method: &str| {
         let per_frame = match (quick, n) {
@@ -79,8 +83,12 @@ pub fn run(args: &CoreArgs) -> CliResult<()> {
         (_, true) => Some("brute"),
         (_, false) => Some("vadop"),
     };
-    let total: usize =
-        bodies.iter().map(|&n| args.grid.speeds.len() * methods(n).map(|m| 1 + usize::from(reference(n, m).is_some())).sum::<usize>()).sum();
+    let total: usize = bodies
+        .iter()
+        .map(|&n| {
+            args.grid.speeds.len() * methods(n).map(|m| 1 + usize::from(reference(n, m).is_some())).sum::<usize>()
+        })
+        .sum();
     let progress = Progress::new(total);
     let info = RunInfo::start(runner.cpu());
     let mut rows = Vec::new();

@@ -198,7 +198,12 @@ pub fn run(args: &ExperimentsArgs) -> CliResult<()> {
         let label = pool.map_or(String::new(), |m| format!(" m={m}"));
         let what = format!("{}: n={bodies} speed={speed} {method}{label}", experiment.name());
         progress.start(&what);
-        let run = Simulation { mode: experiment.mode(), reference, pool, ..Simulation::paper(bodies, speed, plan.frames(method, speed), method) };
+        let run = Simulation {
+            mode: experiment.mode(),
+            reference,
+            pool,
+            ..Simulation::paper(bodies, speed, plan.frames(method, speed), method)
+        };
         let outcome = runner.simulate(vadop, &run).map(|r| r.summary);
         progress.done(&match &outcome {
             Ok(s) => format!("{what}: {:.3} ms/frame (mean c_total)", s.c_total_ms.mean),
@@ -212,7 +217,11 @@ pub fn run(args: &ExperimentsArgs) -> CliResult<()> {
     let figures = draw_figures(&runs, &plan, &out_dir)?;
     let section = markdown_section(&runs, &plan, &out_dir, &markdown_path, &figures, &info);
     markdown::write_section(&markdown_path, MARKERS, &section)?;
-    crate::common::print(&format!("{section}\nwrote {}, {} and its plots\n", markdown_path.display(), out_dir.display()))
+    crate::common::print(&format!(
+        "{section}\nwrote {}, {} and its plots\n",
+        markdown_path.display(),
+        out_dir.display()
+    ))
 }
 
 fn of(runs: &[Run], experiment: Experiment) -> impl Iterator<Item = &Run> {
@@ -221,7 +230,8 @@ fn of(runs: &[Run], experiment: Experiment) -> impl Iterator<Item = &Run> {
 
 /// Least-squares slope of log(y) against log(x): the exponent of y ~ x^slope.
 fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
-    let logs: Vec<(f64, f64)> = points.iter().filter(|p| p.0 > 0.0 && p.1 > 0.0).map(|p| (p.0.ln(), p.1.ln())).collect();
+    let logs: Vec<(f64, f64)> =
+        points.iter().filter(|p| p.0 > 0.0 && p.1 > 0.0).map(|p| (p.0.ln(), p.1.ln())).collect();
     if logs.len() < 2 {
         return None;
     }
@@ -233,11 +243,14 @@ fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
 }
 
 /// Points (x, y) of one method's successful runs in an experiment.
-fn points(runs: &[Run], experiment: Experiment, method: &str, x: fn(&Run) -> f64, y: fn(&Summary) -> f64) -> Vec<(f64, f64)> {
-    of(runs, experiment)
-        .filter(|r| r.method == method)
-        .filter_map(|r| r.summary().map(|s| (x(r), y(s))))
-        .collect()
+fn points(
+    runs: &[Run],
+    experiment: Experiment,
+    method: &str,
+    x: fn(&Run) -> f64,
+    y: fn(&Summary) -> f64,
+) -> Vec<(f64, f64)> {
+    of(runs, experiment).filter(|r| r.method == method).filter_map(|r| r.summary().map(|s| (x(r), y(s)))).collect()
 }
 
 /// The plots, as (file name, title) pairs for the markdown.
@@ -254,17 +267,27 @@ fn draw_figures(runs: &[Run], plan: &Plan, out_dir: &Path) -> CliResult<Vec<(Str
     let accuracy = |method: &str, y: fn(&Summary) -> f64| points(runs, Experiment::Accuracy, method, speed_of, y);
     let mut series = vec![Series::new(
         "contacts (brute force)",
-        accuracy("auto", |s| s.accuracy.as_ref().map_or(0.0, |a| a.reference_pairs as f64) / s.frames_completed.max(1) as f64),
+        accuracy("auto", |s| {
+            s.accuracy.as_ref().map_or(0.0, |a| a.reference_pairs as f64) / s.frames_completed.max(1) as f64
+        }),
     )];
     for method in ["auto", "vadop", "discrete"] {
         series.push(Series::new(&format!("found by {method}"), accuracy(method, |s| s.pairs_per_frame())));
     }
     for method in ["discrete", "auto", "vadop"] {
-        let missed = accuracy(method, |s| s.accuracy.as_ref().map_or(0.0, |a| a.missed as f64) / s.frames_completed.max(1) as f64);
+        let missed = accuracy(method, |s| {
+            s.accuracy.as_ref().map_or(0.0, |a| a.missed as f64) / s.frames_completed.max(1) as f64
+        });
         series.push(Series::new(&format!("missed by {method}"), missed));
     }
     let title = format!("Pair contacts per frame vs speed (n = {}, detect mode)", plan.bodies);
-    plots::line_chart(&figure("1-contacts-vs-speed.png", title.clone()), &title, "max speed (diameters/frame)", "pair contacts per frame", series)?;
+    plots::line_chart(
+        &figure("1-contacts-vs-speed.png", title.clone()),
+        &title,
+        "max speed (diameters/frame)",
+        "pair contacts per frame",
+        series,
+    )?;
 
     // 2. Time against n.
     let series: Vec<Series> = METHODS
@@ -276,12 +299,27 @@ fn draw_figures(runs: &[Run], plan: &Plan, out_dir: &Path) -> CliResult<Vec<(Str
         })
         .collect();
     let title = "Mean ms per frame vs n (speed 0.5 diameters/frame)".to_string();
-    plots::line_chart(&figure("2-time-vs-n.png", title.clone()), &title, "bodies n", "ms per frame (mean c_total)", series)?;
+    plots::line_chart(
+        &figure("2-time-vs-n.png", title.clone()),
+        &title,
+        "bodies n",
+        "ms per frame (mean c_total)",
+        series,
+    )?;
 
     // 3. Time against speed.
-    let series: Vec<Series> = METHODS.iter().map(|&m| Series::new(m, points(runs, Experiment::Speed, m, speed_of, |s| s.c_total_ms.mean))).collect();
+    let series: Vec<Series> = METHODS
+        .iter()
+        .map(|&m| Series::new(m, points(runs, Experiment::Speed, m, speed_of, |s| s.c_total_ms.mean)))
+        .collect();
     let title = format!("Mean ms per frame vs speed (n = {})", plan.bodies);
-    plots::line_chart(&figure("3-time-vs-speed.png", title.clone()), &title, "max speed (diameters/frame)", "ms per frame (mean c_total)", series)?;
+    plots::line_chart(
+        &figure("3-time-vs-speed.png", title.clone()),
+        &title,
+        "max speed (diameters/frame)",
+        "ms per frame (mean c_total)",
+        series,
+    )?;
 
     // 4. Time against pool size, one line per speed, the automatic choice as its own series.
     let mut series = Vec::new();
@@ -292,11 +330,21 @@ fn draw_figures(runs: &[Run], plan: &Plan, out_dir: &Path) -> CliResult<Vec<(Str
             &format!("speed {speed}"),
             at.iter().filter_map(|r| Some((r.pool? as f64, r.mean_ms()?))).collect(),
         ));
-        auto_points.extend(at.iter().filter(|r| r.pool.is_none()).filter_map(|r| Some((r.summary()?.pool.as_ref()?.axes as f64, r.mean_ms()?))));
+        auto_points.extend(
+            at.iter()
+                .filter(|r| r.pool.is_none())
+                .filter_map(|r| Some((r.summary()?.pool.as_ref()?.axes as f64, r.mean_ms()?))),
+        );
     }
     series.push(Series::markers("automatic choice", auto_points));
     let title = format!("vadop: mean ms per frame vs pool size (n = {})", plan.bodies);
-    plots::line_chart(&figure("4-time-vs-pool.png", title.clone()), &title, "pool axes m", "ms per frame (mean c_total)", series)?;
+    plots::line_chart(
+        &figure("4-time-vs-pool.png", title.clone()),
+        &title,
+        "pool axes m",
+        "ms per frame (mean c_total)",
+        series,
+    )?;
 
     // 5. Cost split per method at speed 0.5; brute force would dwarf every other bar.
     let split: Vec<(String, Vec<f64>)> = of(runs, Experiment::Speed)
@@ -308,7 +356,13 @@ fn draw_figures(runs: &[Run], plan: &Plan, out_dir: &Path) -> CliResult<Vec<(Str
         })
         .collect();
     let title = format!("Cost split per frame, brute force left out (n = {}, speed 0.5)", plan.bodies);
-    plots::stacked_bars(&figure("5-cost-split.png", title.clone()), &title, "ms per frame (mean)", &["c_update", "c_sort", "c_test", "c_response"], &split)?;
+    plots::stacked_bars(
+        &figure("5-cost-split.png", title.clone()),
+        &title,
+        "ms per frame (mean)",
+        &["c_update", "c_sort", "c_test", "c_response"],
+        &split,
+    )?;
 
     // 6. Endpoint swaps against speed, for the methods that keep sorted lists.
     let series: Vec<Series> = ["vadop", "swept-aabb", "swept-kdop", "discrete"]
@@ -316,7 +370,13 @@ fn draw_figures(runs: &[Run], plan: &Plan, out_dir: &Path) -> CliResult<Vec<(Str
         .map(|&m| Series::new(m, points(runs, Experiment::Speed, m, speed_of, |s| s.per_frame.endpoint_swaps.max(0.5))))
         .collect();
     let title = format!("Insertion-sort moves per frame vs speed (n = {})", plan.bodies);
-    plots::line_chart(&figure("6-swaps-vs-speed.png", title.clone()), &title, "max speed (diameters/frame)", "endpoint moves per frame", series)?;
+    plots::line_chart(
+        &figure("6-swaps-vs-speed.png", title.clone()),
+        &title,
+        "max speed (diameters/frame)",
+        "endpoint moves per frame",
+        series,
+    )?;
 
     // 7. Peak memory against n.
     let series: Vec<Series> = METHODS
@@ -324,7 +384,13 @@ fn draw_figures(runs: &[Run], plan: &Plan, out_dir: &Path) -> CliResult<Vec<(Str
         .map(|&m| Series::new(m, points(runs, Experiment::Bodies, m, n_of, |s| s.peak_memory_mib.unwrap_or(0.0))))
         .collect();
     let title = "Peak memory vs n (whole process, speed 0.5)".to_string();
-    plots::line_chart(&figure("7-memory-vs-n.png", title.clone()), &title, "bodies n", "peak resident memory (MiB)", series)?;
+    plots::line_chart(
+        &figure("7-memory-vs-n.png", title.clone()),
+        &title,
+        "bodies n",
+        "peak resident memory (MiB)",
+        series,
+    )?;
     Ok(figures)
 }
 
@@ -375,7 +441,14 @@ fn cell(r: Option<&Run>) -> String {
     }
 }
 
-fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, figures: &[(String, String)], info: &RunInfo) -> String {
+fn markdown_section(
+    runs: &[Run],
+    plan: &Plan,
+    out_dir: &Path,
+    markdown: &Path,
+    figures: &[(String, String)],
+    info: &RunInfo,
+) -> String {
     let mut md = String::new();
     // Figures are linked relative to the markdown file.
     let link = |file: &str| markdown::link(markdown, &out_dir.join(file));
@@ -396,10 +469,14 @@ fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, 
     let _ = writeln!(md, "| speed | brute-force pair contacts | auto found | auto missed | vadop found | vadop missed | discrete found | discrete missed | discrete missed % |");
     let _ = writeln!(md, "|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for &speed in &plan.accuracy_speeds {
-        let find = |m: &str| of(runs, Experiment::Accuracy).find(|r| r.speed == speed && r.method == m).and_then(|r| r.summary());
+        let find = |m: &str| {
+            of(runs, Experiment::Accuracy).find(|r| r.speed == speed && r.method == m).and_then(|r| r.summary())
+        };
         let (a, v, d) = (find("auto"), find("vadop"), find("discrete"));
         let reference = a.or(v).or(d).and_then(|s| s.accuracy.as_ref()).map(|a| a.reference_pairs);
-        let missed = |s: Option<&Summary>| s.and_then(|s| s.accuracy.as_ref()).map_or("—".to_string(), |a| a.missed.to_string());
+        let missed = |s: Option<&Summary>| {
+            s.and_then(|s| s.accuracy.as_ref()).map_or("—".to_string(), |a| a.missed.to_string())
+        };
         let found = |s: Option<&Summary>| s.map_or("—".to_string(), |s| s.contacts.pairs.to_string());
         let percent = d
             .and_then(|s| s.accuracy.as_ref())
@@ -428,10 +505,14 @@ fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, 
     for method in METHODS {
         let _ = write!(md, "| {method} |");
         for &n in &plan.body_counts {
-            let _ = write!(md, " {} |", cell(of(runs, Experiment::Bodies).find(|r| r.bodies == n && r.method == method)));
+            let _ =
+                write!(md, " {} |", cell(of(runs, Experiment::Bodies).find(|r| r.bodies == n && r.method == method)));
         }
         let p = points(runs, Experiment::Bodies, method, |r| r.bodies as f64, |s| s.c_total_ms.mean);
-        let peak = of(runs, Experiment::Bodies).filter(|r| r.method == method).filter_map(|r| r.summary()?.peak_memory_mib).last();
+        let peak = of(runs, Experiment::Bodies)
+            .filter(|r| r.method == method)
+            .filter_map(|r| r.summary()?.peak_memory_mib)
+            .last();
         let _ = writeln!(
             md,
             " {} | {} |",
@@ -475,7 +556,11 @@ fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, 
         }
         let auto = at.iter().copied().find(|r| r.pool.is_none());
         let chosen = auto.and_then(|r| r.summary()?.pool.as_ref()).map_or("?".to_string(), |p| p.axes.to_string());
-        let best = at.iter().filter(|r| r.pool.is_some()).filter_map(|r| Some((r.pool?, r.mean_ms()?))).min_by(|a, b| a.1.total_cmp(&b.1));
+        let best = at
+            .iter()
+            .filter(|r| r.pool.is_some())
+            .filter_map(|r| Some((r.pool?, r.mean_ms()?)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
         let (best_cell, ratio) = match (best, auto.and_then(Run::mean_ms)) {
             (Some((m, t)), Some(a)) => (format!("{m} ({t:.2})"), format!("{:.2}", a / t)),
             (Some((m, t)), None) => (format!("{m} ({t:.2})"), "—".to_string()),
@@ -484,8 +569,12 @@ fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, 
         let _ = writeln!(md, " {} ({chosen}) | {best_cell} | {ratio} |", cell(auto));
     }
 
-    let _ = writeln!(md, "\n### 5–6. Cost split (ms per frame, mean) and sort work at speed 0.5 (n = {})\n", plan.bodies);
-    let _ = writeln!(md, "| method | c_update | c_sort | c_test | c_response | endpoint moves/frame | candidate pairs/frame |");
+    let _ =
+        writeln!(md, "\n### 5–6. Cost split (ms per frame, mean) and sort work at speed 0.5 (n = {})\n", plan.bodies);
+    let _ = writeln!(
+        md,
+        "| method | c_update | c_sort | c_test | c_response | endpoint moves/frame | candidate pairs/frame |"
+    );
     let _ = writeln!(md, "|---|---:|---:|---:|---:|---:|---:|");
     for r in of(runs, Experiment::Speed).filter(|r| r.speed == 0.5) {
         if let Some(s) = r.summary() {
@@ -493,12 +582,22 @@ fn markdown_section(runs: &[Run], plan: &Plan, out_dir: &Path, markdown: &Path, 
             let _ = writeln!(
                 md,
                 "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.0} | {:.0} |",
-                s.run.method, c.update_ms, c.sort_ms, c.test_ms, c.response_ms, s.per_frame.endpoint_swaps, s.per_frame.candidate_pairs
+                s.run.method,
+                c.update_ms,
+                c.sort_ms,
+                c.test_ms,
+                c.response_ms,
+                s.per_frame.endpoint_swaps,
+                s.per_frame.candidate_pairs
             );
         }
     }
     let _ = writeln!(md, "\n### 7. Simulate mode (full response; paths differ between methods, so no miss counts): mean ms per frame (n = {})\n", plan.bodies);
-    let _ = writeln!(md, "| method | {} |", plan.simulate_speeds.iter().map(|s| format!("speed {s} | pair contacts/frame")).collect::<Vec<_>>().join(" | "));
+    let _ = writeln!(
+        md,
+        "| method | {} |",
+        plan.simulate_speeds.iter().map(|s| format!("speed {s} | pair contacts/frame")).collect::<Vec<_>>().join(" | ")
+    );
     let _ = writeln!(md, "|---|{}", "---:|---:|".repeat(plan.simulate_speeds.len()));
     for method in METHODS {
         let _ = write!(md, "| {method} |");

@@ -53,7 +53,9 @@ fn merge(existing: Option<&str>, section: &str, path: &Path, markers: Markers) -
         return Ok(format!("# Benchmarks\n\n{section}\n"));
     };
     match (text.find(&begin_marker), text.find(&end_marker)) {
-        (Some(begin), Some(end)) if begin < end => Ok(format!("{}{section}{}", &text[..begin], &text[end + end_marker.len()..])),
+        (Some(begin), Some(end)) if begin < end => {
+            Ok(format!("{}{section}{}", &text[..begin], &text[end + end_marker.len()..]))
+        }
         (None, None) => {
             let separator = if text.is_empty() || text.ends_with("\n\n") {
                 ""
@@ -64,7 +66,10 @@ fn merge(existing: Option<&str>, section: &str, path: &Path, markers: Markers) -
             };
             Ok(format!("{text}{separator}{section}\n"))
         }
-        _ => Err(format!("{}: the markers {begin_marker} and {end_marker} are unbalanced or out of order; fix them by hand", path.display())),
+        _ => Err(format!(
+            "{}: the markers {begin_marker} and {end_marker} are unbalanced or out of order; fix them by hand",
+            path.display()
+        )),
     }
 }
 
@@ -92,8 +97,15 @@ impl RunInfo {
     /// Captures the command line, the date and the load average now, at the start of a run whose
     /// children are pinned to `cpu`.
     pub fn start(cpu: Option<usize>) -> RunInfo {
-        let command: Vec<String> = std::env::args().skip(1).map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect();
-        RunInfo { command: command.join(" "), date: utc_now(), started: Instant::now(), load_at_start: load_average(), cpu }
+        let command: Vec<String> =
+            std::env::args().skip(1).map(|a| if a.contains(' ') { format!("'{a}'") } else { a }).collect();
+        RunInfo {
+            command: command.join(" "),
+            date: utc_now(),
+            started: Instant::now(),
+            load_at_start: load_average(),
+            cpu,
+        }
     }
 
     /// The lines under a section's heading: command, date, duration so far, machine, load and pinning.
@@ -145,7 +157,8 @@ fn machine() -> String {
         .and_then(|line| line.split(':').nth(1))
         .map_or("unknown CPU".to_string(), |model| model.trim().to_string());
     let cores = std::thread::available_parallelism().map_or("unknown".to_string(), |n| n.to_string());
-    let memory = proc_number("/proc/meminfo", "MemTotal:").map_or("unknown".to_string(), |kib| format!("{:.1} GiB", kib / (1024.0 * 1024.0)));
+    let memory = proc_number("/proc/meminfo", "MemTotal:")
+        .map_or("unknown".to_string(), |kib| format!("{:.1} GiB", kib / (1024.0 * 1024.0)));
     format!("{cpu}, {cores} cores available, {memory} memory")
 }
 

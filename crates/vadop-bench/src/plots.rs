@@ -50,7 +50,8 @@ impl Series {
     }
     /// The same series with a fixed colour (`#rrggbb`) and stroke.
     pub fn styled(self, colour: &str, stroke: Stroke) -> Series {
-        let channel = |k: usize| u8::from_str_radix(colour.get(1 + 2 * k..3 + 2 * k).unwrap_or("7f"), 16).unwrap_or(127);
+        let channel =
+            |k: usize| u8::from_str_radix(colour.get(1 + 2 * k..3 + 2 * k).unwrap_or("7f"), 16).unwrap_or(127);
         Series { colour: Some(RGBColor(channel(0), channel(1), channel(2))), stroke, ..self }
     }
 }
@@ -78,7 +79,11 @@ fn plot_error(path: &Path, e: impl std::fmt::Display) -> String {
 }
 
 /// The legend of `chart`, in its upper left corner.
-fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(chart: &mut ChartContext<'a, DB, CT>, font: u32, path: &Path) -> CliResult<()> {
+fn draw_legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    font: u32,
+    path: &Path,
+) -> CliResult<()> {
     chart
         .configure_series_labels()
         .label_font(("sans-serif", font))
@@ -111,7 +116,8 @@ pub fn line_chart(path: &Path, title: &str, x_label: &str, y_label: &str, series
 pub fn line_panels(path: &Path, title: Option<&str>, panels: &[Panel]) -> CliResult<()> {
     register_font()?;
     let wide = panels.len() > 1;
-    let root = BitMapBackend::new(path, (if wide { 560 * panels.len() as u32 } else { WIDTH }, HEIGHT)).into_drawing_area();
+    let root =
+        BitMapBackend::new(path, (if wide { 560 * panels.len() as u32 } else { WIDTH }, HEIGHT)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| plot_error(path, e))?;
     let root = match title {
         Some(title) => root.titled(title, ("sans-serif", 26)).map_err(|e| plot_error(path, e))?,
@@ -119,8 +125,11 @@ pub fn line_panels(path: &Path, title: Option<&str>, panels: &[Panel]) -> CliRes
     };
     let (caption, legend) = if wide { (20, 12) } else { (26, 16) };
     for (panel, area) in panels.iter().zip(root.split_evenly((1, panels.len()))) {
-        let shown: Vec<Vec<(f64, f64)>> =
-            panel.series.iter().map(|s| s.points.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect()).collect();
+        let shown: Vec<Vec<(f64, f64)>> = panel
+            .series
+            .iter()
+            .map(|s| s.points.iter().copied().filter(|p| p.0 > 0.0 && p.1 > 0.0).collect())
+            .collect();
         let (x0, x1) = span(shown.iter().flatten().map(|p| p.0));
         let (y0, y1) = span(shown.iter().flatten().map(|p| p.1));
         let mut chart = ChartBuilder::on(&area)
@@ -142,28 +151,33 @@ pub fn line_panels(path: &Path, title: Option<&str>, panels: &[Panel]) -> CliRes
             .map_err(|e| plot_error(path, e))?;
         for (k, (s, points)) in panel.series.iter().zip(&shown).enumerate() {
             let colour = s.colour.unwrap_or(PALETTE[k % PALETTE.len()]);
-            let label = if points.is_empty() && !s.points.is_empty() { format!("{} — zero everywhere", s.label) } else { s.label.clone() };
+            let label = if points.is_empty() && !s.points.is_empty() {
+                format!("{} — zero everywhere", s.label)
+            } else {
+                s.label.clone()
+            };
             let line = colour.stroke_width(3);
             let dashed = s.stroke == Stroke::Dashed;
             let drawn = match s.stroke {
                 Stroke::Solid => chart.draw_series(LineSeries::new(points.iter().copied(), line).point_size(4)),
                 Stroke::Dashed => {
                     // A dashed line draws no points of its own: a lone point would not show.
-                    chart.draw_series(points.iter().map(|&p| Circle::new(p, 4, colour.stroke_width(2)))).map_err(|e| plot_error(path, e))?;
+                    chart
+                        .draw_series(points.iter().map(|&p| Circle::new(p, 4, colour.stroke_width(2))))
+                        .map_err(|e| plot_error(path, e))?;
                     chart.draw_series(DashedLineSeries::new(points.iter().copied(), 8, 5, colour.stroke_width(2)))
                 }
-                Stroke::MarkersOnly => chart.draw_series(points.iter().map(|&p| TriangleMarker::new(p, 12, colour.filled()))),
+                Stroke::MarkersOnly => {
+                    chart.draw_series(points.iter().map(|&p| TriangleMarker::new(p, 12, colour.filled())))
+                }
             };
-            drawn
-                .map_err(|e| plot_error(path, e))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    // Dashed series show a gap in the middle of their legend line.
-                    let gap = if dashed { 6 } else { 0 };
-                    EmptyElement::at((x, y))
-                        + PathElement::new(vec![(0, 0), (12 - gap / 2, 0)], colour.stroke_width(3))
-                        + PathElement::new(vec![(12 + gap / 2, 0), (24, 0)], colour.stroke_width(3))
-                });
+            drawn.map_err(|e| plot_error(path, e))?.label(label).legend(move |(x, y)| {
+                // Dashed series show a gap in the middle of their legend line.
+                let gap = if dashed { 6 } else { 0 };
+                EmptyElement::at((x, y))
+                    + PathElement::new(vec![(0, 0), (12 - gap / 2, 0)], colour.stroke_width(3))
+                    + PathElement::new(vec![(12 + gap / 2, 0), (24, 0)], colour.stroke_width(3))
+            });
         }
         draw_legend(&mut chart, legend, path)?;
     }
@@ -179,7 +193,13 @@ struct Segment {
 }
 
 /// One stacked bar per entry of `bars`, its segments in the order of `parts`.
-pub fn stacked_bars(path: &Path, title: &str, y_label: &str, parts: &[&str], bars: &[(String, Vec<f64>)]) -> CliResult<()> {
+pub fn stacked_bars(
+    path: &Path,
+    title: &str,
+    y_label: &str,
+    parts: &[&str],
+    bars: &[(String, Vec<f64>)],
+) -> CliResult<()> {
     let mut segments = Vec::new();
     for (slot, (_, values)) in bars.iter().enumerate() {
         let mut bottom = 0.0;
@@ -195,9 +215,17 @@ pub fn stacked_bars(path: &Path, title: &str, y_label: &str, parts: &[&str], bar
 
 /// Groups of bars on a log axis: one group per entry of `groups`, one bar per entry of `members`
 /// in each (a missing value leaves its place empty).
-pub fn grouped_bars(path: &Path, title: &str, x_label: &str, y_label: &str, members: &[&str], groups: &[(String, Vec<Option<f64>>)]) -> CliResult<()> {
+pub fn grouped_bars(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    members: &[&str],
+    groups: &[(String, Vec<Option<f64>>)],
+) -> CliResult<()> {
     // Log values on a linear axis: bars need a common floor, which a log axis has not.
-    let logs: Vec<f64> = groups.iter().flat_map(|g| g.1.iter().flatten()).filter(|v| **v > 0.0).map(|v| v.log10()).collect();
+    let logs: Vec<f64> =
+        groups.iter().flat_map(|g| g.1.iter().flatten()).filter(|v| **v > 0.0).map(|v| v.log10()).collect();
     let (lo, hi) = logs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
     let (floor, ceiling) = if lo.is_finite() { (lo.floor() - 0.2, hi + 0.3) } else { (0.0, 1.0) };
     // Each group takes one slot per member and an empty one between groups.
@@ -212,7 +240,9 @@ pub fn grouped_bars(path: &Path, title: &str, x_label: &str, y_label: &str, memb
             }
         }
     }
-    draw_bars(path, title, x_label, y_label, members, &labels, &segments, floor..ceiling, |y| significant(10f64.powf(*y)))
+    draw_bars(path, title, x_label, y_label, members, &labels, &segments, floor..ceiling, |y| {
+        significant(10f64.powf(*y))
+    })
 }
 
 /// A tick value with at most three significant digits and no trailing zeros.
@@ -268,7 +298,10 @@ fn draw_bars(
     for (k, part) in parts.iter().enumerate() {
         let colour = PALETTE[k % PALETTE.len()];
         let rectangles = segments.iter().filter(|s| s.part == k).map(|s| {
-            let mut bar = Rectangle::new([(SegmentValue::Exact(s.slot), s.bottom), (SegmentValue::Exact(s.slot + 1), s.top)], colour.filled());
+            let mut bar = Rectangle::new(
+                [(SegmentValue::Exact(s.slot), s.bottom), (SegmentValue::Exact(s.slot + 1), s.top)],
+                colour.filled(),
+            );
             bar.set_margin(0, 0, 6, 6);
             bar
         });

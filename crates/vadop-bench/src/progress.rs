@@ -13,7 +13,9 @@ impl Progress {
     pub fn new(total: usize) -> Progress {
         let bar = ProgressBar::new(total as u64);
         // The template is fixed, so this never fails; the default style would do anyway.
-        if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} runs [{elapsed_precise} < {eta_precise}] {msg}") {
+        if let Ok(style) =
+            ProgressStyle::with_template("{bar:40} {pos}/{len} runs [{elapsed_precise} < {eta_precise}] {msg}")
+        {
             bar.set_style(style);
         }
         Progress { bar, terminal: std::io::stderr().is_terminal() }

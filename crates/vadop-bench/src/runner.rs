@@ -78,7 +78,8 @@ impl Runner {
     /// report.
     pub fn simulate(&self, program: &Path, run: &Simulation) -> Result<Report, String> {
         let json = self.scratch_file("run.json");
-        let mut full = vec!["simulate".to_string(), "--quiet".to_string(), "--json".to_string(), json.display().to_string()];
+        let mut full =
+            vec!["simulate".to_string(), "--quiet".to_string(), "--json".to_string(), json.display().to_string()];
         full.extend(run.args());
         let outcome = self.run(program, &full, self.timeout).and_then(|_| {
             let text = std::fs::read_to_string(&json).map_err(|e| io_error(&json, e))?;
@@ -199,7 +200,11 @@ impl Simulation {
 fn newer_source(binary: &Path) -> Option<PathBuf> {
     let built = std::fs::metadata(binary).and_then(|m| m.modified()).ok()?;
     let root = binary.parent()?.parent()?.parent()?;
-    let mut pending: Vec<PathBuf> = ["crates/vadop", "crates/vadop-cli"].iter().map(|c| root.join(c)).filter(|c| c.join("Cargo.toml").is_file()).collect();
+    let mut pending: Vec<PathBuf> = ["crates/vadop", "crates/vadop-cli"]
+        .iter()
+        .map(|c| root.join(c))
+        .filter(|c| c.join("Cargo.toml").is_file())
+        .collect();
     while let Some(path) = pending.pop() {
         if path.is_dir() {
             // A crate's own target or test folders do not go into the binary.

@@ -8,7 +8,10 @@ use std::process::{Command, Output};
 
 fn bench(dir: &Path, args: &[&str]) -> Output {
     let exe = Path::new(env!("CARGO_BIN_EXE_vadop-bench"));
-    assert!(exe.with_file_name("vadop").is_file(), "build the product binary too: cargo build -p vadop-cli (same profile)");
+    assert!(
+        exe.with_file_name("vadop").is_file(),
+        "build the product binary too: cargo build -p vadop-cli (same profile)"
+    );
     Command::new(exe).args(args).current_dir(dir).output().expect("the binary runs")
 }
 
@@ -43,7 +46,12 @@ fn assert_usage_error(output: &Output, expected: &str) {
 
 /// The table rows (lines starting with `|`, header and rule left out) after `heading`.
 fn table_after<'a>(text: &'a str, heading: &str) -> Vec<&'a str> {
-    text.lines().skip_while(|l| !l.starts_with(heading)).skip_while(|l| !l.starts_with('|')).skip(2).take_while(|l| l.starts_with('|')).collect()
+    text.lines()
+        .skip_while(|l| !l.starts_with(heading))
+        .skip_while(|l| !l.starts_with('|'))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .collect()
 }
 
 #[test]
@@ -96,7 +104,15 @@ fn quick_experiments_write_tables_csv_and_plots() {
     assert!(output.status.success(), "{}", stderr(&output));
     let text = read(&dir.join("B.md"));
     assert!(text.starts_with("# Benchmarks\n\nKept.\n"), "{text}");
-    for needle in ["<!-- experiments:begin -->", "### 1. Contacts found", "| swept-aabb |", "| grid |", "| auto |", "automatic ÷ best", "<!-- experiments:end -->"] {
+    for needle in [
+        "<!-- experiments:begin -->",
+        "### 1. Contacts found",
+        "| swept-aabb |",
+        "| grid |",
+        "| auto |",
+        "automatic ÷ best",
+        "<!-- experiments:end -->",
+    ] {
         assert!(text.contains(needle), "{needle} missing from {text}");
     }
     // The continuous methods never miss: the accuracy table's auto and vadop "missed" columns are 0.
@@ -106,7 +122,15 @@ fn quick_experiments_write_tables_csv_and_plots() {
         let cells: Vec<&str> = row.split('|').map(str::trim).collect();
         assert_eq!((cells[4], cells[6]), ("0", "0"), "{row}");
     }
-    for plot in ["1-contacts-vs-speed", "2-time-vs-n", "3-time-vs-speed", "4-time-vs-pool", "5-cost-split", "6-swaps-vs-speed", "7-memory-vs-n"] {
+    for plot in [
+        "1-contacts-vs-speed",
+        "2-time-vs-n",
+        "3-time-vs-speed",
+        "4-time-vs-pool",
+        "5-cost-split",
+        "6-swaps-vs-speed",
+        "7-memory-vs-n",
+    ] {
         assert_png(&dir.join(format!("results/experiments/{plot}.png")));
         assert!(text.contains(&format!("results/experiments/{plot}.png")), "{plot} not linked");
     }
@@ -131,7 +155,10 @@ fn quick_speed_suite_writes_every_section() {
     ];
     for (name, plot, rows) in sections {
         let begin = format!("<!-- speed-{name}:begin -->");
-        assert!(text.contains(&begin) && text.contains(&format!("<!-- speed-{name}:end -->")), "{name} markers missing");
+        assert!(
+            text.contains(&begin) && text.contains(&format!("<!-- speed-{name}:end -->")),
+            "{name} markers missing"
+        );
         let section = &text[text.find(&begin).expect("begin")..];
         assert!(section.contains("1-minute load average"), "{name}: no machine line");
         let table = table_after(section, "Produced by");
@@ -149,11 +176,21 @@ fn quick_speed_suite_writes_every_section() {
 #[test]
 fn peers_render_their_table_and_plot_from_a_csv() {
     let dir = scratch("peers");
-    let mut csv = String::from("n,speed,pipeline,kind,frames,status,mean_ms,found,missed,false,reference,peak_mib,time_vs_auto\n");
+    let mut csv = String::from(
+        "n,speed,pipeline,kind,frames,status,mean_ms,found,missed,false,reference,peak_mib,time_vs_auto\n",
+    );
     for (n, scale) in [(10_000, 1.0), (100_000, 12.0)] {
         for speed in [0.5, 5.0] {
-            for (pipeline, kind, ms) in [("vadop-auto", "continuous", 2.0), ("vadop", "continuous", 5.0), ("parry-ccd", "continuous", 3.0), ("fcl-dtree", "discrete", 1.0)] {
-                csv.push_str(&format!("{n},{speed},{pipeline},{kind},10,ok,{},100,0,0,100,20.0,\n", ms * scale * speed));
+            for (pipeline, kind, ms) in [
+                ("vadop-auto", "continuous", 2.0),
+                ("vadop", "continuous", 5.0),
+                ("parry-ccd", "continuous", 3.0),
+                ("fcl-dtree", "discrete", 1.0),
+            ] {
+                csv.push_str(&format!(
+                    "{n},{speed},{pipeline},{kind},10,ok,{},100,0,0,100,20.0,\n",
+                    ms * scale * speed
+                ));
             }
         }
     }
@@ -165,7 +202,10 @@ fn peers_render_their_table_and_plot_from_a_csv() {
     assert!(text.contains("<!-- peers:begin -->") && text.contains("<!-- peers:end -->"), "{text}");
     assert_eq!(table_after(&text, "| n | speed | pipeline").len(), 17, "{text}");
     assert!(text.contains("| timed out after 120 s |"), "{text}");
-    assert!(text.contains("- n=100000, speed 5: auto 120.000 ms, exact; faster than every continuous peer that finished"), "{text}");
+    assert!(
+        text.contains("- n=100000, speed 5: auto 120.000 ms, exact; faster than every continuous peer that finished"),
+        "{text}"
+    );
     assert_png(&dir.join("results/peers/peers.png"));
     std::fs::remove_dir_all(dir).ok();
 }
@@ -181,8 +221,12 @@ fn bad_input_is_reported_not_panicked() {
     assert_usage_error(&bench(&dir, &["core", "--publish"]), "--quick");
     assert_usage_error(&bench(&dir, &["core", "--bodies", "100,0"]), "--bodies");
     assert_usage_error(&bench(&dir, &["peers", "--speeds", "nan"]), "--speeds");
-    std::fs::write(dir.join("B.md"), "<!-- core-benchmark:end -->\n<!-- core-benchmark:begin -->\n").expect("markdown written");
+    std::fs::write(dir.join("B.md"), "<!-- core-benchmark:end -->\n<!-- core-benchmark:begin -->\n")
+        .expect("markdown written");
     assert_usage_error(&bench(&dir, &["core", "--output", "B.md"]), "unbalanced");
-    assert_usage_error(&bench(&dir, &["--child", "--job", "retest", "--bodies", "0", "--speed", "1"]), "at least one sphere");
+    assert_usage_error(
+        &bench(&dir, &["--child", "--job", "retest", "--bodies", "0", "--speed", "1"]),
+        "at least one sphere",
+    );
     std::fs::remove_dir_all(dir).ok();
 }

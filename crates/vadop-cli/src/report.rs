@@ -216,7 +216,8 @@ impl Quantiles {
     const HIGHEST_MS: f64 = 1e9;
 
     pub fn add(&mut self, value: f64) {
-        (self.min, self.max) = if self.count == 0 { (value, value) } else { (self.min.min(value), self.max.max(value)) };
+        (self.min, self.max) =
+            if self.count == 0 { (value, value) } else { (self.min.min(value), self.max.max(value)) };
         self.count += 1;
         self.sum += value;
         if self.bins.is_empty() {
@@ -235,7 +236,11 @@ impl Quantiles {
     fn bin(value: f64) -> usize {
         let bin = ((value / Self::LOWEST_MS).ln() / Self::BIN_RATIO.ln()).floor();
         // NaN and values below the lowest (0 too) go to the first bin.
-        if bin > 0.0 { (bin as usize).min(Self::bin_count() - 1) } else { 0 }
+        if bin > 0.0 {
+            (bin as usize).min(Self::bin_count() - 1)
+        } else {
+            0
+        }
     }
 
     fn bin_count() -> usize {
@@ -457,7 +462,8 @@ impl fmt::Display for Summary {
         let run = &self.run;
         let scene = &run.scene;
         let [x, y, z] = scene.extent;
-        let shape = if x == y && y == z { format!("cube of side {x:.4}") } else { format!("box {x:.4} x {y:.4} x {z:.4}") };
+        let shape =
+            if x == y && y == z { format!("cube of side {x:.4}") } else { format!("box {x:.4} x {y:.4} x {z:.4}") };
         writeln!(f, "scene       {}", scene.source)?;
         writeln!(
             f,
@@ -490,7 +496,9 @@ impl fmt::Display for Summary {
                     "detect mode: identical paths, so these are exact misses".to_string()
                 } else {
                     match a.first_difference_frame {
-                        Some(frame) => format!("simulate mode: paths diverge from frame {frame} on, so later differences are not misses"),
+                        Some(frame) => format!(
+                            "simulate mode: paths diverge from frame {frame} on, so later differences are not misses"
+                        ),
                         None => "simulate mode: paths never diverged".to_string(),
                     }
                 };
@@ -598,7 +606,11 @@ impl OutputFile {
     }
 
     fn json(&mut self, value: &impl Serialize, pretty: bool) -> CliResult<()> {
-        let written = if pretty { serde_json::to_writer_pretty(&mut self.out, value) } else { serde_json::to_writer(&mut self.out, value) };
+        let written = if pretty {
+            serde_json::to_writer_pretty(&mut self.out, value)
+        } else {
+            serde_json::to_writer(&mut self.out, value)
+        };
         written.map_err(|e| io_error(&self.path, e))
     }
 
@@ -731,5 +743,4 @@ mod tests {
         let s = edges.spread();
         assert_eq!((s.median, s.p95), (0.0, 1e12));
     }
-
 }

@@ -7,7 +7,10 @@
 //! steps, and its messages are what the user sees. A frame that fails stops the run, but what was
 //! simulated before it is still reported and written. Nothing it keeps grows with the frames.
 
-use crate::report::{self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, JsonReport, OutputFile, PoolInfo, RunInfo, SceneInfo, Summary};
+use crate::report::{
+    self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, JsonReport, OutputFile, PoolInfo, RunInfo,
+    SceneInfo, Summary,
+};
 use crate::CliResult;
 use clap::{Args, ValueEnum};
 use std::fs::{File, OpenOptions};
@@ -44,11 +47,25 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "N", default_value_t = 1000, conflicts_with = "scene", help_heading = "Scene")]
     bodies: usize,
     /// Fraction of the box volume the spheres fill, in (0, 0.6]
-    #[arg(long, value_name = "F", default_value_t = 0.05, allow_negative_numbers = true, conflicts_with = "scene", help_heading = "Scene")]
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 0.05,
+        allow_negative_numbers = true,
+        conflicts_with = "scene",
+        help_heading = "Scene"
+    )]
     packing: f64,
     /// Speeds are uniform in [0, S] sphere diameters per frame (at 30 frames per second); with
     /// --kind gas S is the rms speed, stream the speed of every body, heavy-tail the median speed
-    #[arg(long, value_name = "S", default_value_t = 0.5, allow_negative_numbers = true, conflicts_with = "scene", help_heading = "Scene")]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 0.5,
+        allow_negative_numbers = true,
+        conflicts_with = "scene",
+        help_heading = "Scene"
+    )]
     max_speed: f64,
     /// The velocities of the generated scene: paper (random directions, uniform speeds), gas (an
     /// equilibrium gas: Maxwell velocities, no net momentum), stream (every body within --spread
@@ -230,8 +247,14 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         }
         None => {
             let (velocities, what) = match args.kind {
-                KindArg::Paper => (Velocities::Uniform { max_speed: args.max_speed }, format!("paper scene (speeds up to {} diameters/frame", args.max_speed)),
-                KindArg::Gas => (Velocities::Maxwell { rms_speed: args.max_speed }, format!("equilibrium gas (rms speed {} diameters/frame", args.max_speed)),
+                KindArg::Paper => (
+                    Velocities::Uniform { max_speed: args.max_speed },
+                    format!("paper scene (speeds up to {} diameters/frame", args.max_speed),
+                ),
+                KindArg::Gas => (
+                    Velocities::Maxwell { rms_speed: args.max_speed },
+                    format!("equilibrium gas (rms speed {} diameters/frame", args.max_speed),
+                ),
                 KindArg::Stream => (
                     Velocities::Stream { speed: args.max_speed, spread: args.spread.to_radians() },
                     format!("stream ({} diameters/frame within {} degrees of +x", args.max_speed, args.spread),
@@ -241,7 +264,13 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
                     format!("heavy-tailed speeds (median {} diameters/frame, tail index 1.5", args.max_speed),
                 ),
             };
-            let generated = GeneratedScene { bodies: args.bodies, packing_fraction: args.packing, velocities, radius: 0.5, seed: args.seed };
+            let generated = GeneratedScene {
+                bodies: args.bodies,
+                packing_fraction: args.packing,
+                velocities,
+                radius: 0.5,
+                seed: args.seed,
+            };
             let reference = reference_method(args, generated.bodies, config.method);
             // Only a valid scene's size is worth checking: the core names bad parameters better.
             if generated.bodies <= MAX_SCENE_BODIES {
@@ -352,7 +381,10 @@ impl Files {
             if let Some((other, _)) = seen.iter().find(|(_, seen)| *seen == target) {
                 if (*other, flag) != ("--resume", "--save-state") {
                     let role = if inputs.iter().any(|(input, _)| input == other) { "reads" } else { "writes" };
-                    return Err(format!("{flag} {} is the file {other} {role}: give every output a file of its own", path.display()));
+                    return Err(format!(
+                        "{flag} {} is the file {other} {role}: give every output a file of its own",
+                        path.display()
+                    ));
                 }
             }
             seen.push((flag, target));
@@ -369,7 +401,10 @@ impl Files {
             }
             Ok(Some(target.clone()))
         };
-        Ok(Files { save_scene: replaced("--save-scene", &args.save_scene)?, save_state: replaced("--save-state", &args.save_state)? })
+        Ok(Files {
+            save_scene: replaced("--save-scene", &args.save_scene)?,
+            save_state: replaced("--save-state", &args.save_state)?,
+        })
     }
 }
 
@@ -431,12 +466,21 @@ fn run_world(
     let frames = frames_done + 1..=frames_done + args.frames;
     let mut outcome = step_frames(world, reference_world, args, frames, files.save_state.as_deref(), &mut outputs);
     // A failed flush loses contacts or rows, not frames: it is reported like a failed frame.
-    for finished in [outputs.contacts.map(ContactWriter::finish), outputs.csv.map(FramesCsv::finish)].into_iter().flatten() {
+    for finished in
+        [outputs.contacts.map(ContactWriter::finish), outputs.csv.map(FramesCsv::finish)].into_iter().flatten()
+    {
         if let Err(e) = finished {
             outcome.failure.get_or_insert(e);
         }
     }
-    let summary = Summary::new(info, &outcome.frames, outcome.pool, outcome.accuracy, outcome.conservation, outcome.failure.clone());
+    let summary = Summary::new(
+        info,
+        &outcome.frames,
+        outcome.pool,
+        outcome.accuracy,
+        outcome.conservation,
+        outcome.failure.clone(),
+    );
     if !args.quiet && outcome.frames.frames > 0 {
         report::print(&summary.to_string())?;
     }
@@ -487,7 +531,8 @@ struct ContactWriter {
 }
 
 impl ContactWriter {
-    const HEADER: &'static str = "frame,time,body,touched,other,point_x,point_y,point_z,normal_x,normal_y,normal_z,impulse";
+    const HEADER: &'static str =
+        "frame,time,body,touched,other,point_x,point_y,point_z,normal_x,normal_y,normal_z,impulse";
 
     fn create(path: &Path) -> CliResult<ContactWriter> {
         let file = report::create_file(path)?;
@@ -530,7 +575,8 @@ impl ContactWriter {
             number += 1;
             // The end, or a row cut short by a kill.
             if read == 0 || line.last() != Some(&b'\n') {
-                let header_cut_short = number == 1 && format!("{}\n", ContactWriter::HEADER).as_bytes().starts_with(&line);
+                let header_cut_short =
+                    number == 1 && format!("{}\n", ContactWriter::HEADER).as_bytes().starts_with(&line);
                 return if number > 1 || header_cut_short { Ok(keep) } else { Err(not_contacts(path, number)) };
             }
             let text = std::str::from_utf8(&line[..line.len() - 1]).map_err(|_| not_contacts(path, number))?;
@@ -587,7 +633,10 @@ impl ContactWriter {
 }
 
 fn not_contacts(path: &Path, line: u64) -> String {
-    format!("--contacts {} line {line}: not a vadop contacts file; give --contacts a contacts file or a new one", path.display())
+    format!(
+        "--contacts {} line {line}: not a vadop contacts file; give --contacts a contacts file or a new one",
+        path.display()
+    )
 }
 
 /// What the frame loop produced.
@@ -660,7 +709,9 @@ fn step_frames(
         if let Some(path) = save_state {
             // The contacts first: a state on disk must never be ahead of the contacts file.
             let synced = outputs.contacts.as_mut().map_or(Ok(()), ContactWriter::sync);
-            if let Err(e) = synced.and_then(|()| world.save(path).map_err(|e| format!("frame {frame}: {}", describe(e)))) {
+            if let Err(e) =
+                synced.and_then(|()| world.save(path).map_err(|e| format!("frame {frame}: {}", describe(e))))
+            {
                 failure = Some(e);
                 break;
             }

@@ -73,7 +73,8 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
         let momentum = world.momentum();
         let scale: f64 = world.spheres().map(|(_, s)| s.mass * s.velocity.length()).sum();
         let found = world.step(dt).map_err(|e| format!("frame {}: {e}", frames + 1))?;
-        let wall: DVec3 = found.iter().filter(|c| matches!(c.touched, Touched::Wall(_))).map(|c| -c.impulse * c.normal).sum();
+        let wall: DVec3 =
+            found.iter().filter(|c| matches!(c.touched, Touched::Wall(_))).map(|c| -c.impulse * c.normal).sum();
         let pairs = found.iter().filter(|c| matches!(c.touched, Touched::Body(_))).count() as u64;
         contacts += found.len() as u64;
         pair_contacts += pairs;
@@ -135,7 +136,9 @@ fn check_positions(world: &World, worst: &mut Worst) {
     let mut grid: Vec<Vec<usize>> = vec![Vec::new(); nx * ny * nz];
     for (k, s) in spheres.iter().enumerate() {
         let slack = 1e-9 * s.radius;
-        if !((s.position - s.radius).cmpge(bounds.min - slack).all() && (s.position + s.radius).cmple(bounds.max + slack).all()) {
+        if !((s.position - s.radius).cmpge(bounds.min - slack).all()
+            && (s.position + s.radius).cmple(bounds.max + slack).all())
+        {
             worst.escapes += 1;
         }
         let (x, y, z) = cell_of(s.position);

@@ -48,8 +48,22 @@ fn every_mode_and_method_prints_a_summary() {
             let output = vadop(&["simulate", "--bodies", "150", "--frames", "5", "--mode", mode, "--method", method]);
             assert!(output.status.success(), "{mode} {method}: {}", stderr(&output));
             let summary = stdout(&output);
-            for field in ["scene", "method", "pool", "frames", "contacts", "accuracy", "ms/frame", "cost split", "per frame", "memory"] {
-                assert!(summary.lines().any(|l| l.starts_with(field)), "{mode} {method}: no {field} line in\n{summary}");
+            for field in [
+                "scene",
+                "method",
+                "pool",
+                "frames",
+                "contacts",
+                "accuracy",
+                "ms/frame",
+                "cost split",
+                "per frame",
+                "memory",
+            ] {
+                assert!(
+                    summary.lines().any(|l| l.starts_with(field)),
+                    "{mode} {method}: no {field} line in\n{summary}"
+                );
             }
             assert!(summary.contains(&format!("{method}, {mode} mode")), "{summary}");
             assert!(summary.contains("frames      5 of 5"), "{summary}");
@@ -65,8 +79,19 @@ fn every_mode_and_method_prints_a_summary() {
 fn vadop_misses_nothing_and_discrete_misses_fast_contacts() {
     let run = |method: &str| {
         let output = vadop(&[
-            "simulate", "--bodies", "400", "--frames", "10", "--max-speed", "5", "--mode", "detect", "--method", method,
-            "--reference", "brute",
+            "simulate",
+            "--bodies",
+            "400",
+            "--frames",
+            "10",
+            "--max-speed",
+            "5",
+            "--mode",
+            "detect",
+            "--method",
+            method,
+            "--reference",
+            "brute",
         ]);
         assert!(output.status.success(), "{}", stderr(&output));
         stdout(&output)
@@ -84,8 +109,20 @@ fn csv_and_json_have_one_row_per_frame() {
     let (csv, json, contacts, scene) = (dir.join("f.csv"), dir.join("f.json"), dir.join("c.csv"), dir.join("s.json"));
     let path = |p: &PathBuf| p.to_str().expect("utf-8 path").to_string();
     let output = vadop(&[
-        "simulate", "--bodies", "200", "--frames", "7", "--quiet", "--csv", &path(&csv), "--json", &path(&json),
-        "--contacts", &path(&contacts), "--save-scene", &path(&scene),
+        "simulate",
+        "--bodies",
+        "200",
+        "--frames",
+        "7",
+        "--quiet",
+        "--csv",
+        &path(&csv),
+        "--json",
+        &path(&json),
+        "--contacts",
+        &path(&contacts),
+        "--save-scene",
+        &path(&scene),
     ]);
     assert!(output.status.success(), "{}", stderr(&output));
     assert!(stdout(&output).is_empty(), "--quiet printed {}", stdout(&output));
@@ -102,7 +139,8 @@ fn csv_and_json_have_one_row_per_frame() {
         assert!(cells.iter().all(|c| c.parse::<f64>().is_ok()), "{line}");
     }
 
-    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("json written")).expect("json parses");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json written")).expect("json parses");
     assert_eq!(report["frames"].as_array().map(Vec::len), Some(7));
     assert_eq!(report["summary"]["frames_completed"], 7);
     let total = report["summary"]["contacts"]["total"].as_u64().expect("contact total");
@@ -112,7 +150,8 @@ fn csv_and_json_have_one_row_per_frame() {
     // The saved scene runs again as a scene file and gives the same contacts.
     let again = vadop(&["simulate", "--scene", &path(&scene), "--frames", "7", "--json", &path(&json), "--quiet"]);
     assert!(again.status.success(), "{}", stderr(&again));
-    let replay: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("json written")).expect("json parses");
+    let replay: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).expect("json written")).expect("json parses");
     assert_eq!(replay["summary"]["contacts"]["total"].as_u64(), Some(total));
     std::fs::remove_dir_all(dir).ok();
 }
@@ -161,11 +200,8 @@ fn pools_tabulate_covering_radius_against_the_bound() {
     let output = vadop(&["pools", "--axes", "3,6,13"]);
     assert!(output.status.success(), "{}", stderr(&output));
     let table = stdout(&output);
-    let rows: Vec<Vec<f64>> = table
-        .lines()
-        .skip(1)
-        .map(|l| l.split_whitespace().filter_map(|c| c.parse().ok()).collect())
-        .collect();
+    let rows: Vec<Vec<f64>> =
+        table.lines().skip(1).map(|l| l.split_whitespace().filter_map(|c| c.parse().ok()).collect()).collect();
     assert_eq!(rows.len(), 3, "{table}");
     for row in rows {
         // m, rho, bound, rho/bound, ms, mean band: no pool beats the lower bound.
@@ -174,4 +210,3 @@ fn pools_tabulate_covering_radius_against_the_bound() {
     }
     assert_usage_error(&vadop(&["pools", "--axes", "2"]), "axis pool size");
 }
-

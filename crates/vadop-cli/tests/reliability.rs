@@ -108,7 +108,12 @@ fn resuming_drops_contact_rows_beyond_the_saved_state() {
     run(&["--frames", "6", "--contacts", &text(&whole)]);
     run(&["--frames", "4", "--save-state", &text(&state), "--contacts", &text(&contacts)]);
     // What a run killed in frame 5 leaves behind: rows of frame 5 and one cut short.
-    let frame_five: String = String::from_utf8(bytes(&whole)).unwrap().lines().filter(|l| l.starts_with("5,")).map(|l| format!("{l}\n")).collect();
+    let frame_five: String = String::from_utf8(bytes(&whole))
+        .unwrap()
+        .lines()
+        .filter(|l| l.starts_with("5,"))
+        .map(|l| format!("{l}\n"))
+        .collect();
     assert!(!frame_five.is_empty());
     let mut killed = bytes(&contacts);
     killed.extend_from_slice(frame_five.as_bytes());
@@ -120,7 +125,9 @@ fn resuming_drops_contact_rows_beyond_the_saved_state() {
     // A contacts file that is not this run's, or another --dt, is refused and left as it was.
     let foreign = d.join("foreign.csv");
     std::fs::write(&foreign, "frame,time\n1,0.5\n").unwrap();
-    let resume = |contacts: &Path, dt: &str| vadop(&["simulate", "--resume", &text(&state), "--frames", "1", "--dt", dt, "--contacts", &text(contacts)]);
+    let resume = |contacts: &Path, dt: &str| {
+        vadop(&["simulate", "--resume", &text(&state), "--frames", "1", "--dt", dt, "--contacts", &text(contacts)])
+    };
     assert_error(resume(&foreign, "0.03333333333333333"), "not a vadop contacts file");
     assert_eq!(bytes(&foreign), b"frame,time\n1,0.5\n");
     assert_error(resume(&contacts, "0.025"), "not a whole number of frames");
@@ -135,7 +142,8 @@ fn saved_files_replace_only_regular_files() {
     let d = dir("targets");
     let fifo = d.join("fifo");
     assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
-    let run = |flag: &str, path: &Path| vadop(&["simulate", "--bodies", "20", "--frames", "1", "--quiet", flag, &text(path)]);
+    let run =
+        |flag: &str, path: &Path| vadop(&["simulate", "--bodies", "20", "--frames", "1", "--quiet", flag, &text(path)]);
     for flag in ["--save-state", "--save-scene"] {
         for target in [fifo.as_path(), Path::new("/dev/null"), d.as_path()] {
             assert_error(run(flag, target), "not a regular file");
@@ -188,7 +196,8 @@ fn outputs_never_overwrite_each_other_or_the_inputs() {
 fn long_quiet_runs_keep_memory_flat_and_huge_ones_are_refused() {
     // Half a million frames of one body in 64 MiB of address space (it needs about 12): keeping
     // a 136-byte row per frame would take 71 MiB and abort.
-    let long = vadop_within(64 << 10, &["simulate", "--bodies", "1", "--frames", "500000", "--reference", "none", "--quiet"]);
+    let long =
+        vadop_within(64 << 10, &["simulate", "--bodies", "1", "--frames", "500000", "--reference", "none", "--quiet"]);
     assert!(long.status.success(), "{:?}: {}", long.status, String::from_utf8_lossy(&long.stderr));
     for bodies in ["100000000", "1000000"] {
         let huge = vadop_within(256 << 10, &["simulate", "--bodies", bodies, "--frames", "1", "--reference", "none"]);
@@ -218,9 +227,21 @@ fn bad_reliability_options_are_errors() {
         (vec!["simulate".into(), "--resume".into(), "/nonexistent/state.json".into()], "/nonexistent/state.json"),
         (vec!["simulate".into(), "--resume".into(), text(&garbage)], "EOF"),
         (vec!["simulate".into(), "--resume".into(), text(&saved), "--reference".into(), "brute".into()], "--reference"),
-        (vec!["simulate".into(), "--resume".into(), text(&saved), "--bodies".into(), "5".into()], "cannot be used with"),
+        (
+            vec!["simulate".into(), "--resume".into(), text(&saved), "--bodies".into(), "5".into()],
+            "cannot be used with",
+        ),
         (vec!["simulate".into(), "--resume".into(), text(&saved), "--dt".into(), "nan".into()], "time step"),
-        (vec!["simulate".into(), "--frames".into(), "1".into(), "--save-state".into(), "/nonexistent/dir/s.json".into()], "/nonexistent/dir/s.json"),
+        (
+            vec![
+                "simulate".into(),
+                "--frames".into(),
+                "1".into(),
+                "--save-state".into(),
+                "/nonexistent/dir/s.json".into(),
+            ],
+            "/nonexistent/dir/s.json",
+        ),
         (vec!["simulate".into(), "--bodies".into(), "10000000000000".into()], "at most"),
         (vec!["soak".into(), "--bodies".into(), "0".into()], "at least one sphere"),
         (vec!["soak".into(), "--packing".into(), "0.7".into()], "packing fraction"),

@@ -132,7 +132,8 @@ fn ids_of(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
         }
     }
     let py = obj.py();
-    let array = checked_array(obj, name, numpy::dtype::<i64>(py), &[None]).map_err(|e| also_accepts(py, e, "an int"))?;
+    let array =
+        checked_array(obj, name, numpy::dtype::<i64>(py), &[None]).map_err(|e| also_accepts(py, e, "an int"))?;
     let array = array.downcast::<PyArray1<i64>>()?.readonly();
     Ok(array.as_array().to_vec())
 }
@@ -142,15 +143,19 @@ fn bounds(obj: &Bound<'_, PyAny>) -> PyResult<BoxBounds> {
     if !obj.is_instance_of::<PyUntypedArray>() {
         if let Ok(side) = obj.extract::<f64>() {
             return BoxBounds::cube(side).map_err(|_| {
-                PyValueError::new_err(format!("box as a number is the side of the cube [0, side]^3 and must be finite and > 0, got {side}"))
+                PyValueError::new_err(format!(
+                    "box as a number is the side of the cube [0, side]^3 and must be finite and > 0, got {side}"
+                ))
             });
         }
     }
     let py = obj.py();
-    let array = checked_array(obj, "box", numpy::dtype::<f64>(py), &[Some(2), Some(3)]).map_err(|e| also_accepts(py, e, "a number (cube side)"))?;
+    let array = checked_array(obj, "box", numpy::dtype::<f64>(py), &[Some(2), Some(3)])
+        .map_err(|e| also_accepts(py, e, "a number (cube side)"))?;
     let array = array.downcast::<PyArray2<f64>>()?.readonly();
     let v = array.as_array();
-    BoxBounds::new(DVec3::new(v[[0, 0]], v[[0, 1]], v[[0, 2]]), DVec3::new(v[[1, 0]], v[[1, 1]], v[[1, 2]])).map_err(value_error)
+    BoxBounds::new(DVec3::new(v[[0, 0]], v[[0, 1]], v[[0, 2]]), DVec3::new(v[[1, 0]], v[[1, 1]], v[[1, 2]]))
+        .map_err(value_error)
 }
 
 /// Spheres from the column arrays, each checked (and checked to fit in `bounds`) before any is used.
@@ -201,18 +206,38 @@ fn parse_mode(mode: &str) -> PyResult<Mode> {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn config(method: &str, mode: &str, pool_axes: Option<i64>, phi: Option<f64>, restitution: f64, contact_duration: f64, threads: Option<i64>) -> PyResult<WorldConfig> {
+fn config(
+    method: &str,
+    mode: &str,
+    pool_axes: Option<i64>,
+    phi: Option<f64>,
+    restitution: f64,
+    contact_duration: f64,
+    threads: Option<i64>,
+) -> PyResult<WorldConfig> {
     let pool_axes = match pool_axes {
-        Some(m) if m < 0 => return Err(PyValueError::new_err(format!("pool_axes must be an int between 3 and 100000, got {m}"))),
+        Some(m) if m < 0 => {
+            return Err(PyValueError::new_err(format!("pool_axes must be an int between 3 and 100000, got {m}")))
+        }
         Some(m) => Some(m as usize),
         None => None,
     };
     let threads = match threads {
-        Some(n) if n < 1 => return Err(PyValueError::new_err(format!("threads must be an int >= 1 or None (every core), got {n}"))),
+        Some(n) if n < 1 => {
+            return Err(PyValueError::new_err(format!("threads must be an int >= 1 or None (every core), got {n}")))
+        }
         Some(n) => Some(n as usize),
         None => None,
     };
-    Ok(WorldConfig { method: parse_method(method)?, mode: parse_mode(mode)?, pool_axes, phi, restitution, contact_duration, threads })
+    Ok(WorldConfig {
+        method: parse_method(method)?,
+        mode: parse_mode(mode)?,
+        pool_axes,
+        phi,
+        restitution,
+        contact_duration,
+        threads,
+    })
 }
 
 fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f64>> {
@@ -518,7 +543,12 @@ impl PyWorld {
         &self,
         py: Python<'py>,
         dt: f64,
-    ) -> PyResult<(Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<i64>>, Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+    ) -> PyResult<(
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray1<i64>>,
+        Bound<'py, PyArray1<f64>>,
+        Bound<'py, PyArray1<f64>>,
+    )> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(value_error(VadopError::BadTimeStep(dt)));
         }
@@ -541,7 +571,12 @@ impl PyWorld {
             }
         }
         drop(world);
-        Ok((Array1::from_vec(body).into_pyarray(py), Array1::from_vec(axis).into_pyarray(py), Array1::from_vec(lo).into_pyarray(py), Array1::from_vec(hi).into_pyarray(py)))
+        Ok((
+            Array1::from_vec(body).into_pyarray(py),
+            Array1::from_vec(axis).into_pyarray(py),
+            Array1::from_vec(lo).into_pyarray(py),
+            Array1::from_vec(hi).into_pyarray(py),
+        ))
     }
 
     fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
@@ -551,7 +586,13 @@ impl PyWorld {
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let world = self.lock(py)?;
         let config = world.config();
-        Ok(format!("<World: {} bodies, method {}, mode {}, time {}>", world.len(), config.method.name(), mode_name(config.mode), world.time()))
+        Ok(format!(
+            "<World: {} bodies, method {}, mode {}, time {}>",
+            world.len(),
+            config.method.name(),
+            mode_name(config.mode),
+            world.time()
+        ))
     }
 }
 
@@ -571,7 +612,9 @@ impl PyWorld {
 
 /// A world whose lock a panic left poisoned may be half-way through a change.
 fn poisoned() -> PyErr {
-    PyRuntimeError::new_err("this world is unusable: an earlier call on it failed inside the engine (a bug, please report it)")
+    PyRuntimeError::new_err(
+        "this world is unusable: an earlier call on it failed inside the engine (a bug, please report it)",
+    )
 }
 
 fn mode_name(mode: Mode) -> &'static str {

@@ -562,10 +562,15 @@ fn index(axes: Vec<DVec3>) -> (Vec<DVec3>, Vec<Bin>) {
     let sectors: Vec<usize> = (0..rings)
         .map(|j| {
             let middle = (j as f64 + 0.5) * ring_height;
-            if j == 0 { 1 } else { ((2.0 * PI * middle.sin() / ring_height).round() as usize).max(1) }
+            if j == 0 {
+                1
+            } else {
+                ((2.0 * PI * middle.sin() / ring_height).round() as usize).max(1)
+            }
         })
         .collect();
-    let ring_start: Vec<usize> = sectors.iter().scan(0, |start, &s| Some(std::mem::replace(start, *start + s))).collect();
+    let ring_start: Vec<usize> =
+        sectors.iter().scan(0, |start, &s| Some(std::mem::replace(start, *start + s))).collect();
     let bin_of = |a: DVec3| {
         let a = upper(a);
         let ring = ((a.z.clamp(-1.0, 1.0).acos() / ring_height) as usize).min(rings - 1);

@@ -146,7 +146,9 @@ impl ContactRules {
 
     /// Bytes held.
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.last_contact.capacity() * 8 + (self.at_instant.capacity() + self.in_step.capacity() + self.step_of.capacity()) * 4 + self.frozen.capacity() * 8
+        self.last_contact.capacity() * 8
+            + (self.at_instant.capacity() + self.in_step.capacity() + self.step_of.capacity()) * 4
+            + self.frozen.capacity() * 8
     }
 }
 

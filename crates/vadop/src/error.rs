@@ -45,7 +45,9 @@ pub enum VadopError {
     #[error("the world's time {time:e} plus the time step {dt:e} is not finite; positions at that time would be NaN")]
     TimeOverflow { time: f64, dt: f64 },
     /// The time step is below the resolution of the world's time: the clock would not move.
-    #[error("the time step {dt:e} is too small to advance the world's time {time:e} (below its floating-point resolution)")]
+    #[error(
+        "the time step {dt:e} is too small to advance the world's time {time:e} (below its floating-point resolution)"
+    )]
     TimeStepTooSmall { time: f64, dt: f64 },
     /// `step` was called on a world with no bodies.
     #[error("the world is empty: add at least one sphere before stepping")]

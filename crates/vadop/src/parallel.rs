@@ -66,7 +66,12 @@ impl Workers {
     }
 
     /// `f(offset, a_chunk, b_chunk)` on matching contiguous chunks of two slices of one length.
-    pub fn zip_chunks<A: Send, B: Send>(&self, a: &mut [A], b: &mut [B], f: impl Fn(usize, &mut [A], &mut [B]) + Sync + Send) {
+    pub fn zip_chunks<A: Send, B: Send>(
+        &self,
+        a: &mut [A],
+        b: &mut [B],
+        f: impl Fn(usize, &mut [A], &mut [B]) + Sync + Send,
+    ) {
         assert_eq!(a.len(), b.len());
         if self.threads == 1 {
             return f(0, a, b);

@@ -22,8 +22,8 @@ use crate::bodies::Bodies;
 use crate::broad_phase::BroadPhase;
 use crate::collapse::{ContactRules, Rule};
 use crate::event_queue::{Event, EventQueue, Partner};
-use crate::parallel::Workers;
 use crate::narrow_phase::{direction, pair_contact_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE};
+use crate::parallel::Workers;
 use crate::proxy::{ProxyTable, Reported};
 use crate::response::{pair_impulse, wall_bounce};
 use crate::window::Window;
@@ -224,7 +224,12 @@ impl<B: BroadPhase> Pipeline<B> {
         let start = Instant::now();
         self.queue.clear();
         let mut predicted = std::mem::take(&mut self.predicted);
-        let candidates = self.broad.find_pairs(&self.proxies, &self.workers, |a, b, window, out| out.extend(predict_pair(a, b, window)), &mut predicted);
+        let candidates = self.broad.find_pairs(
+            &self.proxies,
+            &self.workers,
+            |a, b, window, out| out.extend(predict_pair(a, b, window)),
+            &mut predicted,
+        );
         let (proxies, window) = (&self.proxies, self.window);
         let walls = self.workers.map_ranges(bodies.slots(), |range| {
             let mut found = Vec::new();
@@ -291,7 +296,8 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
         // Coincident centres have no normal; the relative velocity gives one.
-        let normal = direction(pj - pi).or_else(|| direction(bodies.velocity[i] - bodies.velocity[j])).unwrap_or(DVec3::X);
+        let normal =
+            direction(pj - pi).or_else(|| direction(bodies.velocity[i] - bodies.velocity[j])).unwrap_or(DVec3::X);
         let mut impulse = 0.0;
         if physics.mode == Mode::Simulate {
             match self.rules.pair(a, b, t, physics.restitution, physics.contact_duration) {
@@ -319,7 +325,14 @@ impl<B: BroadPhase> Pipeline<B> {
             }
         }
         out.stats.pair_contacts += 1;
-        out.contacts.push(Contact { time: t, body: a, touched: Touched::Body(b), point: pi + normal * bodies.radius[i], normal, impulse });
+        out.contacts.push(Contact {
+            time: t,
+            body: a,
+            touched: Touched::Body(b),
+            point: pi + normal * bodies.radius[i],
+            normal,
+            impulse,
+        });
     }
 
     fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
@@ -351,7 +364,14 @@ impl<B: BroadPhase> Pipeline<B> {
     /// The jam rule (see [`crate::collapse`]): every body touching `seeds` at `t`, directly or
     /// through each other, without separating, moves on with the cluster's centre-of-mass
     /// velocity less any component into a wall a member touches.
-    fn freeze_cluster(&mut self, bodies: &mut Bodies, physics: &Physics, seeds: &[u32], t: f64, stats: &mut FrameStats) {
+    fn freeze_cluster(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        seeds: &[u32],
+        t: f64,
+        stats: &mut FrameStats,
+    ) {
         let mut cluster = std::mem::take(&mut self.cluster);
         let mut near = std::mem::take(&mut self.near);
         cluster.clear();
@@ -411,7 +431,15 @@ impl<B: BroadPhase> Pipeline<B> {
 
     /// After `body` changed velocity at `t`: a fresh proxy, and its contacts with the walls and
     /// its candidate partners (except `skip`, tested by the partner) for the rest of the window.
-    fn retest(&mut self, body: u32, skip: Option<u32>, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+    fn retest(
+        &mut self,
+        body: u32,
+        skip: Option<u32>,
+        bodies: &Bodies,
+        physics: &Physics,
+        t: f64,
+        stats: &mut FrameStats,
+    ) {
         self.proxies.enter(body as usize, bodies, t);
         self.updates += 1;
         stats.retests += 1;
@@ -457,7 +485,13 @@ fn predict_pair(x: Reported, y: Reported, window: Window) -> Option<Event> {
 #[inline]
 fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
     let i = body as usize;
-    Event { time: proxies.window_of(i).end, body, partner: Partner::Renew, body_stamp: bodies.stamp[i], partner_stamp: 0 }
+    Event {
+        time: proxies.window_of(i).end,
+        body,
+        partner: Partner::Renew,
+        body_stamp: bodies.stamp[i],
+        partner_stamp: 0,
+    }
 }
 
 /// Body `body`'s wall contact if its canonical time lies in `window`.
@@ -465,5 +499,11 @@ fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
 fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
     let i = body as usize;
     let (time, wall) = wall_contact_time(&bodies.motion(i), bodies.radius[i], bounds.min, bounds.max)?;
-    window.contains(time).then_some(Event { time, body, partner: Partner::Wall(wall), body_stamp: bodies.stamp[i], partner_stamp: 0 })
+    window.contains(time).then_some(Event {
+        time,
+        body,
+        partner: Partner::Wall(wall),
+        body_stamp: bodies.stamp[i],
+        partner_stamp: 0,
+    })
 }

@@ -132,12 +132,20 @@ impl CompactBox {
 #[inline]
 fn down(x: f64) -> f32 {
     let f = x as f32;
-    if f as f64 > x { f.next_down() } else { f }
+    if f as f64 > x {
+        f.next_down()
+    } else {
+        f
+    }
 }
 #[inline]
 fn up(x: f64) -> f32 {
     let f = x as f32;
-    if (f as f64) < x { f.next_up() } else { f }
+    if (f as f64) < x {
+        f.next_up()
+    } else {
+        f
+    }
 }
 
 /// Swept box of a sphere of `radius` moving from `a` to `b`, padded for rounding.
@@ -312,7 +320,9 @@ impl ProxyTable {
 
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        self.proxies.capacity() * std::mem::size_of::<Proxy>() + self.spans.capacity() * std::mem::size_of::<Span>() + self.radii.capacity() * 8
+        self.proxies.capacity() * std::mem::size_of::<Proxy>()
+            + self.spans.capacity() * std::mem::size_of::<Span>()
+            + self.radii.capacity() * 8
     }
 }
 

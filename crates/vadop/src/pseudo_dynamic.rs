@@ -120,7 +120,9 @@ impl PseudoDynamic {
             if !bodies.alive[i] {
                 continue;
             }
-            while let Some((t, wall)) = wall_contact_time(&bodies.motion(i), bodies.radius[i], physics.bounds.min, physics.bounds.max) {
+            while let Some((t, wall)) =
+                wall_contact_time(&bodies.motion(i), bodies.radius[i], physics.bounds.min, physics.bounds.max)
+            {
                 if !(t < t1) {
                     break;
                 }
@@ -136,7 +138,14 @@ impl PseudoDynamic {
                 bodies.set_velocity_at(i, t, bounced);
                 let normal = wall.outward_normal();
                 let point = bodies.position_at(i, t) + normal * bodies.radius[i];
-                out.contacts.push(Contact { time: t, body, touched: Touched::Wall(wall), point, normal, impulse: bodies.mass[i] * (v - bounced).length() });
+                out.contacts.push(Contact {
+                    time: t,
+                    body,
+                    touched: Touched::Wall(wall),
+                    point,
+                    normal,
+                    impulse: bodies.mass[i] * (v - bounced).length(),
+                });
             }
         }
         out.contacts.sort_by(|x, y| x.time.total_cmp(&y.time).then(x.body.cmp(&y.body)));
@@ -161,7 +170,14 @@ impl PseudoDynamic {
                 continue;
             }
             out.stats.pair_contacts += 1;
-            out.contacts.push(Contact { time: t1, body: a, touched: Touched::Body(b), point: self.centre[i] + normal * bodies.radius[i], normal, impulse });
+            out.contacts.push(Contact {
+                time: t1,
+                body: a,
+                touched: Touched::Body(b),
+                point: self.centre[i] + normal * bodies.radius[i],
+                normal,
+                impulse,
+            });
         }
         out.stats.response_seconds += start.elapsed().as_secs_f64();
     }

@@ -53,7 +53,8 @@ pub enum Velocities {
 impl Velocities {
     /// Checks the parameters.
     fn check(&self) -> Result<()> {
-        let bad = |what: &str, value: f64| Err(VadopError::Scene(format!("{what} must be finite and >= 0, got {value}")));
+        let bad =
+            |what: &str, value: f64| Err(VadopError::Scene(format!("{what} must be finite and >= 0, got {value}")));
         match *self {
             Velocities::Uniform { max_speed } if !(max_speed.is_finite() && max_speed >= 0.0) => bad("max speed", max_speed),
             Velocities::Maxwell { rms_speed } if !(rms_speed.is_finite() && rms_speed >= 0.0) => bad("rms speed", rms_speed),
@@ -125,7 +126,13 @@ impl GeneratedScene {
     /// Generates the scene.
     pub fn build(&self) -> Result<Scene> {
         self.velocities.check()?;
-        let paper = PaperScene { bodies: self.bodies, packing_fraction: self.packing_fraction, max_speed: 0.0, radius: self.radius, seed: self.seed };
+        let paper = PaperScene {
+            bodies: self.bodies,
+            packing_fraction: self.packing_fraction,
+            max_speed: 0.0,
+            radius: self.radius,
+            seed: self.seed,
+        };
         let mut scene = paper.place(|rng| self.velocities.draw(rng))?;
         if let Velocities::Maxwell { .. } = self.velocities {
             // An equilibrium gas at rest as a whole.
@@ -191,10 +198,16 @@ impl PaperScene {
             return Err(VadopError::Scene("a scene needs at least one sphere".into()));
         }
         if self.bodies > MAX_SCENE_BODIES {
-            return Err(VadopError::Scene(format!("a scene holds at most {MAX_SCENE_BODIES} spheres, got {}", self.bodies)));
+            return Err(VadopError::Scene(format!(
+                "a scene holds at most {MAX_SCENE_BODIES} spheres, got {}",
+                self.bodies
+            )));
         }
         if !(self.packing_fraction > 0.0 && self.packing_fraction <= 0.6) {
-            return Err(VadopError::Scene(format!("packing fraction must be in (0, 0.6], got {}", self.packing_fraction)));
+            return Err(VadopError::Scene(format!(
+                "packing fraction must be in (0, 0.6], got {}",
+                self.packing_fraction
+            )));
         }
         if !(self.radius.is_finite() && self.radius > 0.0) {
             return Err(VadopError::BadRadius(self.radius));
@@ -264,7 +277,8 @@ impl Scene {
 
     /// Reads a scene file.
     pub fn load(path: &std::path::Path) -> Result<Scene> {
-        let io = |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
+        let io =
+            |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
         let text = std::fs::read_to_string(path).map_err(|e| io(&e))?;
         let scene: Scene = serde_json::from_str(&text).map_err(|e| io(&e))?;
         BoxBounds::new(scene.bounds.min, scene.bounds.max)?;
@@ -273,7 +287,8 @@ impl Scene {
 
     /// Writes a scene file atomically (a temporary file renamed into place).
     pub fn save(&self, path: &std::path::Path) -> Result<()> {
-        let io = |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
+        let io =
+            |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
         let text = serde_json::to_string(self).map_err(|e| io(&e))?;
         let temporary = path.with_extension("json.partial");
         std::fs::write(&temporary, text).map_err(|e| io(&e))?;

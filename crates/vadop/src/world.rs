@@ -51,8 +51,15 @@ pub enum Method {
 
 impl Method {
     /// Every method, in the order the benchmarks list them.
-    pub const ALL: [Method; 7] =
-        [Method::Auto, Method::Vadop, Method::Grid, Method::SweptAabb, Method::SweptKdop, Method::Discrete, Method::Brute];
+    pub const ALL: [Method; 7] = [
+        Method::Auto,
+        Method::Vadop,
+        Method::Grid,
+        Method::SweptAabb,
+        Method::SweptKdop,
+        Method::Discrete,
+        Method::Brute,
+    ];
 
     /// The method's name on the command line and in reports.
     pub fn name(self) -> &'static str {
@@ -476,7 +483,10 @@ impl World {
     }
     /// Total kinetic energy.
     pub fn kinetic_energy(&self) -> f64 {
-        self.bodies.alive_ids().map(|i| 0.5 * self.bodies.mass[i as usize] * self.bodies.velocity[i as usize].length_squared()).sum()
+        self.bodies
+            .alive_ids()
+            .map(|i| 0.5 * self.bodies.mass[i as usize] * self.bodies.velocity[i as usize].length_squared())
+            .sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
@@ -616,7 +626,8 @@ impl World {
         if matches!(self.engine, Engine::Unbuilt) {
             let threads = self.config.thread_count();
             // A pool only when there is something to share; a failed pool leaves one thread.
-            self.threads = (threads > 1).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
+            self.threads =
+                (threads > 1).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
             self.engine = self.build_engine(self.config.method.resolve());
         }
         let physics = self.physics();
@@ -637,9 +648,13 @@ impl World {
         let (min, max) = (self.bounds.min, self.bounds.max);
         let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
         match method {
-            Method::Brute => Engine::Brute(Pipeline::new(BruteForce::default(), WindowRule::Frame, &self.bounds, workers)),
+            Method::Brute => {
+                Engine::Brute(Pipeline::new(BruteForce::default(), WindowRule::Frame, &self.bounds, workers))
+            }
             Method::Discrete => Engine::Discrete(PseudoDynamic::default()),
-            Method::Grid | Method::Auto => Engine::Grid(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, &self.bounds, workers)),
+            Method::Grid | Method::Auto => {
+                Engine::Grid(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, &self.bounds, workers))
+            }
             Method::Vadop => {
                 let phi = self.config.phi.unwrap_or(self.pool.covering_radius());
                 // A hair wider than phi, so rounding never costs a pair its shared axis.

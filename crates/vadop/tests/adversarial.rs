@@ -160,7 +160,11 @@ fn radii_from_a_thousandth_to_a_thousand() {
     // Radii spread log-uniformly over 1e-3..1e1, fast, placed where they do not overlap.
     while spheres.len() < 300 {
         let radius = 10f64.powf(rng.random_range(-3.0..1.0));
-        let position = DVec3::new(rng.random_range(20.0..side - 20.0), rng.random_range(20.0..side - 20.0), rng.random_range(20.0..side - 20.0));
+        let position = DVec3::new(
+            rng.random_range(20.0..side - 20.0),
+            rng.random_range(20.0..side - 20.0),
+            rng.random_range(20.0..side - 20.0),
+        );
         if spheres.iter().all(|s| s.position.distance(position) > s.radius + radius) {
             spheres.push(sphere(position, random_direction(&mut rng) * rng.random_range(0.0..30_000.0), radius));
         }
@@ -175,8 +179,10 @@ fn radii_from_a_thousandth_to_a_thousand() {
 #[test]
 fn a_million_units_from_the_origin_with_grazing_passes() {
     let offset = DVec3::splat(1.0e6);
-    let base = PaperScene { bodies: 300, packing_fraction: 0.05, max_speed: 3.0, radius: 0.5, seed: 4 }.build().unwrap();
-    let mut spheres: Vec<Sphere> = base.spheres.iter().map(|s| Sphere { position: s.position + offset, ..*s }).collect();
+    let base =
+        PaperScene { bodies: 300, packing_fraction: 0.05, max_speed: 3.0, radius: 0.5, seed: 4 }.build().unwrap();
+    let mut spheres: Vec<Sphere> =
+        base.spheres.iter().map(|s| Sphere { position: s.position + offset, ..*s }).collect();
     let bounds = BoxBounds::new(base.bounds.min + offset, base.bounds.max + offset).unwrap();
     // Grazing pairs beside the pack: paths exactly R apart, and a hair inside and outside.
     let side = base.bounds.max.x;
@@ -202,7 +208,8 @@ fn a_million_units_from_the_origin_with_grazing_passes() {
 
 #[test]
 fn dense_pack_at_packing_fraction_0_6() {
-    let scene = PaperScene { bodies: 500, packing_fraction: 0.6, max_speed: 1.0, radius: 0.5, seed: 9 }.build().unwrap();
+    let scene =
+        PaperScene { bodies: 500, packing_fraction: 0.6, max_speed: 1.0, radius: 0.5, seed: 9 }.build().unwrap();
     for config in both_modes() {
         let contacts = run_against_oracle(&scene, config, 1.0 / 30.0, 10);
         assert!(contacts > 1000, "{config:?}: {contacts}");
@@ -212,7 +219,8 @@ fn dense_pack_at_packing_fraction_0_6() {
 #[test]
 fn all_bodies_at_rest() {
     let base = PaperScene::new(200, 0.3, 0.0).build().unwrap();
-    let scene = Scene { spheres: base.spheres.iter().map(|s| Sphere { velocity: DVec3::ZERO, ..*s }).collect(), ..base };
+    let scene =
+        Scene { spheres: base.spheres.iter().map(|s| Sphere { velocity: DVec3::ZERO, ..*s }).collect(), ..base };
     for config in both_modes() {
         let mut world = scene.world(config).unwrap();
         for _ in 0..5 {

@@ -170,7 +170,11 @@ fn band_is_exactly_the_full_scan() {
                     _ => random.unit_vector(),
                 };
                 pool.band(direction, sin_phi, &mut band);
-                assert_eq!(band, full_scan(&pool, direction, sin_phi), "m = {m}, sin phi = {sin_phi}, direction {direction}");
+                assert_eq!(
+                    band,
+                    full_scan(&pool, direction, sin_phi),
+                    "m = {m}, sin phi = {sin_phi}, direction {direction}"
+                );
             }
         }
     }
@@ -205,7 +209,10 @@ fn any_two_bands_share_an_axis() {
             };
             pool.band(u1, sin_phi, &mut first);
             pool.band(u2, sin_phi, &mut second);
-            assert!(first.iter().any(|id| second.binary_search(id).is_ok()), "m = {m}: bands of {u1} and {u2} are disjoint");
+            assert!(
+                first.iter().any(|id| second.binary_search(id).is_ok()),
+                "m = {m}: bands of {u1} and {u2} are disjoint"
+            );
         }
     }
 }

@@ -95,8 +95,14 @@ fn empty_worlds_bad_ids_and_bad_configs() {
     assert!(BoxBounds::new(DVec3::ZERO, DVec3::new(1.0, f64::INFINITY, 1.0)).is_err());
     let bad = |config: WorldConfig| World::new(bounds, config).unwrap_err();
     assert!(matches!(bad(WorldConfig { restitution: 1.5, ..WorldConfig::default() }), VadopError::BadRestitution(_)));
-    assert!(matches!(bad(WorldConfig { pool_axes: Some(2), ..WorldConfig::default() }), VadopError::BadPoolSize { .. }));
-    assert!(matches!(bad(WorldConfig { pool_axes: Some(1_000_000), ..WorldConfig::default() }), VadopError::BadPoolSize { .. }));
+    assert!(matches!(
+        bad(WorldConfig { pool_axes: Some(2), ..WorldConfig::default() }),
+        VadopError::BadPoolSize { .. }
+    ));
+    assert!(matches!(
+        bad(WorldConfig { pool_axes: Some(1_000_000), ..WorldConfig::default() }),
+        VadopError::BadPoolSize { .. }
+    ));
     // phi below the covering radius would let two bodies share no axis.
     let err = bad(WorldConfig { pool_axes: Some(13), phi: Some(0.1), ..WorldConfig::default() });
     assert!(matches!(err, VadopError::BadPhi { .. }), "{err}");
@@ -145,8 +151,20 @@ fn huge_and_tiny_values_are_rejected_before_they_overflow() {
     // At the limit itself everything still works: a head-on pair 1e49 wide is found.
     let mut big = World::new(BoxBounds::cube(1e50).unwrap(), WorldConfig::default()).unwrap();
     let r = 1e48;
-    big.add_sphere(Sphere { position: DVec3::new(2.0 * r, 5e49, 5e49), velocity: DVec3::new(1e49, 0.0, 0.0), radius: r, mass: 1e50 }).unwrap();
-    big.add_sphere(Sphere { position: DVec3::new(9e49, 5e49, 5e49), velocity: DVec3::new(-1e49, 0.0, 0.0), radius: r, mass: 1e-50 }).unwrap();
+    big.add_sphere(Sphere {
+        position: DVec3::new(2.0 * r, 5e49, 5e49),
+        velocity: DVec3::new(1e49, 0.0, 0.0),
+        radius: r,
+        mass: 1e50,
+    })
+    .unwrap();
+    big.add_sphere(Sphere {
+        position: DVec3::new(9e49, 5e49, 5e49),
+        velocity: DVec3::new(-1e49, 0.0, 0.0),
+        radius: r,
+        mass: 1e-50,
+    })
+    .unwrap();
     let contacts = big.step(10.0).unwrap();
     assert!(contacts.iter().any(|c| c.touched == vadop::Touched::Body(1)), "{contacts:?}");
 }

@@ -25,8 +25,10 @@ fn check_frame_end(world: &World) {
 
 #[test]
 fn energy_and_momentum_over_a_long_run() {
-    let scene = PaperScene { bodies: 400, packing_fraction: 0.2, max_speed: 2.0, radius: 0.5, seed: 11 }.build().unwrap();
-    let mut world = scene.world(WorldConfig { method: Method::Vadop, mode: Mode::Simulate, ..WorldConfig::default() }).unwrap();
+    let scene =
+        PaperScene { bodies: 400, packing_fraction: 0.2, max_speed: 2.0, radius: 0.5, seed: 11 }.build().unwrap();
+    let mut world =
+        scene.world(WorldConfig { method: Method::Vadop, mode: Mode::Simulate, ..WorldConfig::default() }).unwrap();
     let energy = world.kinetic_energy();
     let mut pair_contacts = 0;
     for _ in 0..300 {
@@ -36,11 +38,8 @@ fn energy_and_momentum_over_a_long_run() {
         // total; check the change equals the sum of wall impulses.
         let after: Vec<_> = world.spheres().map(|(_, s)| s).collect();
         let change: glam::DVec3 = before.iter().zip(&after).map(|(b, a)| a.mass * (a.velocity - b.velocity)).sum();
-        let wall: glam::DVec3 = contacts
-            .iter()
-            .filter(|c| matches!(c.touched, Touched::Wall(_)))
-            .map(|c| -c.impulse * c.normal)
-            .sum();
+        let wall: glam::DVec3 =
+            contacts.iter().filter(|c| matches!(c.touched, Touched::Wall(_))).map(|c| -c.impulse * c.normal).sum();
         let scale = before.iter().map(|s| s.mass * s.velocity.length()).sum::<f64>();
         assert!((change - wall).length() <= 1e-10 * scale, "momentum not conserved in pair impacts");
         pair_contacts += contacts.iter().filter(|c| matches!(c.touched, Touched::Body(_))).count();
@@ -53,7 +52,8 @@ fn energy_and_momentum_over_a_long_run() {
 
 #[test]
 fn inelastic_runs_lose_energy_but_never_overlap() {
-    let scene = PaperScene { bodies: 200, packing_fraction: 0.1, max_speed: 1.0, radius: 0.5, seed: 5 }.build().unwrap();
+    let scene =
+        PaperScene { bodies: 200, packing_fraction: 0.1, max_speed: 1.0, radius: 0.5, seed: 5 }.build().unwrap();
     let config = WorldConfig { restitution: 0.9, ..WorldConfig::default() };
     let mut world = scene.world(config).unwrap();
     let energy = world.kinetic_energy();

@@ -30,7 +30,12 @@ fn edit(world: &mut World, frame: usize) {
         }
         3 => {
             // A small sphere in a corner, which may be free or not: only the outcome must match.
-            let corner = Sphere { position: world.bounds().min + 0.11, velocity: DVec3::new(1.0, -0.0, 2.0), radius: 0.1, mass: 0.01 };
+            let corner = Sphere {
+                position: world.bounds().min + 0.11,
+                velocity: DVec3::new(1.0, -0.0, 2.0),
+                radius: 0.1,
+                mass: 0.01,
+            };
             if world.spheres().all(|(_, s)| s.position.distance(corner.position) > s.radius + corner.radius) {
                 world.add_sphere(corner).unwrap();
             }
@@ -100,7 +105,8 @@ fn same_input_same_bits_across_runs_and_threads() {
 fn every_thread_count_gives_the_same_bits() {
     for method in [Method::Auto, Method::Vadop, Method::Grid, Method::Brute, Method::Discrete, Method::SweptAabb] {
         for (mode, restitution) in [(Mode::Detect, 1.0), (Mode::Simulate, 1.0), (Mode::Simulate, 0.3)] {
-            let config = |threads| WorldConfig { method, mode, restitution, threads: Some(threads), ..WorldConfig::default() };
+            let config =
+                |threads| WorldConfig { method, mode, restitution, threads: Some(threads), ..WorldConfig::default() };
             let go = |threads: usize| {
                 let mut world = scene().world(config(threads)).unwrap();
                 let contacts = run(&mut world, 0, 12);
@@ -172,14 +178,19 @@ fn damaged_or_foreign_files_are_errors() {
     };
     let impossible = [
         (edited(&|v| v["slots"][0]["since"] = serde_json::json!(1.0)), "since must be finite and <= time"),
-        (edited(&|v| v["slots"][0]["last_contact"] = serde_json::json!(5.0)), "last contact must be finite and <= time"),
+        (
+            edited(&|v| v["slots"][0]["last_contact"] = serde_json::json!(5.0)),
+            "last contact must be finite and <= time",
+        ),
         (edited(&|v| v["slots"][1] = v["slots"][0].clone()), "overlap"),
         (edited(&|v| v["slots"][0]["velocity"] = serde_json::json!([1e3, 0.0, 0.0])), "does not fit inside the box"),
         (edited(&|v| v["time"] = serde_json::json!(-1.0)), "time must be finite"),
     ];
     for (bad, message) in impossible {
         std::fs::write(&path, bad).unwrap();
-        let err = World::load(&path).map(|_| format!("loaded, but it should say {message}")).unwrap_or_else(|e| e.to_string());
+        let err = World::load(&path)
+            .map(|_| format!("loaded, but it should say {message}"))
+            .unwrap_or_else(|e| e.to_string());
         assert!(err.contains(message), "{err} should say {message}");
     }
     std::fs::remove_file(&path).unwrap();

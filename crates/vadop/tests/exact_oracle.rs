@@ -43,7 +43,8 @@ fn exact_path(s: &Sphere, bounds: &BoxBounds, end: &Q) -> (Vec<Segment>, Vec<Q>)
     let r = q(s.radius);
     let low = bounds.min.to_array().map(|x| q(x) + &r);
     let high = bounds.max.to_array().map(|x| q(x) - &r);
-    let mut segment = Segment { start: Q::zero(), position: s.position.to_array().map(q), velocity: s.velocity.to_array().map(q) };
+    let mut segment =
+        Segment { start: Q::zero(), position: s.position.to_array().map(q), velocity: s.velocity.to_array().map(q) };
     let mut segments = Vec::new();
     let mut walls = Vec::new();
     loop {
@@ -93,7 +94,8 @@ struct Expected {
 /// may go unreported because it lies within `slack` of the end of the run.
 fn frames_holding(boundaries: &[Q], slack: &Q, below: impl Fn(&Q) -> bool) -> (Vec<usize>, bool) {
     let last = boundaries.len() - 1;
-    let frames = (0..last).filter(|&k| !below(&(&boundaries[k] - slack)) && below(&(&boundaries[k + 1] + slack))).collect();
+    let frames =
+        (0..last).filter(|&k| !below(&(&boundaries[k] - slack)) && below(&(&boundaries[k + 1] + slack))).collect();
     (frames, !below(&(&boundaries[last] - slack)))
 }
 
@@ -153,7 +155,11 @@ fn exact_contacts(scene: &Scene, boundaries: &[Q]) -> Vec<Expected> {
                         if inside || at_edge {
                             let grazing = near(&disc, &(&qa * &r2));
                             let (frames, at_end) = frames_holding(boundaries, &slack, below);
-                            expected.push(Expected { pair: (i as u32, j as u32), frames, optional: grazing || at_edge || at_end });
+                            expected.push(Expected {
+                                pair: (i as u32, j as u32),
+                                frames,
+                                optional: grazing || at_edge || at_end,
+                            });
                         }
                     }
                 }
@@ -183,7 +189,11 @@ fn check(scene: &Scene, dt: f64, frames: usize, method: Method) -> usize {
     let mut found = Vec::new();
     for frame in 0..frames {
         for c in world.step(dt).unwrap() {
-            assert!(boundaries[frame] <= c.time && c.time < boundaries[frame + 1], "{method:?}: contact at {} outside frame {frame}", c.time);
+            assert!(
+                boundaries[frame] <= c.time && c.time < boundaries[frame + 1],
+                "{method:?}: contact at {} outside frame {frame}",
+                c.time
+            );
             let other = match c.touched {
                 Touched::Body(other) => other,
                 Touched::Wall(_) => WALL,
@@ -223,7 +233,8 @@ fn boundary_scene(rng: &mut ChaCha8Rng, dt: f64, frames: usize) -> Scene {
         let (ra, rb) = (rng.random_range(0.3..1.5), rng.random_range(0.3..1.5));
         let centre = DVec3::splat(side / 2.0) + random_direction(rng) * 3.0;
         let normal = random_direction(rng);
-        let (va, vb) = (random_direction(rng) * rng.random_range(0.5..4.0), random_direction(rng) * rng.random_range(0.5..4.0));
+        let (va, vb) =
+            (random_direction(rng) * rng.random_range(0.5..4.0), random_direction(rng) * rng.random_range(0.5..4.0));
         // Approaching along the normal at t, touching there; walk back to time 0.
         let (va, vb) = if (vb - va).dot(normal) < 0.0 { (va, vb) } else { (vb, va) };
         let a = centre - va * t;
@@ -237,7 +248,12 @@ fn boundary_scene(rng: &mut ChaCha8Rng, dt: f64, frames: usize) -> Scene {
     for _ in 0..rng.random_range(0..5) {
         let r = rng.random_range(0.3..1.5);
         let p = DVec3::new(rng.random_range(r..side - r), rng.random_range(r..side - r), rng.random_range(r..side - r));
-        spheres.push(Sphere { position: p, velocity: random_direction(rng) * rng.random_range(0.0..30.0), radius: r, mass: 1.0 });
+        spheres.push(Sphere {
+            position: p,
+            velocity: random_direction(rng) * rng.random_range(0.0..30.0),
+            radius: r,
+            mass: 1.0,
+        });
     }
     if spheres.is_empty() {
         spheres.push(Sphere { position: DVec3::splat(10.0), velocity: DVec3::X, radius: 1.0, mass: 1.0 });
@@ -250,7 +266,12 @@ const METHODS: [Method; 4] = [Method::Brute, Method::Grid, Method::Vadop, Method
 #[test]
 fn the_reported_frame_boundary_duplicate() {
     // Issue: frames 10 and 11 both held the contact at 5/3.
-    let sphere = |x: f64, vx: f64| Sphere { position: DVec3::new(x, 5.0, 5.0), velocity: DVec3::new(vx, 0.0, 0.0), radius: 0.5, mass: 1.0 };
+    let sphere = |x: f64, vx: f64| Sphere {
+        position: DVec3::new(x, 5.0, 5.0),
+        velocity: DVec3::new(vx, 0.0, 0.0),
+        radius: 0.5,
+        mass: 1.0,
+    };
     let scene = Scene { bounds: BoxBounds::cube(10.0).unwrap(), spheres: vec![sphere(2.0, 1.5), sphere(8.0, -1.5)] };
     for method in METHODS {
         // One pair contact; the walls are out of reach.
@@ -283,9 +304,18 @@ fn random_small_scenes_match_exact_arithmetic() {
         let spheres = (0..rng.random_range(2..9))
             .map(|_| {
                 let r = rng.random_range(0.2..1.0);
-                let p = DVec3::new(rng.random_range(r..side - r), rng.random_range(r..side - r), rng.random_range(r..side - r));
+                let p = DVec3::new(
+                    rng.random_range(r..side - r),
+                    rng.random_range(r..side - r),
+                    rng.random_range(r..side - r),
+                );
                 // From nearly at rest to several box lengths per frame.
-                Sphere { position: p, velocity: random_direction(&mut rng) * 10f64.powf(rng.random_range(-1.0..2.5)), radius: r, mass: 1.0 }
+                Sphere {
+                    position: p,
+                    velocity: random_direction(&mut rng) * 10f64.powf(rng.random_range(-1.0..2.5)),
+                    radius: r,
+                    mass: 1.0,
+                }
             })
             .collect();
         let scene = Scene { bounds, spheres };

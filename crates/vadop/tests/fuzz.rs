@@ -26,7 +26,8 @@ use vadop::{BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
 fn budget(default_cases: u64) -> (u64, Instant, u64) {
     let var = |name: &str| std::env::var(name).ok().and_then(|v| v.parse::<u64>().ok());
     let seconds = var("VADOP_FUZZ_SECONDS").unwrap_or(4);
-    let cases = var("VADOP_FUZZ_CASES").unwrap_or(if var("VADOP_FUZZ_SECONDS").is_some() { u64::MAX } else { default_cases });
+    let cases =
+        var("VADOP_FUZZ_CASES").unwrap_or(if var("VADOP_FUZZ_SECONDS").is_some() { u64::MAX } else { default_cases });
     (var("VADOP_FUZZ_SEED").unwrap_or(7), Instant::now() + Duration::from_secs(seconds), cases)
 }
 
@@ -119,13 +120,24 @@ fn narrow_case(rng: &mut ChaCha8Rng) -> (DVec3, DVec3, f64, f64) {
         _ => {
             // Nearly parallel (tiny relative speed) or very fast (many diameters per window).
             let scale = if rng.random_bool(0.5) { power(rng, -14.0, -6.0) } else { power(rng, 3.0, 6.0) };
-            (random_direction(rng) * radius * power(rng, 0.0, 3.0), random_direction(rng) * radius / window * scale, radius, window)
+            (
+                random_direction(rng) * radius * power(rng, 0.0, 3.0),
+                random_direction(rng) * radius / window * scale,
+                radius,
+                window,
+            )
         }
     }
 }
 
 /// Checks one result against exact arithmetic; returns why it is wrong.
-fn check_narrow(offset: DVec3, velocity: DVec3, radius_sum: f64, window: f64, found: Option<f64>) -> Result<(), String> {
+fn check_narrow(
+    offset: DVec3,
+    velocity: DVec3,
+    radius_sum: f64,
+    window: f64,
+    found: Option<f64>,
+) -> Result<(), String> {
     let exact = Exact::new(offset, velocity, radius_sum);
     let eps = f64::EPSILON;
     let r2 = radius_sum * radius_sum;
@@ -135,7 +147,8 @@ fn check_narrow(offset: DVec3, velocity: DVec3, radius_sum: f64, window: f64, fo
                 return Err(format!("time {tau} outside [0, {window})"));
             }
             // Touching at tau to the tolerance plus the rounding of the inputs' magnitudes ...
-            let slack = 4.0 * CONTACT_TOLERANCE * r2 + 16.0 * eps * (offset.length_squared() + (tau * velocity.length()).powi(2));
+            let slack = 4.0 * CONTACT_TOLERANCE * r2
+                + 16.0 * eps * (offset.length_squared() + (tau * velocity.length()).powi(2));
             let at = exact.distance_sq(&q(tau));
             let (low, high) = (&exact.radius_sq - q(slack), &exact.radius_sq + q(slack));
             if at < low || at > high {
@@ -183,9 +196,26 @@ fn narrow_phase_matches_exact_arithmetic() {
 fn narrow_phase_survives_arbitrary_values() {
     let (seed, deadline, cases) = budget(200_000);
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 1);
-    const SPECIAL: [f64; 12] = [0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MAX, f64::MIN, 1e-310, -1e-310, 1e200, -1e200, 1.0];
+    const SPECIAL: [f64; 12] = [
+        0.0,
+        -0.0,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::MAX,
+        f64::MIN,
+        1e-310,
+        -1e-310,
+        1e200,
+        -1e200,
+        1.0,
+    ];
     let pick = |rng: &mut ChaCha8Rng| {
-        if rng.random_bool(0.5) { SPECIAL[rng.random_range(0..SPECIAL.len())] } else { rng.random_range(-10.0..10.0) }
+        if rng.random_bool(0.5) {
+            SPECIAL[rng.random_range(0..SPECIAL.len())]
+        } else {
+            rng.random_range(-10.0..10.0)
+        }
     };
     let mut case = 0u64;
     while case < cases && Instant::now() < deadline {
@@ -193,7 +223,10 @@ fn narrow_phase_survives_arbitrary_values() {
         let velocity = DVec3::new(pick(&mut rng), pick(&mut rng), pick(&mut rng));
         let radius_sum = pick(&mut rng);
         if let Some(tau) = sphere_sphere_time(offset, velocity, radius_sum) {
-            assert!(tau >= 0.0 && tau.is_finite(), "seed {seed} case {case}: {tau} for {offset:?} {velocity:?} {radius_sum}");
+            assert!(
+                tau >= 0.0 && tau.is_finite(),
+                "seed {seed} case {case}: {tau} for {offset:?} {velocity:?} {radius_sum}"
+            );
         }
         case += 1;
     }
@@ -204,8 +237,13 @@ fn narrow_phase_survives_arbitrary_values() {
 
 /// A value that is usually sensible for the world and sometimes anything at all.
 fn maybe_bad(rng: &mut ChaCha8Rng, good: f64) -> f64 {
-    const BAD: [f64; 11] = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.0, -0.0, -1.0, 1e308, -1e308, 1e-310, 1e60, 1e-60];
-    if rng.random_bool(0.03) { BAD[rng.random_range(0..BAD.len())] } else { good }
+    const BAD: [f64; 11] =
+        [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.0, -0.0, -1.0, 1e308, -1e308, 1e-310, 1e60, 1e-60];
+    if rng.random_bool(0.03) {
+        BAD[rng.random_range(0..BAD.len())]
+    } else {
+        good
+    }
 }
 
 fn random_bounds(rng: &mut ChaCha8Rng) -> BoxBounds {
@@ -215,7 +253,8 @@ fn random_bounds(rng: &mut ChaCha8Rng) -> BoxBounds {
         1 => DVec3::splat(1e6),
         _ => random_direction(rng) * power(rng, -3.0, 7.0),
     };
-    BoxBounds::new(min, min + DVec3::new(side, side * rng.random_range(0.2..2.0), side * rng.random_range(0.2..2.0))).unwrap()
+    BoxBounds::new(min, min + DVec3::new(side, side * rng.random_range(0.2..2.0), side * rng.random_range(0.2..2.0)))
+        .unwrap()
 }
 
 #[test]
@@ -245,7 +284,8 @@ fn world_api_survives_random_operation_sequences() {
                 0..=7 => {
                     let radius = side * power(&mut rng, -4.0, -1.3);
                     let radius = maybe_bad(&mut rng, radius);
-                    let position = bounds.min + (bounds.max - bounds.min) * DVec3::new(rng.random(), rng.random(), rng.random());
+                    let position =
+                        bounds.min + (bounds.max - bounds.min) * DVec3::new(rng.random(), rng.random(), rng.random());
                     let position = DVec3::new(maybe_bad(&mut rng, position.x), position.y, position.z);
                     let velocity = random_direction(&mut rng) * side * power(&mut rng, -3.0, 2.5);
                     let velocity = DVec3::new(velocity.x, maybe_bad(&mut rng, velocity.y), velocity.z);

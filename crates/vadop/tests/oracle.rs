@@ -63,7 +63,8 @@ fn other_velocities() -> impl Strategy<Value = Velocities> {
     prop_oneof![
         (0.01f64..3.0).prop_map(|rms_speed| Velocities::Maxwell { rms_speed }),
         (0.1f64..20.0, 0.0f64..0.5).prop_map(|(speed, spread)| Velocities::Stream { speed, spread }),
-        (0.01f64..1.0, 1.1f64..3.0).prop_map(|(median_speed, tail_index)| Velocities::HeavyTail { median_speed, tail_index }),
+        (0.01f64..1.0, 1.1f64..3.0)
+            .prop_map(|(median_speed, tail_index)| Velocities::HeavyTail { median_speed, tail_index }),
     ]
 }
 
@@ -139,7 +140,12 @@ fn grazing_and_head_on_pairs() {
     for k in 0..40 {
         let y = 10.0 + 4.5 * k as f64;
         let miss = [0.0, 1e-7, -1e-7, 1e-12][k % 4];
-        let sphere = |x: f64, y: f64, vx: f64| Sphere { position: DVec3::new(x, y, 100.0), velocity: DVec3::new(vx, 0.0, 0.0), radius: 1.0, mass: 1.0 };
+        let sphere = |x: f64, y: f64, vx: f64| Sphere {
+            position: DVec3::new(x, y, 100.0),
+            velocity: DVec3::new(vx, 0.0, 0.0),
+            radius: 1.0,
+            mass: 1.0,
+        };
         // Head-on at 100 diameters per frame, and a grazing pass 2 + miss apart.
         spheres.push(sphere(20.0, y, 6000.0));
         spheres.push(sphere(180.0, y, -6000.0));

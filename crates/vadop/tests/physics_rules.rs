@@ -102,7 +102,12 @@ fn the_tc_model_ends_inelastic_collapse_and_is_counted() {
     let spheres: Vec<Sphere> = (0..20)
         .map(|k| {
             let velocity = DVec3::new(if k < 10 { 3.0 } else { -3.0 }, 0.0, 0.0);
-            Sphere { position: DVec3::new(80.0 + 2.0 * k as f64 + 0.01 * k as f64, 100.0, 100.0), velocity, radius: 1.0, mass: 1.0 }
+            Sphere {
+                position: DVec3::new(80.0 + 2.0 * k as f64 + 0.01 * k as f64, 100.0, 100.0),
+                velocity,
+                radius: 1.0,
+                mass: 1.0,
+            }
         })
         .collect();
     let scene = Scene { bounds: BoxBounds::cube(200.0).unwrap(), spheres };
@@ -128,7 +133,8 @@ fn the_tc_model_ends_inelastic_collapse_and_is_counted() {
 /// give the same contacts in the same order, to the bit, for every method and mode.
 #[test]
 fn frames_of_any_length_give_the_same_contacts() {
-    let scene = PaperScene { bodies: 200, packing_fraction: 0.2, max_speed: 2.0, radius: 0.5, seed: 3 }.build().unwrap();
+    let scene =
+        PaperScene { bodies: 200, packing_fraction: 0.2, max_speed: 2.0, radius: 0.5, seed: 3 }.build().unwrap();
     for method in [Method::Auto, Method::Vadop, Method::Brute] {
         for (mode, restitution) in [(Mode::Detect, 1.0), (Mode::Simulate, 1.0), (Mode::Simulate, 0.4)] {
             let config = WorldConfig { method, mode, restitution, ..WorldConfig::default() };
@@ -157,7 +163,11 @@ fn scenes_scaled_to_both_ends_of_the_range_give_the_same_contacts() {
     let unit = PaperScene { bodies: 150, packing_fraction: 0.3, max_speed: 3.0, radius: 0.5, seed: 8 }.build().unwrap();
     let scaled = |s: f64| Scene {
         bounds: BoxBounds::new(unit.bounds.min * s, unit.bounds.max * s).unwrap(),
-        spheres: unit.spheres.iter().map(|b| Sphere { position: b.position * s, velocity: b.velocity * s, radius: b.radius * s, mass: b.mass }).collect(),
+        spheres: unit
+            .spheres
+            .iter()
+            .map(|b| Sphere { position: b.position * s, velocity: b.velocity * s, radius: b.radius * s, mass: b.mass })
+            .collect(),
     };
     for method in [Method::Auto, Method::Vadop, Method::Brute] {
         for mode in [Mode::Detect, Mode::Simulate] {
@@ -173,7 +183,11 @@ fn scenes_scaled_to_both_ends_of_the_range_give_the_same_contacts() {
                 let found = contacts(&scaled(s));
                 assert_eq!(found.len(), reference.len(), "{method:?} {mode:?} 2^{exponent}");
                 for (a, b) in found.iter().zip(&reference) {
-                    assert_eq!((a.time, a.body, a.touched), (b.time, b.body, b.touched), "{method:?} {mode:?} 2^{exponent}");
+                    assert_eq!(
+                        (a.time, a.body, a.touched),
+                        (b.time, b.body, b.touched),
+                        "{method:?} {mode:?} 2^{exponent}"
+                    );
                     assert_eq!(a.point, b.point * s);
                     assert_eq!(a.normal, b.normal);
                 }

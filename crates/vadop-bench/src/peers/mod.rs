@@ -118,11 +118,29 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
     if let Some(csv) = &args.render {
         let rows = read_csv(csv)?;
         let section = write_outputs(&markdown_path, &results, &rows, args.brute_max, &info, true)?;
-        return crate::common::print(&format!("{section}\nwrote {} and {}\n", markdown_path.display(), results.display()));
+        return crate::common::print(&format!(
+            "{section}\nwrote {} and {}\n",
+            markdown_path.display(),
+            results.display()
+        ));
     }
-    let bodies = args.grid.bodies.clone().unwrap_or(if quick { vec![1000, 2000] } else { vec![1000, 2000, 10_000, 100_000, 1_000_000] });
+    let bodies = args.grid.bodies.clone().unwrap_or(if quick {
+        vec![1000, 2000]
+    } else {
+        vec![1000, 2000, 10_000, 100_000, 1_000_000]
+    });
     let brute_max = args.brute_max;
-    let frames_for = |n: usize| args.grid.frames.unwrap_or(if quick { 10 } else if n <= 10_000 { 30 } else if n <= 100_000 { 10 } else { 3 });
+    let frames_for = |n: usize| {
+        args.grid.frames.unwrap_or(if quick {
+            10
+        } else if n <= 10_000 {
+            30
+        } else if n <= 100_000 {
+            10
+        } else {
+            3
+        })
+    };
     let pipelines: Vec<_> = match &args.pipelines {
         None => PIPELINES.to_vec(),
         Some(names) => names
@@ -133,17 +151,24 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
     let programs = build_peers(&repository_root()?)?;
     let scratch = runner.scratch_file("peers");
     crate::common::create_dir(&scratch)?;
-    let (trajectory, reference_file, contacts) = (scratch.join("trajectory.bin"), scratch.join("reference.bin"), scratch.join("contacts.bin"));
+    let (trajectory, reference_file, contacts) =
+        (scratch.join("trajectory.bin"), scratch.join("reference.bin"), scratch.join("contacts.bin"));
 
     let runs_per_cell = |n: usize| pipelines.iter().filter(|p| p.0 != "vadop-brute" || n <= brute_max).count() + 1;
-    let progress = crate::progress::Progress::new(bodies.iter().map(|&n| runs_per_cell(n) * args.grid.speeds.len()).sum());
+    let progress =
+        crate::progress::Progress::new(bodies.iter().map(|&n| runs_per_cell(n) * args.grid.speeds.len()).sum());
     let mut rows = Vec::new();
     for &n in &bodies {
         for &speed in &args.grid.speeds {
             let frames = frames_for(n);
             let common_args = |job: &str, out: &Path| -> Vec<String> {
-                let values = [job.to_string(), n.to_string(), speed.to_string(), frames.to_string(), out.display().to_string()];
-                ["--job", "--bodies", "--speed", "--frames", "--out"].iter().zip(values).flat_map(|(f, v)| [f.to_string(), v]).collect()
+                let values =
+                    [job.to_string(), n.to_string(), speed.to_string(), frames.to_string(), out.display().to_string()];
+                ["--job", "--bodies", "--speed", "--frames", "--out"]
+                    .iter()
+                    .zip(values)
+                    .flat_map(|(f, v)| [f.to_string(), v])
+                    .collect()
             };
             let reference_kind = if n <= brute_max { "brute force" } else { "auto" };
             let what = format!("n={n} speed={speed}: paths and the {reference_kind} reference");
@@ -152,7 +177,8 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
             if n <= brute_max {
                 export.push("--brute".to_string());
             }
-            let exported = runner.child(&export, runner.timeout * 4).and_then(|_| trajectory::read_contacts(&reference_file));
+            let exported =
+                runner.child(&export, runner.timeout * 4).and_then(|_| trajectory::read_contacts(&reference_file));
             progress.done(&match &exported {
                 Ok(reference) => format!("{what}: {} pair contacts", reference.len()),
                 Err(e) => format!("{what}: {e}"),
@@ -173,7 +199,11 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
                                 runner.child(&job, runner.timeout)
                             }
                             other => {
-                                let arguments = [name.to_string(), trajectory.display().to_string(), contacts.display().to_string()];
+                                let arguments = [
+                                    name.to_string(),
+                                    trajectory.display().to_string(),
+                                    contacts.display().to_string(),
+                                ];
                                 runner.run(&programs.path(other), &arguments, runner.timeout)
                             }
                         };
@@ -202,16 +232,24 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
 }
 
 /// Writes the CSV, the markdown section and (when `plot`) the PNG; returns the section.
-fn write_outputs(markdown_path: &Path, results: &Path, rows: &[Row], brute_max: usize, info: &RunInfo, plot: bool) -> CliResult<String> {
+fn write_outputs(
+    markdown_path: &Path,
+    results: &Path,
+    rows: &[Row],
+    brute_max: usize,
+    info: &RunInfo,
+    plot: bool,
+) -> CliResult<String> {
     write_csv(&results.join("peers.csv"), rows)?;
     let png = results.join("peers.png");
-    let plotted = plot && match write_plot(rows, &png) {
-        Ok(()) => true,
-        Err(e) => {
-            eprintln!("no plot: {e}");
-            false
-        }
-    };
+    let plotted = plot
+        && match write_plot(rows, &png) {
+            Ok(()) => true,
+            Err(e) => {
+                eprintln!("no plot: {e}");
+                false
+            }
+        };
     let section = markdown_section(rows, brute_max, info, plotted.then(|| markdown::link(markdown_path, &png)));
     markdown::write_section(markdown_path, MARKERS, &section)?;
     Ok(section)
@@ -305,7 +343,14 @@ fn measure(stdout: &str, contacts: &Path, reference: &[[u32; 3]]) -> Result<Meas
     let mean_ms = summary.frame_ms.iter().sum::<f64>() / summary.frame_ms.len() as f64;
     let found = trajectory::read_contacts(contacts)?;
     let (matched, missed, false_contacts) = compare(reference, &found);
-    Ok(Measured { mean_ms, peak_mib: summary.peak_kib as f64 / 1024.0, found: matched, missed, false_contacts, reference: reference.len() as u64 })
+    Ok(Measured {
+        mean_ms,
+        peak_mib: summary.peak_kib as f64 / 1024.0,
+        found: matched,
+        missed,
+        false_contacts,
+        reference: reference.len() as u64,
+    })
 }
 
 /// (in both, only in the reference, only in `found`); both sorted and free of duplicates.
@@ -326,7 +371,9 @@ fn compare(reference: &[[u32; 3]], found: &[[u32; 3]]) -> (u64, u64, u64) {
 }
 
 fn write_csv(path: &Path, rows: &[Row]) -> CliResult<()> {
-    let mut text = String::from("n,speed,pipeline,kind,frames,status,mean_ms,found,missed,false,reference,peak_mib,time_vs_auto\n");
+    let mut text = String::from(
+        "n,speed,pipeline,kind,frames,status,mean_ms,found,missed,false,reference,peak_mib,time_vs_auto\n",
+    );
     for row in rows {
         let kind = if row.continuous { "continuous" } else { "discrete" };
         let _ = match &row.outcome {
@@ -345,7 +392,15 @@ fn write_csv(path: &Path, rows: &[Row]) -> CliResult<()> {
                 m.peak_mib,
                 ratio(rows, row).map_or(String::new(), |r| format!("{r:.3}"))
             ),
-            Err(e) => writeln!(text, "{},{},{},{kind},{},{},,,,,,,", row.bodies, row.speed, row.pipeline, row.frames, e.replace(',', ";")),
+            Err(e) => writeln!(
+                text,
+                "{},{},{},{kind},{},{},,,,,,,",
+                row.bodies,
+                row.speed,
+                row.pipeline,
+                row.frames,
+                e.replace(',', ";")
+            ),
         };
     }
     write_file(path, &text)
@@ -362,7 +417,8 @@ pub fn read_csv(path: &Path) -> CliResult<Vec<Row>> {
         if f.len() != 13 {
             return Err(bad(k, "expected 13 fields"));
         }
-        let &(pipeline, continuous, _) = PIPELINES.iter().find(|p| p.0 == f[2]).ok_or_else(|| bad(k, "unknown pipeline"))?;
+        let &(pipeline, continuous, _) =
+            PIPELINES.iter().find(|p| p.0 == f[2]).ok_or_else(|| bad(k, "unknown pipeline"))?;
         let number = |i: usize| f[i].parse::<f64>().map_err(|_| bad(k, &format!("bad number {:?}", f[i])));
         let outcome = if f[5] == "ok" {
             Ok(Measured {
@@ -376,7 +432,14 @@ pub fn read_csv(path: &Path) -> CliResult<Vec<Row>> {
         } else {
             Err(f[5].to_string())
         };
-        rows.push(Row { bodies: number(0)? as usize, speed: number(1)?, frames: number(4)? as u64, pipeline, continuous, outcome });
+        rows.push(Row {
+            bodies: number(0)? as usize,
+            speed: number(1)?,
+            frames: number(4)? as u64,
+            pipeline,
+            continuous,
+            outcome,
+        });
     }
     Ok(rows)
 }
@@ -455,7 +518,10 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
          start. Peak MiB is the run's VmHWM; × auto is the time divided by vadop-auto's (the default method) on the \
          same row group (above 1: slower than the default).\n"
     );
-    let _ = writeln!(md, "| n | speed | pipeline | kind | frames | mean ms/frame | found | missed | false | peak MiB | × auto |");
+    let _ = writeln!(
+        md,
+        "| n | speed | pipeline | kind | frames | mean ms/frame | found | missed | false | peak MiB | × auto |"
+    );
     let _ = writeln!(md, "|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|");
     for row in rows {
         let kind = if row.continuous { "continuous" } else { "discrete" };
@@ -471,7 +537,8 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
             ),
             Err(e) => format!("{} | — | — | — | — | —", markdown::table_cell(e)),
         };
-        let _ = writeln!(md, "| {} | {} | {} | {kind} | {} | {cells} |", row.bodies, row.speed, row.pipeline, row.frames);
+        let _ =
+            writeln!(md, "| {} | {} | {} | {kind} | {} | {cells} |", row.bodies, row.speed, row.pipeline, row.frames);
     }
     let _ = writeln!(md);
     if let Some(plot) = plot {
@@ -486,11 +553,21 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
             let _ = writeln!(md, "- n={n}, speed {speed}: vadop-auto did not finish.");
             continue;
         };
-        let peers = |continuous: bool| group.iter().filter(move |r| r.continuous == continuous && !r.pipeline.starts_with("vadop"));
+        let peers = |continuous: bool| {
+            group.iter().filter(move |r| r.continuous == continuous && !r.pipeline.starts_with("vadop"))
+        };
         let faster_continuous: Vec<String> = peers(true)
-            .filter_map(|r| r.outcome.as_ref().ok().filter(|m| m.mean_ms <= auto.mean_ms).map(|m| format!("{} ({:.3} ms)", r.pipeline, m.mean_ms)))
+            .filter_map(|r| {
+                r.outcome
+                    .as_ref()
+                    .ok()
+                    .filter(|m| m.mean_ms <= auto.mean_ms)
+                    .map(|m| format!("{} ({:.3} ms)", r.pipeline, m.mean_ms))
+            })
             .collect();
-        let fastest_discrete = peers(false).filter_map(|r| r.outcome.as_ref().ok().map(|m| (r.pipeline, m.mean_ms))).min_by(|a, b| a.1.total_cmp(&b.1));
+        let fastest_discrete = peers(false)
+            .filter_map(|r| r.outcome.as_ref().ok().map(|m| (r.pipeline, m.mean_ms)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
         let exact = if auto.missed == 0 && auto.false_contacts == 0 { "exact" } else { "NOT exact" };
         let versus_continuous = if faster_continuous.is_empty() {
             "faster than every continuous peer that finished".to_string()
@@ -498,11 +575,18 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
             format!("NOT faster than {}", faster_continuous.join(", "))
         };
         let versus_discrete = match fastest_discrete {
-            Some((name, ms)) if ms < auto.mean_ms => format!("slower than the fastest discrete peer, {name} ({ms:.3} ms, {:.2}x auto's time)", ms / auto.mean_ms),
+            Some((name, ms)) if ms < auto.mean_ms => format!(
+                "slower than the fastest discrete peer, {name} ({ms:.3} ms, {:.2}x auto's time)",
+                ms / auto.mean_ms
+            ),
             Some((name, ms)) => format!("not slower than the fastest discrete peer, {name} ({ms:.3} ms)"),
             None => "no discrete peer finished".to_string(),
         };
-        let _ = writeln!(md, "- n={n}, speed {speed}: auto {:.3} ms, {exact}; {versus_continuous}; {versus_discrete}.", auto.mean_ms);
+        let _ = writeln!(
+            md,
+            "- n={n}, speed {speed}: auto {:.3} ms, {exact}; {versus_continuous}; {versus_discrete}.",
+            auto.mean_ms
+        );
     }
     md
 }

@@ -20,7 +20,8 @@ const MAGIC: &[u8; 8] = b"VADOPTR1";
 /// The paper scene of `n` bodies at `speed` in detect mode with `method`.
 fn detect_world(n: usize, speed: f64, method: Method) -> CliResult<(vadop::scene::Scene, World)> {
     let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
-    let world = scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
+    let world =
+        scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
     Ok((scene, world))
 }
 
@@ -66,7 +67,8 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
         let mut bytes = Vec::with_capacity(n * 72);
         let start: Vec<_> = world.spheres().map(|(_, s)| s).collect();
         for s in &start {
-            bytes.extend(s.position.to_array().iter().chain(s.velocity.to_array().iter()).flat_map(|v| v.to_le_bytes()));
+            bytes
+                .extend(s.position.to_array().iter().chain(s.velocity.to_array().iter()).flat_map(|v| v.to_le_bytes()));
         }
         let t0 = world.time();
         let mut bounces = Vec::new();
@@ -74,7 +76,9 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
             match c.touched {
                 Touched::Body(j) => contacts.push([frame as u32, c.body.min(j), c.body.max(j)]),
                 // The contact point sits one radius out along the normal from the centre.
-                Touched::Wall(_) => bounces.push((c.body as u64, c.time - t0, c.point - c.normal * start[c.body as usize].radius)),
+                Touched::Wall(_) => {
+                    bounces.push((c.body as u64, c.time - t0, c.point - c.normal * start[c.body as usize].radius))
+                }
             }
         }
         for (_, s) in world.spheres() {
@@ -98,7 +102,8 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
 pub fn read_contacts(path: &Path) -> Result<Vec<[u32; 3]>, String> {
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     let word = |k: usize| u32::from_le_bytes([bytes[4 * k], bytes[4 * k + 1], bytes[4 * k + 2], bytes[4 * k + 3]]);
-    let mut triples: Vec<[u32; 3]> = (0..bytes.len() / 12).map(|t| [word(3 * t), word(3 * t + 1), word(3 * t + 2)]).collect();
+    let mut triples: Vec<[u32; 3]> =
+        (0..bytes.len() / 12).map(|t| [word(3 * t), word(3 * t + 1), word(3 * t + 2)]).collect();
     triples.sort_unstable();
     triples.dedup();
     Ok(triples)
@@ -160,7 +165,8 @@ mod tests {
                 let body = word() as usize;
                 let (tau, p) = (float(), [float(), float(), float()]);
                 assert!((0.0..dt).contains(&tau));
-                let on_wall = (0..3).any(|a| (p[a] - low[a] - radius).abs() < 1e-9 || (high[a] - p[a] - radius).abs() < 1e-9);
+                let on_wall =
+                    (0..3).any(|a| (p[a] - low[a] - radius).abs() < 1e-9 || (high[a] - p[a] - radius).abs() < 1e-9);
                 assert!(on_wall, "bounce of body {body} at {p:?} is on no wall");
                 first_knot[body].get_or_insert((tau, p));
                 bodies_seen.push(body);

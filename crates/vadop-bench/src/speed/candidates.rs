@@ -41,11 +41,15 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
             let frames = window_frames(speed, plan.quick);
             // The runs of the detect section, made once; narrow tests do not vary between repeats.
             let tests = ["auto", "vadop"].map(|method| {
-                first(&context.time(product, &Simulation::paper(n, speed, frames, method), &progress)).map(|r| r.summary.per_frame.narrow_tests)
+                first(&context.time(product, &Simulation::paper(n, speed, frames, method), &progress))
+                    .map(|r| r.summary.per_frame.narrow_tests)
             });
             let args = [("--bodies", n.to_string()), ("--speed", speed.to_string()), ("--frames", frames.to_string())];
             let overlaps = context.child("candidates", &args, 1, &progress).and_then(|values| {
-                values.first().and_then(|v| v["pairs_per_frame"].as_f64()).ok_or_else(|| "no pairs_per_frame".to_string())
+                values
+                    .first()
+                    .and_then(|v| v["pairs_per_frame"].as_f64())
+                    .ok_or_else(|| "no pairs_per_frame".to_string())
             });
             cells.push(Cell { bodies: n, speed, frames, overlaps, tests });
             write(context, &cells)?;
@@ -59,12 +63,22 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
         .flat_map(|(k, method)| {
             let cells = &cells;
             bodies.iter().map(move |&n| {
-                let points = cells.iter().filter(|c| c.bodies == n).filter_map(|c| Some((c.speed, c.tests[k]? / *c.overlaps.as_ref().ok()?))).collect();
+                let points = cells
+                    .iter()
+                    .filter(|c| c.bodies == n)
+                    .filter_map(|c| Some((c.speed, c.tests[k]? / *c.overlaps.as_ref().ok()?)))
+                    .collect();
                 Series::new(&format!("{method}, n = {n}"), points)
             })
         })
         .collect();
-    plots::line_chart(&path, "Narrow tests per swept-box overlap (goal: at most 2)", "max speed (diameters/frame)", "narrow tests ÷ overlapping swept boxes", series)
+    plots::line_chart(
+        &path,
+        "Narrow tests per swept-box overlap (goal: at most 2)",
+        "max speed (diameters/frame)",
+        "narrow tests ÷ overlapping swept boxes",
+        series,
+    )
 }
 
 fn write(context: &Context, cells: &[Cell]) -> CliResult<()> {
@@ -77,7 +91,9 @@ fn write(context: &Context, cells: &[Cell]) -> CliResult<()> {
     );
     let _ = writeln!(md, "| n | speed | frames | overlapping swept boxes/frame | auto narrow tests/frame | auto ÷ overlaps | vadop narrow tests/frame | vadop ÷ overlaps |");
     let _ = writeln!(md, "|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let mut csv = String::from("n,speed,frames,overlaps_per_frame,auto_tests_per_frame,auto_ratio,vadop_tests_per_frame,vadop_ratio,status\n");
+    let mut csv = String::from(
+        "n,speed,frames,overlaps_per_frame,auto_tests_per_frame,auto_ratio,vadop_tests_per_frame,vadop_ratio,status\n",
+    );
     for c in cells {
         let overlaps = c.overlaps.as_ref().ok().copied();
         let ratios = c.tests.map(|t| Some(t? / overlaps?));
@@ -112,7 +128,13 @@ fn write(context: &Context, cells: &[Cell]) -> CliResult<()> {
     }
     let (_, link) = context.plot("candidates.png");
     let _ = writeln!(md, "\n![narrow tests per overlapping swept-box pair]({link})\n");
-    context.write(Section::Candidates.markers(), "Candidates: narrow tests against overlapping swept boxes", &md, "candidates.csv", &csv)
+    context.write(
+        Section::Candidates.markers(),
+        "Candidates: narrow tests against overlapping swept boxes",
+        &md,
+        "candidates.csv",
+        &csv,
+    )
 }
 
 /// An axis-aligned box: lower and upper corner.
@@ -122,7 +144,9 @@ type Aabb = (DVec3, DVec3);
 /// boxes per frame as `{"pairs_per_frame": x}`.
 pub fn count(bodies: usize, speed: f64, frames: u64) -> CliResult<()> {
     let scene = PaperScene::new(bodies, 0.05, speed).build().map_err(|e| e.to_string())?;
-    let mut world = scene.world(WorldConfig { method: Method::Auto, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
+    let mut world = scene
+        .world(WorldConfig { method: Method::Auto, mode: Mode::Detect, ..WorldConfig::default() })
+        .map_err(|e| e.to_string())?;
     let radii: Vec<f64> = scene.spheres.iter().map(|s| s.radius).collect();
     let grow = |aabb: &mut Aabb, centre: DVec3, radius: f64| {
         aabb.0 = aabb.0.min(centre - radius);
@@ -131,7 +155,8 @@ pub fn count(bodies: usize, speed: f64, frames: u64) -> CliResult<()> {
     let mut total = 0;
     for _ in 0..frames {
         // A paper scene's ids are its sphere indices.
-        let mut boxes: Vec<Aabb> = world.spheres().map(|(_, s)| (s.position - s.radius, s.position + s.radius)).collect();
+        let mut boxes: Vec<Aabb> =
+            world.spheres().map(|(_, s)| (s.position - s.radius, s.position + s.radius)).collect();
         for c in world.step(1.0 / FRAMES_PER_SECOND).map_err(|e| e.to_string())? {
             if let Touched::Wall(_) = c.touched {
                 let radius = radii[c.body as usize];
@@ -171,12 +196,23 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let mut boxes: Vec<Aabb> = (0..400)
             .map(|_| {
-                let low = DVec3::new(rng.random_range(0.0..20.0), rng.random_range(0.0..20.0), rng.random_range(0.0..20.0));
-                (low, low + DVec3::new(rng.random_range(0.0..3.0), rng.random_range(0.0..3.0), rng.random_range(0.0..3.0)))
+                let low =
+                    DVec3::new(rng.random_range(0.0..20.0), rng.random_range(0.0..20.0), rng.random_range(0.0..20.0));
+                (
+                    low,
+                    low + DVec3::new(
+                        rng.random_range(0.0..3.0),
+                        rng.random_range(0.0..3.0),
+                        rng.random_range(0.0..3.0),
+                    ),
+                )
             })
             .collect();
         let overlap = |a: &Aabb, b: &Aabb| a.0.cmple(b.1).all() && b.0.cmple(a.1).all();
-        let every_pair = (0..boxes.len()).flat_map(|i| (i + 1..boxes.len()).map(move |j| (i, j))).filter(|&(i, j)| overlap(&boxes[i], &boxes[j])).count();
+        let every_pair = (0..boxes.len())
+            .flat_map(|i| (i + 1..boxes.len()).map(move |j| (i, j)))
+            .filter(|&(i, j)| overlap(&boxes[i], &boxes[j]))
+            .count();
         assert!(every_pair > 0);
         assert_eq!(overlapping_pairs(&mut boxes), every_pair as u64);
     }

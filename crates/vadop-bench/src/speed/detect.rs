@@ -46,7 +46,10 @@ pub fn run(context: &Context, baseline: &Path, peers_csv: &Path) -> CliResult<()
     let product = context.runner.product()?;
     let old = baseline.is_file().then_some(baseline);
     if old.is_none() {
-        eprintln!("{} not found: the old engine's column stays empty (build it with scripts/build-baseline.sh)", baseline.display());
+        eprintln!(
+            "{} not found: the old engine's column stays empty (build it with scripts/build-baseline.sh)",
+            baseline.display()
+        );
     }
     // The peers' columns are a comparison, not the measurement: without a readable CSV they stay empty.
     let peer_rows = peers::read_csv(peers_csv).unwrap_or_else(|e| {
@@ -70,7 +73,15 @@ pub fn run(context: &Context, baseline: &Path, peers_csv: &Path) -> CliResult<()
                     .filter_map(|r: &Row| Some((r.pipeline, r.outcome.as_ref().ok()?.mean_ms)))
                     .min_by(|a, b| a.1.total_cmp(&b.1))
             };
-            cells.push(Cell { bodies, speed, frames, runs, old_grid, exact_peer: fastest(true), discrete_peer: fastest(false) });
+            cells.push(Cell {
+                bodies,
+                speed,
+                frames,
+                runs,
+                old_grid,
+                exact_peer: fastest(true),
+                discrete_peer: fastest(false),
+            });
             write(context, &cells, old.is_some(), peers_csv, !peer_rows.is_empty())?;
         }
     }
@@ -89,7 +100,11 @@ fn write(context: &Context, cells: &[Cell], old_built: bool, peers_csv: &Path, p
          nothing missed or false) and fastest discrete pipeline of `{}` on the same cell, {} (another command, \
          other frames: its times are per-frame too, but measured at another time).\n",
         context.repeats,
-        cells.first().and_then(|c| first(&c.runs[0])).map(|r| r.summary.run.method.clone()).unwrap_or_else(|| "auto".into()),
+        cells
+            .first()
+            .and_then(|c| first(&c.runs[0]))
+            .map(|r| r.summary.run.method.clone())
+            .unwrap_or_else(|| "auto".into()),
         if old_built { "scripts/build-baseline.sh" } else { "not built here: run scripts/build-baseline.sh" },
         peers_csv.display(),
         if peers_read { "read from it" } else { "not found, so these columns are empty" },
@@ -100,8 +115,11 @@ fn write(context: &Context, cells: &[Cell], old_built: bool, peers_csv: &Path, p
     for c in cells {
         let windows = first(&c.runs[0]).map(|r| r.summary.per_frame.windows * r.summary.frames_completed as f64);
         let peer = |p: Option<(&str, f64)>| p.map_or("—".to_string(), |(name, ms)| format!("{ms:.3} ({name})"));
-        let (vs_exact, vs_discrete, old_vs_auto) =
-            (ratio(c.auto_ms(), c.exact_peer.map(|p| p.1)), ratio(c.auto_ms(), c.discrete_peer.map(|p| p.1)), ratio(c.old_ms(), c.auto_ms()));
+        let (vs_exact, vs_discrete, old_vs_auto) = (
+            ratio(c.auto_ms(), c.exact_peer.map(|p| p.1)),
+            ratio(c.auto_ms(), c.discrete_peer.map(|p| p.1)),
+            ratio(c.old_ms(), c.auto_ms()),
+        );
         let old = c.old_grid.as_deref().map_or("not built".to_string(), ms_cell);
         let _ = writeln!(
             md,
@@ -119,7 +137,12 @@ fn write(context: &Context, cells: &[Cell], old_built: bool, peers_csv: &Path, p
             cell(vs_discrete, 2),
             cell(old_vs_auto, 2),
         );
-        let failures: Vec<String> = c.runs.iter().chain(&c.old_grid).filter_map(|t| t.as_ref().as_ref().err().map(|e| e.replace(',', ";"))).collect();
+        let failures: Vec<String> = c
+            .runs
+            .iter()
+            .chain(&c.old_grid)
+            .filter_map(|t| t.as_ref().as_ref().err().map(|e| e.replace(',', ";")))
+            .collect();
         let _ = writeln!(
             csv,
             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
@@ -152,7 +175,13 @@ fn write(context: &Context, cells: &[Cell], old_built: bool, peers_csv: &Path, p
     }
     let (_, link) = context.plot("detect.png");
     let _ = writeln!(md, "\nRatios below 1 mean auto is faster; old grid ÷ auto above 1 means the new engine is faster.\n\n![detect-mode ms per frame against n]({link})\n");
-    context.write(Section::Detect.markers(), "Detect mode: ms per frame against the old engine and the peers", &md, "detect.csv", &csv)
+    context.write(
+        Section::Detect.markers(),
+        "Detect mode: ms per frame against the old engine and the peers",
+        &md,
+        "detect.csv",
+        &csv,
+    )
 }
 
 /// ms/frame against n, one panel per speed.
@@ -167,11 +196,19 @@ fn draw(context: &Context, cells: &[Cell]) -> CliResult<()> {
             let line = |label: &str, value: &dyn Fn(&Cell) -> Option<f64>| {
                 Series::new(label, at.iter().filter_map(|c| Some((c.bodies as f64, value(c)?))).collect())
             };
-            let mut series: Vec<Series> = METHODS.iter().enumerate().map(|(k, m)| line(m, &|c| mean_ms(&c.runs[k]))).collect();
+            let mut series: Vec<Series> =
+                METHODS.iter().enumerate().map(|(k, m)| line(m, &|c| mean_ms(&c.runs[k]))).collect();
             series.push(line("old grid (d35de4a)", &|c| c.old_ms()));
             series.push(line("fastest exact peer", &|c| c.exact_peer.map(|p| p.1)).styled("#404040", Stroke::Solid));
-            series.push(line("fastest discrete peer", &|c| c.discrete_peer.map(|p| p.1)).styled("#a0a0a0", Stroke::Dashed));
-            Panel { title: format!("max speed {speed} diameters/frame"), x_label: "bodies n".into(), y_label: "mean ms per frame".into(), series }
+            series.push(
+                line("fastest discrete peer", &|c| c.discrete_peer.map(|p| p.1)).styled("#a0a0a0", Stroke::Dashed),
+            );
+            Panel {
+                title: format!("max speed {speed} diameters/frame"),
+                x_label: "bodies n".into(),
+                y_label: "mean ms per frame".into(),
+                series,
+            }
         })
         .collect::<Vec<_>>();
     let (path, _) = context.plot("detect.png");

@@ -20,7 +20,10 @@ const GOAL_BYTES: f64 = 300.0;
 /// Median over repeats of a run's peak MiB.
 fn peak_mib(timed: &Timed) -> Option<f64> {
     let reports = timed.as_ref().ok()?;
-    reports.iter().all(|r| r.summary.peak_memory_mib.is_some()).then(|| median_of(reports, |r| r.summary.peak_memory_mib.unwrap_or(0.0)))
+    reports
+        .iter()
+        .all(|r| r.summary.peak_memory_mib.is_some())
+        .then(|| median_of(reports, |r| r.summary.peak_memory_mib.unwrap_or(0.0)))
 }
 
 pub(super) fn run(context: &Context) -> CliResult<()> {
@@ -35,7 +38,8 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
     }
     progress.finish();
     let (path, _) = context.plot("memory.png");
-    let per_body: Vec<(f64, f64)> = rows.iter().filter_map(|(n, t)| Some((*n as f64, bytes_per_body(*n, t, &empty)?))).collect();
+    let per_body: Vec<(f64, f64)> =
+        rows.iter().filter_map(|(n, t)| Some((*n as f64, bytes_per_body(*n, t, &empty)?))).collect();
     let goal = per_body.iter().map(|p| (p.0, GOAL_BYTES)).collect();
     let series = vec![Series::new("default method, detect mode, speed 0.5", per_body), Series::new("goal", goal)];
     plots::line_chart(&path, "Peak memory above an empty process, per body", "bodies n", "bytes per body", series)
@@ -68,7 +72,13 @@ fn write(context: &Context, empty: &Timed, rows: &[(usize, Rc<Timed>)]) -> CliRe
         };
         let _ = writeln!(md, "| {n} | {peak_cell} | {} |", cell(per_body, 0));
         let status = timed.as_ref().as_ref().err().map_or("ok".to_string(), |e| e.replace(',', ";"));
-        let _ = writeln!(csv, "{n},{FRAMES},{},{},{},{status}", csv_number(peak), csv_number(empty_mib), csv_number(per_body));
+        let _ = writeln!(
+            csv,
+            "{n},{FRAMES},{},{},{},{status}",
+            csv_number(peak),
+            csv_number(empty_mib),
+            csv_number(per_body)
+        );
     }
     let (_, link) = context.plot("memory.png");
     let _ = writeln!(md, "\n![bytes per body against n]({link})\n");

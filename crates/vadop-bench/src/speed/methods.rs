@@ -3,7 +3,7 @@
 //! paper's at three speeds, a stream, heavy-tailed speeds (detect mode) and an equilibrium gas
 //! (simulate mode). A method that times out at one n is not run at a larger one.
 
-use super::{ms_cell, mean_ms, Context, Section, Timed};
+use super::{mean_ms, ms_cell, Context, Section, Timed};
 use crate::common::{csv_number, window_frames};
 use crate::plots;
 use crate::progress::Progress;
@@ -102,10 +102,16 @@ fn write(context: &Context, rows: &[Row]) -> CliResult<()> {
     let mut csv = format!("n,scene,frames,{},fastest,status\n", METHODS.map(|m| format!("{m}_ms")).join(","));
     for r in rows {
         let times: Vec<Option<f64>> = r.runs.iter().map(|t| t.as_deref().and_then(mean_ms)).collect();
-        let fastest = times.iter().zip(METHODS).filter_map(|(t, m)| Some((t.as_ref()?, m))).min_by(|a, b| a.0.total_cmp(b.0)).map_or("—", |f| f.1);
+        let fastest = times
+            .iter()
+            .zip(METHODS)
+            .filter_map(|(t, m)| Some((t.as_ref()?, m)))
+            .min_by(|a, b| a.0.total_cmp(b.0))
+            .map_or("—", |f| f.1);
         let cells: Vec<String> = r.runs.iter().map(|t| t.as_deref().map_or("—".to_string(), ms_cell)).collect();
         let _ = writeln!(md, "| {} | {} | {} | {} | {fastest} |", r.bodies, r.scene.name, r.frames, cells.join(" | "));
-        let failures: Vec<String> = r.runs.iter().flatten().filter_map(|t| t.as_ref().as_ref().err().map(|e| e.replace(',', ";"))).collect();
+        let failures: Vec<String> =
+            r.runs.iter().flatten().filter_map(|t| t.as_ref().as_ref().err().map(|e| e.replace(',', ";"))).collect();
         let status = if failures.is_empty() { "ok".to_string() } else { failures.join("; ") };
         let numbers: Vec<String> = times.iter().map(|t| csv_number(*t)).collect();
         let _ = writeln!(csv, "{},{},{},{},{fastest},{status}", r.bodies, r.scene.name, r.frames, numbers.join(","));

@@ -167,8 +167,17 @@ impl Context {
     }
 
     /// This binary's `--child` job `job` with `args`, run `repeats` times; each run's JSON line.
-    fn child(&self, job: &str, args: &[(&str, String)], repeats: u64, progress: &Progress) -> Result<Vec<serde_json::Value>, String> {
-        let what = format!("{job} {}", args.iter().map(|(f, v)| format!("{}={v}", f.trim_start_matches("--"))).collect::<Vec<_>>().join(" "));
+    fn child(
+        &self,
+        job: &str,
+        args: &[(&str, String)],
+        repeats: u64,
+        progress: &Progress,
+    ) -> Result<Vec<serde_json::Value>, String> {
+        let what = format!(
+            "{job} {}",
+            args.iter().map(|(f, v)| format!("{}={v}", f.trim_start_matches("--"))).collect::<Vec<_>>().join(" ")
+        );
         progress.start(&what);
         let mut full = vec!["--job".to_string(), job.to_string()];
         full.extend(args.iter().flat_map(|(flag, value)| [flag.to_string(), value.clone()]));

@@ -26,7 +26,8 @@ const METHODS: [&str; 2] = ["auto", "vadop"];
 /// `{"median_us": m, "p95_us": p}`.
 pub fn measure(bodies: usize, speed: f64, frames: u64, method: Method, calls: usize) -> CliResult<()> {
     let scene = PaperScene::new(bodies, 0.05, speed).build().map_err(|e| e.to_string())?;
-    let mut world = scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
+    let mut world =
+        scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
     let dt = 1.0 / FRAMES_PER_SECOND;
     for _ in 0..frames {
         world.step(dt).map_err(|e| e.to_string())?;
@@ -40,7 +41,8 @@ pub fn measure(bodies: usize, speed: f64, frames: u64, method: Method, calls: us
         for _ in round * calls / ROUNDS..(round + 1) * calls / ROUNDS {
             let id = ids[rng.random_range(0..ids.len())];
             let direction = loop {
-                let v = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let v =
+                    DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
                 if (1e-6..=1.0).contains(&v.length_squared()) {
                     break v.normalize();
                 }
@@ -80,7 +82,10 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
                 ("--calls", plan.retest_calls.to_string()),
             ];
             let outcome = context.child("retest", &args, context.repeats, &progress).and_then(|values| {
-                let of = |key: &str| median(&values.iter().filter_map(|v| v[key].as_f64()).collect::<Vec<_>>()).ok_or(format!("no {key}"));
+                let of = |key: &str| {
+                    median(&values.iter().filter_map(|v| v[key].as_f64()).collect::<Vec<_>>())
+                        .ok_or(format!("no {key}"))
+                };
                 Ok((of("median_us")?, of("p95_us")?))
             });
             rows.push(Row { speed, method, outcome });
@@ -94,12 +99,22 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
         .flat_map(|&method| {
             let rows = &rows;
             [("median", 0), ("p95", 1)].map(move |(statistic, k)| {
-                let points = rows.iter().filter(|r| r.method == method).filter_map(|r| Some((r.speed, [r.outcome.as_ref().ok()?.0, r.outcome.as_ref().ok()?.1][k]))).collect();
+                let points = rows
+                    .iter()
+                    .filter(|r| r.method == method)
+                    .filter_map(|r| Some((r.speed, [r.outcome.as_ref().ok()?.0, r.outcome.as_ref().ok()?.1][k])))
+                    .collect();
                 Series::new(&format!("{method} {statistic}"), points)
             })
         })
         .collect();
-    plots::line_chart(&path, &format!("World::set_velocity: microseconds per call (n = {n})"), "max speed (diameters/frame)", "microseconds per call", series)
+    plots::line_chart(
+        &path,
+        &format!("World::set_velocity: microseconds per call (n = {n})"),
+        "max speed (diameters/frame)",
+        "microseconds per call",
+        series,
+    )
 }
 
 fn write(context: &Context, rows: &[Row], warm_up: u64) -> CliResult<()> {
@@ -127,7 +142,16 @@ fn write(context: &Context, rows: &[Row], warm_up: u64) -> CliResult<()> {
             Err(e) => writeln!(md, "| {} | {} | {} | — |", r.speed, r.method, crate::markdown::table_cell(e)),
         }
         .unwrap_or(());
-        let _ = writeln!(csv, "{},{},{},{},{},{},{status}", plan.retest_bodies, r.speed, r.method, plan.retest_calls, csv_number(median_us), csv_number(p95_us));
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{status}",
+            plan.retest_bodies,
+            r.speed,
+            r.method,
+            plan.retest_calls,
+            csv_number(median_us),
+            csv_number(p95_us)
+        );
     }
     let (_, link) = context.plot("retest.png");
     let _ = writeln!(md, "\n![microseconds per set_velocity call]({link})\n");

@@ -43,7 +43,10 @@ impl Row {
             (seconds > 0.0).then(|| (pairs as f64 / measured.len() as f64, pairs as f64 / seconds))
         };
         let rates: Vec<(f64, f64)> = reports.iter().filter_map(rate).collect();
-        Some((median(&rates.iter().map(|r| r.0).collect::<Vec<_>>())?, median(&rates.iter().map(|r| r.1).collect::<Vec<_>>())?))
+        Some((
+            median(&rates.iter().map(|r| r.0).collect::<Vec<_>>())?,
+            median(&rates.iter().map(|r| r.1).collect::<Vec<_>>())?,
+        ))
     }
 }
 
@@ -86,13 +89,31 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
     let by_packing = plan
         .throughput_bodies
         .iter()
-        .map(|&n| Series::new(&format!("n = {n}"), packings.iter().filter(|r| r.bodies == n).filter_map(|r| rate(r, r.packing)).collect()))
+        .map(|&n| {
+            Series::new(
+                &format!("n = {n}"),
+                packings.iter().filter(|r| r.bodies == n).filter_map(|r| rate(r, r.packing)).collect(),
+            )
+        })
         .collect();
-    let by_frame = vec![Series::new(&format!("n = {sweep_bodies}, packing {SWEEP_PACKING}"), sweep.iter().filter_map(|r| rate(r, r.travel)).collect())];
+    let by_frame = vec![Series::new(
+        &format!("n = {sweep_bodies}, packing {SWEEP_PACKING}"),
+        sweep.iter().filter_map(|r| rate(r, r.travel)).collect(),
+    )];
     let y_label = "pair collisions per second of stepping".to_string();
     let panels = [
-        Panel { title: format!("frames of {RMS_SPEED} rms diameters"), x_label: "packing fraction".into(), y_label: y_label.clone(), series: by_packing },
-        Panel { title: "frame length sweep".into(), x_label: "frame length (rms diameters of travel)".into(), y_label, series: by_frame },
+        Panel {
+            title: format!("frames of {RMS_SPEED} rms diameters"),
+            x_label: "packing fraction".into(),
+            y_label: y_label.clone(),
+            series: by_packing,
+        },
+        Panel {
+            title: "frame length sweep".into(),
+            x_label: "frame length (rms diameters of travel)".into(),
+            y_label,
+            series: by_frame,
+        },
     ];
     plots::line_panels(&path, Some("Equilibrium gas, default method: pair collisions per second"), &panels)
 }
@@ -108,7 +129,9 @@ fn write(context: &Context, packings: &[Row], sweep: &[Row]) -> CliResult<()> {
     );
     let _ = writeln!(md, "| n | packing | frame (rms diameters) | dt (s) | frames (warm-up + measured) | pair collisions/frame | pair collisions/s |");
     let _ = writeln!(md, "|---:|---:|---:|---:|---:|---:|---:|");
-    let mut csv = String::from("table,n,packing,travel_per_frame,dt,warm_up_frames,measured_frames,pairs_per_frame,pairs_per_second,status\n");
+    let mut csv = String::from(
+        "table,n,packing,travel_per_frame,dt,warm_up_frames,measured_frames,pairs_per_frame,pairs_per_second,status\n",
+    );
     let mut table = |rows: &[Row], name: &str, md: &mut String| {
         for r in rows {
             let rates = r.rates();
@@ -148,5 +171,11 @@ fn write(context: &Context, packings: &[Row], sweep: &[Row]) -> CliResult<()> {
     table(sweep, "frame-length", &mut md);
     let (_, link) = context.plot("throughput.png");
     let _ = writeln!(md, "\n![pair collisions per second against packing]({link})\n");
-    context.write(Section::Throughput.markers(), "Simulate-mode throughput: an equilibrium gas", &md, "throughput.csv", &csv)
+    context.write(
+        Section::Throughput.markers(),
+        "Simulate-mode throughput: an equilibrium gas",
+        &md,
+        "throughput.csv",
+        &csv,
+    )
 }

@@ -35,7 +35,12 @@ impl BroadPhase for BruteForce {
                 let i = live[k] as usize;
                 for &j in &live[k + 1..] {
                     let j = j as usize;
-                    predict(proxies.reported(i), proxies.reported(j), proxies.window_of(i).intersect(proxies.window_of(j)), &mut found);
+                    predict(
+                        proxies.reported(i),
+                        proxies.reported(j),
+                        proxies.window_of(i).intersect(proxies.window_of(j)),
+                        &mut found,
+                    );
                 }
             }
             found

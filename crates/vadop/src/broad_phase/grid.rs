@@ -71,7 +71,9 @@ impl Level {
     fn reset(&mut self, exponent: i32, base_cell: f64, pieces: usize, extent: DVec3) {
         let nominal = base_cell * 2f64.powi(exponent);
         let most_cells = (CELLS_PER_PIECE * pieces as f64).max(MIN_CELLS);
-        let cell = nominal.max((extent.x * extent.y * extent.z / most_cells).cbrt()).max(extent.max_element() / MAX_CELLS_PER_AXIS);
+        let cell = nominal
+            .max((extent.x * extent.y * extent.z / most_cells).cbrt())
+            .max(extent.max_element() / MAX_CELLS_PER_AXIS);
         self.exponent = exponent;
         self.cell = cell;
         self.inverse = 1.0 / cell;
@@ -108,7 +110,8 @@ impl Level {
         let a = self.coordinates(low - self.cell);
         let b = self.coordinates(high);
         let [_, ny, nz] = self.dims;
-        (a[0]..=b[0]).flat_map(move |x| (a[1]..=b[1]).flat_map(move |y| ((x * ny + y) * nz + a[2])..=((x * ny + y) * nz + b[2])))
+        (a[0]..=b[0])
+            .flat_map(move |x| (a[1]..=b[1]).flat_map(move |y| ((x * ny + y) * nz + a[2])..=((x * ny + y) * nz + b[2])))
     }
 
     /// The binned pieces of cell `c`, as a range of `Grid::entries`.
@@ -235,7 +238,13 @@ impl Grid {
     /// whose box overlaps `query`, unlinking the stale late
     /// pieces it passes, so a busy cell's list stays short.
     #[inline]
-    fn for_each_overlapping(&mut self, k: usize, query: &Entry, proxies: &ProxyTable, mut visit: impl FnMut(&Entry, Window, &Proxy)) {
+    fn for_each_overlapping(
+        &mut self,
+        k: usize,
+        query: &Entry,
+        proxies: &ProxyTable,
+        mut visit: impl FnMut(&Entry, Window, &Proxy),
+    ) {
         let Grid { levels, late, late_motions, entries, windows, motions, .. } = self;
         let level = &mut levels[k];
         let (low, high) = query.bbox.corners();
@@ -246,7 +255,8 @@ impl Grid {
             for y in a[1]..=b[1] {
                 let column = (x * ny + y) * nz;
                 // The binned pieces of cells z = a..=b of a column are one run.
-                let run = level.first + level.cell_start[column + a[2]] as usize..level.first + level.cell_start[column + b[2] + 1] as usize;
+                let run = level.first + level.cell_start[column + a[2]] as usize
+                    ..level.first + level.cell_start[column + b[2] + 1] as usize;
                 for e in run {
                     let entry = &entries[e];
                     if query.overlaps(entry) && proxies.is_current(entry.body as usize, entry.stamp) {
@@ -332,7 +342,10 @@ impl Grid {
                         }
                         let column = (x2 * ny + y2) * nz;
                         let (z_from, z_to) = (z.saturating_sub(1), (z + 1).min(nz - 1));
-                        sweep(level.first + starts[column + z_from] as usize, level.first + starts[column + z_to + 1] as usize);
+                        sweep(
+                            level.first + starts[column + z_from] as usize,
+                            level.first + starts[column + z_to + 1] as usize,
+                        );
                     }
                     // Coarser levels: each piece against the cells that can hold an
                     // overlapping box there.
@@ -468,7 +481,8 @@ impl BroadPhase for Grid {
                 home[i] = place(cell as usize, proxies.bbox(i), proxies.window_of(i)) as u32;
             } else {
                 let (exponent_level_dims, inverse) = (level.dims, level.inverse);
-                let coordinate = |value: f64, axis: usize| ((value * inverse).max(0.0) as usize).min(exponent_level_dims[axis] - 1);
+                let coordinate =
+                    |value: f64, axis: usize| ((value * inverse).max(0.0) as usize).min(exponent_level_dims[axis] - 1);
                 Grid::for_each_piece(proxies, i, count, |bbox, window| {
                     let p = bbox.corners().0;
                     let [_, ny, nz] = exponent_level_dims;
@@ -572,7 +586,8 @@ impl BroadPhase for Grid {
     }
 
     fn memory_bytes(&self) -> usize {
-        let levels: usize = self.levels.iter().chain(&self.spare).map(|l| (l.cell_start.capacity() + l.late_head.capacity()) * 4).sum();
+        let levels: usize =
+            self.levels.iter().chain(&self.spare).map(|l| (l.cell_start.capacity() + l.late_head.capacity()) * 4).sum();
         self.entries.capacity() * std::mem::size_of::<Entry>()
             + self.windows.capacity() * std::mem::size_of::<Window>()
             + self.motions.capacity() * std::mem::size_of::<Proxy>()

@@ -118,7 +118,6 @@ fn is_live(entry: &Entry, proxies: &ProxyTable) -> bool {
     proxies.is_current(entry.body as usize, entry.stamp)
 }
 
-
 /// Midpoint of body `b`'s path over its proxy window: the point its tile is taken from.
 #[inline]
 fn path_midpoint(proxies: &ProxyTable, b: usize) -> DVec3 {
@@ -143,11 +142,13 @@ impl AxisList {
     fn new(axis: DVec3, min: DVec3, max: DVec3) -> AxisList {
         let across = axis.any_orthonormal_vector();
         let up = axis.cross(across);
-        let corners = (0..8).map(|k| DVec3::new(
-            if k & 1 == 0 { min.x } else { max.x },
-            if k & 2 == 0 { min.y } else { max.y },
-            if k & 4 == 0 { min.z } else { max.z },
-        ));
+        let corners = (0..8).map(|k| {
+            DVec3::new(
+                if k & 1 == 0 { min.x } else { max.x },
+                if k & 2 == 0 { min.y } else { max.y },
+                if k & 4 == 0 { min.z } else { max.z },
+            )
+        });
         let origin = corners.fold([f64::INFINITY; 2], |o, c| [o[0].min(c.dot(across)), o[1].min(c.dot(up))]);
         AxisList { sorted: Vec::new(), pending: Vec::new(), max_width: 0.0, across, up, origin }
     }
@@ -196,7 +197,6 @@ impl AxisList {
         self.pending.clear();
     }
 }
-
 
 impl SweepPrune {
     /// An empty broad phase over `pool` for bodies in the box `[min, max]`, selecting axes within
@@ -250,7 +250,15 @@ impl SweepPrune {
             let iv = body_interval(self.pool.axis(a), proxies, b);
             let list = &mut self.lists[a as usize];
             let tile = list.tile_of(&self.tiling, midpoint);
-            list.pending.push(Entry { lo: iv.lo, hi: iv.hi, body: b as u32, stamp: proxies.stamp(b), tile, mask, bbox });
+            list.pending.push(Entry {
+                lo: iv.lo,
+                hi: iv.hi,
+                body: b as u32,
+                stamp: proxies.stamp(b),
+                tile,
+                mask,
+                bbox,
+            });
             if absorb && list.pending.len() > 64 + list.sorted.len() / 128 {
                 list.absorb_pending(proxies);
             }
@@ -262,7 +270,11 @@ impl SweepPrune {
     /// The bit mask of an axis set (0 for pools of more than 64 axes, which use the lists).
     #[inline]
     fn mask_of(&self, axes: &[u32]) -> u64 {
-        if self.masked { axes.iter().fold(0, |m, &a| m | 1 << a) } else { 0 }
+        if self.masked {
+            axes.iter().fold(0, |m, &a| m | 1 << a)
+        } else {
+            0
+        }
     }
 
     /// True when the pair of entries `e` (of body `i`, whose axes are `axes_i`) and `f` is a
@@ -499,14 +511,24 @@ impl BroadPhase for SweepPrune {
         let midpoint = path_midpoint(proxies, b);
         let body_reach = reach(proxies, b);
         let window = proxies.window_of(b);
-        let distance = (body_reach + self.max_reach.max(body_reach)) * (1.0 + REACH_MARGIN) + REACH_MARGIN * midpoint.abs().max_element();
+        let distance = (body_reach + self.max_reach.max(body_reach)) * (1.0 + REACH_MARGIN)
+            + REACH_MARGIN * midpoint.abs().max_element();
         let mask = self.mask_of(&axes);
         for &a in &axes {
             let query = body_interval(self.pool.axis(a), proxies, b);
-            let own = Entry { lo: query.lo, hi: query.hi, body, stamp: proxies.stamp(b), tile: 0, mask, bbox: proxies.bbox(b) };
+            let own = Entry {
+                lo: query.lo,
+                hi: query.hi,
+                body,
+                stamp: proxies.stamp(b),
+                tile: 0,
+                mask,
+                bbox: proxies.bbox(b),
+            };
             let list = &self.lists[a as usize];
             let mut visit = |e: &Entry| {
-                if e.body == body || Some(e.body) == skip || e.hi < query.lo || e.lo > query.hi || !is_live(e, proxies) {
+                if e.body == body || Some(e.body) == skip || e.hi < query.lo || e.lo > query.hi || !is_live(e, proxies)
+                {
                     return;
                 }
                 if self.is_candidate(&own, &axes, e, a, proxies) {
@@ -515,9 +537,11 @@ impl BroadPhase for SweepPrune {
             };
             let (x, y) = (midpoint.dot(list.across), midpoint.dot(list.up));
             let tiling = &self.tiling;
-            let rows = tiling.coordinate(x - distance, list.origin[0])..=tiling.coordinate(x + distance, list.origin[0]);
+            let rows =
+                tiling.coordinate(x - distance, list.origin[0])..=tiling.coordinate(x + distance, list.origin[0]);
             for row in rows {
-                let cols = tiling.coordinate(y - distance, list.origin[1])..=tiling.coordinate(y + distance, list.origin[1]);
+                let cols =
+                    tiling.coordinate(y - distance, list.origin[1])..=tiling.coordinate(y + distance, list.origin[1]);
                 for col in cols {
                     let run = list.run(row * tiling.side + col);
                     let start = run.partition_point(|e| e.lo < query.lo - list.max_width);

@@ -62,7 +62,8 @@ impl World {
     /// Writes the whole world to `path` atomically (a temporary file beside it, flushed to disk,
     /// then renamed into place). Call between frames; [`World::load`] resumes bit-exactly.
     pub fn save(&self, path: &Path) -> Result<()> {
-        let io = |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
+        let io =
+            |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
         let b = &self.bodies;
         let history = self.rules().map(|r| &r.last_contact[..]).unwrap_or(&[]);
         let slots = (0..b.slots())
@@ -120,10 +121,12 @@ impl World {
         world.time = time;
         // Bodies end a frame up to a rounding error outside the box; a damaged file is further out.
         let exact = world.bounds;
-        let slack = 1e-9 * (exact.max - exact.min).max_element() + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
+        let slack = 1e-9 * (exact.max - exact.min).max_element()
+            + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
         world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack };
         for (i, slot) in snapshot.slots.iter().enumerate() {
-            let at = |position: DVec3| Sphere { position, velocity: slot.velocity, radius: slot.radius, mass: slot.mass };
+            let at =
+                |position: DVec3| Sphere { position, velocity: slot.velocity, radius: slot.radius, mass: slot.mass };
             if !(slot.since.is_finite() && slot.since <= time) {
                 return Err(bad(format!("slot {i}: since must be finite and <= time {time}, got {}", slot.since)));
             }
@@ -160,9 +163,14 @@ impl World {
             return Err(bad("free and unplaced ids do not match the slots".to_string()));
         }
         let pairs_valid = snapshot.overlapping.windows(2).all(|w| w[0] < w[1])
-            && snapshot.overlapping.iter().all(|&(a, b)| a < b && (b as usize) < slots && snapshot.slots[a as usize].alive && snapshot.slots[b as usize].alive);
+            && snapshot.overlapping.iter().all(|&(a, b)| {
+                a < b && (b as usize) < slots && snapshot.slots[a as usize].alive && snapshot.slots[b as usize].alive
+            });
         if !pairs_valid || (!snapshot.overlapping.is_empty() && snapshot.config.method != super::Method::Discrete) {
-            return Err(bad("overlapping pairs must be ascending pairs of live bodies, saved by the discrete method only".to_string()));
+            return Err(bad(
+                "overlapping pairs must be ascending pairs of live bodies, saved by the discrete method only"
+                    .to_string(),
+            ));
         }
         world.live = slots - dead;
         world.free_slots = snapshot.free_slots;
@@ -172,7 +180,9 @@ impl World {
         // The pseudo-dynamic method finds overlaps only after they happen: its worlds may hold some.
         if world.config.mode == Mode::Simulate && world.config.method != super::Method::Discrete {
             if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.unplaced, time) {
-                return Err(bad(format!("bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies")));
+                return Err(bad(format!(
+                    "bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies"
+                )));
             }
         }
         world.place_new_bodies();

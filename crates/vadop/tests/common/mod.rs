@@ -15,7 +15,17 @@ pub fn contact_bits(contacts: &[Contact]) -> Vec<String> {
     let bits = |v: DVec3| v.to_array().map(f64::to_bits);
     contacts
         .iter()
-        .map(|c| format!("{:x} {} {:?} {:?} {:?} {:x}", c.time.to_bits(), c.body, c.touched, bits(c.point), bits(c.normal), c.impulse.to_bits()))
+        .map(|c| {
+            format!(
+                "{:x} {} {:?} {:?} {:?} {:x}",
+                c.time.to_bits(),
+                c.body,
+                c.touched,
+                bits(c.point),
+                bits(c.normal),
+                c.impulse.to_bits()
+            )
+        })
         .collect()
 }
 
@@ -23,7 +33,9 @@ pub fn contact_bits(contacts: &[Contact]) -> Vec<String> {
 pub fn state_bits(world: &World) -> Vec<String> {
     let bits = |v: DVec3| v.to_array().map(f64::to_bits);
     let mut state = vec![format!("time {:x}", world.time().to_bits())];
-    state.extend(world.spheres().map(|(id, s)| format!("{id} {:?} {:?} {:x} {:x}", bits(s.position), bits(s.velocity), s.radius.to_bits(), s.mass.to_bits())));
+    state.extend(world.spheres().map(|(id, s)| {
+        format!("{id} {:?} {:?} {:x} {:x}", bits(s.position), bits(s.velocity), s.radius.to_bits(), s.mass.to_bits())
+    }));
     state
 }
 
@@ -48,7 +60,9 @@ pub fn frame_end_violation(world: &World, pairs: bool) -> Option<String> {
     let spheres: Vec<(u32, Sphere)> = world.spheres().collect();
     for (id, s) in &spheres {
         let slack = 1e-9 * s.radius + 4.0 * f64::EPSILON * scale;
-        if !((s.position - s.radius).cmpge(bounds.min - slack).all() && (s.position + s.radius).cmple(bounds.max + slack).all()) {
+        if !((s.position - s.radius).cmpge(bounds.min - slack).all()
+            && (s.position + s.radius).cmple(bounds.max + slack).all())
+        {
             return Some(format!("body {id} left the box: {s:?}"));
         }
     }
