@@ -35,6 +35,22 @@ pub struct Bodies {
     /// Bumped on every velocity change (and on removal): predictions made earlier are void.
     pub stamp: Vec<u32>,
     pub alive: Vec<bool>,
+    /// No live body is faster than this: raised by every velocity written and lowered only by
+    /// [`Bodies::tighten_speed_bound`], so a step need not read every body to rule out an absurd
+    /// speed.
+    pub speed_bound: f64,
+}
+
+/// The length of `velocity`, robust to squares that underflow: below about 1e-162 the largest
+/// component stands in for it.
+#[inline]
+pub fn speed(velocity: DVec3) -> f64 {
+    let length = velocity.length();
+    if length > 0.0 {
+        length
+    } else {
+        velocity.abs().max_element()
+    }
 }
 
 impl Bodies {
@@ -64,6 +80,7 @@ impl Bodies {
 
     /// Writes `sphere` into slot `i`, appending when `i` is one past the end.
     pub(crate) fn put(&mut self, i: usize, sphere: Sphere, time: f64) {
+        self.speed_bound = self.speed_bound.max(speed(sphere.velocity));
         if i == self.slots() {
             self.position.push(sphere.position);
             self.velocity.push(sphere.velocity);
@@ -92,6 +109,13 @@ impl Bodies {
         self.since[i] = t;
         self.velocity[i] = velocity;
         self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.speed_bound = self.speed_bound.max(speed(velocity));
+    }
+
+    /// Sets the speed bound to the speed of the fastest live body, and returns it.
+    pub(crate) fn tighten_speed_bound(&mut self) -> f64 {
+        self.speed_bound = self.alive_ids().map(|i| speed(self.velocity[i as usize])).fold(0.0, f64::max);
+        self.speed_bound
     }
 
     /// Voids body `i`'s predictions without changing its motion (its proxy is being renewed).

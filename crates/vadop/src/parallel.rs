@@ -80,6 +80,53 @@ impl Workers {
         a.par_chunks_mut(size).zip(b.par_chunks_mut(size)).enumerate().for_each(|(k, (x, y))| f(k * size, x, y));
     }
 
+    /// `f(k, part)` for every part, in parallel with more than one thread: for work already cut
+    /// into disjoint pieces (see [`split_at_points`]).
+    ///
+    /// ```
+    /// use vadop::parallel::{split_at_points, Workers};
+    /// let mut v = [1, 2, 3, 4, 5];
+    /// Workers::new(2).for_each_part(split_at_points(&mut v, &[2]), |k, part| part.iter_mut().for_each(|x| *x += k));
+    /// assert_eq!(v, [1, 2, 4, 5, 6]);
+    /// ```
+    pub fn for_each_part<S: Send>(&self, parts: Vec<S>, f: impl Fn(usize, S) + Sync + Send) {
+        if self.threads == 1 {
+            parts.into_iter().enumerate().for_each(|(k, part)| f(k, part));
+        } else {
+            parts.into_par_iter().enumerate().for_each(|(k, part)| f(k, part));
+        }
+    }
+
+    /// `len` split into one range per thread, each with about the same share of `weight`: the
+    /// boundaries `b` where the running total `weight(b)` (ascending, from 0 at 0) crosses each
+    /// thread's share.
+    ///
+    /// ```
+    /// use vadop::parallel::Workers;
+    /// // Running totals 0, 1, 2, 10, 11: the item at 2 weighs 8 of the 11.
+    /// let running = [0, 1, 2, 10, 11];
+    /// assert_eq!(Workers::new(2).balanced_points(5, 11, |b| running[b]), vec![3]);
+    /// assert_eq!(Workers::new(1).balanced_points(5, 11, |b| running[b]), Vec::<usize>::new());
+    /// ```
+    pub fn balanced_points(&self, len: usize, total: usize, weight: impl Fn(usize) -> usize) -> Vec<usize> {
+        (1..self.threads)
+            .map(|k| {
+                let share = k * total / self.threads;
+                // The first index whose running total reaches the share.
+                let (mut low, mut high) = (0, len);
+                while low < high {
+                    let middle = (low + high) / 2;
+                    if weight(middle) < share {
+                        low = middle + 1;
+                    } else {
+                        high = middle;
+                    }
+                }
+                low
+            })
+            .collect()
+    }
+
     /// Sorts `v` (unstable: equal elements must be indistinguishable).
     pub fn sort_unstable<T: Ord + Send>(&self, v: &mut [T]) {
         if self.threads == 1 {
@@ -87,5 +134,48 @@ impl Workers {
         } else {
             v.par_sort_unstable();
         }
+    }
+}
+
+/// `slice` cut at the ascending `points` into `points.len() + 1` disjoint parts.
+pub fn split_at_points<'a, T>(mut slice: &'a mut [T], points: &[usize]) -> Vec<&'a mut [T]> {
+    let mut parts = Vec::with_capacity(points.len() + 1);
+    let mut cut = 0;
+    for &point in points {
+        let (head, tail) = slice.split_at_mut(point - cut);
+        parts.push(head);
+        (slice, cut) = (tail, point);
+    }
+    parts.push(slice);
+    parts
+}
+
+/// Lets several threads write one slice at once, each into slots no other thread touches.
+pub(crate) struct DisjointWriter<'a, T> {
+    start: *mut T,
+    len: usize,
+    _slice: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: the writer only moves `T`s into the slice; callers of `write` promise that no two
+// writes, on any threads, name one slot.
+unsafe impl<T: Send> Sync for DisjointWriter<'_, T> {}
+
+impl<'a, T: Copy> DisjointWriter<'a, T> {
+    pub(crate) fn new(slice: &'a mut [T]) -> Self {
+        DisjointWriter { start: slice.as_mut_ptr(), len: slice.len(), _slice: std::marker::PhantomData }
+    }
+
+    /// Writes `value` into slot `i`.
+    ///
+    /// # Safety
+    /// While this writer lives, no other call names slot `i`.
+    #[inline]
+    pub(crate) unsafe fn write(&self, i: usize, value: T) {
+        // A plain assert: a formatted message here slows the hot loops that call this.
+        assert!(i < self.len);
+        // SAFETY: in bounds (checked above), and no other thread touches slot i (the caller's
+        // promise); `T: Copy` has nothing to drop in the value overwritten.
+        unsafe { self.start.add(i).write(value) }
     }
 }

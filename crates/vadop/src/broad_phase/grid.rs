@@ -16,7 +16,7 @@
 //! reads shapes or computes contact times.
 
 use super::{BroadPhase, PrepareCounts};
-use crate::parallel::Workers;
+use crate::parallel::{split_at_points, DisjointWriter, Workers};
 use crate::proxy::{CompactBox, Proxy, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
@@ -59,6 +59,8 @@ struct Level {
     dims: [usize; 3],
     /// Binned pieces of cell c: `entries[first + cell_start[c]..first + cell_start[c + 1]]`.
     first: usize,
+    /// Cells of the levels before this one: its cell c is cell `cells_before + c` of the grid.
+    cells_before: usize,
     cell_start: Vec<u32>,
     /// Head of each cell's list of late pieces in `Grid::late`.
     late_head: Vec<u32>,
@@ -146,6 +148,8 @@ pub struct Grid {
     /// replaces it there instead of joining a late list.
     home: Vec<u32>,
     pieces: Vec<(CompactBox, Window)>,
+    /// Scratch of the binning: each cell's piece count, then the slot of its next piece.
+    next_slot: Vec<u32>,
 }
 
 impl Grid {
@@ -166,6 +170,7 @@ impl Grid {
             extents: Vec::new(),
             home: Vec::new(),
             pieces: Vec::new(),
+            next_slot: Vec::new(),
         }
     }
 
@@ -206,6 +211,44 @@ impl Grid {
             let to = origin + velocity * (end - window.start);
             f(proxies.compact_swept_box(from, to, radius), Window::new(start, end));
             (from, start) = (to, end);
+        }
+    }
+
+    /// Calls `f(body, cell, box, window)` for every piece, in body order, whose cell (numbered
+    /// across levels) is in `owned`, per the bodies' `plan`.
+    #[inline(always)]
+    fn for_each_owned_piece(
+        levels: &[Level],
+        plan: &[(u32, u32, u32)],
+        proxies: &ProxyTable,
+        owned: std::ops::Range<usize>,
+        mut f: impl FnMut(usize, usize, CompactBox, Window),
+    ) {
+        for (i, &(count, k, cell)) in plan.iter().enumerate() {
+            if count == 0 {
+                continue;
+            }
+            let level = &levels[k as usize];
+            if count == 1 {
+                let cell = level.cells_before + cell as usize;
+                if owned.contains(&cell) {
+                    f(i, cell, proxies.bbox(i), proxies.window_of(i));
+                }
+                continue;
+            }
+            // The pieces' low corners lie in the path's box, so their cells lie between the
+            // cells of its corners: cells are numbered in x, then y, then z order.
+            let (low, high) = proxies.bbox(i).corners();
+            let (first, last) = (level.index(level.coordinates(low)), level.index(level.coordinates(high)));
+            if level.cells_before + last < owned.start || level.cells_before + first >= owned.end {
+                continue;
+            }
+            Grid::for_each_piece(proxies, i, count, |bbox, window| {
+                let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
+                if owned.contains(&cell) {
+                    f(i, cell, bbox, window);
+                }
+            });
         }
     }
 
@@ -412,12 +455,14 @@ impl BroadPhase for Grid {
         per_exponent.sort_unstable();
         // Levels sized to their pieces, storage reused; each body's plan now names its level.
         self.spare.append(&mut self.levels);
-        let mut first = 0;
+        let (mut first, mut cells_before) = (0, 0);
         for &(exponent, count) in &per_exponent {
             let mut level = self.spare.pop().unwrap_or_default();
             level.reset(exponent, self.base_cell, count, self.extent);
             level.first = first;
+            level.cells_before = cells_before;
             first += count;
+            cells_before += level.late_head.len();
             self.levels.push(level);
         }
         // Each body's level, and a single piece's cell, found in parallel.
@@ -433,24 +478,36 @@ impl BroadPhase for Grid {
                 }
             }
         });
-        // Pass 2: count the pieces of each cell; pass 3: scatter them (counting sort, no hashing).
-        // Longer paths are cut again in pass 3.
-        for (i, plan) in plan.iter().enumerate() {
-            let (count, k) = (plan.0, plan.1 as usize);
-            if count == 1 {
-                self.levels[k].cell_start[plan.2 as usize + 1] += 1;
-            } else if count > 1 {
-                let level = &mut self.levels[k];
-                Grid::for_each_piece(proxies, i, count, |bbox, _| {
-                    let c = level.index(level.coordinates(bbox.corners().0));
-                    level.cell_start[c + 1] += 1;
-                });
-            }
-        }
+        // Pass 2: count the pieces of each cell; pass 3: scatter them (a counting sort, no
+        // hashing). Each worker owns a range of cells (cells are numbered level by level, so
+        // their slots are a range too) and goes through all bodies in order, taking the pieces
+        // that fall in its cells: a cell holds its pieces in body order whatever the number of
+        // workers, and no two workers write near each other. Longer paths are cut again.
+        let cells = self.levels.last().map_or(0, |l| l.cells_before + l.late_head.len());
+        let mut next_slot = std::mem::take(&mut self.next_slot);
+        next_slot.clear();
+        next_slot.resize(cells, 0);
+        let equal_cells: Vec<usize> = (1..workers.threads()).map(|k| k * cells / workers.threads()).collect();
+        let (levels, plan_of) = (&self.levels, &plan);
+        let parts: Vec<_> = split_at_points(&mut next_slot, &equal_cells)
+            .into_iter()
+            .zip(std::iter::once(0).chain(equal_cells.iter().copied()))
+            .collect();
+        workers.for_each_part(parts, |_, (counts, lowest)| {
+            let owned = lowest..lowest + counts.len();
+            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, |_, cell, _, _| counts[cell - lowest] += 1);
+        });
+        // Counts become starts: of each cell in its level, and of the next piece it takes.
         for level in &mut self.levels {
+            let mut filled = 0u32;
             for c in 0..level.late_head.len() {
-                level.cell_start[c + 1] += level.cell_start[c];
+                level.cell_start[c] = filled;
+                let next = &mut next_slot[level.cells_before + c];
+                (*next, filled) = (filled + level.first as u32, filled + *next);
             }
+            let end = level.late_head.len();
+            level.cell_start[end] = filled;
+            level.count = filled as usize;
         }
         // Every slot is written below: no need to clear what a longer window left.
         self.entries.resize(first, Entry::default());
@@ -462,43 +519,45 @@ impl BroadPhase for Grid {
         let mut home = std::mem::take(&mut self.home);
         home.clear();
         home.resize(plan.len(), NONE);
-        for (i, &(count, k, cell)) in plan.iter().enumerate() {
-            if count == 0 {
-                continue;
+        let levels = &self.levels;
+        // Cells cut so each worker gets about as many pieces; its slots follow from its cells.
+        let slot_of_cell = |g: usize| {
+            if levels.is_empty() {
+                return 0;
             }
-            let level = &mut self.levels[k as usize];
-            let (entries, windows, motions) = (&mut self.entries, &mut self.windows, &mut self.motions);
-            // Cell c's pieces go from cell_start[c] on, shifting it to the next cell's start.
-            let mut place = |c: usize, bbox: CompactBox, window: Window| {
-                let slot = level.first + level.cell_start[c] as usize;
-                level.cell_start[c] += 1;
-                entries[slot] = Entry { bbox, body: i as u32, stamp: proxies.stamp(i) };
-                windows[slot] = window;
-                motions[slot] = proxies.proxies[i];
-                slot
-            };
-            if count == 1 {
-                home[i] = place(cell as usize, proxies.bbox(i), proxies.window_of(i)) as u32;
-            } else {
-                let (exponent_level_dims, inverse) = (level.dims, level.inverse);
-                let coordinate =
-                    |value: f64, axis: usize| ((value * inverse).max(0.0) as usize).min(exponent_level_dims[axis] - 1);
-                Grid::for_each_piece(proxies, i, count, |bbox, window| {
-                    let p = bbox.corners().0;
-                    let [_, ny, nz] = exponent_level_dims;
-                    let c = (coordinate(p.x, 0) * ny + coordinate(p.y, 1)) * nz + coordinate(p.z, 2);
-                    place(c, bbox, window);
-                });
-            }
-        }
+            let level =
+                &levels[levels.partition_point(|l| l.cells_before + l.late_head.len() <= g).min(levels.len() - 1)];
+            level.first + level.cell_start[g - level.cells_before] as usize
+        };
+        let cell_points = workers.balanced_points(cells, first, slot_of_cell);
+        let slot_points: Vec<usize> = cell_points.iter().map(|&g| slot_of_cell(g)).collect();
+        let homes = DisjointWriter::new(&mut home);
+        let parts: Vec<_> = split_at_points(&mut next_slot, &cell_points)
+            .into_iter()
+            .zip(split_at_points(&mut self.entries, &slot_points))
+            .zip(split_at_points(&mut self.windows, &slot_points))
+            .zip(split_at_points(&mut self.motions, &slot_points))
+            .zip(std::iter::once(0).chain(cell_points.iter().copied()))
+            .zip(std::iter::once(0).chain(slot_points.iter().copied()))
+            .collect();
+        workers.for_each_part(parts, |_, (((((next_slot, entries), windows), motions), lowest), first_slot)| {
+            let owned = lowest..lowest + next_slot.len();
+            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, |i, cell, bbox, window| {
+                let next = &mut next_slot[cell - lowest];
+                let slot = *next as usize;
+                *next += 1;
+                let k = slot - first_slot;
+                entries[k] = Entry { bbox, body: i as u32, stamp: proxies.stamp(i) };
+                windows[k] = window;
+                motions[k] = proxies.proxies[i];
+                if plan_of[i].0 == 1 {
+                    // SAFETY: a single piece is taken by one worker only.
+                    unsafe { homes.write(i, slot as u32) };
+                }
+            });
+        });
         self.home = home;
-        for level in &mut self.levels {
-            // Shifting back by one cell restores the starts.
-            let cells = level.late_head.len();
-            level.cell_start.copy_within(0..cells, 1);
-            level.cell_start[0] = 0;
-            level.count = level.cell_start[cells] as usize;
-        }
+        self.next_slot = next_slot;
         self.late.clear();
         self.late_motions.clear();
         self.plan = plan;
@@ -596,6 +655,7 @@ impl BroadPhase for Grid {
             + self.plan.capacity() * 12
             + self.extents.capacity() * 8
             + self.home.capacity() * 4
+            + self.next_slot.capacity() * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels
     }
