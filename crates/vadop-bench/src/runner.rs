@@ -1,6 +1,7 @@
 //! Child processes: every measurement runs in its own process, pinned to one core with
-//! `taskset -c <cpu>` (so runs do not migrate or share a core with each other), stopped after a
-//! timeout, and reporting its own peak memory. A child is either the product binary's
+//! `taskset -c <cpu>` (so runs do not migrate or share a core with each other) unless it is a
+//! run on several threads, which gets the whole machine; stopped after a timeout, and reporting
+//! its own peak memory. A child is either the product binary's
 //! `vadop simulate ... --json` (or an older engine's, for the speed suite's baseline) or this
 //! binary's hidden `--child` job. Output goes through files, never pipes, so a talkative child
 //! cannot block; a child that fails or times out is an `Err` carrying its last message, which the
@@ -81,7 +82,7 @@ impl Runner {
         let mut full =
             vec!["simulate".to_string(), "--quiet".to_string(), "--json".to_string(), json.display().to_string()];
         full.extend(run.args());
-        let outcome = self.run(program, &full, self.timeout).and_then(|_| {
+        let outcome = self.run_on(program, &full, self.timeout, run.pinned()).and_then(|_| {
             let text = std::fs::read_to_string(&json).map_err(|e| io_error(&json, e))?;
             serde_json::from_str::<Report>(&text).map_err(|e| io_error(&json, e))
         });
@@ -102,10 +103,15 @@ impl Runner {
 
     /// Runs `program` pinned to the core, to completion or `timeout`; returns its stdout.
     pub fn run(&self, program: &Path, args: &[String], timeout: Duration) -> Result<String, String> {
+        self.run_on(program, args, timeout, true)
+    }
+
+    /// [`Runner::run`], pinned to the core or free on every core.
+    fn run_on(&self, program: &Path, args: &[String], timeout: Duration, pinned: bool) -> Result<String, String> {
         let (stdout_path, stderr_path) = (self.scratch_file("stdout"), self.scratch_file("stderr"));
         let create = |path: &Path| std::fs::File::create(path).map_err(|e| io_error(path, e));
         let (stdout, stderr) = (create(&stdout_path)?, create(&stderr_path)?);
-        let mut command = match self.cpu {
+        let mut command = match self.cpu.filter(|_| pinned) {
             Some(cpu) => {
                 let mut c = Command::new("taskset");
                 c.arg("-c").arg(cpu.to_string()).arg(program);
@@ -153,6 +159,9 @@ pub struct Simulation {
     pub dt: Option<f64>,
     /// Pool axes [default: automatic].
     pub pool: Option<usize>,
+    /// `--threads`: one for a run pinned to one core, more for a run on the whole machine;
+    /// `None` leaves the flag out (an older binary without it is single-threaded).
+    pub threads: Option<usize>,
 }
 
 impl Simulation {
@@ -170,7 +179,13 @@ impl Simulation {
             reference: "none",
             dt: None,
             pool: None,
+            threads: Some(1),
         }
+    }
+
+    /// Whether the run is pinned to one core: unless it asks for several threads.
+    fn pinned(&self) -> bool {
+        self.threads.is_none_or(|threads| threads == 1)
     }
 
     /// The command-line arguments. Options left at their default are left out, so that an older
@@ -191,6 +206,7 @@ impl Simulation {
         flags.extend(self.spread.map(|s| ("--spread", s.to_string())));
         flags.extend(self.dt.map(|dt| ("--dt", dt.to_string())));
         flags.extend(self.pool.map(|m| ("--pool", m.to_string())));
+        flags.extend(self.threads.map(|t| ("--threads", t.to_string())));
         flags.into_iter().flat_map(|(flag, value)| [flag.to_string(), value]).collect()
     }
 }

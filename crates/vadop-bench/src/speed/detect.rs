@@ -64,7 +64,8 @@ pub fn run(context: &Context, baseline: &Path, peers_csv: &Path) -> CliResult<()
             let frames = window_frames(speed, plan.quick);
             let scene = |method| Simulation::paper(bodies, speed, frames, method);
             let runs = METHODS.iter().map(|m| context.time(product, &scene(m), &progress)).collect();
-            let old_grid = old.map(|old| context.time(old, &scene("grid"), &progress));
+            // The old engine has no --threads: it is single-threaded.
+            let old_grid = old.map(|old| context.time(old, &Simulation { threads: None, ..scene("grid") }, &progress));
             let fastest = |exact: bool| {
                 peer_rows
                     .iter()

@@ -1,12 +1,12 @@
-//! `vadop-bench speed`: where the time goes at scale, in six sections, each a table between its
+//! `vadop-bench speed`: where the time goes at scale, in seven sections, each a table between its
 //! own markers in the markdown file with its CSV and plot in results/speed/:
 //! detect-mode ms/frame of the default method against grid, vadop, the old engine's grid and the
 //! peers ([`detect`]); narrow tests against the pairs whose swept boxes overlap ([`candidates`]);
 //! the cost of a velocity change ([`retest`]); simulate-mode collisions per second and their
-//! independence of the frame length ([`throughput`]); memory per body ([`memory`]); and where
-//! each broad phase wins ([`methods`]).
+//! independence of the frame length ([`throughput`]); memory per body ([`memory`]); where
+//! each broad phase wins ([`methods`]); and all cores against one ([`cores`]).
 //!
-//! Every run is a child pinned to one core; timed runs are repeated and the tables show the
+//! Every run is a child pinned to one core, but the all-cores runs; timed runs are repeated and the tables show the
 //! median of the repeats; ratios compare runs of this same command. Times are means over frames
 //! of enough frames to cover several broad-phase windows, since a frame that starts a window pays
 //! for the whole window. This module owns the plan, the shared measurement cache (a run that two
@@ -14,6 +14,7 @@
 //! table, CSV and plot.
 
 pub mod candidates;
+mod cores;
 mod detect;
 mod memory;
 mod methods;
@@ -35,7 +36,8 @@ use std::rc::Rc;
 #[derive(Debug, Args)]
 #[command(after_help = "Sizes: detect at n = 10^4, 10^5 and 10^6 x max speeds 0.05, 0.5 and 5 diameters per frame \
 (candidates up to 10^5), retest at n = 10^5 with 10,000 calls, throughput at n = 10^4 and 10^5, memory at n = 10^4 to \
-10^6, methods at n = 10^4 and 10^5; with --quick every section at n = 10^4 only, with fewer frames and calls and one \
+10^6, methods at n = 10^4 and 10^5, cores at the detect and throughput sizes on one thread and on every core \
+and at n = 10^7 on every core; with --quick every section at n = 10^4 only, with fewer frames and calls and one \
 run each (a minute or two). Frames cover several broad-phase windows. --timeout defaults to 900 s per child run. The \
 full suite takes hours: run it on a quiet machine.")]
 pub struct SpeedArgs {
@@ -63,6 +65,7 @@ enum Section {
     Throughput,
     Memory,
     Methods,
+    Cores,
 }
 
 /// The sizes of every section.
@@ -83,6 +86,8 @@ struct Plan {
     measured_travel: f64,
     memory_bodies: Vec<usize>,
     methods_bodies: Vec<usize>,
+    /// Body counts run only on every core, at the lowest speed.
+    huge_bodies: Vec<usize>,
 }
 
 impl Plan {
@@ -101,6 +106,7 @@ impl Plan {
                 measured_travel: 3.0,
                 memory_bodies: vec![10_000],
                 methods_bodies: vec![10_000],
+                huge_bodies: vec![],
             }
         } else {
             Plan {
@@ -116,6 +122,7 @@ impl Plan {
                 measured_travel: 20.0,
                 memory_bodies: vec![10_000, 100_000, 1_000_000],
                 methods_bodies: vec![10_000, 100_000],
+                huge_bodies: vec![10_000_000],
             }
         }
     }
@@ -141,7 +148,9 @@ impl Context {
     fn time(&self, program: &Path, run: &Simulation, progress: &Progress) -> Rc<Timed> {
         let key = format!("{} {run:?}", program.display());
         let binary = program.file_name().map_or(String::new(), |name| name.to_string_lossy().into_owned());
-        let what = format!("{binary}: {} n={} speed={} {} {}", run.kind, run.bodies, run.speed, run.method, run.mode);
+        let threads = run.threads.filter(|&t| t > 1).map_or(String::new(), |t| format!(" on {t} threads"));
+        let what =
+            format!("{binary}: {} n={} speed={} {} {}{threads}", run.kind, run.bodies, run.speed, run.method, run.mode);
         if let Some(made) = self.made.borrow().get(&key) {
             progress.done(&format!("{what}: measured above"));
             return made.clone();
@@ -271,6 +280,7 @@ pub fn run(args: &SpeedArgs) -> CliResult<()> {
             Section::Throughput => throughput::run(&context)?,
             Section::Memory => memory::run(&context)?,
             Section::Methods => methods::run(&context)?,
+            Section::Cores => cores::run(&context)?,
         }
     }
     crate::common::print(&format!("wrote {} and {}\n", context.markdown.display(), context.results.display()))
@@ -286,6 +296,7 @@ impl Section {
                 Section::Throughput => "speed-throughput",
                 Section::Memory => "speed-memory",
                 Section::Methods => "speed-methods",
+                Section::Cores => "speed-cores",
             },
         }
     }

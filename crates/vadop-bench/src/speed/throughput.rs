@@ -4,7 +4,7 @@
 //! 5 rms diameters of travel (the speed unchanged, dt scaled): the pipeline works in windows
 //! chosen from speeds, not frames, so the rate should not depend on the frame length.
 
-use super::{cell, Context, Section, Timed};
+use super::{cell, Context, Plan, Section, Timed};
 use crate::common::{csv_number, median};
 use crate::plots::{self, Panel, Series};
 use crate::progress::Progress;
@@ -16,7 +16,7 @@ use std::rc::Rc;
 use vadop::scene::FRAMES_PER_SECOND;
 
 /// The gas's rms speed in diameters per frame at 30 frames per second.
-const RMS_SPEED: f64 = 0.2;
+pub(super) const RMS_SPEED: f64 = 0.2;
 /// Packing fraction of the frame-length sweep.
 const SWEEP_PACKING: f64 = 0.2;
 
@@ -32,22 +32,46 @@ struct Row {
 }
 
 impl Row {
-    /// Median over repeats of (pair collisions per frame, per second of stepping), over the
-    /// measured frames.
     fn rates(&self) -> Option<(f64, f64)> {
-        let reports = self.timed.as_ref().as_ref().ok()?;
-        let rate = |r: &Report| {
-            let measured = r.frames.get(self.warm_up as usize..)?;
-            let pairs: u64 = measured.iter().map(|f| f.pair_contacts).sum();
-            let seconds: f64 = measured.iter().map(|f| f.wall_ms).sum::<f64>() / 1e3;
-            (seconds > 0.0).then(|| (pairs as f64 / measured.len() as f64, pairs as f64 / seconds))
-        };
-        let rates: Vec<(f64, f64)> = reports.iter().filter_map(rate).collect();
-        Some((
-            median(&rates.iter().map(|r| r.0).collect::<Vec<_>>())?,
-            median(&rates.iter().map(|r| r.1).collect::<Vec<_>>())?,
-        ))
+        collision_rates(&self.timed, self.warm_up)
     }
+}
+
+/// Median over repeats of (pair collisions per frame, per second of stepping), over the frames
+/// after the first `warm_up`.
+pub(super) fn collision_rates(timed: &Timed, warm_up: u64) -> Option<(f64, f64)> {
+    let reports = timed.as_ref().ok()?;
+    let rate = |r: &Report| {
+        let measured = r.frames.get(warm_up as usize..)?;
+        let pairs: u64 = measured.iter().map(|f| f.pair_contacts).sum();
+        let seconds: f64 = measured.iter().map(|f| f.wall_ms).sum::<f64>() / 1e3;
+        (seconds > 0.0).then(|| (pairs as f64 / measured.len() as f64, pairs as f64 / seconds))
+    };
+    let rates: Vec<(f64, f64)> = reports.iter().filter_map(rate).collect();
+    Some((
+        median(&rates.iter().map(|r| r.0).collect::<Vec<_>>())?,
+        median(&rates.iter().map(|r| r.1).collect::<Vec<_>>())?,
+    ))
+}
+
+/// The gas of `bodies` at `packing` with frames of `travel` rms diameters, stepped on `threads`
+/// threads: the run, and its warm-up and measured frames (whole frames covering the plan's
+/// travels).
+pub(super) fn gas(plan: &Plan, bodies: usize, packing: f64, travel: f64, threads: usize) -> (Simulation, u64, u64) {
+    let frames = |distance: f64| (distance / travel).ceil() as u64;
+    let (warm_up, measured) = (frames(plan.warm_up_travel), frames(plan.measured_travel));
+    let run = Simulation {
+        kind: "gas",
+        bodies,
+        packing,
+        speed: RMS_SPEED,
+        frames: warm_up + measured,
+        mode: "simulate",
+        dt: Some(travel / (RMS_SPEED * FRAMES_PER_SECOND)),
+        threads: Some(threads),
+        ..Simulation::paper(bodies, RMS_SPEED, 1, "auto")
+    };
+    (run, warm_up, measured)
 }
 
 pub(super) fn run(context: &Context) -> CliResult<()> {
@@ -55,19 +79,7 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
     let product = context.runner.product()?;
     let progress = Progress::new(plan.throughput_bodies.len() * plan.packings.len() + plan.travels.len());
     let gas = |bodies: usize, packing: f64, travel: f64| {
-        // Whole frames covering the warm-up and the measured travel.
-        let frames = |distance: f64| (distance / travel).ceil() as u64;
-        let (warm_up, measured) = (frames(plan.warm_up_travel), frames(plan.measured_travel));
-        let run = Simulation {
-            kind: "gas",
-            bodies,
-            packing,
-            speed: RMS_SPEED,
-            frames: warm_up + measured,
-            mode: "simulate",
-            dt: Some(travel / (RMS_SPEED * FRAMES_PER_SECOND)),
-            ..Simulation::paper(bodies, RMS_SPEED, 1, "auto")
-        };
+        let (run, warm_up, measured) = gas(plan, bodies, packing, travel, 1);
         Row { bodies, packing, travel, warm_up, measured, timed: context.time(product, &run, &progress) }
     };
     let mut packings = Vec::new();

@@ -1,0 +1,216 @@
+//! All cores against one: the default method on one thread pinned to one core, and on every
+//! core of the machine (unpinned, `--threads` = the core count), in the same command. Detect mode
+//! on the paper scene for every n and speed of the detect section (the one-thread runs are that
+//! section's, made once), with the goals of 33 ms per frame at 0.05 and 66 ms at 0.5 diameters
+//! per frame for n = 10^6; the equilibrium gas of the throughput section in simulate mode; and
+//! one run at n = 10^7 on every core, with its peak memory per body.
+
+use super::throughput::{collision_rates, gas, RMS_SPEED};
+use super::{cell, mean_ms, ms_cell, ratio, Context, Section, Timed};
+use crate::common::{csv_number, window_frames};
+use crate::plots::{self, Series};
+use crate::progress::Progress;
+use crate::runner::Simulation;
+use crate::CliResult;
+use std::fmt::Write as _;
+use std::rc::Rc;
+
+/// Goals at n = 10^6 on every core: (speed, ms per frame).
+const GOALS: [(f64, f64); 2] = [(0.05, 33.0), (0.5, 66.0)];
+/// Goal of the all-cores speed-up at n >= 10^5.
+const SPEEDUP_GOAL: f64 = 1.8;
+/// Packing of the gas rows.
+const GAS_PACKING: f64 = 0.05;
+
+/// One scene on one thread and on every core.
+struct Row {
+    scene: String,
+    bodies: usize,
+    one: Rc<Timed>,
+    all: Rc<Timed>,
+    /// For the gas: frames of warm-up before the measured ones; `None` for detect rows.
+    warm_up: Option<u64>,
+}
+
+impl Row {
+    /// ms/frame (detect) or pair collisions per second (gas), on one thread and on all.
+    fn values(&self) -> (Option<f64>, Option<f64>) {
+        match self.warm_up {
+            None => (mean_ms(&self.one), mean_ms(&self.all)),
+            Some(warm_up) => {
+                let rate = |t: &Timed| collision_rates(t, warm_up).map(|r| r.1);
+                (rate(&self.one), rate(&self.all))
+            }
+        }
+    }
+
+    /// How many times faster every core is than one.
+    fn speedup(&self) -> Option<f64> {
+        let (one, all) = self.values();
+        match self.warm_up {
+            None => ratio(one, all),
+            Some(_) => ratio(all, one),
+        }
+    }
+}
+
+pub(super) fn run(context: &Context) -> CliResult<()> {
+    let plan = &context.plan;
+    let product = context.runner.product()?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let detect_rows = plan.detect_bodies.len() * plan.speeds.len();
+    let progress = Progress::new(2 * (detect_rows + plan.throughput_bodies.len()) + plan.huge_bodies.len());
+    let mut rows = Vec::new();
+    for &bodies in &plan.detect_bodies {
+        for &speed in &plan.speeds {
+            let one = Simulation::paper(bodies, speed, window_frames(speed, plan.quick), "auto");
+            let all = Simulation { threads: Some(cores), ..one.clone() };
+            rows.push(Row {
+                scene: format!("detect, speed {speed}"),
+                bodies,
+                one: context.time(product, &one, &progress),
+                all: context.time(product, &all, &progress),
+                warm_up: None,
+            });
+            write(context, cores, &rows, &[])?;
+        }
+    }
+    for &bodies in &plan.throughput_bodies {
+        let (one, warm_up, _) = gas(plan, bodies, GAS_PACKING, RMS_SPEED, 1);
+        let (all, _, _) = gas(plan, bodies, GAS_PACKING, RMS_SPEED, cores);
+        rows.push(Row {
+            scene: format!("gas, packing {GAS_PACKING} (pair collisions/s)"),
+            bodies,
+            one: context.time(product, &one, &progress),
+            all: context.time(product, &all, &progress),
+            warm_up: Some(warm_up),
+        });
+        write(context, cores, &rows, &[])?;
+    }
+    let mut huge = Vec::new();
+    for &bodies in &plan.huge_bodies {
+        let speed = plan.speeds[0];
+        let run = Simulation {
+            threads: Some(cores),
+            ..Simulation::paper(bodies, speed, window_frames(speed, plan.quick), "auto")
+        };
+        huge.push((bodies, speed, context.time(product, &run, &progress)));
+        write(context, cores, &rows, &huge)?;
+    }
+    progress.finish();
+    let (path, _) = context.plot("cores.png");
+    let series = plan
+        .speeds
+        .iter()
+        .map(|&speed| {
+            let scene = format!("detect, speed {speed}");
+            let points = rows
+                .iter()
+                .filter(|r| r.scene == scene)
+                .filter_map(|r| Some((r.bodies as f64, r.speedup()?)))
+                .collect();
+            Series::new(&format!("detect mode, speed {speed}"), points)
+        })
+        .chain(std::iter::once(Series::markers(
+            "simulate mode, gas",
+            rows.iter().filter(|r| r.warm_up.is_some()).filter_map(|r| Some((r.bodies as f64, r.speedup()?))).collect(),
+        )))
+        .collect();
+    plots::line_chart(
+        &path,
+        &format!("Default method: speed-up of {cores} threads over one"),
+        "bodies n",
+        "one thread's time / all threads' time",
+        series,
+    )
+}
+
+fn write(context: &Context, cores: usize, rows: &[Row], huge: &[(usize, f64, Rc<Timed>)]) -> CliResult<()> {
+    let mut md = format!(
+        "The default method on one thread (pinned to one core, as in the other sections) and on all {cores} cores \
+         of the machine (`--threads {cores}`, not pinned), in this same command. Detect rows: the paper scene, mean \
+         wall-clock ms/frame over frames covering several broad-phase windows; gas rows: the equilibrium gas of the \
+         throughput section (rms speed {RMS_SPEED} diameters per frame), pair collisions per second of the measured \
+         frames. Median of {} runs. Goals: a speed-up of at least {SPEEDUP_GOAL} at n >= 10^5; at n = 10^6 on every \
+         core, at most {} ms/frame at speed {} and {} ms/frame at speed {}.\n\n",
+        context.repeats, GOALS[0].1, GOALS[0].0, GOALS[1].1, GOALS[1].0,
+    );
+    let _ = writeln!(md, "| scene | n | one thread | {cores} threads | speed-up | goal |");
+    let _ = writeln!(md, "|---|---:|---:|---:|---:|---|");
+    let mut csv = String::from("scene,n,threads,value,unit,speedup,status\n");
+    for r in rows {
+        let (one, all) = r.values();
+        let decimals = if r.warm_up.is_some() { 0 } else { 3 };
+        let shown = |timed: &Timed, value: Option<f64>| match timed {
+            Ok(_) => cell(value, decimals),
+            Err(e) => crate::markdown::table_cell(e),
+        };
+        let goal = goal(r, all);
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {} | {goal} |",
+            r.scene,
+            r.bodies,
+            shown(&r.one, one),
+            shown(&r.all, all),
+            cell(r.speedup(), 2)
+        );
+        let unit = if r.warm_up.is_some() { "pair_collisions_per_s" } else { "ms_per_frame" };
+        for (threads, timed, value) in [(1, &r.one, one), (cores, &r.all, all)] {
+            let status = timed.as_ref().as_ref().err().map_or("ok".to_string(), |e| e.replace(',', ";"));
+            let _ = writeln!(
+                csv,
+                "{},{},{threads},{},{unit},{},{status}",
+                r.scene.replace(',', ";"),
+                r.bodies,
+                csv_number(value),
+                csv_number(r.speedup())
+            );
+        }
+    }
+    if !huge.is_empty() {
+        let _ = writeln!(md, "\nThe largest scenes, on all {cores} cores (detect mode, paper scene):\n");
+        let _ = writeln!(md, "| n | speed | ms/frame | peak MiB | bytes per body | goal |");
+        let _ = writeln!(md, "|---:|---:|---:|---:|---:|---|");
+        for (bodies, speed, timed) in huge {
+            let peak = timed.as_ref().as_ref().ok().and_then(|reports| reports.first()?.summary.peak_memory_mib);
+            let per_body = peak.map(|mib| mib * 1024.0 * 1024.0 / *bodies as f64);
+            let met = per_body.map_or("—", |b| if b <= 300.0 { "met (≤ 300 B/body)" } else { "missed (> 300 B/body)" });
+            let _ = writeln!(
+                md,
+                "| {bodies} | {speed} | {} | {} | {} | {met} |",
+                ms_cell(timed),
+                cell(peak, 0),
+                cell(per_body, 0)
+            );
+            let status = timed.as_ref().as_ref().err().map_or("ok".to_string(), |e| e.replace(',', ";"));
+            let _ = writeln!(
+                csv,
+                "detect; speed {speed},{bodies},{cores},{},ms_per_frame,,{status}",
+                csv_number(mean_ms(timed))
+            );
+        }
+    }
+    let (_, link) = context.plot("cores.png");
+    let _ = writeln!(md, "\n![speed-up of all cores against n]({link})\n");
+    context.write(Section::Cores.markers(), "All cores against one", &md, "cores.csv", &csv)
+}
+
+/// Whether the row meets its goal: the n = 10^6 ms/frame goals, else the speed-up goal from
+/// n = 10^5 on; empty where there is none.
+fn goal(row: &Row, all: Option<f64>) -> String {
+    let speed_goal =
+        GOALS.iter().find(|(speed, _)| row.warm_up.is_none() && row.scene == format!("detect, speed {speed}"));
+    if let (1_000_000, Some(&(_, ms))) = (row.bodies, speed_goal) {
+        return match all {
+            Some(v) if v <= ms => format!("met (≤ {ms} ms)"),
+            Some(_) => format!("missed (> {ms} ms)"),
+            None => "—".into(),
+        };
+    }
+    match row.speedup() {
+        Some(s) if row.bodies >= 100_000 && s >= SPEEDUP_GOAL => format!("met (≥ {SPEEDUP_GOAL}x)"),
+        Some(_) if row.bodies >= 100_000 => format!("missed (< {SPEEDUP_GOAL}x)"),
+        _ => String::new(),
+    }
+}
