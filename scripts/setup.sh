@@ -1,15 +1,35 @@
 #!/usr/bin/env bash
-# Installs what vadop needs on a fresh Debian machine: a Rust toolchain (via rustup when cargo is
-# missing) and a C linker. Safe to run again: it does nothing when everything is present.
+# Checks and installs what building vadop needs on a Debian machine: a C linker (installed with
+# apt-get when missing and run as root) and a Rust toolchain of the version rust-toolchain.toml
+# pins. Rust is not a Debian package recent enough, so when cargo is missing this script says
+# exactly how to install it with rustup and stops. Safe to run again: it does nothing when
+# everything is present.
 set -euo pipefail
+cd "$(dirname "$0")/.."
+export PATH="$HOME/.cargo/bin:$PATH"
 if ! command -v cc >/dev/null 2>&1; then
-  if command -v apt-get >/dev/null 2>&1; then
-    apt-get update -qq && apt-get install -y -qq build-essential >/dev/null
+  if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
+    echo "setup: installing a C linker (Debian's build-essential)" >&2
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq build-essential >/dev/null
+  else
+    echo "setup: no C compiler (cc) found: install one (on Debian: sudo apt-get install build-essential) and run again" >&2
+    exit 1
   fi
 fi
+toolchain=$(sed -n 's/^channel *= *"\(.*\)"/\1/p' rust-toolchain.toml)
 if ! command -v cargo >/dev/null 2>&1; then
-  [ -x "$HOME/.cargo/bin/cargo" ] || {
-    echo "cargo not found: install Rust (https://rustup.rs) and run again" >&2
+  cat >&2 <<MSG
+setup: cargo not found. vadop needs Rust $toolchain (pinned in rust-toolchain.toml). Install it with rustup:
+    curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --default-toolchain $toolchain --profile minimal
+then open a new shell (or run: . "\$HOME/.cargo/env") and run this command again.
+MSG
+  exit 1
+fi
+# rustup reads rust-toolchain.toml itself; a cargo without rustup must already be new enough.
+if ! command -v rustup >/dev/null 2>&1; then
+  have=$(rustc --version | cut -d' ' -f2)
+  if [ "$(printf '%s\n%s\n' "$toolchain" "$have" | sort -V | head -n1)" != "$toolchain" ]; then
+    echo "setup: rustc $have is older than the $toolchain that vadop is built and tested with; install Rust $toolchain with rustup (https://rustup.rs)" >&2
     exit 1
-  }
+  fi
 fi

@@ -6,8 +6,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/setup.sh
 export PATH="$HOME/.cargo/bin:$PATH"
+# Hygiene first, so a formatting slip fails in seconds rather than after the long tests.
+cargo fmt --all --check
+cargo clippy --release --workspace --all-targets -- -D warnings
 cargo test --release --workspace --all-targets
+# The doctests include README.md's Rust examples (crates/vadop/src/lib.rs, ReadmeExamples).
 cargo test --release --workspace --doc
+RUSTDOCFLAGS="-D warnings" cargo doc --release --workspace --no-deps
 
 # Python package: build and install it into a local virtual environment the way users do
 # (`pip install ./`), with the test tools, then run its tests. The viewer test drives a real

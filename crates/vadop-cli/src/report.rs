@@ -467,10 +467,20 @@ impl fmt::Display for Summary {
         writeln!(f, "scene       {}", scene.source)?;
         writeln!(
             f,
-            "            {} bodies, {shape}, packing {:.4}, max speed {:.4} diameters/frame (fastest body)",
-            scene.bodies, scene.packing, scene.max_speed
+            "            {} {}, {shape}, packing {:.4}, max speed {:.4} diameters/frame (fastest body)",
+            scene.bodies,
+            if scene.bodies == 1 { "body" } else { "bodies" },
+            scene.packing,
+            scene.max_speed
         )?;
-        writeln!(f, "method      {}, {} mode, dt {} s, restitution {}", run.method, run.mode, run.dt, run.restitution)?;
+        writeln!(
+            f,
+            "method      {}, {} mode, dt {}, restitution {}",
+            run.method,
+            run.mode,
+            seconds(run.dt),
+            run.restitution
+        )?;
         match &self.pool {
             Some(p) => writeln!(
                 f,
@@ -700,8 +710,35 @@ pub fn reveal(bar: &ProgressBar) {
     }
 }
 
+/// A time step as a reader wants it: `1/30 s` for a whole fraction of a second (the frame rates
+/// people choose), otherwise six significant digits.
+fn seconds(dt: f64) -> String {
+    let rate = 1.0 / dt;
+    if (2.0..1e9).contains(&rate) && (rate - rate.round()).abs() <= 1e-9 * rate {
+        format!("1/{} s", rate.round())
+    } else {
+        let rounded: f64 = format!("{dt:.5e}").parse().unwrap_or(dt);
+        if (1e-4..1e6).contains(&rounded) {
+            format!("{rounded} s")
+        } else {
+            format!("{rounded:e} s")
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn time_steps_read_as_people_write_them() {
+        assert_eq!(super::seconds(1.0 / 30.0), "1/30 s");
+        assert_eq!(super::seconds(0.16666666666666666), "1/6 s");
+        assert_eq!(super::seconds(0.25), "1/4 s");
+        assert_eq!(super::seconds(0.123456789), "0.123457 s");
+        assert_eq!(super::seconds(3.0), "3 s");
+        assert_eq!(super::seconds(1e-300), "1e-300 s");
+        assert_eq!(super::seconds(2.5e7), "2.5e7 s");
+    }
+
     use super::*;
 
     fn spread_of(values: impl Iterator<Item = f64>) -> Spread {

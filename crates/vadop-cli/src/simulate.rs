@@ -676,7 +676,11 @@ fn step_frames(
         let contacts = match world.step(args.dt) {
             Ok(contacts) => contacts,
             Err(e) => {
-                failure = Some(format!("frame {frame}: {}", describe(e)));
+                // A step fails before changing anything, so a failure of the run's first step is
+                // about the scene as given, not about anything a frame did.
+                let when =
+                    if totals.frames == 0 { "before the first frame".to_string() } else { format!("frame {frame}") };
+                failure = Some(format!("{when}: {}", describe(e)));
                 break;
             }
         };

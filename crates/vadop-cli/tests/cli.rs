@@ -182,16 +182,54 @@ fn bad_scene_files_are_reported_not_panicked() {
             r#"{{"bounds": {{"min": [0, 0, 0], "max": [10, 10, 10]}}, "spheres": [{{"position": {position}, "velocity": [1, 0, 0], "radius": {radius}, "mass": 1}}]}}"#
         )
     };
+    let two_spheres = |second: &str| {
+        format!(
+            r#"{{"bounds": {{"min": [0, 0, 0], "max": [10, 10, 10]}}, "spheres": [{{"position": [2, 5, 5], "velocity": [1, 0, 0], "radius": 0.5, "mass": 1}}, {second}]}}"#
+        )
+    };
     let cases = [
         ("nan", sphere("[5, 5, NaN]", "0.5"), "nan.json"),
-        ("negative-radius", sphere("[5, 5, 5]", "-0.5"), "radius"),
-        ("outside", sphere("[5, 5, 12]", "0.5"), "does not fit inside the box"),
+        ("negative-radius", sphere("[5, 5, 5]", "-0.5"), "sphere 0: radius must be a finite number > 0, got -0.5"),
+        ("outside", sphere("[5, 5, 12]", "0.5"), "sphere 0: sphere at [5.0, 5.0, 12.0] with radius 0.5 does not fit"),
+        (
+            "second-bad",
+            two_spheres(r#"{"position": [8, 5, 5], "velocity": [0, 0, 0], "radius": 0, "mass": 1}"#),
+            "sphere 1: radius",
+        ),
+        // Nothing has been stepped yet: the error is about the scene, not about frame 1.
+        (
+            "overlap",
+            two_spheres(r#"{"position": [2.5, 5, 5], "velocity": [0, 0, 0], "radius": 0.5, "mass": 1}"#),
+            "error: before the first frame: spheres 0 and 1 overlap",
+        ),
+        (
+            "empty",
+            r#"{"bounds": {"min": [0, 0, 0], "max": [10, 10, 10]}, "spheres": []}"#.to_string(),
+            "before the first frame: the world is empty",
+        ),
     ];
     for (name, text, expected) in cases {
         let path = dir.join(format!("{name}.json"));
         std::fs::write(&path, text).expect("scene written");
         assert_usage_error(&vadop(&["simulate", "--scene", path.to_str().expect("utf-8 path")]), expected);
     }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn the_summary_reads_as_written_by_hand() {
+    let dir = scratch("one-body");
+    let path = dir.join("one.json");
+    std::fs::write(
+        &path,
+        r#"{"bounds": {"min": [0, 0, 0], "max": [10, 10, 10]}, "spheres": [{"position": [5, 5, 5], "velocity": [1, 0, 0], "radius": 0.5, "mass": 1}]}"#,
+    )
+    .expect("scene written");
+    let output = vadop(&["simulate", "--scene", path.to_str().expect("utf-8 path"), "--frames", "2"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = stdout(&output);
+    assert!(summary.contains(" 1 body, cube of side 10"), "{summary}");
+    assert!(summary.contains(", dt 1/30 s, "), "{summary}");
     std::fs::remove_dir_all(dir).ok();
 }
 

@@ -36,7 +36,7 @@ pub struct Bodies {
     pub stamp: Vec<u32>,
     pub alive: Vec<bool>,
     /// No live body is faster than this: raised by every velocity written and lowered only by
-    /// [`Bodies::tighten_speed_bound`], so a step need not read every body to rule out an absurd
+    /// `Bodies::tighten_speed_bound`, so a step need not read every body to rule out an absurd
     /// speed.
     pub speed_bound: f64,
 }

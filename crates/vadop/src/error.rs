@@ -14,6 +14,10 @@ pub enum VadopError {
     /// A radius was zero, negative or not finite.
     #[error("radius must be a finite number > 0, got {0}")]
     BadRadius(f64),
+    /// A sphere of a batch (`add_spheres`, a scene file) was rejected; `index` is its place in
+    /// the batch, so a user can find it among thousands.
+    #[error("sphere {index}: {source}")]
+    InSphere { index: usize, source: Box<VadopError> },
     /// A mass was zero, negative or not finite.
     #[error("mass must be a finite number > 0, got {0}")]
     BadMass(f64),

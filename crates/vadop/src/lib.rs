@@ -31,6 +31,10 @@
 //! }
 //! ```
 
+// Comparisons are written `!(t < end)` on purpose throughout: a NaN then fails the check
+// instead of passing it, which `t >= end` would not do.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod axis_pool;
 pub mod bodies;
 pub mod bounding_volume;
@@ -56,3 +60,8 @@ pub use error::{Result, VadopError};
 pub use narrow_phase::Wall;
 pub use window::Window;
 pub use world::{BoxBounds, Contact, FrameStats, Method, Mode, Touched, World, WorldConfig};
+
+/// The README's Rust examples, compiled and run with the doctests so they cannot go stale.
+#[cfg(doctest)]
+#[doc = include_str!("../../../README.md")]
+pub struct ReadmeExamples;

@@ -21,8 +21,6 @@
 //! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
 //! scaled by a power of two gives bit-identical contact times, scaled alike.
 
-#![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x < y)` deliberately also rejects NaN.
-
 use glam::DVec3;
 
 /// Relative tolerance on the centre distance within which two spheres count as touching.

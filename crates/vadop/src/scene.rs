@@ -58,11 +58,11 @@ impl Velocities {
         match *self {
             Velocities::Uniform { max_speed } if !(max_speed.is_finite() && max_speed >= 0.0) => bad("max speed", max_speed),
             Velocities::Maxwell { rms_speed } if !(rms_speed.is_finite() && rms_speed >= 0.0) => bad("rms speed", rms_speed),
-            Velocities::Stream { speed, spread } if !(speed.is_finite() && speed >= 0.0) || !(0.0..=std::f64::consts::PI).contains(&spread) => {
+            Velocities::Stream { speed, spread } if !(speed.is_finite() && speed >= 0.0 && (0.0..=std::f64::consts::PI).contains(&spread)) => {
                 Err(VadopError::Scene(format!("a stream needs a finite speed >= 0 and a spread in [0, pi], got {speed} and {spread}")))
             }
             Velocities::HeavyTail { median_speed, tail_index }
-                if !(median_speed.is_finite() && median_speed >= 0.0) || !(tail_index.is_finite() && tail_index >= 1.0) =>
+                if !(median_speed.is_finite() && median_speed >= 0.0 && tail_index.is_finite() && tail_index >= 1.0) =>
             {
                 Err(VadopError::Scene(format!("heavy-tailed speeds need a finite median >= 0 and a tail index >= 1, got {median_speed} and {tail_index}")))
             }

@@ -252,7 +252,7 @@ impl FrameStats {
 }
 
 /// Pool size used when none is given, whatever the bodies' speeds. Measured by experiment 4 of
-/// `vadop bench` (BENCHMARKS.md): with tiled axis lists the 3-axis pool is the fastest at every
+/// `vadop-bench experiments` (BENCHMARKS.md): with tiled axis lists the 3-axis pool is the fastest at every
 /// speed it tests (0.05, 0.5 and 5 diameters per frame, pools of 3 to 39,000 axes), because each
 /// extra axis per body costs more in updates and candidate checks than its thinner volume saves.
 /// phi stays rho, the smallest angle that keeps every pair sharing an axis; every axis for every
@@ -367,10 +367,11 @@ impl World {
         Ok(id)
     }
 
-    /// Adds many spheres at once, all or none.
+    /// Adds many spheres at once, all or none. An error names the first bad sphere by its index
+    /// in `spheres` ([`VadopError::InSphere`]).
     pub fn add_spheres(&mut self, spheres: &[Sphere]) -> Result<Vec<u32>> {
-        for s in spheres {
-            self.check_sphere(s)?;
+        for (index, s) in spheres.iter().enumerate() {
+            self.check_sphere(s).map_err(|e| VadopError::InSphere { index, source: Box::new(e) })?;
         }
         if self.live + spheres.len() >= u32::MAX as usize - 1 {
             return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
@@ -587,7 +588,6 @@ impl World {
         Ok(())
     }
 
-    #[allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x <= y)` deliberately rejects NaN too.
     fn check_step(&mut self, dt: f64) -> Result<()> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(VadopError::BadTimeStep(dt));

@@ -42,7 +42,8 @@ fn bad_spheres_are_rejected_and_change_nothing() {
     }
     // A batch with one bad sphere adds none.
     let err = w.add_spheres(&[sphere(8.0), Sphere { radius: -1.0, ..sphere(8.0) }]).unwrap_err();
-    assert_eq!(err, VadopError::BadRadius(-1.0));
+    assert_eq!(err, VadopError::InSphere { index: 1, source: Box::new(VadopError::BadRadius(-1.0)) });
+    assert_eq!(err.to_string(), "sphere 1: radius must be a finite number > 0, got -1");
     assert_eq!(snapshot(&w), before);
 }
 
