@@ -31,6 +31,7 @@ if [ ! -x .venv/bin/python ]; then
     python3 -m venv .venv
   }
 fi
-.venv/bin/python -m pip install -q --disable-pip-version-check maturin numpy pytest hypothesis matplotlib mypy
+.venv/bin/python -m pip install -q --disable-pip-version-check maturin numpy pytest hypothesis matplotlib mypy pdoc
 .venv/bin/python -m pip install -q --disable-pip-version-check ./
 .venv/bin/python -m pytest -q python/tests
+./scripts/python-docs.sh

@@ -14,16 +14,16 @@ import pytest
 import vadop
 
 
-def resident_bytes():
+def resident_bytes() -> int:
     with open("/proc/self/statm") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/statm"), reason="needs Linux /proc")
-def test_no_growth_over_many_steps():
+def test_no_growth_over_many_steps() -> None:
     world = vadop.scene(500, 0.05, 0.5)
 
-    def run(frames):
+    def run(frames: int) -> None:
         for _ in range(frames):
             contacts = world.step(1 / 30)
             _ = (contacts.time, contacts.point, world.positions, world.velocities, world.stats())
@@ -39,7 +39,7 @@ def test_no_growth_over_many_steps():
     assert resident_bytes() - resident < 4 * 2**20
 
 
-def test_arrays_handed_out_are_not_kept_alive():
+def test_arrays_handed_out_are_not_kept_alive() -> None:
     world = vadop.scene(300, 0.1, 2.0)
     contacts = world.step(1 / 30)
     columns = [weakref.ref(getattr(contacts, c)) for c in ("time", "i", "j", "wall", "point", "normal", "impulse")]
@@ -74,7 +74,7 @@ def refused(call):
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="needs Linux /proc")
-def test_requests_too_large_for_the_memory_left_raise_memory_error():
+def test_requests_too_large_for_the_memory_left_raise_memory_error() -> None:
     body = textwrap.dedent("""
         refused(lambda: vadop.scene(10**8))
         refused(lambda: vadop.scene(10**6))

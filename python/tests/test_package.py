@@ -5,6 +5,7 @@ import doctest
 import subprocess
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import pytest
 
@@ -18,7 +19,7 @@ EXAMPLES = sorted((ROOT / "examples" / "python").glob("*.py"))
 
 
 @pytest.mark.parametrize("module", [vadop, vadop._vadop, vadop.viewer, vadop.plot], ids=lambda m: m.__name__)
-def test_docstring_examples(module):
+def test_docstring_examples(module: ModuleType) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -26,7 +27,7 @@ def test_docstring_examples(module):
     finder = doctest.DocTestFinder()
     tests = finder.find(module)
     if module is vadop._vadop:
-        for name in ("World", "scene", "detect"):
+        for name in ("World", "Contacts", "scene", "detect"):
             tests += finder.find(getattr(module, name), f"vadop._vadop.{name}", module=False, globs={})
     ran = 0
     for test in tests:
@@ -36,19 +37,19 @@ def test_docstring_examples(module):
     assert ran > 0
 
 
-def test_stubs_match_the_module():
+def test_stubs_match_the_module() -> None:
     result = subprocess.run([sys.executable, "-m", "mypy.stubtest", "vadop._vadop"], capture_output=True, text=True)
     assert result.returncode == 0, result.stdout + result.stderr
 
 
-def test_package_and_examples_type_check_strictly():
+def test_package_and_examples_type_check_strictly() -> None:
     paths = [str(ROOT / "python" / "vadop"), *map(str, EXAMPLES)]
     result = subprocess.run([sys.executable, "-m", "mypy", "--strict", "--no-incremental", *paths],
                             capture_output=True, text=True, cwd=ROOT)
     assert result.returncode == 0, result.stdout + result.stderr
 
 
-def test_stubs_and_marker_are_installed():
+def test_stubs_and_marker_are_installed() -> None:
     package = Path(vadop.__file__).parent
     assert (package / "py.typed").exists() and (package / "_vadop.pyi").exists()
 
@@ -61,9 +62,42 @@ def test_stubs_and_marker_are_installed():
         ("detect_comparison.py", ["--bodies", "200", "--frames", "5"], "discrete"),
     ],
 )
-def test_example_scripts_run(script, args, expected):
+def test_example_scripts_run(script: str, args: list[str], expected: str) -> None:
     assert {p.name for p in EXAMPLES} == {"bouncing_spheres.py", "bullets_through_crowd.py", "detect_comparison.py"}
     result = subprocess.run([sys.executable, str(ROOT / "examples" / "python" / script), *args],
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert expected in result.stdout
+
+
+def test_version_matches_pyproject_and_the_installed_metadata() -> None:
+    import re
+    from importlib.metadata import version
+
+    pyproject = (ROOT / "pyproject.toml").read_text()
+    declared = re.search(r'^version = "([^"]+)"', pyproject, re.MULTILINE)
+    assert declared is not None
+    assert vadop.__version__ == declared.group(1) == "0.1.0"
+    assert vadop.__version__ == version("vadop")
+    assert "__version__" in vadop.__all__
+
+
+def test_readme_python_example_and_plot_calls_run(monkeypatch: pytest.MonkeyPatch) -> None:
+    import re
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
+    blocks = re.findall(r"```python\n(.*?)```", section, re.DOTALL)
+    assert len(blocks) == 1
+    monkeypatch.chdir(ROOT)  # the benchmark CSV's path is relative to the clone
+    namespace: dict[str, object] = {}
+    exec(compile(blocks[0], "README.md", "exec"), namespace)
+    # The plot calls the section shows, run on what the example made.
+    calls = re.findall(r"`(vadop\.plot\.\w+\(.*?\))`", section)
+    assert {c.split("(")[0] for c in calls} == {"vadop.plot.benchmark", "vadop.plot.cost_split", "vadop.plot.contact_timeline"}
+    exec("import vadop.plot", namespace)
+    for call in calls:
+        assert eval(call, namespace) is not None, call

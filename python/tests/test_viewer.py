@@ -6,8 +6,10 @@ import json
 import os
 import shutil
 import subprocess
+from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 from matplotlib.image import imread
 
@@ -15,7 +17,7 @@ import vadop
 from vadop.viewer import main, record, write_html
 
 
-def test_recording_holds_frames_contacts_and_honest_volumes():
+def test_recording_holds_frames_contacts_and_honest_volumes() -> None:
     world = vadop.scene(80, 0.1, 2.0, method="vadop", pool_axes=7)
     run = record(world, frames=6, watch=[3, 5])
     assert len(run["frames"]) == 7 and run["frames"][0]["v"] is None
@@ -34,14 +36,14 @@ def test_recording_holds_frames_contacts_and_honest_volumes():
             assert abs(u[body] @ a) <= np.linalg.norm(u[body]) * np.sin(world.phi) + 1e-3
 
 
-def test_other_methods_record_without_volumes(tmp_path):
+def test_other_methods_record_without_volumes(tmp_path: Path) -> None:
     run = record(vadop.scene(30, 0.1, 1.0, method="brute"), frames=2)
     assert all(f["v"] is None for f in run["frames"])
     page = write_html(run, tmp_path / "run.html").read_text()
     assert "/*VADOP_DATA*/" not in page and '"method":"brute"' in page
 
 
-def test_command_writes_a_page(tmp_path, capsys):
+def test_command_writes_a_page(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "run.html"
     assert main(["--bodies", "40", "--frames", "5", "--out", str(out)]) == 0
     assert out.exists() and "wrote" in capsys.readouterr().out
@@ -50,7 +52,7 @@ def test_command_writes_a_page(tmp_path, capsys):
     assert exit.value.code == 2
 
 
-def chromium():
+def chromium() -> str:
     found = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
     if found is None:
         if os.environ.get("CI"):
@@ -59,7 +61,7 @@ def chromium():
     return found
 
 
-def browse(page, fragment, *args):
+def browse(page: Path, fragment: str, *args: str) -> str:
     command = [chromium(), "--headless", "--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                "--window-size=1000,700", "--hide-scrollbars", "--virtual-time-budget=4000", *args,
                page.resolve().as_uri() + "#" + fragment]
@@ -67,12 +69,12 @@ def browse(page, fragment, *args):
 
 
 @pytest.fixture(scope="module")
-def page(tmp_path_factory):
+def page(tmp_path_factory: pytest.TempPathFactory) -> Path:
     world = vadop.scene(150, 0.08, 1.5, seed=2, method="vadop")
     return write_html(record(world, frames=40), tmp_path_factory.mktemp("viewer") / "run.html")
 
 
-def test_page_runs_without_errors(page):
+def test_page_runs_without_errors(page: Path) -> None:
     dom = browse(page, "frame=20&body=7&pause", "--dump-dom")
     status = json.loads(html.unescape(dom.split('data-status="', 1)[1].split('"', 1)[0]))
     assert status["error"] == "" and status["gl"] == "webgl2"
@@ -80,12 +82,12 @@ def test_page_runs_without_errors(page):
     assert status["slabs"] >= 2  # a body uses at least two axes of the 3-axis pool
 
 
-def screenshot(page, fragment, path):
+def screenshot(page: Path, fragment: str, path: Path) -> npt.NDArray[np.float32]:
     browse(page, fragment, f"--screenshot={path}")
     return imread(path)[:, :, :3]
 
 
-def test_screenshot_shows_spheres_box_and_the_selected_volume(page, tmp_path):
+def test_screenshot_shows_spheres_box_and_the_selected_volume(page: Path, tmp_path: Path) -> None:
     with_volume = screenshot(page, "frame=20&body=7&pause", tmp_path / "volume.png")
     without = screenshot(page, "frame=20&body=7&pause&volumes=0", tmp_path / "plain.png")
     assert with_volume.shape == (700, 1000, 3)
@@ -101,7 +103,7 @@ def test_screenshot_shows_spheres_box_and_the_selected_volume(page, tmp_path):
     assert edges[:640, 340:].sum() > 300
     # The slabs of the selected body's two axes (red for axis 0, green for axis 1) appear only
     # with volumes on, and near the selected body.
-    def slab_pixels(image):
+    def slab_pixels(image: npt.NDArray[np.float32]) -> tuple[npt.NDArray[np.bool_], npt.NDArray[np.bool_]]:
         r, g, b = image[:640, 340:, 0], image[:640, 340:, 1], image[:640, 340:, 2]
         return (r > 0.5) & (g < 0.6 * r) & (b > 0.25 * r) & (b < 0.5 * r), (g > 0.5) & (r < 0.7 * g) & (b < 0.7 * g)
     (red, green), (red_before, green_before) = slab_pixels(with_volume), slab_pixels(without)

@@ -3,6 +3,7 @@
 import os
 import signal
 import threading
+from typing import Any
 
 import numpy as np
 import pytest
@@ -10,13 +11,13 @@ import pytest
 import vadop
 
 
-def two_bodies(**settings):
+def two_bodies(**settings: Any) -> vadop.World:
     positions = np.array([[2.0, 5, 5], [8, 5, 5]])
     velocities = np.array([[30.0, 0, 0], [0, 0, 0]])
     return vadop.World(positions, velocities, np.array([0.5, 0.5]), np.array([1.0, 3.0]), box=10.0, **settings)
 
 
-def test_arrays_round_trip():
+def test_arrays_round_trip() -> None:
     rng = np.random.default_rng(1)
     positions = rng.uniform(1, 9, (20, 3))
     velocities = rng.normal(size=(20, 3))
@@ -37,20 +38,20 @@ def test_arrays_round_trip():
     np.testing.assert_array_equal(world.positions, positions)
 
 
-def test_non_contiguous_input_is_read_correctly():
+def test_non_contiguous_input_is_read_correctly() -> None:
     data = np.arange(24, dtype=np.float64).reshape(4, 6) / 10 + 1
     positions = data[:, ::2]
     world = vadop.World(positions, np.zeros((4, 3)), np.full(4, 0.01), box=10.0, mode="detect")
     np.testing.assert_array_equal(world.positions, positions)
 
 
-def test_masses_default_to_one_and_box_side_means_a_cube():
+def test_masses_default_to_one_and_box_side_means_a_cube() -> None:
     world = vadop.World(np.array([[1.0, 1, 1]]), np.zeros((1, 3)), np.array([0.5]), box=4.0)
     np.testing.assert_array_equal(world.masses, [1.0])
     np.testing.assert_array_equal(world.box, [[0, 0, 0], [4, 4, 4]])
 
 
-def test_settings_are_reported():
+def test_settings_are_reported() -> None:
     world = two_bodies(method="brute", mode="detect", pool_axes=13, phi=1.2, restitution=0.5)
     assert (world.method, world.mode, world.pool_axes, world.phi, world.restitution) == ("brute", "detect", 13, 1.2, 0.5)
     assert world.axes.shape == (13, 3)
@@ -60,7 +61,7 @@ def test_settings_are_reported():
     assert 0 < default.phi <= np.pi / 2
 
 
-def test_step_finds_the_contact_between_frames_and_resolves_it():
+def test_step_finds_the_contact_between_frames_and_resolves_it() -> None:
     world = two_bodies()
     contacts = world.step(0.25)
     assert world.time == 0.25
@@ -78,7 +79,7 @@ def test_step_finds_the_contact_between_frames_and_resolves_it():
     assert world.kinetic_energy() == pytest.approx(450.0)
 
 
-def test_contact_columns_are_typed_and_in_time_order():
+def test_contact_columns_are_typed_and_in_time_order() -> None:
     world = vadop.scene(400, 0.1, 3.0, seed=4)
     for _ in range(5):
         c = world.step(1 / 30)
@@ -98,7 +99,7 @@ def test_contact_columns_are_typed_and_in_time_order():
         np.testing.assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0)
 
 
-def test_add_remove_reuse_ids_lowest_first():
+def test_add_remove_reuse_ids_lowest_first() -> None:
     world = two_bodies(mode="detect")
     new = world.add(np.array([[5.0, 2, 2], [5, 8, 8]]), np.zeros((2, 3)), np.array([0.5, 0.25]))
     assert new.tolist() == [2, 3]
@@ -112,7 +113,7 @@ def test_add_remove_reuse_ids_lowest_first():
     np.testing.assert_array_equal(world.masses, [2.0, 2.0, 1.0])
 
 
-def test_set_velocities():
+def test_set_velocities() -> None:
     world = two_bodies()
     world.set_velocities(np.array([1, 0]), np.array([[0.0, 1, 0], [0, 0, 2]]))
     np.testing.assert_array_equal(world.velocities, [[0.0, 0, 2], [0, 1, 0]])
@@ -120,7 +121,7 @@ def test_set_velocities():
     np.testing.assert_array_equal(world.velocities[1], [3.0, 0, 0])
 
 
-def test_stats_is_a_dict_of_the_last_frame():
+def test_stats_is_a_dict_of_the_last_frame() -> None:
     world = vadop.scene(300, 0.1, 2.0)
     world.step(1 / 30)
     stats = world.stats()
@@ -134,7 +135,7 @@ def test_stats_is_a_dict_of_the_last_frame():
     assert isinstance(stats["candidate_pairs"], int)
 
 
-def test_volumes_bound_each_body_on_its_axes():
+def test_volumes_bound_each_body_on_its_axes() -> None:
     world = vadop.scene(200, 0.1, 2.0, method="vadop", pool_axes=13)
     world.step(1 / 30)
     body, axis, lo, hi = world.volumes(1 / 30)
@@ -151,7 +152,7 @@ def test_volumes_bound_each_body_on_its_axes():
     assert np.all(sines <= np.sin(world.phi) + 1e-9)
 
 
-def test_scene_matches_its_parameters():
+def test_scene_matches_its_parameters() -> None:
     world = vadop.scene(500, 0.05, 0.5, seed=3)
     side = (500 * 4 / 3 * np.pi * 0.125 / 0.05) ** (1 / 3)
     np.testing.assert_allclose(world.box, [[0, 0, 0], [side] * 3])
@@ -161,7 +162,7 @@ def test_scene_matches_its_parameters():
     assert not np.array_equal(vadop.scene(500, 0.05, 0.5, seed=4).positions, world.positions)
 
 
-def test_step_releases_the_gil():
+def test_step_releases_the_gil() -> None:
     world = vadop.scene(60_000, 0.05, 1.0)
     world.step(1 / 30)
     worker = threading.Thread(target=world.step, args=(1 / 30,))
@@ -174,7 +175,7 @@ def test_step_releases_the_gil():
     assert spins > 50_000
 
 
-def test_ctrl_c_interrupts_a_long_detect():
+def test_ctrl_c_interrupts_a_long_detect() -> None:
     # One slow body in a big box: frames without contacts, about a minute of them if not stopped.
     one = (np.array([[5.0, 5, 5]]), np.array([[1e-3, 0, 0]]), np.array([0.5]))
     timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
@@ -186,12 +187,12 @@ def test_ctrl_c_interrupts_a_long_detect():
     assert found is None
 
 
-def test_two_threads_stepping_one_world_take_turns():
+def test_two_threads_stepping_one_world_take_turns() -> None:
     world = vadop.scene(2000, 0.1, 2.0)
     alone = vadop.scene(2000, 0.1, 2.0)
     failures = []
 
-    def run():
+    def run() -> None:
         try:
             for _ in range(15):
                 world.step(1 / 30)
@@ -213,12 +214,35 @@ def test_two_threads_stepping_one_world_take_turns():
     np.testing.assert_array_equal(world.velocities, alone.velocities)
 
 
-def test_any_thread_count_gives_the_same_contacts():
+def test_any_thread_count_gives_the_same_contacts() -> None:
     runs = []
     for threads in (1, 2, 3):
         world = vadop.scene(400, 0.2, 2.0, threads=threads)
         steps = [world.step(1 / 30) for _ in range(8)]
         runs.append([(c.time.tolist(), c.i.tolist(), c.j.tolist()) for c in steps])
     assert runs[0] == runs[1] == runs[2]
-    with pytest.raises(ValueError, match="threads must be an int >= 1"):
+    with pytest.raises(ValueError, match="threads must be an int between 1 and 1024, got 0"):
         vadop.scene(10, threads=0)
+
+
+def test_lists_and_tuples_work_wherever_arrays_do() -> None:
+    positions: list[list[float]] = [[2, 5, 5], [8.0, 5, 5]]
+    velocities = ((30, 0, 0), (0, 0, 0))
+    from_lists = vadop.World(positions, velocities, [0.5, 0.5], (1, 3), box=[[0, 0, 0], [10, 10, 10]])
+    from_arrays = two_bodies()
+    np.testing.assert_array_equal(from_lists.positions, from_arrays.positions)
+    np.testing.assert_array_equal(from_lists.masses, [1.0, 3.0])
+    np.testing.assert_array_equal(from_lists.box, from_arrays.box)
+    a, b = from_lists.step(0.25), from_arrays.step(0.25)
+    assert (a.time.tolist(), a.i.tolist(), a.j.tolist()) == (b.time.tolist(), b.i.tolist(), b.j.tolist())
+    # add, set_velocities and remove take lists and tuples of numbers and of ids.
+    assert from_lists.add([[5, 2, 2]], [(0, 0, 1)], (0.25,)).tolist() == [2]
+    from_lists.set_velocities([2, 0], [[0, 0, 2], (1.5, 0, 0)])
+    np.testing.assert_array_equal(from_lists.velocities[[0, 2]], [[1.5, 0, 0], [0, 0, 2]])
+    from_lists.remove((0, 2))
+    assert from_lists.ids.tolist() == [1]
+    from_lists.remove([])
+    # numpy scalars inside a list are numbers too; detect takes lists as well.
+    found = vadop.detect([[1.0, 1, 1], [np.float32(4), 1, 1]], [[40, 0, 0], [0, 0, 0]], [0.5, np.float64(0.5)],
+                         box=10, dt=0.1, frames=1)
+    assert found.j.tolist() == [1] and found.time.tolist() == [0.05]

@@ -13,10 +13,17 @@ as numpy arrays; the engine is Rust and releases the GIL while it steps.
 >>> world.velocities[:, 0].round(12).tolist()   # equal masses: velocities exchanged
 [0.0, 30.0]
 
+Lists and tuples work wherever arrays do; the version is the package's:
+
+>>> len(vadop.World([[2, 5, 5], [8, 5, 5]], [[30, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10).step(0.2))
+1
+>>> vadop.__version__
+'0.1.0'
+
 ``vadop.plot`` (needs matplotlib: ``pip install vadop[plot]``) draws benchmark figures and a
 run's contact timeline; ``vadop.viewer`` records a run and plays it back in the browser.
 """
 
-from ._vadop import WALLS, Contacts, World, detect, scene
+from ._vadop import WALLS, Contacts, World, __version__, detect, scene
 
-__all__ = ["WALLS", "Contacts", "World", "detect", "scene"]
+__all__ = ["WALLS", "Contacts", "World", "__version__", "detect", "scene"]

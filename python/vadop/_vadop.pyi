@@ -1,20 +1,25 @@
 """Type stubs of the vadop extension module (checked against it with mypy's stubtest)."""
 
-from typing import Literal, Optional, Union, final
+from typing import Any, Literal, Optional, Sequence, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
 _Float64Array = npt.NDArray[np.float64]
 _Int64Array = npt.NDArray[np.int64]
-_Box = Union[float, _Float64Array]
-_Ids = Union[int, _Int64Array]
+# Lists and tuples are read with numpy.asarray wherever an array is taken.
+_Number = Union[int, float, np.integer[Any], np.floating[Any]]
+_Vectors = Union[_Float64Array, Sequence[Sequence[_Number]]]
+_Values = Union[_Float64Array, Sequence[_Number]]
+_Box = Union[float, _Float64Array, Sequence[Sequence[_Number]]]
+_Ids = Union[int, _Int64Array, Sequence[int]]
 _MethodName = Literal["auto", "vadop", "grid", "brute", "discrete", "swept-aabb", "swept-kdop"]
 _ModeName = Literal["simulate", "detect"]
 
-__all__ = ["WALLS", "Contacts", "World", "detect", "scene"]
+__all__ = ["WALLS", "Contacts", "World", "__version__", "detect", "scene"]
 
 WALLS: list[str]
+__version__: str
 
 @final
 class Contacts:
@@ -40,17 +45,18 @@ class Contacts:
 class World:
     """Spheres in a box, stepped frame by frame; every contact inside a frame is found.
 
-    Threads may share a world: calls on it take turns. A thread that calls while another steps
-    waits, without holding the GIL, until that step is done. A world that would not fit in the
+    Threads may share a world: calls on it take turns (steps are serialised by a lock inside the
+    world). A thread that calls while another steps waits, without holding the GIL, until that
+    step is done. A world that would not fit in the
     memory left raises MemoryError before anything is allocated.
     """
 
     def __new__(
         cls,
-        positions: _Float64Array,
-        velocities: _Float64Array,
-        radii: _Float64Array,
-        masses: Optional[_Float64Array] = None,
+        positions: _Vectors,
+        velocities: _Vectors,
+        radii: _Values,
+        masses: Optional[_Values] = None,
         *,
         box: _Box,
         method: _MethodName = "auto",
@@ -63,13 +69,13 @@ class World:
     ) -> World: ...
     def add(
         self,
-        positions: _Float64Array,
-        velocities: _Float64Array,
-        radii: _Float64Array,
-        masses: Optional[_Float64Array] = None,
+        positions: _Vectors,
+        velocities: _Vectors,
+        radii: _Values,
+        masses: Optional[_Values] = None,
     ) -> _Int64Array: ...
     def remove(self, ids: _Ids) -> None: ...
-    def set_velocities(self, ids: _Ids, velocities: _Float64Array) -> None: ...
+    def set_velocities(self, ids: _Ids, velocities: _Vectors) -> None: ...
     def step(self, dt: float) -> Contacts:
         """Advances the world by dt; the frame's contacts in time order.
 
@@ -126,9 +132,9 @@ def scene(
     """The paper's scene as a World; MemoryError when it would not fit in the memory left."""
 
 def detect(
-    positions: _Float64Array,
-    velocities: _Float64Array,
-    radii: _Float64Array,
+    positions: _Vectors,
+    velocities: _Vectors,
+    radii: _Values,
     *,
     box: _Box,
     dt: float,

@@ -5,8 +5,8 @@ can save it and notebooks show it.
 
 - ``benchmark(csv)``: median cost per frame against the number of bodies, one line per method and
   one panel per speed, from the CSV that ``vadop bench`` writes (``results/core-benchmark.csv``).
-- ``cost_split(stats)``: the per-frame cost split c_update / c_sort / c_test / c_response from a
-  list of ``World.stats()`` dicts.
+- ``cost_split(stats)``: the per-frame cost split c_update / c_sort / c_test / c_response from
+  one ``World.stats()`` dict or a list of them.
 - ``contact_timeline(contacts)``: when each body touched something, body-body and wall contacts
   apart, with the number of contacts per frame underneath.
 
@@ -45,7 +45,15 @@ def _pyplot() -> Any:
 
 
 def benchmark(csv_path: Union[str, Path] = "results/core-benchmark.csv") -> Figure:
-    """Median c_total per frame (ms) against bodies, per method, one panel per speed."""
+    """Median c_total per frame (ms) against bodies, per method, one panel per speed.
+
+    ``csv_path`` is a CSV written by ``vadop bench`` (columns n, speed, method, status,
+    median_ms); rows whose status is not ``ok`` are left out.
+
+    >>> import vadop.plot
+    >>> figure = vadop.plot.benchmark("results/core-benchmark.csv")  # doctest: +SKIP
+    >>> figure.savefig("benchmark.png")                               # doctest: +SKIP
+    """
     rows = [r for r in csv.DictReader(open(csv_path, newline="")) if r.get("status") == "ok" and r.get("median_ms")]
     if not rows:
         raise ValueError(f"{csv_path} has no successful benchmark rows (run `vadop bench` first)")
@@ -68,18 +76,44 @@ def benchmark(csv_path: Union[str, Path] = "results/core-benchmark.csv") -> Figu
     return cast("Figure", figure)
 
 
-def cost_split(stats: Sequence[Mapping[str, float]], ax: Optional[Axes] = None) -> Figure:
-    """Stacked per-frame cost (ms) of the four stages, from ``World.stats()`` of each frame."""
-    if not stats:
+def cost_split(
+    stats: Union[Mapping[str, float], Sequence[Mapping[str, float]]],
+    ax: Optional[Axes] = None,
+) -> Figure:
+    """Stacked per-frame cost (ms) of the four stages: update, sort, test and response.
+
+    ``stats`` is what ``World.stats()`` returns after a step (one frame's dict) or a list of
+    them, one per frame, drawn left to right.
+
+    >>> import vadop, vadop.plot
+    >>> world = vadop.scene(300, 0.1, 2.0)
+    >>> _ = world.step(1 / 30)
+    >>> figure = vadop.plot.cost_split(world.stats())          # one frame
+    >>> frames = []
+    >>> for _ in range(5):
+    ...     _ = world.step(1 / 30)
+    ...     frames.append(world.stats())
+    >>> figure = vadop.plot.cost_split(frames)                 # five frames
+    >>> len(figure.axes[0].patches)                            # a bar per stage and frame
+    20
+    """
+    frames = [stats] if isinstance(stats, Mapping) else list(stats)
+    if not frames:
         raise ValueError("stats must hold the stats of at least one frame")
+    for k, frame in enumerate(frames):
+        if not isinstance(frame, Mapping):
+            raise TypeError(f"stats must be a World.stats() dict or a list of them, got {type(frame).__name__} at [{k}]")
+        missing = [stage for stage in STAGES if stage not in frame]
+        if missing:
+            raise ValueError(f"stats[{k}] is not a World.stats() dict: it lacks {', '.join(missing)}")
     plt = _pyplot()
     figure, ax = (plt.subplots(figsize=(7, 3.5)) if ax is None else (ax.figure, ax))
     assert ax is not None
-    frames = np.arange(1, len(stats) + 1)
-    bottom = np.zeros(len(stats))
+    numbers = np.arange(1, len(frames) + 1)
+    bottom = np.zeros(len(frames))
     for stage in STAGES:
-        ms = np.array([s[stage] for s in stats]) * 1e3
-        ax.bar(frames, ms, bottom=bottom, width=1.0, label=stage.replace("_seconds", ""))
+        ms = np.array([frame[stage] for frame in frames]) * 1e3
+        ax.bar(numbers, ms, bottom=bottom, width=1.0, label=stage.replace("_seconds", ""))
         bottom += ms
     ax.set(xlabel="frame", ylabel="cost (ms)", title="c_total = c_update + c_sort + c_test + c_response")
     ax.legend(loc="upper right")
@@ -92,7 +126,16 @@ def contact_timeline(
     ax: Optional[Axes] = None,
 ) -> Figure:
     """Each contact as a dot at (time, body): body-body contacts at both bodies, wall contacts
-    apart; with ``dt``, frame boundaries are marked and contacts per frame drawn underneath."""
+    apart; with ``dt``, frame boundaries are marked and contacts per frame drawn underneath.
+
+    ``contacts`` is one ``Contacts`` (a frame's, or ``vadop.detect``'s whole run) or a list of them.
+
+    >>> import vadop, vadop.plot
+    >>> world = vadop.scene(300, 0.1, 2.0)
+    >>> figure = vadop.plot.contact_timeline([world.step(1 / 30) for _ in range(5)], dt=1 / 30)
+    >>> len(figure.axes)
+    2
+    """
     frames = [contacts] if isinstance(contacts, Contacts) else list(contacts)
     time = np.concatenate([c.time for c in frames]) if frames else np.zeros(0)
     i = np.concatenate([c.i for c in frames]) if frames else np.zeros(0, dtype=np.int64)

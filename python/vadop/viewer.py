@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import operator
 import webbrowser
 from importlib.resources import files
 from pathlib import Path
@@ -34,6 +35,23 @@ __all__ = ["record", "write_html", "main"]
 # so the page stays a few megabytes.
 DEFAULT_WATCHED = 300
 
+# Most frames a recording holds: nine hours at 30 frames per second. The page holds every frame,
+# and one of more would not load in a browser long before this.
+MAX_FRAMES = 1_000_000
+
+
+def _int_arg(value: Any, name: str, minimum: int, maximum: int) -> int:
+    """``value`` as an int in ``minimum..=maximum``: TypeError if it is not an int (a float
+    neither, even 1.0), ValueError naming ``name`` and the range if it lies outside."""
+    expected = f"{name} must be an int between {minimum} and {maximum}"
+    try:
+        number = operator.index(value)
+    except TypeError:
+        raise TypeError(f"{expected}, got {type(value).__name__}") from None
+    if not minimum <= number <= maximum:
+        raise ValueError(f"{expected}, got {number}")
+    return number
+
 
 def _rounded(values: np.ndarray[Any, Any], digits: int) -> list[float]:
     return [float(v) for v in np.round(values, digits).ravel()]
@@ -47,14 +65,28 @@ def record(
 ) -> dict[str, Any]:
     """Steps ``world`` ``frames`` times by ``dt`` and returns the run as a JSON-ready dict.
 
-    ``watch`` lists the body ids whose volumes are kept (default: all of them, up to
-    ``DEFAULT_WATCHED``). Volumes exist for method 'vadop' from the first step on, so frame 0
-    has none. Bodies must not be added or removed while recording.
+    ``frames`` is an int from 1 to ``MAX_FRAMES``. ``watch`` lists the ids (ints) of live bodies
+    whose volumes are kept (default: all of them, up to ``DEFAULT_WATCHED``). Volumes exist for
+    method 'vadop' from the first step on, so frame 0 has none. Bodies must not be added or
+    removed while recording.
+
+    >>> import vadop
+    >>> from vadop.viewer import record
+    >>> run = record(vadop.scene(20, 0.1, 1.0, method="vadop"), frames=2, watch=[0, 1])
+    >>> sorted({row[0] for row in run["frames"][1]["v"]})
+    [0, 1]
     """
-    if frames < 1:
-        raise ValueError(f"frames must be an int >= 1, got {frames}")
+    frames = _int_arg(frames, "frames", 1, MAX_FRAMES)
     ids = world.ids
-    watched = set(int(i) for i in (ids[:DEFAULT_WATCHED] if watch is None else watch))
+    if watch is None:
+        watched = set(int(i) for i in ids[:DEFAULT_WATCHED])
+    elif isinstance(watch, (str, bytes)):
+        raise TypeError(f"watch must be a sequence of body ids (ints), got {type(watch).__name__}")
+    else:
+        watched = {_int_arg(i, f"watch[{k}]", 0, 2**32 - 1) for k, i in enumerate(watch)}
+        dead = sorted(watched.difference(ids.tolist()))
+        if dead:
+            raise ValueError(f"watch must name live bodies, got {dead[0]}")
     extent = float(np.max(world.box[1] - world.box[0]))
     # Positions to 1e-5 of the box: far below a pixel, and the page stays small.
     digits = max(0, int(np.ceil(5 - np.log10(extent))))
@@ -97,7 +129,14 @@ def record(
 
 
 def write_html(run: dict[str, Any], path: str | Path) -> Path:
-    """Writes the recording as a self-contained HTML page and returns its path."""
+    """Writes the recording as a self-contained HTML page and returns its path.
+
+    >>> import tempfile, pathlib, vadop
+    >>> from vadop.viewer import record, write_html
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "run.html"
+    >>> write_html(record(vadop.scene(20, 0.1, 1.0), frames=2), out).read_text().startswith("<!")
+    True
+    """
     template = files("vadop").joinpath("viewer.html").read_text(encoding="utf-8")
     page = template.replace("/*VADOP_DATA*/null", json.dumps(run, separators=(",", ":")), 1)
     out = Path(path)
@@ -106,7 +145,18 @@ def write_html(run: dict[str, Any], path: str | Path) -> Path:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
-    """The ``vadop-view`` command: records the paper's scene and writes the viewer page."""
+    """The ``vadop-view`` command: records the paper's scene and writes the viewer page.
+
+    ``argv`` are the command's options (default: ``sys.argv[1:]``); returns the exit code, and
+    exits with code 2 and one ``error:`` line on bad options.
+
+    >>> import tempfile, pathlib
+    >>> from vadop.viewer import main
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "run.html"
+    >>> main(["--bodies", "20", "--frames", "2", "--out", str(out)])  # doctest: +ELLIPSIS
+    wrote ... MB): open it in a browser
+    0
+    """
     parser = argparse.ArgumentParser(prog="vadop-view", description=__doc__.split("\n\n")[0] if __doc__ else None)
     parser.add_argument("--bodies", type=int, default=200, help="number of spheres (default 200)")
     parser.add_argument("--packing-fraction", type=float, default=0.05, help="fraction of the box filled (default 0.05)")
@@ -121,7 +171,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         world = scene(args.bodies, args.packing_fraction, args.max_speed, seed=args.seed, method="vadop", mode=args.mode, pool_axes=args.pool_axes)
         path = write_html(record(world, args.frames), args.out)
-    except (ValueError, OverflowError, OSError) as e:
+    except (ValueError, OSError) as e:
         # Out-of-range integers and unwritable paths are the user's input too: one line, exit 2.
         parser.exit(2, f"error: {e}\n")
     print(f"wrote {path} ({path.stat().st_size / 1e6:.1f} MB): open it in a browser")

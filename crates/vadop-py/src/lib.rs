@@ -2,8 +2,9 @@
 //!
 //! It owns the translation between numpy arrays and the core's types, and nothing else: every
 //! physical rule stays in the `vadop` crate. Input is checked here first, row by row, so that a
-//! bad argument raises `TypeError` (wrong type or dtype) or `ValueError` (wrong shape or value)
-//! naming the argument, the row and what was expected, before the world is touched; whatever
+//! bad argument raises `TypeError` (wrong type or dtype) or `ValueError` (wrong shape or value,
+//! an int out of its range) naming the argument, the row and what was expected, before the world
+//! is touched; lists and tuples are read with `numpy.asarray` where arrays are taken; whatever
 //! the core still rejects (overlaps, absurd speeds, bad settings) becomes a `ValueError` with the
 //! core's message. Stepping releases the GIL.
 
@@ -11,11 +12,12 @@ use glam::DVec3;
 use numpy::ndarray::{Array1, Array2};
 use numpy::prelude::*;
 use numpy::{PyArray1, PyArray2, PyArrayDescr, PyUntypedArray};
-use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyOverflowError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::sync::{Mutex, MutexGuard, TryLockError};
 use std::time::{Duration, Instant};
+use vadop::axis_pool::MAX_AXES;
 use vadop::bounding_volume::interval;
 use vadop::collapse::DEFAULT_CONTACT_DURATION;
 use vadop::memory;
@@ -59,7 +61,8 @@ fn expected(dtype: &str, shape: &[Option<usize>]) -> String {
 }
 
 /// Checks that `obj` is a numpy array of `dtype` whose shape matches `shape` (`None` = any
-/// length) and returns it. Type and dtype problems are `TypeError`, shape problems `ValueError`.
+/// length) and returns it; a list or tuple is read with `numpy.asarray` first (see
+/// [`sequence_array`]). Type and dtype problems are `TypeError`, shape problems `ValueError`.
 fn checked_array<'py>(
     obj: &Bound<'py, PyAny>,
     name: &str,
@@ -67,21 +70,99 @@ fn checked_array<'py>(
     shape: &[Option<usize>],
 ) -> PyResult<Bound<'py, PyUntypedArray>> {
     let want = expected(&dtype.to_string(), shape);
-    let Ok(array) = obj.downcast::<PyUntypedArray>() else {
+    let (array, what) = if let Ok(array) = obj.downcast::<PyUntypedArray>() {
+        if !array.dtype().is_equiv_to(&dtype) {
+            let got = format!("{} of shape {}", array.dtype(), shape_text(array.shape()));
+            return Err(PyTypeError::new_err(format!("{name} must be {want}, got {got}")));
+        }
+        (array.clone(), array.dtype().to_string())
+    } else if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        (sequence_array(obj, name, &want, &dtype)?, format!("a {}", obj.get_type().name()?))
+    } else {
         let type_name = obj.get_type().name()?;
         return Err(PyTypeError::new_err(format!(
             "{name} must be {want}, got {type_name} (convert with numpy.asarray({name}, dtype={dtype}))"
         )));
     };
-    let got = format!("{} of shape {}", array.dtype(), shape_text(array.shape()));
-    if !array.dtype().is_equiv_to(&dtype) {
-        return Err(PyTypeError::new_err(format!("{name} must be {want}, got {got}")));
-    }
     let fits = array.ndim() == shape.len() && array.shape().iter().zip(shape).all(|(&d, &s)| s.is_none_or(|s| s == d));
     if !fits {
-        return Err(PyValueError::new_err(format!("{name} must be {want}, got {got}")));
+        return Err(PyValueError::new_err(format!(
+            "{name} must be {want}, got {what} of shape {}",
+            shape_text(array.shape())
+        )));
     }
-    Ok(array.clone())
+    Ok(array)
+}
+
+/// A list or tuple argument as an array of `dtype`, the way `numpy.asarray` reads it: Python and
+/// numpy numbers of any int or float type are taken (ints only, for an int `dtype`), anything
+/// else (str, bool, None, nested lists of different lengths) is an error naming the argument.
+fn sequence_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    want: &str,
+    dtype: &Bound<'py, PyArrayDescr>,
+) -> PyResult<Bound<'py, PyUntypedArray>> {
+    let py = obj.py();
+    let type_name = obj.get_type().name()?;
+    let numpy = py.import("numpy")?;
+    let array = numpy.call_method1("asarray", (obj,)).map_err(|e| {
+        PyValueError::new_err(format!(
+            "{name} must be {want}, got a {type_name} that is not a rectangular array of numbers ({})",
+            e.value(py)
+        ))
+    })?;
+    let array = array.downcast_into::<PyUntypedArray>()?;
+    let kind = array.dtype().kind();
+    let accepted: &[u8] = if dtype.kind() == b'f' { b"iuf" } else { b"iu" };
+    // `numpy.asarray([])` is float64: an empty list is fine whatever the dtype.
+    let empty = array.shape().contains(&0);
+    if !(accepted.contains(&kind) || empty) {
+        let values = match kind {
+            b'b' => "bools".to_string(),
+            b'U' | b'S' => "strings".to_string(),
+            b'O' => "values that are not all numbers (or ints beyond 64 bits)".to_string(),
+            _ => format!("{} values", array.dtype()),
+        };
+        return Err(PyTypeError::new_err(format!("{name} must be {want}, got a {type_name} of {values}")));
+    }
+    Ok(array.call_method1("astype", (dtype,))?.downcast_into::<PyUntypedArray>()?)
+}
+
+/// An int argument as given, before its range is known: [`IntArg::in_range`] checks it. Taking
+/// every object (instead of a Rust int type) keeps a negative or huge int from ever becoming
+/// `OverflowError`, and lets the message name the argument and its range.
+enum IntArg {
+    /// Fits i128 (Python and numpy ints, bools).
+    Int(i128),
+    /// An int beyond i128, as Python prints it.
+    Huge(String),
+    /// Not an int (floats too, even 5.0): the type's name.
+    NotInt(String),
+}
+
+impl<'py> FromPyObject<'py> for IntArg {
+    fn extract_bound(obj: &Bound<'py, PyAny>) -> PyResult<Self> {
+        Ok(match obj.extract::<i128>() {
+            Ok(value) => IntArg::Int(value),
+            Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => IntArg::Huge(obj.str()?.to_string()),
+            Err(_) => IntArg::NotInt(obj.get_type().name()?.to_string()),
+        })
+    }
+}
+
+impl IntArg {
+    /// The value if it lies in `min..=max`; else `ValueError` (`TypeError` if not an int) naming
+    /// `name` and the range.
+    fn in_range(&self, name: &str, min: i128, max: i128) -> PyResult<i128> {
+        let range = format!("{name} must be an int between {min} and {max}");
+        match self {
+            IntArg::Int(value) if (min..=max).contains(value) => Ok(*value),
+            IntArg::Int(value) => Err(PyValueError::new_err(format!("{range}, got {value}"))),
+            IntArg::Huge(text) => Err(PyValueError::new_err(format!("{range}, got {text}"))),
+            IntArg::NotInt(type_name) => Err(PyTypeError::new_err(format!("{range}, got {type_name}"))),
+        }
+    }
 }
 
 /// Rows of a float64 array of shape (n, 3) as vectors, each checked to be finite.
@@ -124,18 +205,36 @@ fn also_accepts(py: Python<'_>, error: PyErr, alternative: &str) -> PyErr {
     }
 }
 
-/// Body ids: a Python int or an int64 array of shape (k,).
-fn ids_of(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
-    if let Ok(id) = obj.extract::<i64>() {
-        if !obj.is_instance_of::<PyUntypedArray>() {
-            return Ok(vec![id]);
+/// Body ids: an int, or an int64 array (or a list or tuple of ints) of shape (k,). An int too
+/// large for int64, in a list or not, names no body: `ValueError`.
+fn ids_of(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i128>> {
+    let no_body = |text: &str| PyValueError::new_err(format!("{name} must name live bodies, got {text}"));
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        // Python ints one by one, whatever their size; anything else goes to the array check.
+        let mut ids = Vec::with_capacity(obj.len()?);
+        for item in obj.try_iter()? {
+            match item?.extract::<IntArg>()? {
+                IntArg::Int(id) => ids.push(id),
+                IntArg::Huge(text) => return Err(no_body(&text)),
+                IntArg::NotInt(_) => break,
+            }
+        }
+        if ids.len() == obj.len()? {
+            return Ok(ids);
+        }
+    } else if !obj.is_instance_of::<PyUntypedArray>() {
+        match obj.extract::<IntArg>()? {
+            IntArg::Int(id) => return Ok(vec![id]),
+            IntArg::Huge(text) => return Err(no_body(&text)),
+            // Not an int: the array check below names what was expected.
+            IntArg::NotInt(_) => {}
         }
     }
     let py = obj.py();
     let array =
         checked_array(obj, name, numpy::dtype::<i64>(py), &[None]).map_err(|e| also_accepts(py, e, "an int"))?;
     let array = array.downcast::<PyArray1<i64>>()?.readonly();
-    Ok(array.as_array().to_vec())
+    Ok(array.as_array().iter().map(|&id| i128::from(id)).collect())
 }
 
 /// The box: a cube side (a number) or a float64 array [[min x, y, z], [max x, y, z]].
@@ -205,30 +304,22 @@ fn parse_mode(mode: &str) -> PyResult<Mode> {
     }
 }
 
+/// Most threads a world may be given: far more than any machine's cores, few enough that asking
+/// for them cannot exhaust the system.
+const MAX_THREADS: i128 = 1024;
+
 #[allow(clippy::too_many_arguments)]
 fn config(
     method: &str,
     mode: &str,
-    pool_axes: Option<i64>,
+    pool_axes: Option<IntArg>,
     phi: Option<f64>,
     restitution: f64,
     contact_duration: f64,
-    threads: Option<i64>,
+    threads: Option<IntArg>,
 ) -> PyResult<WorldConfig> {
-    let pool_axes = match pool_axes {
-        Some(m) if m < 0 => {
-            return Err(PyValueError::new_err(format!("pool_axes must be an int between 3 and 100000, got {m}")))
-        }
-        Some(m) => Some(m as usize),
-        None => None,
-    };
-    let threads = match threads {
-        Some(n) if n < 1 => {
-            return Err(PyValueError::new_err(format!("threads must be an int >= 1 or None (every core), got {n}")))
-        }
-        Some(n) => Some(n as usize),
-        None => None,
-    };
+    let pool_axes = pool_axes.map(|m| m.in_range("pool_axes", 3, MAX_AXES as i128).map(|m| m as usize)).transpose()?;
+    let threads = threads.map(|n| n.in_range("threads", 1, MAX_THREADS).map(|n| n as usize)).transpose()?;
     Ok(WorldConfig {
         method: parse_method(method)?,
         mode: parse_mode(mode)?,
@@ -251,6 +342,12 @@ fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f6
 /// ``j`` (m,) int64 the other body, or -1 for a wall; ``wall`` (m,) int64 the wall's index in
 /// ``vadop.WALLS``, or -1 for a pair; ``point`` and ``normal`` (m, 3) float64, the normal
 /// pointing from ``i`` towards what it touched; ``impulse`` (m,) float64, 0 when not resolved.
+///
+/// >>> import vadop
+/// >>> w = vadop.World([[2.0, 5, 5], [8, 5, 5]], [[30.0, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10.0)
+/// >>> c = w.step(0.2)
+/// >>> len(c), c.point[0].round(6).tolist(), c.normal[0].tolist()
+/// (1, [7.5, 5.0, 5.0], [1.0, 0.0, 0.0])
 #[pyclass(frozen, get_all, module = "vadop._vadop")]
 struct Contacts {
     time: Py<PyArray1<f64>>,
@@ -303,16 +400,19 @@ impl Contacts {
 ///
 /// Bodies are given as numpy columns: ``positions`` and ``velocities`` float64 (n, 3), ``radii``
 /// and ``masses`` float64 (n,) (``masses`` defaults to 1). ``box`` is a cube side or a float64
-/// array ``[[min x, y, z], [max x, y, z]]``. Settings: ``method`` ('auto', the fastest broad
-/// phase for the scene; 'vadop', the paper's velocity-aligned sweep and prune; 'grid'; 'brute' —
-/// every pair, the oracle —; 'discrete' — overlap checks at frame instants only — or the
-/// continuous baselines 'swept-aabb' and 'swept-kdop'), ``mode`` ('simulate' or 'detect': bodies
-/// pass through each other and bounce only off the walls), ``pool_axes`` (None picks the engine's
-/// default), ``phi`` in radians (None: the pool's covering radius), ``restitution`` in [0, 1] and
-/// ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
+/// array ``[[min x, y, z], [max x, y, z]]``. Lists and tuples of numbers (ints too) are taken
+/// wherever an array is, read with ``numpy.asarray``; numpy arrays must have the dtype itself.
+///
+/// Settings: ``method`` ('auto', the fastest broad phase for the scene; 'vadop', the paper's
+/// velocity-aligned sweep and prune; 'grid'; 'brute' — every pair, the oracle —; 'discrete' —
+/// overlap checks at frame instants only — or the continuous baselines 'swept-aabb' and
+/// 'swept-kdop'), ``mode`` ('simulate' or 'detect': bodies pass through each other and bounce
+/// only off the walls), ``pool_axes`` (None picks the engine's default, else an int in
+/// 3..=100000), ``phi`` in radians (None: the pool's covering radius), ``restitution`` in [0, 1]
+/// and ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
 /// body's previous one is elastic — the TC model that ends inelastic collapse) and ``threads``
-/// (how many threads a step shares its work among; None: every core; results are bit-identical
-/// whatever the number).
+/// (how many threads a step shares its work among, 1 to 1024; None: every core; results are
+/// bit-identical whatever the number).
 ///
 /// Body ids start at 0 in row order; ids of removed bodies are reused, lowest first. Arrays read
 /// back (``positions``, ``velocities`` ...) hold the live bodies in ascending id order (``ids``).
@@ -324,7 +424,14 @@ impl Contacts {
 /// >>> int(c.i[0]), int(c.j[0]), round(float(c.time[0]), 6)
 /// (0, 1, 0.166667)
 ///
-/// Threads may share a world: calls on it take turns. A thread that calls while another steps
+/// Lists work as well:
+///
+/// >>> w = vadop.World([[2, 5, 5], [8, 5, 5]], [[30, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10)
+/// >>> len(w.step(0.2))
+/// 1
+///
+/// Threads may share a world: calls on it take turns (``step`` is serialised by a lock inside
+/// the world, never ``RuntimeError: Already borrowed``). A thread that calls while another steps
 /// waits, without holding the GIL, until that step is done.
 #[pyclass(name = "World", module = "vadop._vadop", frozen)]
 struct PyWorld {
@@ -344,11 +451,11 @@ impl PyWorld {
         r#box: &Bound<'_, PyAny>,
         method: &str,
         mode: &str,
-        pool_axes: Option<i64>,
+        pool_axes: Option<IntArg>,
         phi: Option<f64>,
         restitution: f64,
         contact_duration: f64,
-        threads: Option<i64>,
+        threads: Option<IntArg>,
     ) -> PyResult<PyWorld> {
         let bounds = bounds(r#box)?;
         let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads)?;
@@ -359,7 +466,13 @@ impl PyWorld {
         Ok(PyWorld { world: Mutex::new(world) })
     }
 
-    /// Adds bodies (all or none) and returns their ids as an int64 array.
+    /// Adds bodies (all or none) and returns their ids as an int64 array; the arguments are
+    /// those of ``World`` (arrays, lists or tuples).
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[2.0, 2, 2]], [[0.0, 0, 0]], [0.5], box=10.0)
+    /// >>> w.add([[5.0, 5, 5], [8, 8, 8]], [[1.0, 0, 0], [0, 1, 0]], [0.5, 0.25]).tolist()
+    /// [1, 2]
     #[pyo3(signature = (positions, velocities, radii, masses = None))]
     fn add<'py>(
         &self,
@@ -376,7 +489,13 @@ impl PyWorld {
         Ok(Array1::from_iter(added.into_iter().map(i64::from)).into_pyarray(py))
     }
 
-    /// Removes bodies by id (an int or an int64 array), all or none.
+    /// Removes bodies by id (an int, or an int64 array, list or tuple of ints), all or none.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.scene(10)
+    /// >>> w.remove([0, 3])
+    /// >>> w.ids.tolist()
+    /// [1, 2, 4, 5, 6, 7, 8, 9]
     fn remove(&self, py: Python<'_>, ids: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = ids_of(ids, "ids")?;
         let mut world = self.lock(py)?;
@@ -386,8 +505,14 @@ impl PyWorld {
         Ok(())
     }
 
-    /// Sets the velocities of bodies ``ids`` (an int or an int64 array of k ids) to the rows of
-    /// ``velocities`` (float64 (k, 3)), all or none.
+    /// Sets the velocities of bodies ``ids`` (an int, or k ids as for ``remove``) to the rows of
+    /// ``velocities`` (float64 (k, 3), or lists), all or none.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.scene(10)
+    /// >>> w.set_velocities(4, [[1.0, 2.0, 3.0]])
+    /// >>> w.velocities[4].tolist()
+    /// [1.0, 2.0, 3.0]
     fn set_velocities(&self, py: Python<'_>, ids: &Bound<'_, PyAny>, velocities: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = ids_of(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
@@ -398,7 +523,14 @@ impl PyWorld {
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
     /// the GIL; a Ctrl-C pressed before it starts raises ``KeyboardInterrupt`` and leaves the
-    /// world as it was. Another thread's call on this world waits until the step is done.
+    /// world as it was. Steps are serialised: another thread's call on this world waits
+    /// (without the GIL) until the step is done.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.scene(500, 0.1, 2.0)
+    /// >>> contacts = w.step(1 / 30)
+    /// >>> round(w.time, 6), len(contacts) > 0
+    /// (0.033333, True)
     fn step(&self, py: Python<'_>, dt: f64) -> PyResult<Contacts> {
         py.check_signals()?;
         let contacts = py.allow_threads(|| {
@@ -499,6 +631,13 @@ impl PyWorld {
     /// re-tests, contacts, pair contacts, invalidations, broad-phase bytes) and the contacts whose
     /// physics a rule changed (``tc_contacts``: made elastic by the TC model; ``jam_contacts``:
     /// resolved by the jam rule).
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.scene(300, 0.1, 2.0)
+    /// >>> _ = w.step(1 / 30)
+    /// >>> s = w.stats()
+    /// >>> s["contacts"] >= s["pair_contacts"], s["total_seconds"] > 0
+    /// (True, True)
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let s = *self.lock(py)?.stats();
         let d = PyDict::new(py);
@@ -523,11 +662,19 @@ impl PyWorld {
     }
 
     /// Total kinetic energy.
+    ///
+    /// >>> import vadop
+    /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).kinetic_energy()
+    /// 25.0
     fn kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
         Ok(self.lock(py)?.kinetic_energy())
     }
 
     /// Total linear momentum, float64 (3,).
+    ///
+    /// >>> import vadop
+    /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).momentum().tolist()
+    /// [6.0, 8.0, 0.0]
     fn momentum<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let momentum = self.lock(py)?.momentum();
         Ok(Array1::from_vec(momentum.to_array().to_vec()).into_pyarray(py))
@@ -538,6 +685,13 @@ impl PyWorld {
     /// interval each body's swept sphere covers on that axis. The broad phase is built by the
     /// first step, so this needs method 'vadop' and at least one step; bodies added since the
     /// last step have no rows yet.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.scene(100, 0.1, 1.0, method="vadop")
+    /// >>> _ = w.step(1 / 30)
+    /// >>> body, axis, lo, hi = w.volumes(1 / 30)
+    /// >>> bool((lo < hi).all()), set(body.tolist()) == set(w.ids.tolist())
+    /// (True, True)
     #[allow(clippy::type_complexity)]
     fn volumes<'py>(
         &self,
@@ -625,7 +779,7 @@ fn mode_name(mode: Mode) -> &'static str {
 }
 
 /// Ids that all name distinct live bodies of `world`, or an error naming the first that does not.
-fn live_ids(world: &World, ids: &[i64], name: &str) -> PyResult<Vec<u32>> {
+fn live_ids(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<u32>> {
     let mut seen = std::collections::HashSet::new();
     ids.iter()
         .map(|&id| {
@@ -642,36 +796,41 @@ fn live_ids(world: &World, ids: &[i64], name: &str) -> PyResult<Vec<u32>> {
 /// The paper's scene as a world: ``bodies`` spheres of radius ``radius`` at ``packing_fraction``
 /// in a cube, random directions, speeds uniform up to ``max_speed`` diameters per frame at 30
 /// frames per second (so step with ``dt = 1/30``), generated from ``seed``; the world settings
-/// as for ``World``. Raises ``MemoryError``, before allocating anything, when the world would not
-/// fit in the memory left (about 640 bytes a body).
+/// as for ``World``. ``bodies`` is an int in 1..=10^8, ``seed`` an int in 0..2^64; any other int
+/// raises ``ValueError`` naming the argument and its range, a float ``TypeError``. Raises
+/// ``MemoryError``, before allocating anything, when the world would not fit in the memory left
+/// (about 640 bytes a body).
 ///
 /// >>> import vadop
 /// >>> w = vadop.scene(1000, 0.05, 0.5)
 /// >>> len(w), w.positions.shape
 /// (1000, (1000, 3))
 #[pyfunction]
-#[pyo3(signature = (bodies = 1000, packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = 1, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None))]
+// The int defaults are `IntArg`s, which pyo3 cannot print in the signature Python sees.
+#[pyo3(
+    text_signature = "(bodies=1000, packing_fraction=0.05, max_speed=0.5, *, radius=0.5, seed=1, method='auto', mode='simulate', pool_axes=None, phi=None, restitution=1.0, contact_duration=1e-05, threads=None)"
+)]
+#[pyo3(signature = (bodies = IntArg::Int(1000), packing_fraction = 0.05, max_speed = 0.5, *, radius = 0.5, seed = IntArg::Int(1), method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None))]
 #[allow(clippy::too_many_arguments)]
 fn scene(
     py: Python<'_>,
-    bodies: usize,
+    bodies: IntArg,
     packing_fraction: f64,
     max_speed: f64,
     radius: f64,
-    seed: u64,
+    seed: IntArg,
     method: &str,
     mode: &str,
-    pool_axes: Option<i64>,
+    pool_axes: Option<IntArg>,
     phi: Option<f64>,
     restitution: f64,
     contact_duration: f64,
-    threads: Option<i64>,
+    threads: Option<IntArg>,
 ) -> PyResult<PyWorld> {
+    let bodies = bodies.in_range("bodies", 1, MAX_SCENE_BODIES as i128)? as usize;
+    let seed = seed.in_range("seed", 0, u64::MAX.into())? as u64;
     let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads)?;
-    // Only a valid count is worth checking: the core names a bad one better.
-    if bodies <= MAX_SCENE_BODIES {
-        check_world_memory(bodies)?;
-    }
+    check_world_memory(bodies)?;
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
     Ok(PyWorld { world: Mutex::new(world) })
@@ -683,7 +842,8 @@ fn scene(
 /// chooses how they are found ('auto', 'vadop', 'grid', 'brute', 'discrete', 'swept-aabb' or
 /// 'swept-kdop'; all but 'discrete' find the same contacts). Steps without the GIL; Ctrl-C raises
 /// ``KeyboardInterrupt`` within 50 ms (or a frame, if longer). Raises ``MemoryError`` when the contacts found
-/// so far outgrow the memory left: run fewer frames at a time, or step a ``World``.
+/// so far outgrow the memory left: run fewer frames at a time, or step a ``World``. ``frames`` is
+/// an int >= 0; arrays as for ``World`` (lists and tuples too).
 ///
 /// >>> import numpy as np, vadop
 /// >>> c = vadop.detect(np.array([[1.0, 1, 1], [4, 1, 1]]), np.array([[40.0, 0, 0], [0, 0, 0]]),
@@ -700,12 +860,13 @@ fn detect(
     radii: &Bound<'_, PyAny>,
     r#box: &Bound<'_, PyAny>,
     dt: f64,
-    frames: usize,
+    frames: IntArg,
     method: &str,
-    pool_axes: Option<i64>,
+    pool_axes: Option<IntArg>,
     phi: Option<f64>,
-    threads: Option<i64>,
+    threads: Option<IntArg>,
 ) -> PyResult<Contacts> {
+    let frames = frames.in_range("frames", 0, u64::MAX.into())? as u64;
     let bounds = bounds(r#box)?;
     let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION, threads)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
@@ -750,5 +911,7 @@ fn _vadop(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene, m)?)?;
     m.add_function(wrap_pyfunction!(detect, m)?)?;
     m.add("WALLS", WALLS.to_vec())?;
+    // The workspace's version, which pyproject.toml's matches (the tests check both).
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
