@@ -4,7 +4,7 @@ Every function draws into a new figure (or the axes given) and returns the figur
 can save it and notebooks show it.
 
 - ``benchmark(csv)``: median cost per frame against the number of bodies, one line per method and
-  one panel per speed, from the CSV that ``vadop bench`` writes (``results/core-benchmark.csv``).
+  one panel per speed, from the CSV that ``vadop-bench core`` writes (``results/core-benchmark.csv``).
 - ``cost_split(stats)``: the per-frame cost split c_update / c_sort / c_test / c_response from
   one ``World.stats()`` dict or a list of them.
 - ``contact_timeline(contacts)``: when each body touched something, body-body and wall contacts
@@ -47,7 +47,7 @@ def _pyplot() -> Any:
 def benchmark(csv_path: Union[str, Path] = "results/core-benchmark.csv") -> Figure:
     """Median c_total per frame (ms) against bodies, per method, one panel per speed.
 
-    ``csv_path`` is a CSV written by ``vadop bench`` (columns n, speed, method, status,
+    ``csv_path`` is a CSV written by ``vadop-bench core`` (columns n, speed, method, status,
     median_ms); rows whose status is not ``ok`` are left out.
 
     >>> import vadop.plot
@@ -56,7 +56,7 @@ def benchmark(csv_path: Union[str, Path] = "results/core-benchmark.csv") -> Figu
     """
     rows = [r for r in csv.DictReader(open(csv_path, newline="")) if r.get("status") == "ok" and r.get("median_ms")]
     if not rows:
-        raise ValueError(f"{csv_path} has no successful benchmark rows (run `vadop bench` first)")
+        raise ValueError(f"{csv_path} has no successful benchmark rows (run `vadop-bench core` first)")
     speeds = sorted({float(r["speed"]) for r in rows})
     plt = _pyplot()
     figure, axes = plt.subplots(1, len(speeds), figsize=(4.2 * len(speeds), 3.8), squeeze=False, sharey=True)

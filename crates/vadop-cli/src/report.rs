@@ -728,17 +728,6 @@ fn seconds(dt: f64) -> String {
 
 #[cfg(test)]
 mod tests {
-    #[test]
-    fn time_steps_read_as_people_write_them() {
-        assert_eq!(super::seconds(1.0 / 30.0), "1/30 s");
-        assert_eq!(super::seconds(0.16666666666666666), "1/6 s");
-        assert_eq!(super::seconds(0.25), "1/4 s");
-        assert_eq!(super::seconds(0.123456789), "0.123457 s");
-        assert_eq!(super::seconds(3.0), "3 s");
-        assert_eq!(super::seconds(1e-300), "1e-300 s");
-        assert_eq!(super::seconds(2.5e7), "2.5e7 s");
-    }
-
     use super::*;
 
     fn spread_of(values: impl Iterator<Item = f64>) -> Spread {
@@ -779,5 +768,16 @@ mod tests {
         }
         let s = edges.spread();
         assert_eq!((s.median, s.p95), (0.0, 1e12));
+    }
+
+    #[test]
+    fn time_steps_read_as_people_write_them() {
+        assert_eq!(seconds(1.0 / 30.0), "1/30 s");
+        assert_eq!(seconds(0.16666666666666666), "1/6 s");
+        assert_eq!(seconds(0.25), "1/4 s");
+        assert_eq!(seconds(0.123456789), "0.123457 s");
+        assert_eq!(seconds(3.0), "3 s");
+        assert_eq!(seconds(1e-300), "1e-300 s");
+        assert_eq!(seconds(2.5e7), "2.5e7 s");
     }
 }
