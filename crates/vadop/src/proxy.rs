@@ -57,16 +57,13 @@ pub struct Span {
     pub end: f64,
     /// Swept box over `[start, end]`, padded, relative to [`ProxyTable::box_min`].
     pub bbox: CompactBox,
-    /// The body's velocity stamp when the proxy was built: broad-phase entries carrying another
-    /// stamp are stale.
-    pub stamp: u32,
-    /// False for removed bodies and bodies not entered yet.
-    pub live: bool,
     /// True when the proxy ends before the window because of its reach: it must be renewed.
     pub expires: bool,
 }
 
-/// Flat table of proxies: two arrays by body id, the motions (one cache line each) and the spans.
+/// Flat table of proxies, arrays by body id: the motions (one cache line each), the spans, and
+/// the stamps and liveness that a broad phase checks for every entry it passes, kept dense so
+/// that check stays in cache.
 #[derive(Debug, Default, Clone)]
 pub struct ProxyTable {
     /// The broad-phase window every proxy lies in.
@@ -78,9 +75,16 @@ pub struct ProxyTable {
     reach: f64,
     /// Median bounding radius of the live bodies at the window's start.
     typical_radius: f64,
+    /// Few proxies are expected to change within the window (see [`Self::calm`]).
+    calm: bool,
     /// Motion and bounding radius of each body.
     pub proxies: Vec<Proxy>,
     pub spans: Vec<Span>,
+    /// The body's velocity stamp when its proxy was built: broad-phase entries carrying another
+    /// stamp are stale.
+    stamps: Vec<u32>,
+    /// False for removed bodies and bodies not entered yet.
+    live: Vec<bool>,
     /// Scratch for the median radius.
     radii: Vec<f64>,
 }
@@ -166,6 +170,19 @@ impl ProxyTable {
         self.reach = diameters;
     }
 
+    /// Says whether few proxies are expected to change within the window (bodies that rarely
+    /// change velocity), as the pipeline measured over the last one.
+    pub fn set_calm(&mut self, calm: bool) {
+        self.calm = calm;
+    }
+
+    /// True when few proxies are expected to change within the window: a broad phase may then
+    /// make its window start cheaper at the price of dearer mid-window re-tests.
+    #[inline]
+    pub fn calm(&self) -> bool {
+        self.calm
+    }
+
     /// Median bounding radius of the live bodies at the window's start: the length scale the
     /// broad phases size their cells and pieces by.
     #[inline]
@@ -214,7 +231,7 @@ impl ProxyTable {
     /// The velocity stamp proxy `i` was built with.
     #[inline]
     pub fn stamp(&self, i: usize) -> u32 {
-        self.spans[i].stamp
+        self.stamps[i]
     }
 
     /// True when proxy `i` ends before the window because of its reach.
@@ -232,7 +249,7 @@ impl ProxyTable {
     /// Body `i` as a broad phase reports it from this table.
     #[inline]
     pub fn reported(&self, i: usize) -> Reported<'_> {
-        Reported { body: i as u32, stamp: self.spans[i].stamp, proxy: &self.proxies[i] }
+        Reported { body: i as u32, stamp: self.stamps[i], proxy: &self.proxies[i] }
     }
 
     /// Bounding radius of body `i`.
@@ -256,14 +273,13 @@ impl ProxyTable {
     /// True when body `i` has a proxy.
     #[inline]
     pub fn is_live(&self, i: usize) -> bool {
-        self.spans.get(i).is_some_and(|s| s.live)
+        self.live.get(i).copied().unwrap_or(false)
     }
 
     /// True when a broad-phase entry of body `i` made with `stamp` is current.
     #[inline]
     pub fn is_current(&self, i: usize, stamp: u32) -> bool {
-        let span = &self.spans[i];
-        span.live && span.stamp == stamp
+        self.stamps[i] == stamp && self.live[i]
     }
 
     /// Window start: every live body's proxy over `window`, bodies at their positions at its
@@ -272,8 +288,8 @@ impl ProxyTable {
         self.window = window;
         self.resize(bodies.slots());
         self.radii.clear();
-        let spans = &self.spans;
-        self.radii.extend((0..bodies.slots()).filter(|&i| spans[i].live).map(|i| bodies.bounding_radius(i)));
+        let live = &self.live;
+        self.radii.extend((0..bodies.slots()).filter(|&i| live[i]).map(|i| bodies.bounding_radius(i)));
         if !self.radii.is_empty() {
             let middle = self.radii.len() / 2;
             self.typical_radius = *self.radii.select_nth_unstable_by(middle, f64::total_cmp).1;
@@ -281,23 +297,28 @@ impl ProxyTable {
         let rule = self.rule();
         workers.zip_chunks(&mut self.proxies, &mut self.spans, |offset, proxies, spans| {
             for (k, (proxy, span)) in proxies.iter_mut().zip(spans).enumerate() {
-                if span.live {
+                if live[offset + k] {
                     (*proxy, *span) = rule.proxy(offset + k, bodies, window.start);
                 }
             }
         });
+        // Stamps of bodies without a proxy are never compared: is_current checks liveness.
+        let n = self.stamps.len().min(bodies.stamp.len());
+        self.stamps[..n].copy_from_slice(&bodies.stamp[..n]);
     }
 
     /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on.
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
         self.resize(bodies.slots());
         (self.proxies[i], self.spans[i]) = self.rule().proxy(i, bodies, t);
+        self.stamps[i] = bodies.stamp[i];
+        self.live[i] = true;
     }
 
     /// Drops body `i` (removed): its broad-phase entries become stale.
     pub fn remove(&mut self, i: usize) {
-        if let Some(span) = self.spans.get_mut(i) {
-            span.live = false;
+        if let Some(live) = self.live.get_mut(i) {
+            *live = false;
         }
     }
 
@@ -315,6 +336,8 @@ impl ProxyTable {
         if self.spans.len() < slots {
             self.proxies.resize(slots, Proxy::default());
             self.spans.resize(slots, Span::default());
+            self.stamps.resize(slots, 0);
+            self.live.resize(slots, false);
         }
     }
 
@@ -322,6 +345,8 @@ impl ProxyTable {
     pub fn memory_bytes(&self) -> usize {
         self.proxies.capacity() * std::mem::size_of::<Proxy>()
             + self.spans.capacity() * std::mem::size_of::<Span>()
+            + self.stamps.capacity() * 4
+            + self.live.capacity()
             + self.radii.capacity() * 8
     }
 }
@@ -358,6 +383,6 @@ impl ProxyRule {
         let origin = motion.at(start);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         let bbox = CompactBox::new(low, high, self.box_min);
-        (Proxy { motion, radius }, Span { start, end, bbox, stamp: bodies.stamp[i], live: true, expires })
+        (Proxy { motion, radius }, Span { start, end, bbox, expires })
     }
 }
