@@ -111,11 +111,16 @@ impl EventQueue {
     pub fn push(&mut self, event: Event) {
         self.heap.push(event);
     }
-    /// Replaces the bulk part by `events` (left empty, its allocation kept for the caller), to be
-    /// popped in order with everything pushed.
-    pub fn set_bulk(&mut self, events: &mut Vec<Event>, workers: &Workers) {
-        std::mem::swap(&mut self.bulk, events);
-        events.clear();
+    /// Empties the queue and hands over the bulk part's storage, to be filled with the next
+    /// window's predictions and given back by [`Self::set_bulk`]: one buffer serves both, so a
+    /// window's predictions are held once.
+    pub fn take_bulk(&mut self) -> Vec<Event> {
+        self.clear();
+        std::mem::take(&mut self.bulk)
+    }
+    /// Replaces the bulk part by `events`, to be popped in order with everything pushed.
+    pub fn set_bulk(&mut self, events: Vec<Event>, workers: &Workers) {
+        self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is fine.
         workers.sort_unstable(&mut self.bulk);

@@ -96,9 +96,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     calm: bool,
     /// The threads bulk work is shared among.
     workers: Workers,
-    /// Scratch: travel times for the window rule, predictions of a window's start.
+    /// Scratch: travel times for the window rule.
     travel: Vec<f64>,
-    predicted: Vec<Event>,
     /// Scratch of the jam rule: the cluster being frozen, its members' marks, query results.
     cluster: Vec<u32>,
     cluster_mark: Vec<u32>,
@@ -124,7 +123,6 @@ impl<B: BroadPhase> Pipeline<B> {
             calm: false,
             workers,
             travel: Vec::new(),
-            predicted: Vec::new(),
             cluster: Vec::new(),
             cluster_mark: Vec::new(),
             cluster_epoch: 0,
@@ -143,7 +141,7 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.proxies.memory_bytes()
             + self.queue.memory_bytes()
             + self.rules.memory_bytes()
-            + (self.travel.capacity() * 8 + self.predicted.capacity() * std::mem::size_of::<Event>())
+            + self.travel.capacity() * 8
             + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
     }
 
@@ -247,8 +245,7 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.sort_seconds += start.elapsed().as_secs_f64();
 
         let start = Instant::now();
-        self.queue.clear();
-        let mut predicted = std::mem::take(&mut self.predicted);
+        let mut predicted = self.queue.take_bulk();
         let candidates = self.broad.find_pairs(
             &self.proxies,
             &self.workers,
@@ -269,8 +266,7 @@ impl<B: BroadPhase> Pipeline<B> {
         for mut part in walls {
             predicted.append(&mut part);
         }
-        self.queue.set_bulk(&mut predicted, &self.workers);
-        self.predicted = predicted;
+        self.queue.set_bulk(predicted, &self.workers);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;
         stats.test_seconds += start.elapsed().as_secs_f64();

@@ -85,7 +85,7 @@ pub struct ProxyTable {
     stamps: Vec<u32>,
     /// False for removed bodies and bodies not entered yet.
     live: Vec<bool>,
-    /// Scratch for the median radius.
+    /// Scratch for the median radius (a sample).
     radii: Vec<f64>,
 }
 
@@ -150,6 +150,30 @@ fn up(x: f64) -> f32 {
     } else {
         f
     }
+}
+
+/// Most values [`sampled_median`] looks at.
+const MEDIAN_SAMPLE: usize = 4096;
+
+/// The median of `value(i)` over the slots `i < slots` that are `live`, from an evenly strided
+/// sample of at most a few thousand slots: a typical size needs no scratch as large as the
+/// bodies. The same slots are sampled whatever the number of threads. `None` when the sample
+/// holds no live slot.
+pub fn sampled_median(
+    slots: usize,
+    live: impl Fn(usize) -> bool,
+    value: impl Fn(usize) -> f64,
+    scratch: &mut Vec<f64>,
+) -> Option<f64> {
+    scratch.clear();
+    let stride = slots.div_ceil(MEDIAN_SAMPLE).max(1);
+    scratch.extend((0..slots).step_by(stride).filter(|&i| live(i)).map(&value));
+    if scratch.is_empty() {
+        // A sparse table whose sampled slots are all free: look at every slot.
+        scratch.extend((0..slots).filter(|&i| live(i)).map(&value));
+    }
+    let middle = scratch.len() / 2;
+    (!scratch.is_empty()).then(|| *scratch.select_nth_unstable_by(middle, f64::total_cmp).1)
 }
 
 /// Swept box of a sphere of `radius` moving from `a` to `b`, padded for rounding.
@@ -287,13 +311,13 @@ impl ProxyTable {
     pub fn refresh_all(&mut self, bodies: &Bodies, window: Window, workers: &Workers) {
         self.window = window;
         self.resize(bodies.slots());
-        self.radii.clear();
         let live = &self.live;
-        self.radii.extend((0..bodies.slots()).filter(|&i| live[i]).map(|i| bodies.bounding_radius(i)));
-        if !self.radii.is_empty() {
-            let middle = self.radii.len() / 2;
-            self.typical_radius = *self.radii.select_nth_unstable_by(middle, f64::total_cmp).1;
+        if let Some(median) =
+            sampled_median(bodies.slots(), |i| live[i], |i| bodies.bounding_radius(i), &mut self.radii)
+        {
+            self.typical_radius = median;
         }
+        let live = &self.live;
         let rule = self.rule();
         workers.zip_chunks(&mut self.proxies, &mut self.spans, |offset, proxies, spans| {
             for (k, (proxy, span)) in proxies.iter_mut().zip(spans).enumerate() {

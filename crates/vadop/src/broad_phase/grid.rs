@@ -17,7 +17,7 @@
 
 use super::{BroadPhase, PrepareCounts};
 use crate::parallel::{split_at_points, DisjointWriter, Workers};
-use crate::proxy::{CompactBox, Proxy, ProxyTable, Reported};
+use crate::proxy::{sampled_median, CompactBox, Proxy, ProxyTable, Reported};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -419,16 +419,12 @@ impl BroadPhase for Grid {
     fn prepare(&mut self, proxies: &ProxyTable, workers: &Workers) -> PrepareCounts {
         // Base cell from the median extent of the swept boxes: robust to a few giant, tiny or
         // fast bodies.
-        let mut extents = std::mem::take(&mut self.extents);
-        extents.clear();
-        extents.extend((0..proxies.slots()).filter(|&i| proxies.is_live(i)).map(|i| proxies.bbox(i).extent()));
-        if !extents.is_empty() {
-            let middle = extents.len() / 2;
-            let median = *extents.select_nth_unstable_by(middle, f64::total_cmp).1;
+        let sampled =
+            sampled_median(proxies.slots(), |i| proxies.is_live(i), |i| proxies.bbox(i).extent(), &mut self.extents);
+        if let Some(median) = sampled {
             let extents = if proxies.calm() { CALM_BASE_CELL_EXTENTS } else { BASE_CELL_EXTENTS };
             self.base_cell = (extents * median).max(4.0 * proxies.typical_radius());
         }
-        self.extents = extents;
         // Pass 1: each body's piece count and level exponent, and the pieces per exponent.
         let mut plan = std::mem::take(&mut self.plan);
         plan.clear();
@@ -582,6 +578,14 @@ impl BroadPhase for Grid {
         let mut candidates = 0;
         for k in 0..self.levels.len() {
             let this = &*self;
+            if workers.threads() == 1 {
+                // Straight into `out`: no second buffer the size of a window's predictions.
+                this.slab_pairs(k, 0..this.levels[k].dims[0], &mut |x, y, window| {
+                    candidates += 1;
+                    predict(x, y, window, out);
+                });
+                continue;
+            }
             let parts = workers.map_ranges(this.levels[k].dims[0], |slabs| {
                 let (mut found, mut count) = (Vec::new(), 0u64);
                 this.slab_pairs(k, slabs, &mut |x, y, window| {
