@@ -262,6 +262,9 @@ impl FrameStats {
 pub const AUTO_POOL_AXES: usize = 3;
 
 /// The engine of a method, built at the first step.
+// One engine per world: the size of its largest variant does not matter, a box would only add a
+// pointer hop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 enum Engine {
     Unbuilt,

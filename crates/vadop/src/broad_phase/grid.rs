@@ -15,6 +15,7 @@
 //! on per-cell linked lists, and its query visits only the cells its new path can reach. It never
 //! reads shapes or computes contact times.
 
+use super::box_columns::BoxColumns;
 use super::{BroadPhase, PrepareCounts};
 use crate::parallel::{split_at_points, DisjointWriter, Workers};
 use crate::proxy::{sampled_median, CompactBox, Proxy, ProxyTable, Reported};
@@ -54,6 +55,13 @@ impl Entry {
     }
 }
 
+/// Whose a binned piece is: the body and the stamp of the proxy it was cut from.
+#[derive(Debug, Clone, Copy, Default)]
+struct Owner {
+    body: u32,
+    stamp: u32,
+}
+
 /// One level of the hierarchy: cubic cells of one size.
 #[derive(Debug, Default)]
 struct Level {
@@ -62,7 +70,7 @@ struct Level {
     cell: f64,
     inverse: f64,
     dims: [usize; 3],
-    /// Binned pieces of cell c: `entries[first + cell_start[c]..first + cell_start[c + 1]]`.
+    /// Binned pieces of cell c: slots `first + cell_start[c]..first + cell_start[c + 1]`.
     first: usize,
     /// Cells of the levels before this one: its cell c is cell `cells_before + c` of the grid.
     cells_before: usize,
@@ -121,7 +129,7 @@ impl Level {
             .flat_map(move |x| (a[1]..=b[1]).flat_map(move |y| ((x * ny + y) * nz + a[2])..=((x * ny + y) * nz + b[2])))
     }
 
-    /// The binned pieces of cell `c`, as a range of `Grid::entries`.
+    /// The binned pieces of cell `c`, as a range of slots.
     #[inline]
     fn run(&self, c: usize) -> std::ops::Range<usize> {
         self.first + self.cell_start[c] as usize..self.first + self.cell_start[c + 1] as usize
@@ -137,8 +145,10 @@ pub struct Grid {
     /// Levels in use, ascending by exponent; `spare` keeps the storage of unused ones.
     levels: Vec<Level>,
     spare: Vec<Level>,
-    /// This window's pieces, by level then cell, with the window and the motion of each.
-    entries: Vec<Entry>,
+    /// This window's pieces, by level then cell: the box (by coordinate, for the vector sweep),
+    /// owner, window and motion of each.
+    boxes: BoxColumns,
+    owners: Vec<Owner>,
     windows: Vec<Window>,
     motions: Vec<Proxy>,
     /// Pieces entered mid-window, chained per cell: the piece, its window, the next in the chain.
@@ -165,7 +175,8 @@ impl Grid {
             base_cell: 1.0,
             levels: Vec::new(),
             spare: Vec::new(),
-            entries: Vec::new(),
+            boxes: BoxColumns::default(),
+            owners: Vec::new(),
             windows: Vec::new(),
             motions: Vec::new(),
             late: Vec::new(),
@@ -277,7 +288,7 @@ impl Grid {
         }
         let mut level = self.spare.pop().unwrap_or_default();
         level.reset(exponent, self.base_cell, 1, self.extent);
-        level.first = self.entries.len();
+        level.first = self.owners.len();
         self.levels.push(level);
         self.levels.len() - 1
     }
@@ -293,7 +304,7 @@ impl Grid {
         proxies: &ProxyTable,
         mut visit: impl FnMut(&Entry, Window, &Proxy),
     ) {
-        let Grid { levels, late, late_motions, entries, windows, motions, .. } = self;
+        let Grid { levels, late, late_motions, boxes, owners, windows, motions, .. } = self;
         let level = &mut levels[k];
         let (low, high) = query.bbox.corners();
         let a = level.coordinates(low - level.cell);
@@ -305,12 +316,12 @@ impl Grid {
                 // The binned pieces of cells z = a..=b of a column are one run.
                 let run = level.first + level.cell_start[column + a[2]] as usize
                     ..level.first + level.cell_start[column + b[2] + 1] as usize;
-                for e in run {
-                    let entry = &entries[e];
-                    if query.overlaps(entry) && proxies.is_current(entry.body as usize, entry.stamp) {
-                        visit(entry, windows[e], &motions[e]);
+                boxes.for_each_overlap(&query.bbox, run, |e| {
+                    let Owner { body, stamp } = owners[e];
+                    if proxies.is_current(body as usize, stamp) {
+                        visit(&Entry { bbox: boxes.get(e), body, stamp }, windows[e], &motions[e]);
                     }
-                }
+                });
                 for c in column + a[2]..=column + b[2] {
                     let (mut previous, mut current) = (NONE, level.late_head[c]);
                     while current != NONE {
@@ -340,11 +351,11 @@ impl Grid {
         // column, then z - 1 ..= z + 1 of the columns (x, y + 1) and (x + 1, y - 1 ..= y + 1);
         // column offsets are stored +1 in y so that -1 needs no signed arithmetic.
         const COLUMNS: [[usize; 2]; 4] = [[0, 2], [1, 0], [1, 1], [1, 2]];
-        let (entries, windows, motions) = (&self.entries[..], &self.windows[..], &self.motions[..]);
+        let (boxes, owners, windows, motions) = (&self.boxes, &self.owners[..], &self.windows[..], &self.motions[..]);
         // Reports binned pieces a and b when they belong to different bodies and their windows
         // meet (their boxes are known to overlap).
         let mut hit = |a: usize, b: usize| {
-            let (ea, eb) = (&entries[a], &entries[b]);
+            let (ea, eb) = (owners[a], owners[b]);
             let window = windows[a].intersect(windows[b]);
             if ea.body != eb.body && !window.is_empty() {
                 let x = Reported { body: ea.body, stamp: ea.stamp, proxy: &motions[a] };
@@ -363,21 +374,12 @@ impl Grid {
                     if from == to {
                         continue;
                     }
-                    let run = &entries[from..to];
-                    for (m, ea) in run.iter().enumerate() {
-                        for (n, eb) in run[m + 1..].iter().enumerate() {
-                            if ea.overlaps(eb) {
-                                hit(from + m, from + m + 1 + n);
-                            }
-                        }
+                    for a in from..to {
+                        boxes.for_each_overlap(&boxes.get(a), a + 1..to, |b| hit(a, b));
                     }
                     let mut sweep = |other_from: usize, other_to: usize| {
-                        for (m, ea) in run.iter().enumerate() {
-                            for (n, eb) in entries[other_from..other_to].iter().enumerate() {
-                                if ea.overlaps(eb) {
-                                    hit(from + m, other_from + n);
-                                }
-                            }
+                        for a in from..to {
+                            boxes.for_each_overlap(&boxes.get(a), other_from..other_to, |b| hit(a, b));
                         }
                     };
                     if z + 1 < nz {
@@ -398,14 +400,11 @@ impl Grid {
                     // Coarser levels: each piece against the cells that can hold an
                     // overlapping box there.
                     for coarser in &self.levels[k + 1..] {
-                        for (m, ea) in run.iter().enumerate() {
-                            let (low, high) = ea.bbox.corners();
+                        for a in from..to {
+                            let bbox = boxes.get(a);
+                            let (low, high) = bbox.corners();
                             for c2 in coarser.cells_near(low, high) {
-                                for b in coarser.run(c2) {
-                                    if ea.overlaps(&entries[b]) {
-                                        hit(from + m, b);
-                                    }
-                                }
+                                boxes.for_each_overlap(&bbox, coarser.run(c2), |b| hit(a, b));
                             }
                         }
                     }
@@ -512,8 +511,9 @@ impl BroadPhase for Grid {
             level.count = filled as usize;
         }
         // Every slot is written below: no need to clear what a longer window left.
-        self.entries.resize(first, Entry::default());
-        self.entries.truncate(first);
+        self.owners.resize(first, Owner::default());
+        self.owners.truncate(first);
+        self.boxes.resize(first);
         self.windows.resize(first, Window::default());
         self.windows.truncate(first);
         self.motions.resize(first, Proxy::default());
@@ -536,28 +536,32 @@ impl BroadPhase for Grid {
         let homes = DisjointWriter::new(&mut home);
         let parts: Vec<_> = split_at_points(&mut next_slot, &cell_points)
             .into_iter()
-            .zip(split_at_points(&mut self.entries, &slot_points))
+            .zip(split_at_points(&mut self.owners, &slot_points).into_iter().zip(self.boxes.parts_mut(&slot_points)))
             .zip(split_at_points(&mut self.windows, &slot_points))
             .zip(split_at_points(&mut self.motions, &slot_points))
             .zip(std::iter::once(0).chain(cell_points.iter().copied()))
             .zip(std::iter::once(0).chain(slot_points.iter().copied()))
             .collect();
-        workers.for_each_part(parts, |_, (((((next_slot, entries), windows), motions), lowest), first_slot)| {
-            let owned = lowest..lowest + next_slot.len();
-            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, |i, cell, bbox, window| {
-                let next = &mut next_slot[cell - lowest];
-                let slot = *next as usize;
-                *next += 1;
-                let k = slot - first_slot;
-                entries[k] = Entry { bbox, body: i as u32, stamp: proxies.stamp(i) };
-                windows[k] = window;
-                motions[k] = proxies.proxies[i];
-                if plan_of[i].0 == 1 {
-                    // SAFETY: a single piece is taken by one worker only.
-                    unsafe { homes.write(i, slot as u32) };
-                }
-            });
-        });
+        workers.for_each_part(
+            parts,
+            |_, (((((next_slot, (owners, mut boxes)), windows), motions), lowest), first_slot)| {
+                let owned = lowest..lowest + next_slot.len();
+                Grid::for_each_owned_piece(levels, plan_of, proxies, owned, |i, cell, bbox, window| {
+                    let next = &mut next_slot[cell - lowest];
+                    let slot = *next as usize;
+                    *next += 1;
+                    let k = slot - first_slot;
+                    owners[k] = Owner { body: i as u32, stamp: proxies.stamp(i) };
+                    boxes.set(k, bbox);
+                    windows[k] = window;
+                    motions[k] = proxies.proxies[i];
+                    if plan_of[i].0 == 1 {
+                        // SAFETY: a single piece is taken by one worker only.
+                        unsafe { homes.write(i, slot as u32) };
+                    }
+                });
+            },
+        );
         self.home = home;
         self.next_slot = next_slot;
         self.late.clear();
@@ -629,7 +633,8 @@ impl BroadPhase for Grid {
         let i = body as usize;
         let (_, exponent) = self.plan_pieces(proxies, i);
         let k = self.level_for(exponent);
-        let (entries, windows, motions) = (&mut self.entries, &mut self.windows, &mut self.motions);
+        let (boxes, owners, windows, motions) =
+            (&mut self.boxes, &mut self.owners, &mut self.windows, &mut self.motions);
         let level = &mut self.levels[k];
         if self.home.len() <= i {
             self.home.resize(i + 1, NONE);
@@ -642,7 +647,8 @@ impl BroadPhase for Grid {
             let run = level.run(cell);
             if self.pieces.len() == 1 && run.contains(&home) {
                 // Still one piece in the same cell: replace the binned one where it lies.
-                entries[home] = entry;
+                owners[home] = Owner { body, stamp: entry.stamp };
+                boxes.set(home, bbox);
                 windows[home] = window;
                 motions[home] = proxies.proxies[i];
                 continue;
@@ -657,7 +663,8 @@ impl BroadPhase for Grid {
     fn memory_bytes(&self) -> usize {
         let levels: usize =
             self.levels.iter().chain(&self.spare).map(|l| (l.cell_start.capacity() + l.late_head.capacity()) * 4).sum();
-        self.entries.capacity() * std::mem::size_of::<Entry>()
+        self.boxes.memory_bytes()
+            + self.owners.capacity() * std::mem::size_of::<Owner>()
             + self.windows.capacity() * std::mem::size_of::<Window>()
             + self.motions.capacity() * std::mem::size_of::<Proxy>()
             + self.late.capacity() * std::mem::size_of::<(Entry, Window, u32)>()

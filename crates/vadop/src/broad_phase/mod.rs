@@ -14,6 +14,7 @@
 //!   swept-k-DOP and swept-AABB variants);
 //! - [`brute_force::BruteForce`]: every pair, the oracle.
 
+pub mod box_columns;
 pub mod brute_force;
 pub mod grid;
 pub mod sweep_prune;
