@@ -41,19 +41,46 @@ impl Workers {
         (0..chunks).into_par_iter().map(move |k| k * len / chunks..(k + 1) * len / chunks)
     }
 
-    /// `f` on contiguous chunks of `0..len`, in parallel with more than one thread; the results in
-    /// chunk order.
+    /// `f(range, buffer)` on contiguous chunks of `0..len`, each chunk writing into a buffer of
+    /// its own; the buffers are appended to `out` in chunk order, so `out` is the same whatever the
+    /// number of threads. On one thread `f` writes straight into `out`, with no second buffer the
+    /// size of the output. Returns `f`'s results in chunk order.
     ///
     /// ```
     /// use vadop::parallel::Workers;
-    /// let sums = Workers::new(3).map_ranges(10, |r| r.sum::<usize>());
-    /// assert_eq!(sums.iter().sum::<usize>(), 45);
+    /// let mut evens = Vec::new();
+    /// let counts = Workers::new(3).extend_ranges(10, &mut evens, |r, out| {
+    ///     let before = out.len();
+    ///     out.extend(r.filter(|i| i % 2 == 0));
+    ///     out.len() - before
+    /// });
+    /// assert_eq!(evens, [0, 2, 4, 6, 8]);
+    /// assert_eq!(counts.iter().sum::<usize>(), 5);
     /// ```
-    pub fn map_ranges<T: Send>(&self, len: usize, f: impl Fn(Range<usize>) -> T + Sync + Send) -> Vec<T> {
+    pub fn extend_ranges<T: Send, R: Send>(
+        &self,
+        len: usize,
+        out: &mut Vec<T>,
+        f: impl Fn(Range<usize>, &mut Vec<T>) -> R + Sync + Send,
+    ) -> Vec<R> {
         if self.threads == 1 {
-            return vec![f(0..len)];
+            return vec![f(0..len, out)];
         }
-        self.ranges(len).map(f).collect()
+        let parts: Vec<(Vec<T>, R)> = self
+            .ranges(len)
+            .map(|range| {
+                let mut found = Vec::new();
+                let result = f(range, &mut found);
+                (found, result)
+            })
+            .collect();
+        parts
+            .into_iter()
+            .map(|(mut found, result)| {
+                out.append(&mut found);
+                result
+            })
+            .collect()
     }
 
     /// `f(offset, chunk)` on contiguous chunks of `v`; the results in chunk order.

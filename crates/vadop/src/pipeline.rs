@@ -43,8 +43,8 @@ const CALM_WINDOW_DIAMETERS: f64 = 3.0;
 /// A window is calm when the last one refreshed fewer proxies mid-window than this, per live
 /// body and per diameter the fastest tenth travels. Measured: the paper scene in detect mode
 /// (only wall bounces) refreshes about 0.02, the equilibrium gas at packing 0.05 about 0.3 and
-/// at 0.3 about 4, and the calm settings are 1.3-1.5x faster for the first, 1.2x slower for the
-/// others (`vadop simulate`, n = 10^5, one pinned core).
+/// at 0.3 about 4. The calm settings make the first 1.2-1.4x faster and would make the gas about
+/// 1.3x slower (`vadop simulate`, n = 10^4 and 10^5, one pinned core; BENCHMARKS.md, Speed).
 const CALM_UPDATES: f64 = 0.1;
 /// A proxy reaches this many typical diameters along its path at most; then it is renewed, so a
 /// fast body's retest covers only where it can go before its next contact is likely.
@@ -92,8 +92,6 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     updates: usize,
     /// Halved each time a window ends early, doubled back when windows pass calmly.
     shrink: f64,
-    /// Few proxies are expected to change within the window, judged from the last one.
-    calm: bool,
     /// The threads bulk work is shared among.
     workers: Workers,
     /// Scratch: travel times for the window rule.
@@ -120,7 +118,6 @@ impl<B: BroadPhase> Pipeline<B> {
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
-            calm: false,
             workers,
             travel: Vec::new(),
             cluster: Vec::new(),
@@ -182,8 +179,8 @@ impl<B: BroadPhase> Pipeline<B> {
         }
     }
 
-    /// The length of the window starting at `now`, for frames of length `frame`; judges whether
-    /// the window is calm.
+    /// The length of the window starting at `now`, for frames of length `frame`; tells the proxy
+    /// table whether the window is calm.
     fn window_length(&mut self, bodies: &Bodies, mode: Mode, frame: f64) -> f64 {
         if self.rule == WindowRule::Frame {
             return frame;
@@ -208,12 +205,13 @@ impl<B: BroadPhase> Pipeline<B> {
         // tenth). Before the first, the mode tells: in detect mode only walls and the caller
         // change velocities, in simulate mode every contact does.
         let last = self.window.duration();
-        self.calm = if last > 0.0 {
+        let calm = if last > 0.0 {
             (self.updates as f64) * quick < CALM_UPDATES * live as f64 * last
         } else {
             mode == Mode::Detect
         };
-        let diameters = if self.calm { CALM_WINDOW_DIAMETERS } else { WINDOW_DIAMETERS };
+        self.proxies.set_calm(calm);
+        let diameters = if calm { CALM_WINDOW_DIAMETERS } else { WINDOW_DIAMETERS };
         (quick * diameters * self.shrink).clamp(frame / FRAME_RATIO, frame * FRAME_RATIO)
     }
 
@@ -234,7 +232,6 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.windows += 1;
 
         let start = Instant::now();
-        self.proxies.set_calm(self.calm && self.rule == WindowRule::Adaptive);
         self.proxies.refresh_all(bodies, self.window, &self.workers);
         stats.update_seconds += start.elapsed().as_secs_f64();
 
@@ -253,19 +250,14 @@ impl<B: BroadPhase> Pipeline<B> {
             &mut predicted,
         );
         let (proxies, window) = (&self.proxies, self.window);
-        let walls = self.workers.map_ranges(bodies.slots(), |range| {
-            let mut found = Vec::new();
+        self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
                 found.extend(predict_wall(bodies, &physics.bounds, i as u32, window));
                 if proxies.expires(i) {
                     found.push(renewal(bodies, proxies, i as u32));
                 }
             }
-            found
         });
-        for mut part in walls {
-            predicted.append(&mut part);
-        }
         self.queue.set_bulk(predicted, &self.workers);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;

@@ -317,7 +317,6 @@ impl ProxyTable {
         {
             self.typical_radius = median;
         }
-        let live = &self.live;
         let rule = self.rule();
         workers.zip_chunks(&mut self.proxies, &mut self.spans, |offset, proxies, spans| {
             for (k, (proxy, span)) in proxies.iter_mut().zip(spans).enumerate() {

@@ -33,11 +33,6 @@ impl BoxColumnsMut<'_> {
     }
 }
 
-/// Three columns' parts as an array (the caller holds exactly three).
-fn three(parts: Vec<&mut [f32]>) -> [&mut [f32]; 3] {
-    parts.try_into().unwrap_or_else(|_| unreachable!("three columns"))
-}
-
 impl BoxColumns {
     /// Number of boxes.
     #[inline]
@@ -81,15 +76,15 @@ impl BoxColumns {
         use crate::parallel::split_at_points;
         let [lx, ly, lz] = &mut self.low;
         let [hx, hy, hz] = &mut self.high;
-        let mut columns = [lx, ly, lz, hx, hy, hz].map(|column| split_at_points(column, points).into_iter());
-        let mut parts = Vec::with_capacity(points.len() + 1);
-        for _ in 0..=points.len() {
-            let mut next = || columns.iter_mut().map(|c| c.next()).collect::<Option<Vec<_>>>();
-            let Some(mut part) = next() else { break };
-            let (high, low) = (part.split_off(3), part);
-            parts.push(BoxColumnsMut { low: three(low), high: three(high) });
-        }
-        parts
+        let split = |column| split_at_points(column, points).into_iter();
+        split(lx)
+            .zip(split(ly))
+            .zip(split(lz))
+            .zip(split(hx))
+            .zip(split(hy))
+            .zip(split(hz))
+            .map(|(((((lx, ly), lz), hx), hy), hz)| BoxColumnsMut { low: [lx, ly, lz], high: [hx, hy, hz] })
+            .collect()
     }
 
     /// Bytes held (capacity).

@@ -29,8 +29,7 @@ impl BroadPhase for BruteForce {
         out: &mut Vec<T>,
     ) -> u64 {
         let live = &self.live;
-        let parts = workers.map_ranges(live.len(), |rows| {
-            let mut found = Vec::new();
+        workers.extend_ranges(live.len(), out, |rows, found| {
             for k in rows {
                 let i = live[k] as usize;
                 for &j in &live[k + 1..] {
@@ -39,15 +38,11 @@ impl BroadPhase for BruteForce {
                         proxies.reported(i),
                         proxies.reported(j),
                         proxies.window_of(i).intersect(proxies.window_of(j)),
-                        &mut found,
+                        found,
                     );
                 }
             }
-            found
         });
-        for mut part in parts {
-            out.append(&mut part);
-        }
         let n = live.len() as u64;
         n * n.saturating_sub(1) / 2
     }

@@ -26,9 +26,7 @@ use glam::DVec3;
 /// least two typical diameters): small enough that a query in a dense gas meets few bodies, large
 /// enough that a typical path stays one piece. In a calm window (few re-tests expected) larger
 /// cells pay: fewer pieces to bin and fewer cells to sweep, and the dearer queries are rare.
-/// Measured (`vadop simulate`, n = 10^5, one pinned core, mean ms/frame): the paper scene in
-/// detect mode is 1.3-1.5x faster with 2.0 than with 1.5 at every speed from 0.05 to 5
-/// diameters/frame, the equilibrium gas 1.2x slower.
+/// Measured together with the pipeline's calm windows (see `pipeline::CALM_UPDATES`).
 const BASE_CELL_EXTENTS: f64 = 1.5;
 const CALM_BASE_CELL_EXTENTS: f64 = 2.0;
 /// A level holds at most this many cells per piece (and at least [`MIN_CELLS`]), so memory stays
@@ -582,26 +580,15 @@ impl BroadPhase for Grid {
         let mut candidates = 0;
         for k in 0..self.levels.len() {
             let this = &*self;
-            if workers.threads() == 1 {
-                // Straight into `out`: no second buffer the size of a window's predictions.
-                this.slab_pairs(k, 0..this.levels[k].dims[0], &mut |x, y, window| {
-                    candidates += 1;
-                    predict(x, y, window, out);
-                });
-                continue;
-            }
-            let parts = workers.map_ranges(this.levels[k].dims[0], |slabs| {
-                let (mut found, mut count) = (Vec::new(), 0u64);
+            let counts = workers.extend_ranges(this.levels[k].dims[0], out, |slabs, found| {
+                let mut count = 0u64;
                 this.slab_pairs(k, slabs, &mut |x, y, window| {
                     count += 1;
-                    predict(x, y, window, &mut found);
+                    predict(x, y, window, found);
                 });
-                (found, count)
+                count
             });
-            for (mut part, count) in parts {
-                out.append(&mut part);
-                candidates += count;
-            }
+            candidates += counts.iter().sum::<u64>();
         }
         candidates
     }

@@ -484,22 +484,17 @@ impl BroadPhase for SweepPrune {
         out: &mut Vec<T>,
     ) -> u64 {
         let this = &*self;
-        let parts = workers.map_ranges(this.lists.len(), |axes| {
-            let (mut found, mut candidates) = (Vec::new(), 0u64);
+        let counts = workers.extend_ranges(this.lists.len(), out, |axes, found| {
+            let mut candidates = 0u64;
             for a in axes {
                 this.list_pairs(a as u32, proxies, |x, y, window| {
                     candidates += 1;
-                    predict(x, y, window, &mut found);
+                    predict(x, y, window, found);
                 });
             }
-            (found, candidates)
+            candidates
         });
-        let mut candidates = 0;
-        for (mut part, count) in parts {
-            out.append(&mut part);
-            candidates += count;
-        }
-        candidates
+        counts.iter().sum()
     }
 
     /// Picks the body's axes for its new velocity, adds fresh entries (its old ones carry an old
