@@ -30,6 +30,8 @@
 
 /// Contacts one body may take part in at a single instant before it counts as jammed.
 pub const JAM_LIMIT: u32 = 64;
+// The per-instant counts are bytes.
+const _: () = assert!(JAM_LIMIT < u8::MAX as u32);
 
 /// Contacts one body may take part in within one step before it counts as jammed: far above what
 /// a body meets at the fastest speed a world accepts (about 10^5 at 10^4 box lengths per frame),
@@ -53,13 +55,14 @@ pub(crate) enum Rule {
 pub(crate) struct ContactRules {
     /// Time of each body's last contact (`-inf` before the first).
     pub last_contact: Vec<f64>,
-    /// Contacts of each body at the instant `last_contact`.
-    at_instant: Vec<u32>,
-    /// Contacts of each body within the step `step_of` was counted in.
+    /// Contacts of each body at the instant `last_contact`, saturating: only "more than
+    /// [`JAM_LIMIT`]" matters, and a byte holds that.
+    at_instant: Vec<u8>,
+    /// Contacts of each body within the current step.
     in_step: Vec<u32>,
-    step_of: Vec<u32>,
-    /// The current step's number.
-    step: u32,
+    /// The bodies whose `in_step` is not zero: the next step clears only those, so no body needs
+    /// a step number of its own.
+    counted: Vec<u32>,
     /// The instant at which each body was last frozen into a jammed cluster.
     frozen: Vec<f64>,
 }
@@ -71,7 +74,6 @@ impl ContactRules {
             self.last_contact.resize(slots, f64::NEG_INFINITY);
             self.at_instant.resize(slots, 0);
             self.in_step.resize(slots, 0);
-            self.step_of.resize(slots, 0);
             self.frozen.resize(slots, f64::NEG_INFINITY);
         }
     }
@@ -85,7 +87,10 @@ impl ContactRules {
 
     /// A new step: every body's step count starts again.
     pub(crate) fn next_step(&mut self) {
-        self.step = self.step.wrapping_add(1);
+        for &i in &self.counted {
+            self.in_step[i as usize] = 0;
+        }
+        self.counted.clear();
     }
 
     /// Marks body `i` frozen into a jammed cluster at `t`; false when it already was.
@@ -98,16 +103,15 @@ impl ContactRules {
     /// Counts a contact of body `i` at `t`; true once it is jammed.
     fn count(&mut self, i: usize, t: f64) -> bool {
         if self.last_contact[i] == t {
-            self.at_instant[i] += 1;
+            self.at_instant[i] = self.at_instant[i].saturating_add(1);
         } else {
             self.at_instant[i] = 1;
         }
-        if self.step_of[i] != self.step {
-            self.step_of[i] = self.step;
-            self.in_step[i] = 0;
+        if self.in_step[i] == 0 {
+            self.counted.push(i as u32);
         }
         self.in_step[i] += 1;
-        self.at_instant[i] > JAM_LIMIT || self.in_step[i] > BURST_LIMIT || self.frozen[i] == t
+        self.at_instant[i] as u32 > JAM_LIMIT || self.in_step[i] > BURST_LIMIT || self.frozen[i] == t
     }
 
     /// The restitution of a contact at `t` of bodies whose previous contacts were at
@@ -147,7 +151,8 @@ impl ContactRules {
     /// Bytes held.
     pub(crate) fn memory_bytes(&self) -> usize {
         self.last_contact.capacity() * 8
-            + (self.at_instant.capacity() + self.in_step.capacity() + self.step_of.capacity()) * 4
+            + self.at_instant.capacity()
+            + (self.in_step.capacity() + self.counted.capacity()) * 4
             + self.frozen.capacity() * 8
     }
 }

@@ -16,7 +16,7 @@ const CELL_BITS: u32 = 21;
 pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(u32, u32, f64)> {
     let live: Vec<u32> = bodies.alive_ids().collect();
     let position = |i: u32| bodies.position_at(i as usize, time);
-    let max_radius = live.iter().map(|&i| bodies.radius[i as usize]).fold(0.0, f64::max);
+    let max_radius = live.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
     let (lo, hi) = live.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &i| {
         let p = position(i);
         (lo.min(p), hi.max(p))
@@ -33,7 +33,7 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(
     by_cell.sort_unstable();
     let mut found: Option<(u32, u32, f64)> = None;
     for &a in new_bodies {
-        let (pa, ra) = (position(a), bodies.radius[a as usize]);
+        let (pa, ra) = (position(a), bodies.radius(a as usize));
         let c = coords(pa);
         for dz in 0..3u64 {
             for dy in 0..3u64 {
@@ -47,7 +47,7 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(
                         if b == a {
                             continue;
                         }
-                        let reach = ra + bodies.radius[b as usize];
+                        let reach = ra + bodies.radius(b as usize);
                         // Scaled so the square neither underflows nor overflows at any scale.
                         let scale = unit_scale(reach);
                         let distance = ((pa - position(b)) * scale).length() / scale;

@@ -24,7 +24,7 @@ use crate::collapse::{ContactRules, Rule};
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::narrow_phase::{direction, pair_contact_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE};
 use crate::parallel::Workers;
-use crate::proxy::{ProxyTable, Reported};
+use crate::proxy::{sampled_quantile, ProxyTable, Reported};
 use crate::response::{pair_impulse, wall_bounce};
 use crate::window::Window;
 use crate::world::{BoxBounds, Contact, FrameStats, Mode, Touched};
@@ -94,7 +94,7 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     shrink: f64,
     /// The threads bulk work is shared among.
     workers: Workers,
-    /// Scratch: travel times for the window rule.
+    /// Scratch: a sample of travel times for the window rule.
     travel: Vec<f64>,
     /// Scratch of the jam rule: the cluster being frozen, its members' marks, query results.
     cluster: Vec<u32>,
@@ -185,22 +185,15 @@ impl<B: BroadPhase> Pipeline<B> {
         if self.rule == WindowRule::Frame {
             return frame;
         }
-        self.travel.clear();
-        let mut live = 0usize;
-        for i in 0..bodies.slots() {
-            if self.proxies.is_live(i) {
-                live += 1;
-                let speed = bodies.velocity[i].length();
-                if speed > 0.0 {
-                    self.travel.push(2.0 * bodies.bounding_radius(i) / speed);
-                }
-            }
-        }
-        if self.travel.is_empty() {
+        let proxies = &self.proxies;
+        let live = (0..bodies.slots()).filter(|&i| proxies.is_live(i)).count();
+        let travel = |i: usize| {
+            let speed = bodies.velocity(i).length();
+            (proxies.is_live(i) && speed > 0.0).then(|| 2.0 * bodies.bounding_radius(i) / speed)
+        };
+        let Some(quick) = sampled_quantile(bodies.slots(), WINDOW_QUANTILE, travel, &mut self.travel) else {
             return frame;
-        }
-        let k = ((self.travel.len() as f64 * WINDOW_QUANTILE) as usize).min(self.travel.len() - 1);
-        let quick = *self.travel.select_nth_unstable_by(k, f64::total_cmp).1;
+        };
         // The last window's refreshes per live body and per diameter travelled (by the fastest
         // tenth). Before the first, the mode tells: in detect mode only walls and the caller
         // change velocities, in simulate mode every contact does.
@@ -236,7 +229,7 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.update_seconds += start.elapsed().as_secs_f64();
 
         let start = Instant::now();
-        let counts = self.broad.prepare(&self.proxies, &self.workers);
+        let counts = self.broad.prepare(self.proxies.view(bodies), &self.workers);
         stats.endpoint_swaps += counts.moves;
         stats.list_entries = counts.entries;
         stats.sort_seconds += start.elapsed().as_secs_f64();
@@ -244,7 +237,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let start = Instant::now();
         let mut predicted = self.queue.take_bulk();
         let candidates = self.broad.find_pairs(
-            &self.proxies,
+            self.proxies.view(bodies),
             &self.workers,
             |a, b, window, out| out.extend(predict_pair(a, b, window)),
             &mut predicted,
@@ -310,19 +303,19 @@ impl<B: BroadPhase> Pipeline<B> {
         let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
         // Coincident centres have no normal; the relative velocity gives one.
         let normal =
-            direction(pj - pi).or_else(|| direction(bodies.velocity[i] - bodies.velocity[j])).unwrap_or(DVec3::X);
+            direction(pj - pi).or_else(|| direction(bodies.velocity(i) - bodies.velocity(j))).unwrap_or(DVec3::X);
         let mut impulse = 0.0;
         if physics.mode == Mode::Simulate {
             match self.rules.pair(a, b, t, physics.restitution, physics.contact_duration) {
                 Rule::Jam => {
-                    let before = bodies.velocity[i];
+                    let before = bodies.velocity(i);
                     out.stats.jam_contacts += 1;
                     self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
-                    impulse = (bodies.mass[i] * (before - bodies.velocity[i]).dot(normal)).max(0.0);
+                    impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
                 }
                 Rule::Impulse { restitution, changed } => {
-                    let (vi, vj) = (bodies.velocity[i], bodies.velocity[j]);
-                    let (wi, wj) = (bodies.inv_mass[i], bodies.inv_mass[j]);
+                    let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
+                    let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
                     impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
                     // Zero impulse changes nothing; re-testing would find the same touch again.
                     if impulse > 0.0 {
@@ -342,7 +335,7 @@ impl<B: BroadPhase> Pipeline<B> {
             time: t,
             body: a,
             touched: Touched::Body(b),
-            point: pi + normal * bodies.radius[i],
+            point: pi + normal * bodies.radius(i),
             normal,
             impulse,
         });
@@ -351,20 +344,20 @@ impl<B: BroadPhase> Pipeline<B> {
     fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
         let i = a as usize;
         let normal = wall.outward_normal();
-        let point = bodies.position_at(i, t) + normal * bodies.radius[i];
+        let point = bodies.position_at(i, t) + normal * bodies.radius(i);
         // The TC model is for collapse between bodies; detect mode only needs the jam rule
         // (a body exactly as wide as the box).
         let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
         let impulse = match self.rules.wall(a, t, physics.restitution, duration) {
             Rule::Jam => {
-                let before = bodies.velocity[i];
+                let before = bodies.velocity(i);
                 out.stats.jam_contacts += 1;
                 self.freeze_cluster(bodies, physics, &[a], t, out.stats);
-                bodies.mass[i] * (before - bodies.velocity[i]).length()
+                bodies.mass[i] * (before - bodies.velocity(i)).length()
             }
             Rule::Impulse { restitution, changed } => {
                 out.stats.tc_contacts += changed as u64;
-                let v = bodies.velocity[i];
+                let v = bodies.velocity(i);
                 let bounced = wall_bounce(v, wall.axis(), restitution);
                 bodies.set_velocity_at(i, t, bounced);
                 self.retest(a, None, bodies, physics, t, out.stats);
@@ -400,7 +393,7 @@ impl<B: BroadPhase> Pipeline<B> {
         while k < cluster.len() {
             let m = cluster[k] as usize;
             k += 1;
-            let (pm, vm, rm) = (bodies.position_at(m, t), bodies.velocity[m], bodies.radius[m]);
+            let (pm, vm, rm) = (bodies.position_at(m, t), bodies.velocity(m), bodies.radius(m));
             mass += bodies.mass[m];
             momentum += bodies.mass[m] * vm;
             for axis in 0..3 {
@@ -409,16 +402,16 @@ impl<B: BroadPhase> Pipeline<B> {
                 touches_max[axis] |= pm[axis] + rm >= physics.bounds.max[axis] - slack;
             }
             near.clear();
-            self.broad.query(m as u32, &self.proxies, None, |o, _| near.push(o.body));
+            self.broad.query(m as u32, self.proxies.view(bodies), None, |o, _| near.push(o.body));
             for &o in &near {
                 let o = o as usize;
                 if self.cluster_mark[o] == self.cluster_epoch {
                     continue;
                 }
-                let reach = (rm + bodies.radius[o]) * (1.0 + 4.0 * CONTACT_TOLERANCE);
+                let reach = (rm + bodies.radius(o)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
                 let scale = unit_scale(reach);
                 let offset = (bodies.position_at(o, t) - pm) * scale;
-                let separating = (bodies.velocity[o] - vm).dot(offset) > 0.0;
+                let separating = (bodies.velocity(o) - vm).dot(offset) > 0.0;
                 if offset.length_squared() <= (reach * scale) * (reach * scale) && !separating {
                     self.cluster_mark[o] = self.cluster_epoch;
                     cluster.push(o as u32);
@@ -457,7 +450,7 @@ impl<B: BroadPhase> Pipeline<B> {
         self.updates += 1;
         stats.retests += 1;
         let window = self.window.from(t);
-        let (queue, proxies) = (&mut self.queue, &self.proxies);
+        let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
         let mut tests = 0u64;
         let own = proxies.reported(body as usize);
         self.broad.update(body, proxies, skip, |other, bounds_window| {
@@ -484,7 +477,7 @@ impl<B: BroadPhase> Pipeline<B> {
 fn predict_pair(x: Reported, y: Reported, window: Window) -> Option<Event> {
     // Always the lower id first, so every method does bit-identical arithmetic for a pair.
     let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    let time = pair_contact_time(&a.proxy.motion, &b.proxy.motion, a.proxy.radius + b.proxy.radius)?;
+    let time = pair_contact_time(&a.state.motion, &b.state.motion, a.state.radius + b.state.radius)?;
     window.contains(time).then_some(Event {
         time,
         body: a.body,
@@ -511,7 +504,7 @@ fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
 #[inline]
 fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
     let i = body as usize;
-    let (time, wall) = wall_contact_time(&bodies.motion(i), bodies.radius[i], bounds.min, bounds.max)?;
+    let (time, wall) = wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max)?;
     window.contains(time).then_some(Event {
         time,
         body,

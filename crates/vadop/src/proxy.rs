@@ -8,14 +8,14 @@
 //! inside the box, and the reach keeps a fast body's proxy local, however fast it is: a body
 //! that will soon hit another never pays for the rest of its path. It is the only thing a broad
 //! phase reads, so broad phases know nothing of shapes: a body of any shape is bounded by the
-//! sphere about its centre that contains it. The motion is the body's own (its position at its last
-//! velocity change), one cache line per body, so the narrow phase reads a candidate pair's
-//! inputs from here with two memory accesses and gets the same bits as from the bodies. The table
-//! never decides what is a candidate and never moves a body; the pipeline refreshes every proxy at
+//! sphere about its centre that contains it. The table holds no motion of its own: a proxy's
+//! motion is the body's ([`crate::bodies::BodyState`], one cache line), which a broad phase reads
+//! through [`Proxies`]; a body's stamp changes whenever its motion does, so an entry made from an
+//! older motion is stale and its predictions void. The table never decides what is a candidate and never moves a body; the pipeline refreshes every proxy at
 //! a window's start and a body's proxy when it changes velocity.
 
-use crate::bodies::Bodies;
-use crate::narrow_phase::{wall_contact_time, Motion};
+use crate::bodies::{Bodies, BodyState};
+use crate::narrow_phase::wall_contact_time;
 use crate::parallel::Workers;
 use crate::window::Window;
 use glam::DVec3;
@@ -24,30 +24,14 @@ use glam::DVec3;
 /// holds its body whichever instant the body's position is computed from.
 pub const RELATIVE_PADDING: f64 = 1e-12;
 
-/// What the narrow phase needs of a body, in one cache line.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C, align(64))]
-pub struct Proxy {
-    /// The body's straight motion since its last velocity change.
-    pub motion: Motion,
-    /// Radius of the sphere about the centre that holds the whole body.
-    pub radius: f64,
-}
-
-impl Default for Proxy {
-    fn default() -> Self {
-        Proxy { motion: Motion { position: DVec3::ZERO, since: 0.0, velocity: DVec3::ZERO }, radius: 0.0 }
-    }
-}
-
 /// A body as a broad phase reports it: its id, the stamp of the proxy the report comes from, and
-/// the motion that proxy holds. A broad phase may keep its own copy of the motion next to its
-/// other data, so the narrow phase reads it without a trip to memory.
+/// the body's motion and radius as of that proxy. A broad phase may keep its own copy of the
+/// state next to its other data, so the narrow phase reads it without a trip to memory.
 #[derive(Debug, Clone, Copy)]
 pub struct Reported<'a> {
     pub body: u32,
     pub stamp: u32,
-    pub proxy: &'a Proxy,
+    pub state: &'a BodyState,
 }
 
 /// Where and when a proxy bounds its body: over `[start, end)`, inside `bbox`.
@@ -57,13 +41,12 @@ pub struct Span {
     pub end: f64,
     /// Swept box over `[start, end]`, padded, relative to [`ProxyTable::box_min`].
     pub bbox: CompactBox,
-    /// True when the proxy ends before the window because of its reach: it must be renewed.
-    pub expires: bool,
 }
 
-/// Flat table of proxies, arrays by body id: the motions (one cache line each), the spans, and
-/// the stamps and liveness that a broad phase checks for every entry it passes, kept dense so
-/// that check stays in cache.
+/// Flat table of proxies, arrays by body id: the spans, and the stamps and liveness that a broad
+/// phase checks for every entry it passes, kept dense so that check stays in cache. The motions
+/// are the bodies' own: a broad phase reads the table through [`Proxies`], which pairs it with
+/// them.
 #[derive(Debug, Default, Clone)]
 pub struct ProxyTable {
     /// The broad-phase window every proxy lies in.
@@ -77,14 +60,15 @@ pub struct ProxyTable {
     typical_radius: f64,
     /// Few proxies are expected to change within the window (see [`Self::calm`]).
     calm: bool,
-    /// Motion and bounding radius of each body.
-    pub proxies: Vec<Proxy>,
     pub spans: Vec<Span>,
     /// The body's velocity stamp when its proxy was built: broad-phase entries carrying another
     /// stamp are stale.
     stamps: Vec<u32>,
     /// False for removed bodies and bodies not entered yet.
     live: Vec<bool>,
+    /// True when the proxy ends before the window because of its reach: it must be renewed. Kept
+    /// out of the spans, which it would pad by 8 bytes.
+    expires: Vec<bool>,
     /// Scratch for the median radius (a sample).
     radii: Vec<f64>,
 }
@@ -152,28 +136,36 @@ fn up(x: f64) -> f32 {
     }
 }
 
-/// Most values [`sampled_median`] looks at.
-const MEDIAN_SAMPLE: usize = 4096;
+/// Most values [`sampled_quantile`] looks at.
+const QUANTILE_SAMPLE: usize = 4096;
 
-/// The median of `value(i)` over the slots `i < slots` that are `live`, from an evenly strided
-/// sample of at most a few thousand slots: a typical size needs no scratch as large as the
-/// bodies. The same slots are sampled whatever the number of threads. `None` when the sample
-/// holds no live slot.
-pub fn sampled_median(
+/// The `q`-quantile (0 the least, 1 the largest) of the values `value(i)` gives for the slots
+/// `i < slots` (`None`: no value, e.g. a free slot), from an evenly strided sample of at most a
+/// few thousand slots: a typical size needs no scratch as large as the bodies. The same slots are
+/// sampled whatever the number of threads. `None` when the sample holds no value.
+///
+/// ```
+/// use vadop::proxy::sampled_quantile;
+/// let mut scratch = Vec::new();
+/// let value = |i: usize| (i % 2 == 0).then_some(i as f64);
+/// assert_eq!(sampled_quantile(10, 0.5, value, &mut scratch), Some(4.0));
+/// assert_eq!(sampled_quantile(10, 0.0, value, &mut scratch), Some(0.0));
+/// ```
+pub fn sampled_quantile(
     slots: usize,
-    live: impl Fn(usize) -> bool,
-    value: impl Fn(usize) -> f64,
+    q: f64,
+    value: impl Fn(usize) -> Option<f64>,
     scratch: &mut Vec<f64>,
 ) -> Option<f64> {
     scratch.clear();
-    let stride = slots.div_ceil(MEDIAN_SAMPLE).max(1);
-    scratch.extend((0..slots).step_by(stride).filter(|&i| live(i)).map(&value));
+    let stride = slots.div_ceil(QUANTILE_SAMPLE).max(1);
+    scratch.extend((0..slots).step_by(stride).filter_map(&value));
     if scratch.is_empty() {
-        // A sparse table whose sampled slots are all free: look at every slot.
-        scratch.extend((0..slots).filter(|&i| live(i)).map(&value));
+        // A sparse table whose sampled slots hold no value: look at every slot.
+        scratch.extend((0..slots).filter_map(&value));
     }
-    let middle = scratch.len() / 2;
-    (!scratch.is_empty()).then(|| *scratch.select_nth_unstable_by(middle, f64::total_cmp).1)
+    let k = ((scratch.len() as f64 * q) as usize).min(scratch.len().saturating_sub(1));
+    (!scratch.is_empty()).then(|| *scratch.select_nth_unstable_by(k, f64::total_cmp).1)
 }
 
 /// Swept box of a sphere of `radius` moving from `a` to `b`, padded for rounding.
@@ -261,37 +253,7 @@ impl ProxyTable {
     /// True when proxy `i` ends before the window because of its reach.
     #[inline]
     pub fn expires(&self, i: usize) -> bool {
-        self.spans[i].expires
-    }
-
-    /// The body's motion as the proxy holds it.
-    #[inline]
-    pub fn motion(&self, i: usize) -> &Motion {
-        &self.proxies[i].motion
-    }
-
-    /// Body `i` as a broad phase reports it from this table.
-    #[inline]
-    pub fn reported(&self, i: usize) -> Reported<'_> {
-        Reported { body: i as u32, stamp: self.stamps[i], proxy: &self.proxies[i] }
-    }
-
-    /// Bounding radius of body `i`.
-    #[inline]
-    pub fn radius(&self, i: usize) -> f64 {
-        self.proxies[i].radius
-    }
-
-    /// Velocity of body `i`.
-    #[inline]
-    pub fn velocity(&self, i: usize) -> DVec3 {
-        self.proxies[i].motion.velocity
-    }
-
-    /// Centre of body `i` at its proxy's start.
-    #[inline]
-    pub fn origin(&self, i: usize) -> DVec3 {
-        self.proxies[i].motion.at(self.spans[i].start)
+        self.expires[i]
     }
 
     /// True when body `i` has a proxy.
@@ -306,6 +268,12 @@ impl ProxyTable {
         self.stamps[i] == stamp && self.live[i]
     }
 
+    /// The table paired with `bodies`, the bodies its proxies bound, for a broad phase to read.
+    #[inline]
+    pub fn view<'a>(&'a self, bodies: &'a Bodies) -> Proxies<'a> {
+        Proxies { table: self, states: &bodies.state }
+    }
+
     /// Window start: every live body's proxy over `window`, bodies at their positions at its
     /// start; shared among `workers`.
     pub fn refresh_all(&mut self, bodies: &Bodies, window: Window, workers: &Workers) {
@@ -313,15 +281,15 @@ impl ProxyTable {
         self.resize(bodies.slots());
         let live = &self.live;
         if let Some(median) =
-            sampled_median(bodies.slots(), |i| live[i], |i| bodies.bounding_radius(i), &mut self.radii)
+            sampled_quantile(bodies.slots(), 0.5, |i| live[i].then(|| bodies.bounding_radius(i)), &mut self.radii)
         {
             self.typical_radius = median;
         }
         let rule = self.rule();
-        workers.zip_chunks(&mut self.proxies, &mut self.spans, |offset, proxies, spans| {
-            for (k, (proxy, span)) in proxies.iter_mut().zip(spans).enumerate() {
+        workers.zip_chunks(&mut self.spans, &mut self.expires, |offset, spans, expires| {
+            for (k, (span, expires)) in spans.iter_mut().zip(expires).enumerate() {
                 if live[offset + k] {
-                    (*proxy, *span) = rule.proxy(offset + k, bodies, window.start);
+                    (*span, *expires) = rule.span(offset + k, bodies, window.start);
                 }
             }
         });
@@ -333,7 +301,7 @@ impl ProxyTable {
     /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on.
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
         self.resize(bodies.slots());
-        (self.proxies[i], self.spans[i]) = self.rule().proxy(i, bodies, t);
+        (self.spans[i], self.expires[i]) = self.rule().span(i, bodies, t);
         self.stamps[i] = bodies.stamp[i];
         self.live[i] = true;
     }
@@ -357,20 +325,68 @@ impl ProxyTable {
 
     fn resize(&mut self, slots: usize) {
         if self.spans.len() < slots {
-            self.proxies.resize(slots, Proxy::default());
             self.spans.resize(slots, Span::default());
             self.stamps.resize(slots, 0);
             self.live.resize(slots, false);
+            self.expires.resize(slots, false);
         }
     }
 
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        self.proxies.capacity() * std::mem::size_of::<Proxy>()
-            + self.spans.capacity() * std::mem::size_of::<Span>()
+        self.spans.capacity() * std::mem::size_of::<Span>()
             + self.stamps.capacity() * 4
             + self.live.capacity()
+            + self.expires.capacity()
             + self.radii.capacity() * 8
+    }
+}
+
+/// What a broad phase reads: the proxy table together with the bodies' states its proxies bound.
+/// A copyable view, built by the pipeline for each call ([`ProxyTable::view`]); the table's own
+/// accessors are reached through it.
+#[derive(Debug, Clone, Copy)]
+pub struct Proxies<'a> {
+    table: &'a ProxyTable,
+    states: &'a [BodyState],
+}
+
+impl std::ops::Deref for Proxies<'_> {
+    type Target = ProxyTable;
+    fn deref(&self) -> &ProxyTable {
+        self.table
+    }
+}
+
+impl<'a> Proxies<'a> {
+    /// Body `i`'s motion and bounding radius.
+    #[inline]
+    pub fn state(&self, i: usize) -> &'a BodyState {
+        &self.states[i]
+    }
+
+    /// Body `i` as a broad phase reports it from this table.
+    #[inline]
+    pub fn reported(&self, i: usize) -> Reported<'a> {
+        Reported { body: i as u32, stamp: self.table.stamp(i), state: &self.states[i] }
+    }
+
+    /// Bounding radius of body `i`.
+    #[inline]
+    pub fn radius(&self, i: usize) -> f64 {
+        self.states[i].radius
+    }
+
+    /// Velocity of body `i`.
+    #[inline]
+    pub fn velocity(&self, i: usize) -> DVec3 {
+        self.states[i].motion.velocity
+    }
+
+    /// Centre of body `i` at its proxy's start.
+    #[inline]
+    pub fn origin(&self, i: usize) -> DVec3 {
+        self.states[i].motion.at(self.table.spans[i].start)
     }
 }
 
@@ -385,9 +401,9 @@ struct ProxyRule {
 }
 
 impl ProxyRule {
-    /// Body `i`'s proxy from time `t` on.
+    /// Body `i`'s proxy from time `t` on, and whether it expires (ends because of its reach).
     #[inline]
-    fn proxy(&self, i: usize, bodies: &Bodies, t: f64) -> (Proxy, Span) {
+    fn span(&self, i: usize, bodies: &Bodies, t: f64) -> (Span, bool) {
         let start = t.max(self.window.start);
         let motion = bodies.motion(i);
         let velocity = motion.velocity;
@@ -406,6 +422,6 @@ impl ProxyRule {
         let origin = motion.at(start);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         let bbox = CompactBox::new(low, high, self.box_min);
-        (Proxy { motion, radius }, Span { start, end, bbox, expires })
+        (Span { start, end, bbox }, expires)
     }
 }

@@ -71,7 +71,7 @@ impl PseudoDynamic {
         for &b in &self.order {
             let b = b as usize;
             self.centre[b] = bodies.position_at(b, t);
-            self.low_x[b] = self.centre[b].x - bodies.radius[b];
+            self.low_x[b] = self.centre[b].x - bodies.radius(b);
         }
         out.stats.update_seconds += start.elapsed().as_secs_f64();
 
@@ -85,13 +85,13 @@ impl PseudoDynamic {
         std::mem::swap(&mut self.previous, &mut self.current);
         self.current.clear();
         for (k, &i) in self.order.iter().enumerate() {
-            let (pi, ri) = (self.centre[i as usize], bodies.radius[i as usize]);
+            let (pi, ri) = (self.centre[i as usize], bodies.radius(i as usize));
             let high_x = pi.x + ri;
             for &j in &self.order[k + 1..] {
                 if self.low_x[j as usize] > high_x {
                     break;
                 }
-                let (pj, rj) = (self.centre[j as usize], bodies.radius[j as usize]);
+                let (pj, rj) = (self.centre[j as usize], bodies.radius(j as usize));
                 let reach = ri + rj;
                 if (pi.y - pj.y).abs() > reach || (pi.z - pj.z).abs() > reach {
                     continue;
@@ -121,12 +121,12 @@ impl PseudoDynamic {
                 continue;
             }
             while let Some((t, wall)) =
-                wall_contact_time(&bodies.motion(i), bodies.radius[i], physics.bounds.min, physics.bounds.max)
+                wall_contact_time(&bodies.motion(i), bodies.radius(i), physics.bounds.min, physics.bounds.max)
             {
                 if !(t < t1) {
                     break;
                 }
-                let v = bodies.velocity[i];
+                let v = bodies.velocity(i);
                 let bounced = match self.rules.wall(body, t, physics.restitution, 0.0) {
                     // A body alone: its cluster is itself, stopped at the wall.
                     Rule::Jam => {
@@ -137,7 +137,7 @@ impl PseudoDynamic {
                 };
                 bodies.set_velocity_at(i, t, bounced);
                 let normal = wall.outward_normal();
-                let point = bodies.position_at(i, t) + normal * bodies.radius[i];
+                let point = bodies.position_at(i, t) + normal * bodies.radius(i);
                 out.contacts.push(Contact {
                     time: t,
                     body,
@@ -158,8 +158,8 @@ impl PseudoDynamic {
             let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
             let mut impulse = 0.0;
             if physics.mode == Mode::Simulate {
-                let (vi, vj) = (bodies.velocity[i], bodies.velocity[j]);
-                let (wi, wj) = (bodies.inv_mass[i], bodies.inv_mass[j]);
+                let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
+                let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
                 impulse = pair_impulse(normal, vi, vj, wi, wj, physics.restitution);
                 if impulse == 0.0 {
                     continue;
@@ -174,7 +174,7 @@ impl PseudoDynamic {
                 time: t1,
                 body: a,
                 touched: Touched::Body(b),
-                point: self.centre[i] + normal * bodies.radius[i],
+                point: self.centre[i] + normal * bodies.radius(i),
                 normal,
                 impulse,
             });

@@ -379,7 +379,13 @@ impl World {
         if self.live + spheres.len() >= u32::MAX as usize - 1 {
             return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
         }
-        spheres.iter().map(|s| self.add_sphere(*s)).collect()
+        self.bodies.reserve(spheres.len().saturating_sub(self.free_slots.len()));
+        self.unplaced.reserve_exact(spheres.len());
+        let mut ids = Vec::with_capacity(spheres.len());
+        for s in spheres {
+            ids.push(self.add_sphere(*s)?);
+        }
+        Ok(ids)
     }
 
     /// Removes a body and returns it as it was now.
@@ -489,12 +495,12 @@ impl World {
     pub fn kinetic_energy(&self) -> f64 {
         self.bodies
             .alive_ids()
-            .map(|i| 0.5 * self.bodies.mass[i as usize] * self.bodies.velocity[i as usize].length_squared())
+            .map(|i| 0.5 * self.bodies.mass[i as usize] * self.bodies.velocity(i as usize).length_squared())
             .sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
-        self.bodies.alive_ids().map(|i| self.bodies.mass[i as usize] * self.bodies.velocity[i as usize]).sum()
+        self.bodies.alive_ids().map(|i| self.bodies.mass[i as usize] * self.bodies.velocity(i as usize)).sum()
     }
 
     /// Advances the world by `dt` and returns the frame's contacts in time order: every contact
@@ -610,7 +616,7 @@ impl World {
         let within = |speed: f64| speed * dt / side <= MAX_BOX_LENGTHS_PER_FRAME;
         if !within(self.bodies.speed_bound) {
             for i in self.bodies.alive_ids() {
-                let speed = crate::bodies::speed(self.bodies.velocity[i as usize]);
+                let speed = crate::bodies::speed(self.bodies.velocity(i as usize));
                 if !within(speed) {
                     let lengths = speed * dt / side;
                     return Err(VadopError::AbsurdSpeed { body: i, lengths, limit: MAX_BOX_LENGTHS_PER_FRAME });
@@ -646,7 +652,8 @@ impl World {
                 engine => with_pipeline!(engine, p => p.enter(id, bodies, &physics, time, stats), ()),
             }
         }
-        self.unplaced.clear();
+        // A one-off list as long as the bodies added: its room is given back, not kept.
+        self.unplaced = Vec::new();
     }
 
     fn build_engine(&self, method: Method) -> Engine {

@@ -5,7 +5,7 @@
 
 use super::{BroadPhase, PrepareCounts};
 use crate::parallel::Workers;
-use crate::proxy::{ProxyTable, Reported};
+use crate::proxy::{Proxies, Reported};
 use crate::window::Window;
 
 /// All pairs.
@@ -15,7 +15,7 @@ pub struct BruteForce {
 }
 
 impl BroadPhase for BruteForce {
-    fn prepare(&mut self, proxies: &ProxyTable, _workers: &Workers) -> PrepareCounts {
+    fn prepare(&mut self, proxies: Proxies, _workers: &Workers) -> PrepareCounts {
         self.live.clear();
         self.live.extend((0..proxies.slots() as u32).filter(|&i| proxies.is_live(i as usize)));
         PrepareCounts { moves: 0, entries: self.live.len() as u64 }
@@ -23,7 +23,7 @@ impl BroadPhase for BruteForce {
 
     fn find_pairs<T: Send>(
         &mut self,
-        proxies: &ProxyTable,
+        proxies: Proxies,
         workers: &Workers,
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
@@ -47,11 +47,11 @@ impl BroadPhase for BruteForce {
         n * n.saturating_sub(1) / 2
     }
 
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
+    fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
     }
 
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
+    fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let window = proxies.window_of(body as usize);
         for other in 0..proxies.slots() as u32 {
             if other != body && Some(other) != skip && proxies.is_live(other as usize) {

@@ -17,8 +17,9 @@
 
 use super::box_columns::BoxColumns;
 use super::{BroadPhase, PrepareCounts};
+use crate::bodies::BodyState;
 use crate::parallel::{split_at_points, DisjointWriter, Workers};
-use crate::proxy::{sampled_median, CompactBox, Proxy, ProxyTable, Reported};
+use crate::proxy::{sampled_quantile, CompactBox, Proxies, Reported};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -148,10 +149,10 @@ pub struct Grid {
     boxes: BoxColumns,
     owners: Vec<Owner>,
     windows: Vec<Window>,
-    motions: Vec<Proxy>,
+    motions: Vec<BodyState>,
     /// Pieces entered mid-window, chained per cell: the piece, its window, the next in the chain.
     late: Vec<(Entry, Window, u32)>,
-    late_motions: Vec<Proxy>,
+    late_motions: Vec<BodyState>,
     /// Scratch: each body's piece count, level and (for a single piece) cell; pieces per level
     /// exponent; one body's pieces.
     plan: Vec<(u32, u32, u32)>,
@@ -196,7 +197,7 @@ impl Grid {
     /// still fits a base cell: were the widening left out, every cut piece would land one level
     /// up, in cells of eight times the volume.
     #[inline]
-    fn plan_pieces(&self, proxies: &ProxyTable, i: usize) -> (u32, i32) {
+    fn plan_pieces(&self, proxies: Proxies, i: usize) -> (u32, i32) {
         let radius = proxies.radius(i);
         let length = proxies.velocity(i).length() * proxies.window_of(i).duration();
         let scale = 1.0 + 4.0 * crate::proxy::RELATIVE_PADDING;
@@ -211,7 +212,7 @@ impl Grid {
 
     /// Calls `f` with the box and window of every piece of proxy `i`, cut into `count` pieces.
     #[inline]
-    fn for_each_piece(proxies: &ProxyTable, i: usize, count: u32, mut f: impl FnMut(CompactBox, Window)) {
+    fn for_each_piece(proxies: Proxies, i: usize, count: u32, mut f: impl FnMut(CompactBox, Window)) {
         let window = proxies.window_of(i);
         if count == 1 {
             f(proxies.bbox(i), window);
@@ -234,7 +235,7 @@ impl Grid {
     fn for_each_owned_piece(
         levels: &[Level],
         plan: &[(u32, u32, u32)],
-        proxies: &ProxyTable,
+        proxies: Proxies,
         owned: std::ops::Range<usize>,
         mut f: impl FnMut(usize, usize, CompactBox, Window),
     ) {
@@ -299,8 +300,8 @@ impl Grid {
         &mut self,
         k: usize,
         query: &Entry,
-        proxies: &ProxyTable,
-        mut visit: impl FnMut(&Entry, Window, &Proxy),
+        proxies: Proxies,
+        mut visit: impl FnMut(&Entry, Window, &BodyState),
     ) {
         let Grid { levels, late, late_motions, boxes, owners, windows, motions, .. } = self;
         let level = &mut levels[k];
@@ -356,8 +357,8 @@ impl Grid {
             let (ea, eb) = (owners[a], owners[b]);
             let window = windows[a].intersect(windows[b]);
             if ea.body != eb.body && !window.is_empty() {
-                let x = Reported { body: ea.body, stamp: ea.stamp, proxy: &motions[a] };
-                let y = Reported { body: eb.body, stamp: eb.stamp, proxy: &motions[b] };
+                let x = Reported { body: ea.body, stamp: ea.stamp, state: &motions[a] };
+                let y = Reported { body: eb.body, stamp: eb.stamp, state: &motions[b] };
                 report(x, y, window);
             }
         };
@@ -413,11 +414,15 @@ impl Grid {
 }
 
 impl BroadPhase for Grid {
-    fn prepare(&mut self, proxies: &ProxyTable, workers: &Workers) -> PrepareCounts {
+    fn prepare(&mut self, proxies: Proxies, workers: &Workers) -> PrepareCounts {
         // Base cell from the median extent of the swept boxes: robust to a few giant, tiny or
         // fast bodies.
-        let sampled =
-            sampled_median(proxies.slots(), |i| proxies.is_live(i), |i| proxies.bbox(i).extent(), &mut self.extents);
+        let sampled = sampled_quantile(
+            proxies.slots(),
+            0.5,
+            |i| proxies.is_live(i).then(|| proxies.bbox(i).extent()),
+            &mut self.extents,
+        );
         if let Some(median) = sampled {
             let extents = if proxies.calm() { CALM_BASE_CELL_EXTENTS } else { BASE_CELL_EXTENTS };
             self.base_cell = (extents * median).max(4.0 * proxies.typical_radius());
@@ -514,7 +519,7 @@ impl BroadPhase for Grid {
         self.boxes.resize(first);
         self.windows.resize(first, Window::default());
         self.windows.truncate(first);
-        self.motions.resize(first, Proxy::default());
+        self.motions.resize(first, BodyState::default());
         self.motions.truncate(first);
         let mut home = std::mem::take(&mut self.home);
         home.clear();
@@ -552,7 +557,7 @@ impl BroadPhase for Grid {
                     owners[k] = Owner { body: i as u32, stamp: proxies.stamp(i) };
                     boxes.set(k, bbox);
                     windows[k] = window;
-                    motions[k] = proxies.proxies[i];
+                    motions[k] = *proxies.state(i);
                     if plan_of[i].0 == 1 {
                         // SAFETY: a single piece is taken by one worker only.
                         unsafe { homes.write(i, slot as u32) };
@@ -572,7 +577,7 @@ impl BroadPhase for Grid {
     /// Workers sweep slabs of cells along x; a slab reads the next one, never writes.
     fn find_pairs<T: Send>(
         &mut self,
-        _proxies: &ProxyTable,
+        _proxies: Proxies,
         workers: &Workers,
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
@@ -593,7 +598,7 @@ impl BroadPhase for Grid {
         candidates
     }
 
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
+    fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
         let (count, _) = self.plan_pieces(proxies, body as usize);
@@ -605,7 +610,7 @@ impl BroadPhase for Grid {
                     if other.body != body && Some(other.body) != skip {
                         let common = window.intersect(other_window);
                         if !common.is_empty() {
-                            report(Reported { body: other.body, stamp: other.stamp, proxy: motion }, common);
+                            report(Reported { body: other.body, stamp: other.stamp, state: motion }, common);
                         }
                     }
                 });
@@ -614,7 +619,7 @@ impl BroadPhase for Grid {
         self.pieces = pieces;
     }
 
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
+    fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
         // The pieces the query just built.
         let i = body as usize;
@@ -637,12 +642,12 @@ impl BroadPhase for Grid {
                 owners[home] = Owner { body, stamp: entry.stamp };
                 boxes.set(home, bbox);
                 windows[home] = window;
-                motions[home] = proxies.proxies[i];
+                motions[home] = *proxies.state(i);
                 continue;
             }
             self.home[i] = NONE;
             self.late.push((entry, window, level.late_head[cell]));
-            self.late_motions.push(proxies.proxies[i]);
+            self.late_motions.push(*proxies.state(i));
             level.late_head[cell] = (self.late.len() - 1) as u32;
         }
     }
@@ -653,9 +658,9 @@ impl BroadPhase for Grid {
         self.boxes.memory_bytes()
             + self.owners.capacity() * std::mem::size_of::<Owner>()
             + self.windows.capacity() * std::mem::size_of::<Window>()
-            + self.motions.capacity() * std::mem::size_of::<Proxy>()
+            + self.motions.capacity() * std::mem::size_of::<BodyState>()
             + self.late.capacity() * std::mem::size_of::<(Entry, Window, u32)>()
-            + self.late_motions.capacity() * std::mem::size_of::<Proxy>()
+            + self.late_motions.capacity() * std::mem::size_of::<BodyState>()
             + self.plan.capacity() * 12
             + self.extents.capacity() * 8
             + self.home.capacity() * 4

@@ -20,7 +20,7 @@ pub mod grid;
 pub mod sweep_prune;
 
 use crate::parallel::Workers;
-use crate::proxy::{ProxyTable, Reported};
+use crate::proxy::{Proxies, Reported};
 use crate::window::Window;
 
 /// Counters of a broad phase's window-start work.
@@ -36,7 +36,7 @@ pub struct PrepareCounts {
 pub trait BroadPhase {
     /// Window start: every live proxy has just been refreshed; bin or sort them (c_sort),
     /// spreading the work over `workers`.
-    fn prepare(&mut self, proxies: &ProxyTable, workers: &Workers) -> PrepareCounts;
+    fn prepare(&mut self, proxies: Proxies, workers: &Workers) -> PrepareCounts;
 
     /// Calls `predict(a, b, window, out)` for every candidate pair of the window (c_test), each
     /// pair and piece of path once, spread over `workers`: each worker writes into an `out` of
@@ -44,7 +44,7 @@ pub trait BroadPhase {
     /// number of workers. Returns the number of candidates. Call right after [`Self::prepare`].
     fn find_pairs<T: Send>(
         &mut self,
-        proxies: &ProxyTable,
+        proxies: Proxies,
         workers: &Workers,
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
@@ -52,11 +52,11 @@ pub trait BroadPhase {
 
     /// Calls `report(other, window)` for every candidate partner of body `body`'s current proxy
     /// other than `skip`, without entering the proxy.
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window));
+    fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window));
 
     /// Body `body`'s proxy was just refreshed (it was added or changed velocity): reports its
     /// candidate partners other than `skip` as [`Self::query`] does, then enters it.
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window));
+    fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window));
 
     /// Bytes held (capacity, not just length).
     fn memory_bytes(&self) -> usize;

@@ -24,7 +24,7 @@ use crate::axis_pool::AxisPool;
 use crate::bounding_volume::{interval, select_axes, Interval};
 use crate::coherent_sort::coherent_sort;
 use crate::parallel::Workers;
-use crate::proxy::{CompactBox, ProxyTable, Reported};
+use crate::proxy::{CompactBox, Proxies, Reported};
 use crate::window::Window;
 use glam::DVec3;
 use std::sync::Arc;
@@ -114,13 +114,13 @@ pub struct SweepPrune {
 }
 
 #[inline]
-fn is_live(entry: &Entry, proxies: &ProxyTable) -> bool {
+fn is_live(entry: &Entry, proxies: Proxies) -> bool {
     proxies.is_current(entry.body as usize, entry.stamp)
 }
 
 /// Midpoint of body `b`'s path over its proxy window: the point its tile is taken from.
 #[inline]
-fn path_midpoint(proxies: &ProxyTable, b: usize) -> DVec3 {
+fn path_midpoint(proxies: Proxies, b: usize) -> DVec3 {
     proxies.origin(b) + proxies.velocity(b) * (0.5 * proxies.window_of(b).duration())
 }
 
@@ -128,13 +128,13 @@ fn path_midpoint(proxies: &ProxyTable, b: usize) -> DVec3 {
 /// radius plus half the path. Measuring from the midpoint rather than the start halves the tiles
 /// fast bodies need.
 #[inline]
-fn reach(proxies: &ProxyTable, b: usize) -> f64 {
+fn reach(proxies: Proxies, b: usize) -> f64 {
     proxies.radius(b) + proxies.velocity(b).length() * 0.5 * proxies.window_of(b).duration()
 }
 
 /// Body `b`'s interval on `axis` over its proxy window.
 #[inline]
-fn body_interval(axis: DVec3, proxies: &ProxyTable, b: usize) -> Interval {
+fn body_interval(axis: DVec3, proxies: Proxies, b: usize) -> Interval {
     interval(axis, proxies.origin(b), proxies.velocity(b), proxies.radius(b), proxies.window_of(b).duration())
 }
 
@@ -169,7 +169,7 @@ impl AxisList {
 
     /// Drops void entries and merges `pending` into `sorted`. Valid mid-frame: every entry still
     /// bounds its body over the rest of the frame, whenever it was computed.
-    fn absorb_pending(&mut self, proxies: &ProxyTable) {
+    fn absorb_pending(&mut self, proxies: Proxies) {
         self.sorted.retain(|e| is_live(e, proxies));
         self.pending.retain(|e| is_live(e, proxies));
         self.merge_pending();
@@ -236,7 +236,7 @@ impl SweepPrune {
     /// parts (its old entries carry an old stamp and are void). Mid-window (`absorb`), a pending
     /// part that grows beyond small is merged in at once, because queries scan it linearly; at a
     /// window's start the sort merges everything once.
-    fn enter_entries(&mut self, b: usize, proxies: &ProxyTable, absorb: bool) {
+    fn enter_entries(&mut self, b: usize, proxies: Proxies, absorb: bool) {
         if self.axes_of.len() <= b {
             self.axes_of.resize_with(b + 1, Vec::new);
             self.entered.resize(b + 1, None);
@@ -282,7 +282,7 @@ impl SweepPrune {
     /// bodies share (so the pair is reported once), and their intervals overlap on every other
     /// shared axis.
     #[inline]
-    fn is_candidate(&self, e: &Entry, axes_i: &[u32], f: &Entry, axis: u32, proxies: &ProxyTable) -> bool {
+    fn is_candidate(&self, e: &Entry, axes_i: &[u32], f: &Entry, axis: u32, proxies: Proxies) -> bool {
         if !e.bbox.overlaps(&f.bbox) {
             return false;
         }
@@ -306,7 +306,7 @@ impl SweepPrune {
     }
 
     /// [`Self::is_candidate`]'s axis rule for pools of more than 64 axes, on the sorted lists.
-    fn shared_axes_overlap(&self, i: usize, axes_i: &[u32], j: usize, axis: u32, proxies: &ProxyTable) -> bool {
+    fn shared_axes_overlap(&self, i: usize, axes_i: &[u32], j: usize, axis: u32, proxies: Proxies) -> bool {
         let axes_j = &self.axes_of[j];
         let (mut x, mut y) = (0, 0);
         let mut first = true;
@@ -339,7 +339,7 @@ impl SweepPrune {
     /// Calls `report` for every candidate pair reported through axis `axis` (the lowest axis of
     /// the pair's shared ones): sweeps each tile of its list against itself and half of its
     /// neighbours.
-    fn list_pairs(&self, axis: u32, proxies: &ProxyTable, mut report: impl FnMut(Reported, Reported, Window)) {
+    fn list_pairs(&self, axis: u32, proxies: Proxies, mut report: impl FnMut(Reported, Reported, Window)) {
         let side = self.tiling.side;
         let list = &self.lists[axis as usize];
         let mut check = |e: &Entry, f: &Entry| {
@@ -402,7 +402,7 @@ impl BroadPhase for SweepPrune {
     /// Drops void entries, sizes the tiles for the window, recomputes every interval and tile
     /// (c_update folded in: the intervals are the lists' own), then sorts every list by (tile,
     /// interval start).
-    fn prepare(&mut self, proxies: &ProxyTable, _workers: &Workers) -> PrepareCounts {
+    fn prepare(&mut self, proxies: Proxies, _workers: &Workers) -> PrepareCounts {
         for b in 0..proxies.slots() {
             if proxies.is_live(b) && self.entered.get(b).copied().flatten() != Some(proxies.stamp(b)) {
                 self.enter_entries(b, proxies, false);
@@ -478,7 +478,7 @@ impl BroadPhase for SweepPrune {
     /// The axis lists are independent: workers sweep whole lists.
     fn find_pairs<T: Send>(
         &mut self,
-        proxies: &ProxyTable,
+        proxies: Proxies,
         workers: &Workers,
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
@@ -499,7 +499,7 @@ impl BroadPhase for SweepPrune {
 
     /// Picks the body's axes for its new velocity, adds fresh entries (its old ones carry an old
     /// stamp and are void) and reports its candidate partners.
-    fn query(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
+    fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
         let b = body as usize;
         let mut axes = std::mem::take(&mut self.query_axes);
         select_axes(&self.pool, proxies.velocity(b), self.sin_phi, &mut axes);
@@ -550,7 +550,7 @@ impl BroadPhase for SweepPrune {
 
     /// Reports the body's candidate partners on its new axes against the lists as they were, then
     /// enters its fresh entries.
-    fn update(&mut self, body: u32, proxies: &ProxyTable, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
+    fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
         self.query(body, proxies, skip, report);
         self.enter_entries(body as usize, proxies, true);
     }

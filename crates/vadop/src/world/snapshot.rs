@@ -68,10 +68,10 @@ impl World {
         let history = self.rules().map(|r| &r.last_contact[..]).unwrap_or(&[]);
         let slots = (0..b.slots())
             .map(|i| Slot {
-                position: b.position[i],
-                velocity: b.velocity[i],
-                since: b.since[i],
-                radius: b.radius[i],
+                position: b.state[i].motion.position,
+                velocity: b.velocity(i),
+                since: b.state[i].motion.since,
+                radius: b.radius(i),
                 mass: b.mass[i],
                 alive: b.alive[i],
                 last_contact: history.get(i).copied().filter(|t| t.is_finite()),
