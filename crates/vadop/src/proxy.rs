@@ -136,6 +136,20 @@ fn up(x: f64) -> f32 {
     }
 }
 
+/// Asks for the cache line holding `value` ahead of its use; a hint, without effect on results
+/// (and a no-op off x86_64).
+#[inline(always)]
+pub fn prefetch<T>(value: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing the program sees and never faults.
+    unsafe {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        _mm_prefetch::<_MM_HINT_T0>((value as *const T).cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = value;
+}
+
 /// Most values [`sampled_quantile`] looks at.
 const QUANTILE_SAMPLE: usize = 4096;
 
@@ -262,10 +276,18 @@ impl ProxyTable {
         self.live.get(i).copied().unwrap_or(false)
     }
 
-    /// True when a broad-phase entry of body `i` made with `stamp` is current.
+    /// True when a broad-phase entry of body `i` made with `stamp` is current. One load: a
+    /// removed body's stamp has moved on (see [`Self::remove`]), so liveness needs no check of
+    /// its own, and a query's stale-entry test costs one memory access instead of two.
     #[inline]
     pub fn is_current(&self, i: usize, stamp: u32) -> bool {
-        self.stamps[i] == stamp && self.live[i]
+        self.stamps[i] == stamp
+    }
+
+    /// Asks for the cache line of body `i`'s stamp ahead of an [`Self::is_current`] check.
+    #[inline(always)]
+    pub fn prefetch_stamp(&self, i: usize) {
+        prefetch(&self.stamps[i]);
     }
 
     /// The table paired with `bodies`, the bodies its proxies bound, for a broad phase to read.
@@ -293,7 +315,7 @@ impl ProxyTable {
                 }
             }
         });
-        // Stamps of bodies without a proxy are never compared: is_current checks liveness.
+        // A removed body's stamp moved on at its removal, so its entries stay stale.
         let n = self.stamps.len().min(bodies.stamp.len());
         self.stamps[..n].copy_from_slice(&bodies.stamp[..n]);
     }
@@ -306,10 +328,11 @@ impl ProxyTable {
         self.live[i] = true;
     }
 
-    /// Drops body `i` (removed): its broad-phase entries become stale.
+    /// Drops body `i` (removed): its broad-phase entries become stale, for its stamp moves on.
     pub fn remove(&mut self, i: usize) {
         if let Some(live) = self.live.get_mut(i) {
             *live = false;
+            self.stamps[i] = self.stamps[i].wrapping_add(1);
         }
     }
 
