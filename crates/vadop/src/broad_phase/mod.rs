@@ -1,13 +1,14 @@
 //! Broad phases: which pairs of bodies might touch within a window, found from the proxy table.
 //!
-//! Every broad phase implements [`BroadPhase`] over the same flat [`ProxyTable`]: at a window's
-//! start it bins or sorts every proxy and reports each candidate pair once; when a body changes
-//! velocity mid-window it enters the body's new proxy and reports that body's candidate partners,
-//! at a cost that grows with the bodies near the new path. A broad phase may report a pair that
-//! never touches, never misses one that does, and never reads a body's shape, mass or velocity
-//! stamp history: bounds come from the proxies. Each candidate comes with the time window over
-//! which the reported bounds hold, and only contacts inside it may be predicted from it, so a
-//! pair reported through several pieces of a long path still yields each contact once.
+//! Every broad phase implements [`BroadPhase`] over the same flat [`crate::proxy::ProxyTable`],
+//! read through [`Proxies`], which pairs it with the bodies' motions: at a window's start it
+//! bins or sorts every proxy and reports each candidate pair once; when a body changes velocity
+//! mid-window it enters the body's new proxy and reports that body's candidate partners, at a
+//! cost that grows with the bodies near the new path. A broad phase may report a pair that never
+//! touches, never misses one that does, and never reads a body's shape, mass or velocity stamp
+//! history: bounds come from the proxies. Each candidate comes with the time window over which
+//! the reported bounds hold, and only contacts inside it may be predicted from it, so a pair
+//! reported through several pieces of a long path still yields each contact once.
 //!
 //! - [`grid::Grid`]: a hierarchical uniform grid over swept boxes, long paths cut into pieces;
 //! - [`sweep_prune::SweepPrune`]: the paper's VADOP sweep and prune over a pool of axes (and its
