@@ -140,21 +140,34 @@ struct Context {
     made: RefCell<HashMap<String, Rc<Timed>>>,
 }
 
+/// The memo key of `program` running `run`, and how the progress line names it.
+fn describe(program: &Path, run: &Simulation) -> (String, String) {
+    let binary = program.file_name().map_or(String::new(), |name| name.to_string_lossy().into_owned());
+    let threads = run.threads.filter(|&t| t > 1).map_or(String::new(), |t| format!(" on {t} threads"));
+    let what =
+        format!("{binary}: {} n={} speed={} {} {}{threads}", run.kind, run.bodies, run.speed, run.method, run.mode);
+    (format!("{} {run:?}", program.display()), what)
+}
+
 /// The repeats of one timed run, or why it failed.
 type Timed = Result<Vec<Report>, String>;
 
 impl Context {
     /// `program`'s `simulate` of `run`, repeated; made once per command.
     fn time(&self, program: &Path, run: &Simulation, progress: &Progress) -> Rc<Timed> {
-        let key = format!("{} {run:?}", program.display());
-        let binary = program.file_name().map_or(String::new(), |name| name.to_string_lossy().into_owned());
-        let threads = run.threads.filter(|&t| t > 1).map_or(String::new(), |t| format!(" on {t} threads"));
-        let what =
-            format!("{binary}: {} n={} speed={} {} {}{threads}", run.kind, run.bodies, run.speed, run.method, run.mode);
+        let (key, what) = describe(program, run);
         if let Some(made) = self.made.borrow().get(&key) {
             progress.done(&format!("{what}: measured above"));
             return made.clone();
         }
+        self.measure(program, run, progress)
+    }
+
+    /// Like [`Self::time`], but always measured now, never read from an earlier section: for a
+    /// run compared with the one made right before it, since this machine drifts by 10-30%
+    /// within one command (the cores section's speed-ups).
+    fn measure(&self, program: &Path, run: &Simulation, progress: &Progress) -> Rc<Timed> {
+        let (key, what) = describe(program, run);
         progress.start(&what);
         let mut reports = Vec::new();
         let outcome = loop {
