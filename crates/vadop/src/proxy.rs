@@ -9,10 +9,11 @@
 //! that will soon hit another never pays for the rest of its path. It is the only thing a broad
 //! phase reads, so broad phases know nothing of shapes: a body of any shape is bounded by the
 //! sphere about its centre that contains it. The table holds no motion of its own: a proxy's
-//! motion is the body's ([`crate::bodies::BodyState`], one cache line), which a broad phase reads
-//! through [`Proxies`]; a body's stamp changes whenever its motion does, so an entry made from an
-//! older motion is stale and its predictions void. The table never decides what is a candidate and never moves a body; the pipeline refreshes every proxy at
-//! a window's start and a body's proxy when it changes velocity.
+//! motion is the body's ([`crate::bodies::BodyState`], one cache line), which a broad phase
+//! reads through [`Proxies`]; a body's stamp changes whenever its motion does, so an entry made
+//! from an older motion is stale and its predictions void. The table never decides what is a
+//! candidate and never moves a body; the pipeline refreshes every proxy at a window's start and
+//! a body's proxy when it changes velocity.
 
 use crate::bodies::{Bodies, BodyState};
 use crate::narrow_phase::wall_contact_time;
@@ -43,10 +44,10 @@ pub struct Span {
     pub bbox: CompactBox,
 }
 
-/// Flat table of proxies, arrays by body id: the spans, and the stamps and liveness that a broad
-/// phase checks for every entry it passes, kept dense so that check stays in cache. The motions
-/// are the bodies' own: a broad phase reads the table through [`Proxies`], which pairs it with
-/// them.
+/// Flat table of proxies, arrays by body id: the spans, the liveness and expiry flags, and the
+/// stamps that a broad phase checks for every entry it passes, kept dense so that check stays in
+/// cache. The motions are the bodies' own: a broad phase reads the table through [`Proxies`],
+/// which pairs it with them.
 #[derive(Debug, Default, Clone)]
 pub struct ProxyTable {
     /// The broad-phase window every proxy lies in.
