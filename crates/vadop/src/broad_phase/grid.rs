@@ -318,7 +318,7 @@ impl Grid {
         // In phases, each a loop of independent loads, rather than column by column: a query
         // meets a few memory misses per column (its cell bounds, its boxes, their owners and
         // stamps), and a phase lets the processor wait for all of a kind at once instead of for
-        // each in turn. That halves the cost of a re-test at n = 10^5 (BENCHMARKS.md).
+        // each in turn. That cut a re-test's cost by about an eighth at n = 10^5 (BENCHMARKS.md).
         runs.clear();
         for x in a[0]..=b[0] {
             for y in a[1]..=b[1] {
