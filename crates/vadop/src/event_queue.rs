@@ -133,6 +133,12 @@ impl EventQueue {
             (h, b) => h.or(b),
         }
     }
+    /// The event `ahead` places after the earliest in the bulk part: most events come from there,
+    /// in this order, so the caller may fetch the bodies it will need a few events early.
+    #[inline]
+    pub fn upcoming(&self, ahead: usize) -> Option<&Event> {
+        self.bulk.len().checked_sub(ahead + 1).map(|k| &self.bulk[k])
+    }
     /// Time of the earliest event (valid or not).
     #[inline]
     pub fn peek_time(&self) -> Option<f64> {

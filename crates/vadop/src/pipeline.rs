@@ -51,6 +51,8 @@ const CALM_UPDATES: f64 = 0.1;
 const REACH_DIAMETERS: f64 = 8.0;
 /// The quantile of travel times that sets the window.
 const WINDOW_QUANTILE: f64 = 0.1;
+/// The event loop fetches the bodies of the event this many places ahead.
+const EVENTS_AHEAD: usize = 8;
 /// Windows are kept within this factor of the caller's frame either way.
 const FRAME_RATIO: f64 = 64.0;
 
@@ -264,6 +266,14 @@ impl<B: BroadPhase> Pipeline<B> {
                 break;
             }
             let event = self.queue.pop().expect("peeked");
+            // The bodies of an event a few ahead: their records are random memory accesses, and
+            // asking early lets them arrive while this one is handled.
+            if let Some(next) = self.queue.upcoming(EVENTS_AHEAD) {
+                bodies.prefetch(next.body as usize);
+                if let Partner::Body(j) = next.partner {
+                    bodies.prefetch(j as usize);
+                }
+            }
             let partner_current = match event.partner {
                 Partner::Body(j) => bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp,
                 Partner::Wall(_) | Partner::Renew => true,
