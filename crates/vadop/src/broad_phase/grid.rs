@@ -298,6 +298,36 @@ impl Grid {
         self.levels.len() - 1
     }
 
+    /// [`BroadPhase::query`], leaving the body's new pieces in `self.pieces`; returns the exponent
+    /// of the level they fit, so an entry need not plan them again.
+    fn query_pieces(
+        &mut self,
+        body: u32,
+        proxies: Proxies,
+        skip: Option<u32>,
+        mut report: impl FnMut(Reported, Window),
+    ) -> i32 {
+        let mut pieces = std::mem::take(&mut self.pieces);
+        pieces.clear();
+        let (count, exponent) = self.plan_pieces(proxies, body as usize);
+        Grid::for_each_piece(proxies, body as usize, count, |bbox, window| pieces.push((bbox, window)));
+        for &(bbox, window) in &pieces {
+            let piece = Entry { bbox, body, stamp: 0 };
+            for k in 0..self.levels.len() {
+                self.for_each_overlapping(k, &piece, proxies, |other, other_window, motion| {
+                    if other.body != body && Some(other.body) != skip {
+                        let common = window.intersect(other_window);
+                        if !common.is_empty() {
+                            report(Reported { body: other.body, stamp: other.stamp, state: motion }, common);
+                        }
+                    }
+                });
+            }
+        }
+        self.pieces = pieces;
+        exponent
+    }
+
     /// Calls `visit(entry, window, motion)` for every current piece, binned or late, of level `k`
     /// whose box overlaps `query`, unlinking the stale late
     /// pieces it passes, so a busy cell's list stays short.
@@ -624,25 +654,8 @@ impl BroadPhase for Grid {
         candidates
     }
 
-    fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, mut report: impl FnMut(Reported, Window)) {
-        let mut pieces = std::mem::take(&mut self.pieces);
-        pieces.clear();
-        let (count, _) = self.plan_pieces(proxies, body as usize);
-        Grid::for_each_piece(proxies, body as usize, count, |bbox, window| pieces.push((bbox, window)));
-        for &(bbox, window) in &pieces {
-            let piece = Entry { bbox, body, stamp: 0 };
-            for k in 0..self.levels.len() {
-                self.for_each_overlapping(k, &piece, proxies, |other, other_window, motion| {
-                    if other.body != body && Some(other.body) != skip {
-                        let common = window.intersect(other_window);
-                        if !common.is_empty() {
-                            report(Reported { body: other.body, stamp: other.stamp, state: motion }, common);
-                        }
-                    }
-                });
-            }
-        }
-        self.pieces = pieces;
+    fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
+        self.query_pieces(body, proxies, skip, report);
     }
 
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
@@ -650,10 +663,9 @@ impl BroadPhase for Grid {
         if let Some(home) = self.home.get(body as usize) {
             prefetch(home);
         }
-        self.query(body, proxies, skip, report);
+        let exponent = self.query_pieces(body, proxies, skip, report);
         // The pieces the query just built.
         let i = body as usize;
-        let (_, exponent) = self.plan_pieces(proxies, i);
         let k = self.level_for(exponent);
         let (boxes, owners, motions) = (&mut self.boxes, &mut self.owners, &mut self.motions);
         let level = &mut self.levels[k];
