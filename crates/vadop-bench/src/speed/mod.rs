@@ -78,6 +78,8 @@ struct Plan {
     retest_bodies: usize,
     retest_calls: usize,
     throughput_bodies: Vec<usize>,
+    /// Body counts of the gas rows of the cores section.
+    cores_gas_bodies: Vec<usize>,
     packings: Vec<f64>,
     /// Travel per frame in rms diameters, for the frame-length sweep.
     travels: Vec<f64>,
@@ -100,6 +102,7 @@ impl Plan {
                 retest_bodies: 10_000,
                 retest_calls: 2000,
                 throughput_bodies: vec![10_000],
+                cores_gas_bodies: vec![10_000],
                 packings: vec![0.05, 0.2, 0.4],
                 travels: vec![0.05, 0.2, 1.0, 5.0],
                 warm_up_travel: 1.0,
@@ -116,6 +119,7 @@ impl Plan {
                 retest_bodies: 100_000,
                 retest_calls: 10_000,
                 throughput_bodies: vec![10_000, 100_000],
+                cores_gas_bodies: vec![10_000, 100_000, 1_000_000],
                 packings: vec![0.05, 0.2, 0.4],
                 travels: vec![0.05, 0.2, 1.0, 5.0],
                 warm_up_travel: 5.0,
