@@ -140,7 +140,12 @@ fn write(context: &Context, cores: usize, rows: &[Row], huge: &[(usize, f64, Rc<
          frames. Median of {} runs. Goals: a speed-up of at least {SPEEDUP_GOAL} at n >= 10^5; at n = 10^6 on every \
          core, at most {} ms/frame at speed {} and {} ms/frame at speed {}; for the gas at n = 10^6 on every \
          core, an aim of {} M pair collisions/s.\n\n",
-        context.repeats, GOALS[0].1, GOALS[0].0, GOALS[1].1, GOALS[1].0, GAS_AIM / 1e6,
+        context.repeats,
+        GOALS[0].1,
+        GOALS[0].0,
+        GOALS[1].1,
+        GOALS[1].0,
+        GAS_AIM / 1e6,
     );
     let _ = writeln!(md, "| scene | n | one thread | {cores} threads | speed-up | goal |");
     let _ = writeln!(md, "|---|---:|---:|---:|---:|---|");
