@@ -189,6 +189,37 @@ def test_bad_calls_change_nothing(call: Callable[[vadop.World], object], error: 
     world.step(0.1)
 
 
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda w: w.remove(1),
+        lambda w: w.remove([0, 1]),
+        lambda w: w.remove(np.array([1])),
+        lambda w: w.set_velocities(1, [[1.0, 0, 0]]),
+        lambda w: w.set_velocities((0, 1), [[1.0, 0, 0], [0, 1.0, 0]]),
+    ],
+    ids=["remove int", "remove list", "remove array", "set_velocities int", "set_velocities tuple"],
+)
+def test_a_removed_bodys_id_is_refused_once_its_slot_is_reused(call: Callable[[vadop.World], object]) -> None:
+    world = world_with()
+    world.remove(1)
+    (new,) = world.add([[8.0, 5, 5]], [[0.0, 0, 0]], [0.5]).tolist()
+    assert new == 2**32 + 1  # slot 1, generation 1
+    before = snapshot(world)
+    with pytest.raises(ValueError) as raised:
+        call(world)
+    assert str(raised.value) == f"ids must name live bodies, got 1: that body was removed; its slot now holds {new}"
+    assert snapshot(world) == before
+    # Once the slot is empty again, the message says only that the body was removed.
+    world.remove(new)
+    for stale in (1, new):
+        with pytest.raises(ValueError, match=f"^ids must name live bodies, got {stale}: that body was removed$"):
+            world.remove(stale)
+    # An id whose generation the slot never had names no body.
+    with pytest.raises(ValueError, match=f"^ids must name live bodies, got {2 * 2**32}$"):
+        world.remove(2 * 2**32)
+
+
 def test_overlapping_bodies_in_simulate_mode_fail_at_step_without_stepping() -> None:
     world = world_with(positions=np.array([[5.0, 5, 5], [5.5, 5, 5]]))
     before = snapshot(world)

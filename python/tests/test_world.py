@@ -100,7 +100,7 @@ def test_contact_columns_are_typed_and_in_time_order() -> None:
         np.testing.assert_allclose(np.linalg.norm(c.normal, axis=1), 1.0)
 
 
-def test_add_remove_reuse_ids_lowest_first() -> None:
+def test_add_remove_reuse_slots_lowest_first_under_new_ids() -> None:
     world = two_bodies(mode="detect")
     new = world.add(np.array([[5.0, 2, 2], [5, 8, 8]]), np.zeros((2, 3)), np.array([0.5, 0.25]))
     assert new.tolist() == [2, 3]
@@ -109,9 +109,28 @@ def test_add_remove_reuse_ids_lowest_first() -> None:
     world.remove(0)
     assert world.ids.tolist() == [2]
     again = world.add(np.array([[1.0, 1, 1], [3, 3, 3]]), np.zeros((2, 3)), np.array([0.5, 0.5]), np.array([2.0, 2.0]))
-    assert again.tolist() == [0, 1]
+    # Slots 0 and 1 again, each one generation on: generation << 32 | slot.
+    assert again.dtype == np.int64 and again.tolist() == [2**32, 2**32 + 1]
+    assert (again & 0xFFFFFFFF).tolist() == [0, 1] and (again >> 32).tolist() == [1, 1]
+    assert world.ids.tolist() == [2**32, 2**32 + 1, 2]
     np.testing.assert_array_equal(world.positions, [[1.0, 1, 1], [3, 3, 3], [5, 2, 2]])
     np.testing.assert_array_equal(world.masses, [2.0, 2.0, 1.0])
+    # The new ids work wherever ids are taken.
+    world.set_velocities(again, [[1.0, 0, 0], [0, 1, 0]])
+    np.testing.assert_array_equal(world.velocities[:2], [[1.0, 0, 0], [0, 1, 0]])
+
+
+def test_contacts_name_the_live_bodies_of_reused_slots() -> None:
+    world = two_bodies()
+    world.remove(0)
+    (bullet,) = world.add([[2.0, 5, 5]], [[30.0, 0, 0]], [0.5]).tolist()
+    assert bullet == 2**32
+    contacts = world.step(0.25)
+    pair = contacts.j >= 0
+    assert contacts.i[pair].tolist() == [bullet] and contacts.j[pair].tolist() == [1]
+    assert set(contacts.i.tolist()) <= set(world.ids.tolist())
+    with pytest.raises(ValueError, match="ids must name live bodies, got 0: that body was removed"):
+        world.set_velocities(0, [[1.0, 0, 0]])
 
 
 def test_set_velocities() -> None:

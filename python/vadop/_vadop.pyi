@@ -7,6 +7,7 @@ import numpy.typing as npt
 
 _Float64Array = npt.NDArray[np.float64]
 _Int64Array = npt.NDArray[np.int64]
+# Body ids: a body's handle as an int, generation << 32 | slot (0, 1, 2 ... until a slot is reused).
 # Lists and tuples are read with numpy.asarray wherever an array is taken.
 _Number = Union[int, float, np.integer[Any], np.floating[Any]]
 _Vectors = Union[_Float64Array, Sequence[Sequence[_Number]]]
@@ -44,6 +45,10 @@ class Contacts:
 @final
 class World:
     """Spheres in a box, stepped frame by frame; every contact inside a frame is found.
+
+    Bodies are named by int ids, 0, 1, 2 ... in row order; a removed body's slot is reused under
+    a new id (the slot plus 2**32 per reuse), so a removed body's id raises ValueError and never
+    names another body.
 
     Threads may share a world: calls on it take turns (steps are serialised by a lock inside the
     world). A thread that calls while another steps waits, without holding the GIL, until that

@@ -83,7 +83,7 @@ def record(
     elif isinstance(watch, (str, bytes)):
         raise TypeError(f"watch must be a sequence of body ids (ints), got {type(watch).__name__}")
     else:
-        watched = {_int_arg(i, f"watch[{k}]", 0, 2**32 - 1) for k, i in enumerate(watch)}
+        watched = {_int_arg(i, f"watch[{k}]", 0, 2**63 - 1) for k, i in enumerate(watch)}
         dead = sorted(watched.difference(ids.tolist()))
         if dead:
             raise ValueError(f"watch must name live bodies, got {dead[0]}")

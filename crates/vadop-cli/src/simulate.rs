@@ -20,7 +20,7 @@ use std::str::FromStr;
 use std::time::{Duration, Instant};
 use vadop::memory;
 use vadop::scene::{GeneratedScene, Scene, Velocities, FRAMES_PER_SECOND, MAX_SCENE_BODIES};
-use vadop::{Contact, Method, Mode, Touched, VadopError, World, WorldConfig};
+use vadop::{BodyHandle, Contact, Method, Mode, Touched, VadopError, World, WorldConfig};
 
 /// Scenes up to this many bodies are checked against brute force unless told otherwise.
 const DEFAULT_REFERENCE_MAX_BODIES: usize = 3000;
@@ -131,8 +131,11 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     json: Option<PathBuf>,
     /// Write every contact as CSV (frame, time, body, what it touched, point, normal, impulse).
-    /// With --resume an existing file is continued: rows of frames after the saved state are
-    /// dropped, and the new frames' rows appended
+    /// Bodies are numbered from 0 in scene order. A world saved by the library after bodies were
+    /// removed and added may hold a body in a reused slot: it is written as slot + 2^32 x
+    /// generation, the number of its BodyHandle (the id Python uses too). With --resume an
+    /// existing file is continued: rows of frames after the saved state are dropped, and the new
+    /// frames' rows appended
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     contacts: Option<PathBuf>,
     /// Save the scene, before stepping, as a scene file (a regular file; links are followed)
@@ -605,13 +608,13 @@ impl ContactWriter {
     fn frame(&mut self, frame: u64, contacts: &[Contact]) -> CliResult<()> {
         for c in contacts {
             let (kind, other) = match c.touched {
-                Touched::Body(id) => ("body", id.to_string()),
+                Touched::Body(other) => ("body", other.to_bits().to_string()),
                 Touched::Wall(wall) => ("wall", format!("{wall:?}")),
             };
-            let (p, n) = (c.point, c.normal);
+            let (body, p, n) = (c.body.to_bits(), c.point, c.normal);
             self.file.line(format_args!(
-                "{frame},{},{},{kind},{other},{},{},{},{},{},{},{}",
-                c.time, c.body, p.x, p.y, p.z, n.x, n.y, n.z, c.impulse
+                "{frame},{},{body},{kind},{other},{},{},{},{},{},{},{}",
+                c.time, p.x, p.y, p.z, n.x, n.y, n.z, c.impulse
             ))?;
         }
         Ok(())
@@ -757,9 +760,9 @@ fn step_frames(
     Outcome { frames: totals, pool, accuracy, conservation, failure }
 }
 
-/// The body-body contacts of a frame as sorted (lower id, higher id) pairs.
-fn pair_contacts(contacts: &[Contact]) -> Vec<(u32, u32)> {
-    let mut pairs: Vec<(u32, u32)> = contacts
+/// The body-body contacts of a frame as sorted (lower handle, higher handle) pairs.
+fn pair_contacts(contacts: &[Contact]) -> Vec<(BodyHandle, BodyHandle)> {
+    let mut pairs: Vec<(BodyHandle, BodyHandle)> = contacts
         .iter()
         .filter_map(|c| match c.touched {
             Touched::Body(other) => Some((c.body.min(other), c.body.max(other))),
@@ -772,7 +775,7 @@ fn pair_contacts(contacts: &[Contact]) -> Vec<(u32, u32)> {
 
 /// (missed, extra): entries of `expected` absent from `found` and the reverse, as multisets, so a
 /// pair that touches twice in a frame must be found twice. Both inputs are sorted.
-fn differences(expected: &[(u32, u32)], found: &[(u32, u32)]) -> (u64, u64) {
+fn differences<T: Ord>(expected: &[T], found: &[T]) -> (u64, u64) {
     let (mut i, mut j, mut missed, mut extra) = (0, 0, 0u64, 0u64);
     while i < expected.len() && j < found.len() {
         match expected[i].cmp(&found[j]) {

@@ -136,6 +136,40 @@ fn resuming_drops_contact_rows_beyond_the_saved_state() {
     std::fs::remove_dir_all(d).ok();
 }
 
+/// A world saved by the library after a body was removed and another took its slot resumes in the
+/// CLI, and the contacts file names the newcomer by its handle's number, slot + 2^32 x generation,
+/// never by the removed body's.
+#[test]
+fn contacts_of_a_reused_slot_name_the_body_by_its_handle() {
+    use glam::DVec3;
+    use vadop::{BoxBounds, Sphere, World, WorldConfig};
+    let d = dir("reused-slot");
+    let (state, contacts) = (d.join("state.json"), d.join("contacts.csv"));
+    let at = |x: f64, speed: f64| Sphere {
+        position: DVec3::new(x, 5.0, 5.0),
+        velocity: DVec3::new(speed, 0.0, 0.0),
+        radius: 0.5,
+        mass: 1.0,
+    };
+    let mut world = World::new(BoxBounds::cube(10.0).unwrap(), WorldConfig::default()).unwrap();
+    let removed = world.add_sphere(at(2.0, 0.0)).unwrap();
+    let target = world.add_sphere(at(8.0, 0.0)).unwrap();
+    world.remove_sphere(removed).unwrap();
+    let bullet = world.add_sphere(at(2.0, 30.0)).unwrap();
+    assert_eq!((bullet.index(), bullet.generation(), bullet.to_bits()), (0, 1, 1 << 32));
+    world.save(&state).unwrap();
+    ok(vadop(&["simulate", "--resume", &text(&state), "--frames", "6", "--quiet", "--contacts", &text(&contacts)]));
+    let rows = String::from_utf8(bytes(&contacts)).unwrap();
+    // The bullet hits the target at t = 1/6.
+    let hit =
+        rows.lines().skip(1).find(|row| row.contains(",body,")).unwrap_or_else(|| panic!("no pair contact in\n{rows}"));
+    let cells: Vec<&str> = hit.split(',').collect();
+    assert_eq!(cells[2..5], ["4294967296", "body", &target.to_bits().to_string()], "{hit}");
+    assert!(rows.lines().skip(1).all(|row| row.split(',').nth(2) != Some("0")), "{rows}");
+    assert!(ok(vadop(&["simulate", "--help"])).contains("slot + 2^32 x generation"));
+    std::fs::remove_dir_all(d).ok();
+}
+
 #[cfg(unix)]
 #[test]
 fn saved_files_replace_only_regular_files() {

@@ -6,7 +6,7 @@
 //! an int out of its range) naming the argument, the row and what was expected, before the world
 //! is touched; lists and tuples are read with `numpy.asarray` where arrays are taken; whatever
 //! the core still rejects (overlaps, absurd speeds, bad settings) becomes a `ValueError` with the
-//! core's message. Stepping releases the GIL.
+//! core's message. Body handles cross as ints, [`BodyHandle::to_bits`]. Stepping releases the GIL.
 
 use glam::DVec3;
 use numpy::ndarray::{Array1, Array2};
@@ -22,7 +22,7 @@ use vadop::bounding_volume::interval;
 use vadop::collapse::DEFAULT_CONTACT_DURATION;
 use vadop::memory;
 use vadop::scene::{PaperScene, MAX_SCENE_BODIES};
-use vadop::{BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
+use vadop::{BodyHandle, BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
 
 /// Names of the six walls, indexed by the `wall` column of [`Contacts`].
 const WALLS: [&str; 6] = ["min_x", "max_x", "min_y", "max_y", "min_z", "max_z"];
@@ -205,8 +205,9 @@ fn also_accepts(py: Python<'_>, error: PyErr, alternative: &str) -> PyErr {
     }
 }
 
-/// Body ids: an int, or an int64 array (or a list or tuple of ints) of shape (k,). An int too
-/// large for int64, in a list or not, names no body: `ValueError`.
+/// Body ids as given: an int, or an int64 array (or a list or tuple of ints) of shape (k,).
+/// [`live_handles`] checks that they name live bodies; an int too large for int64, in a list or
+/// not, names no body: `ValueError`.
 fn ids_of(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i128>> {
     let no_body = |text: &str| PyValueError::new_err(format!("{name} must name live bodies, got {text}"));
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
@@ -338,10 +339,11 @@ fn vectors_array<'py>(py: Python<'py>, rows: &[DVec3]) -> Bound<'py, PyArray2<f6
 
 /// The contacts of one or more frames, as columns in time order.
 ///
-/// ``time`` (m,) float64 absolute times; ``i`` (m,) int64 the body (the lower id of a pair);
-/// ``j`` (m,) int64 the other body, or -1 for a wall; ``wall`` (m,) int64 the wall's index in
-/// ``vadop.WALLS``, or -1 for a pair; ``point`` and ``normal`` (m, 3) float64, the normal
-/// pointing from ``i`` towards what it touched; ``impulse`` (m,) float64, 0 when not resolved.
+/// ``time`` (m,) float64 absolute times; ``i`` (m,) int64 the body's id (of a pair, the body of
+/// the lower slot: the lower id, unless a slot was reused); ``j`` (m,) int64 the other body's id,
+/// or -1 for a wall; ``wall`` (m,) int64 the wall's index in ``vadop.WALLS``, or -1 for a pair;
+/// ``point`` and ``normal`` (m, 3) float64, the normal pointing from ``i`` towards what it
+/// touched; ``impulse`` (m,) float64, 0 when not resolved.
 ///
 /// >>> import vadop
 /// >>> w = vadop.World([[2.0, 5, 5], [8, 5, 5]], [[30.0, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10.0)
@@ -367,9 +369,9 @@ impl Contacts {
         let normals: Vec<DVec3> = contacts.iter().map(|c| c.normal).collect();
         Contacts {
             time: column(&|c| c.time),
-            i: index(&|c| c.body as i64),
+            i: index(&|c| handle_id(c.body)),
             j: index(&|c| match c.touched {
-                Touched::Body(j) => j as i64,
+                Touched::Body(j) => handle_id(j),
                 Touched::Wall(_) => -1,
             }),
             wall: index(&|c| match c.touched {
@@ -414,8 +416,11 @@ impl Contacts {
 /// (how many threads a step shares its work among, 1 to 1024; None: every core; results are
 /// bit-identical whatever the number).
 ///
-/// Body ids start at 0 in row order; ids of removed bodies are reused, lowest first. Arrays read
-/// back (``positions``, ``velocities`` ...) hold the live bodies in ascending id order (``ids``).
+/// Bodies are named by int ids, 0, 1, 2 ... in row order. A removed body's slot is reused by a
+/// later body (lowest slot first) under a new id, the slot plus 2**32 per reuse (the core's
+/// ``BodyHandle``: ``generation << 32 | slot``), so a removed body's id never names another body:
+/// it raises ``ValueError`` wherever ids are taken. Arrays read back (``positions``,
+/// ``velocities`` ...) hold the live bodies in ascending slot order (``ids``).
 ///
 /// >>> import numpy as np, vadop
 /// >>> w = vadop.World(np.array([[2.0, 5, 5], [8, 5, 5]]), np.array([[30.0, 0, 0], [0, 0, 0]]),
@@ -467,7 +472,8 @@ impl PyWorld {
     }
 
     /// Adds bodies (all or none) and returns their ids as an int64 array; the arguments are
-    /// those of ``World`` (arrays, lists or tuples).
+    /// those of ``World`` (arrays, lists or tuples). Slots of removed bodies are taken first, each
+    /// under a new id.
     ///
     /// >>> import vadop
     /// >>> w = vadop.World([[2.0, 2, 2]], [[0.0, 0, 0]], [0.5], box=10.0)
@@ -486,21 +492,28 @@ impl PyWorld {
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
         let added = self.lock(py)?.add_spheres(&spheres).map_err(value_error)?;
-        Ok(Array1::from_iter(added.into_iter().map(i64::from)).into_pyarray(py))
+        Ok(Array1::from_iter(added.into_iter().map(handle_id)).into_pyarray(py))
     }
 
     /// Removes bodies by id (an int, or an int64 array, list or tuple of ints), all or none.
+    /// Their ids are stale from then on: a body added later may take the slot, under a new id.
     ///
     /// >>> import vadop
     /// >>> w = vadop.scene(10)
     /// >>> w.remove([0, 3])
     /// >>> w.ids.tolist()
     /// [1, 2, 4, 5, 6, 7, 8, 9]
+    /// >>> w.add([[1.0, 1, 1]], [[0.0, 0, 0]], [0.5]).tolist()   # slot 0 again, generation 1
+    /// [4294967296]
+    /// >>> w.remove(0)
+    /// Traceback (most recent call last):
+    /// ...
+    /// ValueError: ids must name live bodies, got 0: that body was removed; its slot now holds 4294967296
     fn remove(&self, py: Python<'_>, ids: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = ids_of(ids, "ids")?;
         let mut world = self.lock(py)?;
-        for id in live_ids(&world, &ids, "ids")? {
-            world.remove_sphere(id).map_err(value_error)?;
+        for handle in live_handles(&world, &ids, "ids")? {
+            world.remove_sphere(handle).map_err(value_error)?;
         }
         Ok(())
     }
@@ -517,8 +530,8 @@ impl PyWorld {
         let ids = ids_of(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
         let mut world = self.lock(py)?;
-        let ids = live_ids(&world, &ids, "ids")?;
-        world.set_velocities(&ids, &velocities).map_err(value_error)
+        let handles = live_handles(&world, &ids, "ids")?;
+        world.set_velocities(&handles, &velocities).map_err(value_error)
     }
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
@@ -540,10 +553,10 @@ impl PyWorld {
         Ok(Contacts::new(py, &contacts))
     }
 
-    /// Ids of the live bodies, ascending (the row order of every array read back).
+    /// Ids of the live bodies, int64, ascending by slot (the row order of every array read back).
     #[getter]
     fn ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let ids: Vec<i64> = self.lock(py)?.spheres().map(|(id, _)| i64::from(id)).collect();
+        let ids: Vec<i64> = self.lock(py)?.spheres().map(|(handle, _)| handle_id(handle)).collect();
         Ok(Array1::from_vec(ids).into_pyarray(py))
     }
 
@@ -715,10 +728,10 @@ impl PyWorld {
             )));
         };
         let (mut body, mut axis, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (id, s) in world.spheres() {
-            for &a in sap.axes_of(id) {
+        for (handle, s) in world.spheres() {
+            for &a in sap.axes_of(handle.index()) {
                 let iv = interval(sap.pool().axis(a), s.position, s.velocity, s.radius, dt);
-                body.push(i64::from(id));
+                body.push(handle_id(handle));
                 axis.push(i64::from(a));
                 lo.push(iv.lo);
                 hi.push(iv.hi);
@@ -778,16 +791,28 @@ fn mode_name(mode: Mode) -> &'static str {
     }
 }
 
-/// Ids that all name distinct live bodies of `world`, or an error naming the first that does not.
-fn live_ids(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<u32>> {
+/// A body's id in Python: its handle's bits, which fit int64 (generations stay at or below
+/// [`BodyHandle::MAX_GENERATION`]), so ids share numpy's default int dtype with `Contacts.j`'s -1.
+fn handle_id(handle: BodyHandle) -> i64 {
+    handle.to_bits() as i64
+}
+
+/// The handles of ids that all name distinct live bodies of `world`, or an error naming the
+/// first that does not, and saying so when it names a body since removed.
+fn live_handles(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<BodyHandle>> {
     let mut seen = std::collections::HashSet::new();
     ids.iter()
         .map(|&id| {
-            let live = u32::try_from(id).ok().filter(|&u| world.sphere(u).is_some());
-            match live {
-                Some(u) if seen.insert(u) => Ok(u),
-                Some(_) => Err(PyValueError::new_err(format!("{name} must not repeat an id, got {id} twice"))),
-                None => Err(PyValueError::new_err(format!("{name} must name live bodies, got {id}"))),
+            let not_live = |why: String| PyValueError::new_err(format!("{name} must name live bodies, got {id}{why}"));
+            let handle = u64::try_from(id).map(BodyHandle::from_bits).map_err(|_| not_live(String::new()))?;
+            match world.sphere(handle) {
+                Ok(_) if seen.insert(handle) => Ok(handle),
+                Ok(_) => Err(PyValueError::new_err(format!("{name} must not repeat an id, got {id} twice"))),
+                Err(VadopError::StaleHandle { current, .. }) => Err(not_live(match current {
+                    Some(current) => format!(": that body was removed; its slot now holds {}", handle_id(current)),
+                    None => ": that body was removed".to_string(),
+                })),
+                Err(_) => Err(not_live(String::new())),
             }
         })
         .collect()

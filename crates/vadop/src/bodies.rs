@@ -1,13 +1,16 @@
 //! The body store: the state of every sphere in flat arrays, indexed by body id.
 //!
-//! It owns each body's motion and bounding radius, its mass and the per-body velocity stamp that
-//! voids stale predictions. It never moves bodies on its own or knows about axes or contacts. A
-//! position is stored together with the time it refers to (`since`), so a body that changed
-//! velocity mid-frame is evaluated exactly as p(t) = p + (t - since) * v by every method alike.
+//! Inside the engine a body's id is its slot index, reused after a removal; users name bodies by
+//! [`BodyHandle`], the slot and its generation. The store owns each body's motion and bounding
+//! radius, its mass, the per-body velocity stamp that voids stale predictions and each slot's
+//! generation. It never moves bodies on its own or knows about axes or contacts. A position is
+//! stored together with the time it refers to (`since`), so a body that changed velocity
+//! mid-frame is evaluated exactly as p(t) = p + (t - since) * v by every method alike.
 //! The motion and the radius share one cache line per body ([`BodyState`]): it is what the
 //! narrow phase reads for a candidate pair, and the proxy table reads it from here rather than
 //! keeping a copy.
 
+use crate::handle::BodyHandle;
 use crate::narrow_phase::Motion;
 use crate::proxy::prefetch;
 use glam::DVec3;
@@ -40,7 +43,7 @@ impl Default for BodyState {
     }
 }
 
-/// Flat store of all bodies; removed slots stay until reused.
+/// Flat store of all bodies; removed slots stay until reused (lowest first, by the world).
 #[derive(Debug, Default, Clone)]
 pub struct Bodies {
     /// Motion and radius of each body.
@@ -49,6 +52,9 @@ pub struct Bodies {
     /// Bumped on every velocity change (and on removal): predictions made earlier are void.
     pub stamp: Vec<u32>,
     pub alive: Vec<bool>,
+    /// Of a live slot, its body's generation; of a removed one, the generation its next body
+    /// gets (above [`BodyHandle::MAX_GENERATION`]: retired, never reused).
+    pub(crate) generation: Vec<u32>,
     /// No live body is faster than this: raised by every velocity written and lowered only by
     /// `Bodies::tighten_speed_bound`, so a step need not read every body to rule out an absurd
     /// speed.
@@ -129,9 +135,11 @@ impl Bodies {
         self.mass.reserve_exact(additional);
         self.stamp.reserve_exact(additional);
         self.alive.reserve_exact(additional);
+        self.generation.reserve_exact(additional);
     }
 
-    /// Writes `sphere` into slot `i`, appending when `i` is one past the end.
+    /// Writes `sphere` into slot `i`, appending when `i` is one past the end; a reused slot keeps
+    /// the generation its last removal set.
     pub(crate) fn put(&mut self, i: usize, sphere: Sphere, time: f64) {
         self.speed_bound = self.speed_bound.max(speed(sphere.velocity));
         let state = BodyState {
@@ -143,12 +151,32 @@ impl Bodies {
             self.mass.push(sphere.mass);
             self.stamp.push(0);
             self.alive.push(true);
+            self.generation.push(0);
         } else {
             self.state[i] = state;
             self.mass[i] = sphere.mass;
             self.stamp[i] = self.stamp[i].wrapping_add(1);
             self.alive[i] = true;
         }
+    }
+
+    /// Empties slot `i`: voids the body's predictions and moves the slot on to its next
+    /// generation, so the body's handle names nothing from now on.
+    pub(crate) fn remove(&mut self, i: usize) {
+        self.alive[i] = false;
+        self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.generation[i] += 1;
+    }
+
+    /// The handle of the body in live slot `i`.
+    #[inline]
+    pub fn handle(&self, i: usize) -> BodyHandle {
+        BodyHandle::new(i as u32, self.generation[i])
+    }
+
+    /// True when removed slot `i` may hold another body: its generation has not run out.
+    pub(crate) fn is_reusable(&self, i: usize) -> bool {
+        self.generation[i] <= BodyHandle::MAX_GENERATION
     }
 
     /// Moves body `i` to time `t` and gives it a new velocity, voiding its predictions.

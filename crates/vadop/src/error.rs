@@ -3,6 +3,7 @@
 //! Every fallible call validates its input *before* it touches any state, so an `Err` always
 //! leaves the world exactly as it was. Messages name the offending value and what was expected.
 
+use crate::handle::BodyHandle;
 use thiserror::Error;
 
 /// Everything that can go wrong when building or stepping a world.
@@ -57,24 +58,27 @@ pub enum VadopError {
     #[error("the world is empty: add at least one sphere before stepping")]
     EmptyWorld,
     /// A batch call was given lists of different lengths.
-    #[error("{ids} ids but {velocities} velocities: give one velocity per id")]
-    LengthMismatch { ids: usize, velocities: usize },
-    /// A body handle that does not name a live body.
-    #[error("no body with id {0}")]
-    NoSuchBody(u32),
+    #[error("{handles} handles but {velocities} velocities: give one velocity per handle")]
+    LengthMismatch { handles: usize, velocities: usize },
+    /// A handle this world never gave out.
+    #[error("no body with handle {0} in this world")]
+    NoSuchBody(BodyHandle),
+    /// The handle of a body since removed; `current` is the body its slot holds now, if any.
+    #[error("body {handle} was removed{}", now_in_slot(.current))]
+    StaleHandle { handle: BodyHandle, current: Option<BodyHandle> },
     /// Two spheres overlap at the start of a run that resolves collisions.
     #[error("spheres {a} and {b} overlap by {depth:.3e} at the start of a simulate-mode run; collisions can only be resolved between separate bodies")]
-    Overlap { a: u32, b: u32, depth: f64 },
+    Overlap { a: BodyHandle, b: BodyHandle, depth: f64 },
     /// A body would cross the box so many times in one frame that stepping it is meaningless.
     #[error("body {body} moves {lengths:.3e} box lengths in one frame (limit {limit:.0e}); reduce the speed or the time step")]
-    AbsurdSpeed { body: u32, lengths: f64, limit: f64 },
+    AbsurdSpeed { body: BodyHandle, lengths: f64, limit: f64 },
     /// The axis pool size was out of the supported range.
     #[error("axis pool size must be between {min} and {max}, got {got}")]
     BadPoolSize { got: usize, min: usize, max: usize },
     /// The alignment angle phi was out of range.
     #[error("phi must be a finite angle in [rho, pi/2] radians (rho = {rho:.6}) so that every pair of bodies shares an axis, got {got}")]
     BadPhi { got: f64, rho: f64 },
-    /// Too many bodies for 32-bit body ids.
+    /// Too many bodies for the 32-bit slot index of a [`BodyHandle`].
     #[error("a world holds at most {0} bodies")]
     TooManyBodies(usize),
     /// A scene file or scene parameters could not be used.
@@ -87,6 +91,14 @@ pub enum VadopError {
 
 /// Shorthand for results of this crate.
 pub type Result<T> = std::result::Result<T, VadopError>;
+
+/// The end of a [`VadopError::StaleHandle`] message: who holds the slot now, if anyone.
+fn now_in_slot(current: &Option<BodyHandle>) -> String {
+    match current {
+        Some(current) => format!("; its slot now holds body {current}"),
+        None => String::new(),
+    }
+}
 
 /// Largest magnitude of a coordinate, velocity component, radius or mass (and inverse of the
 /// smallest mass): products of four such values stay far from overflow, so no contact is lost

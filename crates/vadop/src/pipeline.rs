@@ -343,8 +343,8 @@ impl<B: BroadPhase> Pipeline<B> {
         out.stats.pair_contacts += 1;
         out.contacts.push(Contact {
             time: t,
-            body: a,
-            touched: Touched::Body(b),
+            body: bodies.handle(i),
+            touched: Touched::Body(bodies.handle(j)),
             point: pi + normal * bodies.radius(i),
             normal,
             impulse,
@@ -374,7 +374,14 @@ impl<B: BroadPhase> Pipeline<B> {
                 bodies.mass[i] * (v - bounced).length()
             }
         };
-        out.contacts.push(Contact { time: t, body: a, touched: Touched::Wall(wall), point, normal, impulse });
+        out.contacts.push(Contact {
+            time: t,
+            body: bodies.handle(i),
+            touched: Touched::Wall(wall),
+            point,
+            normal,
+            impulse,
+        });
     }
 
     /// The jam rule (see [`crate::collapse`]): every body touching `seeds` at `t`, directly or

@@ -140,7 +140,7 @@ impl PseudoDynamic {
                 let point = bodies.position_at(i, t) + normal * bodies.radius(i);
                 out.contacts.push(Contact {
                     time: t,
-                    body,
+                    body: bodies.handle(i),
                     touched: Touched::Wall(wall),
                     point,
                     normal,
@@ -148,7 +148,7 @@ impl PseudoDynamic {
                 });
             }
         }
-        out.contacts.sort_by(|x, y| x.time.total_cmp(&y.time).then(x.body.cmp(&y.body)));
+        out.contacts.sort_by(|x, y| x.time.total_cmp(&y.time).then(x.body.index().cmp(&y.body.index())));
         out.stats.response_seconds += start.elapsed().as_secs_f64();
         self.find_overlaps(bodies, t1, out);
         let start = Instant::now();
@@ -172,8 +172,8 @@ impl PseudoDynamic {
             out.stats.pair_contacts += 1;
             out.contacts.push(Contact {
                 time: t1,
-                body: a,
-                touched: Touched::Body(b),
+                body: bodies.handle(i),
+                touched: Touched::Body(bodies.handle(j)),
                 point: self.centre[i] + normal * bodies.radius(i),
                 normal,
                 impulse,

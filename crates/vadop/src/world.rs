@@ -15,6 +15,7 @@ use crate::broad_phase::grid::Grid;
 use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::collapse::{ContactRules, DEFAULT_CONTACT_DURATION};
 use crate::error::{check_length, check_magnitude, check_vector, Result, VadopError};
+use crate::handle::BodyHandle;
 use crate::narrow_phase::Wall;
 use crate::parallel::Workers;
 use crate::pipeline::{Output, Physics, Pipeline, WindowRule};
@@ -186,17 +187,18 @@ impl BoxBounds {
 /// What a contact's body touched.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Touched {
-    Body(u32),
+    Body(BodyHandle),
     Wall(Wall),
 }
 
-/// One contact found in a frame.
+/// One contact found in a frame. Bodies are named by the handles they have at the contact, which
+/// are their current handles: bodies are only removed between frames.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Contact {
     /// Absolute simulation time of first touch.
     pub time: f64,
-    /// The body (the lower id of a pair).
-    pub body: u32,
+    /// The body (of a pair, the one with the lower index).
+    pub body: BodyHandle,
     /// What it touched.
     pub touched: Touched,
     /// Contact point.
@@ -297,7 +299,7 @@ macro_rules! with_pipeline {
 /// // At 30 units/s the gap of 5 closes in 1/6 s, inside a frame of 1/4 s: a discrete check at
 /// // the frame end would find them apart again; the continuous step finds the contact.
 /// let contacts = world.step(0.25).unwrap();
-/// assert_eq!(contacts[0].touched, Touched::Body(b));
+/// assert_eq!((contacts[0].body, contacts[0].touched), (a, Touched::Body(b)));
 /// assert!((contacts[0].time - 5.0 / 30.0).abs() < 1e-12);
 /// // Equal masses: the velocities were exchanged.
 /// assert!(world.sphere(a).unwrap().velocity.x.abs() < 1e-12);
@@ -308,6 +310,7 @@ pub struct World {
     bounds: BoxBounds,
     bodies: Bodies,
     live: usize,
+    /// Removed slots that may be reused, highest first (the lowest is popped).
     free_slots: Vec<u32>,
     /// Added since the last step: validated and entered into the engine at the next step.
     unplaced: Vec<u32>,
@@ -351,95 +354,99 @@ impl World {
         })
     }
 
-    /// Adds a sphere; returns its id. Ids of removed bodies are reused, lowest first.
-    pub fn add_sphere(&mut self, sphere: Sphere) -> Result<u32> {
+    /// Adds a sphere; returns its handle. The slots of removed bodies are reused, lowest first,
+    /// each under a new generation, so the handles of removed bodies stay stale.
+    pub fn add_sphere(&mut self, sphere: Sphere) -> Result<BodyHandle> {
         self.check_sphere(&sphere)?;
-        if self.live >= u32::MAX as usize - 1 {
+        if self.used_slots() >= u32::MAX as usize - 1 {
             return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
         }
-        let id = match self.free_slots.pop() {
-            Some(id) => id,
+        let slot = match self.free_slots.pop() {
+            Some(slot) => slot,
             None => self.bodies.slots() as u32,
         };
-        self.bodies.put(id as usize, sphere, self.time);
+        self.bodies.put(slot as usize, sphere, self.time);
         if let Some(rules) = self.rules_mut() {
-            rules.forget(id as usize);
+            rules.forget(slot as usize);
         }
         self.live += 1;
-        self.unplaced.push(id);
-        Ok(id)
+        self.unplaced.push(slot);
+        Ok(self.bodies.handle(slot as usize))
     }
 
     /// Adds many spheres at once, all or none. An error names the first bad sphere by its index
     /// in `spheres` ([`VadopError::InSphere`]).
-    pub fn add_spheres(&mut self, spheres: &[Sphere]) -> Result<Vec<u32>> {
+    pub fn add_spheres(&mut self, spheres: &[Sphere]) -> Result<Vec<BodyHandle>> {
         for (index, s) in spheres.iter().enumerate() {
             self.check_sphere(s).map_err(|e| VadopError::InSphere { index, source: Box::new(e) })?;
         }
-        if self.live + spheres.len() >= u32::MAX as usize - 1 {
+        if self.used_slots() + spheres.len() >= u32::MAX as usize - 1 {
             return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
         }
         self.bodies.reserve(spheres.len().saturating_sub(self.free_slots.len()));
         self.unplaced.reserve_exact(spheres.len());
-        let mut ids = Vec::with_capacity(spheres.len());
+        let mut handles = Vec::with_capacity(spheres.len());
         for s in spheres {
-            ids.push(self.add_sphere(*s)?);
+            handles.push(self.add_sphere(*s)?);
         }
-        Ok(ids)
+        Ok(handles)
     }
 
-    /// Removes a body and returns it as it was now.
-    pub fn remove_sphere(&mut self, id: u32) -> Result<Sphere> {
-        let i = self.live_index(id)?;
+    /// Removes a body and returns it as it was now. Its handle is stale from now on.
+    pub fn remove_sphere(&mut self, handle: BodyHandle) -> Result<Sphere> {
+        let i = self.live_slot(handle)?;
+        let slot = i as u32;
         let sphere = self.bodies.sphere_at(i, self.time);
-        self.bodies.alive[i] = false;
-        self.bodies.stamp[i] = self.bodies.stamp[i].wrapping_add(1);
+        self.bodies.remove(i);
         self.live -= 1;
-        self.unplaced.retain(|&u| u != id);
-        with_pipeline!(&mut self.engine, p => p.remove(id), ());
-        self.free_slots.push(id);
-        // Pop the lowest id first.
-        self.free_slots.sort_unstable_by(|a, b| b.cmp(a));
+        self.unplaced.retain(|&u| u != slot);
+        with_pipeline!(&mut self.engine, p => p.remove(slot), ());
+        if self.bodies.is_reusable(i) {
+            self.free_slots.push(slot);
+            // Pop the lowest slot first.
+            self.free_slots.sort_unstable_by(|a, b| b.cmp(a));
+        }
         Ok(sphere)
     }
 
     /// Sets a body's velocity (between frames).
-    pub fn set_velocity(&mut self, id: u32, velocity: DVec3) -> Result<()> {
-        let i = self.live_index(id)?;
+    pub fn set_velocity(&mut self, handle: BodyHandle, velocity: DVec3) -> Result<()> {
+        let i = self.live_slot(handle)?;
         check_vector("velocity", velocity)?;
+        let slot = i as u32;
         self.bodies.set_velocity_at(i, self.time, velocity);
-        if !self.unplaced.contains(&id) {
+        if !self.unplaced.contains(&slot) {
             let physics = self.physics();
             let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);
-            with_pipeline!(&mut self.engine, p => p.enter(id, bodies, &physics, time, stats), ());
+            with_pipeline!(&mut self.engine, p => p.enter(slot, bodies, &physics, time, stats), ());
         }
         Ok(())
     }
 
-    /// Sets the velocities of the bodies `ids` (between frames), all or none.
-    pub fn set_velocities(&mut self, ids: &[u32], velocities: &[DVec3]) -> Result<()> {
-        if ids.len() != velocities.len() {
-            return Err(VadopError::LengthMismatch { ids: ids.len(), velocities: velocities.len() });
+    /// Sets the velocities of the bodies `handles` (between frames), all or none.
+    pub fn set_velocities(&mut self, handles: &[BodyHandle], velocities: &[DVec3]) -> Result<()> {
+        if handles.len() != velocities.len() {
+            return Err(VadopError::LengthMismatch { handles: handles.len(), velocities: velocities.len() });
         }
-        for (&id, &velocity) in ids.iter().zip(velocities) {
-            self.live_index(id)?;
+        for (&handle, &velocity) in handles.iter().zip(velocities) {
+            self.live_slot(handle)?;
             check_vector("velocity", velocity)?;
         }
-        for (&id, &velocity) in ids.iter().zip(velocities) {
-            self.set_velocity(id, velocity)?;
+        for (&handle, &velocity) in handles.iter().zip(velocities) {
+            self.set_velocity(handle, velocity)?;
         }
         Ok(())
     }
 
-    /// The body `id` now, if alive.
-    pub fn sphere(&self, id: u32) -> Option<Sphere> {
-        let i = id as usize;
-        (i < self.bodies.slots() && self.bodies.alive[i]).then(|| self.bodies.sphere_at(i, self.time))
+    /// The body `handle` now.
+    pub fn sphere(&self, handle: BodyHandle) -> Result<Sphere> {
+        let i = self.live_slot(handle)?;
+        Ok(self.bodies.sphere_at(i, self.time))
     }
 
-    /// Live bodies with their ids, ascending.
-    pub fn spheres(&self) -> impl Iterator<Item = (u32, Sphere)> + '_ {
-        self.bodies.alive_ids().map(|id| (id, self.bodies.sphere_at(id as usize, self.time)))
+    /// Live bodies with their handles, in ascending order of handle (and slot).
+    pub fn spheres(&self) -> impl Iterator<Item = (BodyHandle, Sphere)> + '_ {
+        self.bodies.alive_ids().map(|i| (self.bodies.handle(i as usize), self.bodies.sphere_at(i as usize, self.time)))
     }
 
     /// Number of live bodies.
@@ -565,12 +572,26 @@ impl World {
         }
     }
 
-    fn live_index(&self, id: u32) -> Result<usize> {
-        let i = id as usize;
-        if i < self.bodies.slots() && self.bodies.alive[i] {
+    /// Slots no new body can take: the live bodies' and the retired ones (see
+    /// [`BodyHandle::MAX_GENERATION`]). Slot indices must fit a handle's 32 bits.
+    fn used_slots(&self) -> usize {
+        self.bodies.slots() - self.free_slots.len()
+    }
+
+    /// The slot of the live body `handle`, or why there is none.
+    fn live_slot(&self, handle: BodyHandle) -> Result<usize> {
+        let i = handle.index() as usize;
+        let Some(&generation) = self.bodies.generation.get(i) else {
+            return Err(VadopError::NoSuchBody(handle));
+        };
+        let alive = self.bodies.alive[i];
+        if alive && handle.generation() == generation {
             Ok(i)
+        } else if handle.generation() < generation {
+            // An earlier generation of the slot: a body that was removed.
+            Err(VadopError::StaleHandle { handle, current: alive.then(|| self.bodies.handle(i)) })
         } else {
-            Err(VadopError::NoSuchBody(id))
+            Err(VadopError::NoSuchBody(handle))
         }
     }
 
@@ -618,14 +639,15 @@ impl World {
             for i in self.bodies.alive_ids() {
                 let speed = crate::bodies::speed(self.bodies.velocity(i as usize));
                 if !within(speed) {
-                    let lengths = speed * dt / side;
-                    return Err(VadopError::AbsurdSpeed { body: i, lengths, limit: MAX_BOX_LENGTHS_PER_FRAME });
+                    let (body, lengths) = (self.bodies.handle(i as usize), speed * dt / side);
+                    return Err(VadopError::AbsurdSpeed { body, lengths, limit: MAX_BOX_LENGTHS_PER_FRAME });
                 }
             }
             self.bodies.tighten_speed_bound();
         }
         if self.config.mode == Mode::Simulate && !self.unplaced.is_empty() {
             if let Some((a, b, depth)) = crate::overlap::first_overlap(&self.bodies, &self.unplaced, self.time) {
+                let (a, b) = (self.bodies.handle(a as usize), self.bodies.handle(b as usize));
                 return Err(VadopError::Overlap { a, b, depth });
             }
         }

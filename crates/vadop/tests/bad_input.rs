@@ -1,27 +1,28 @@
 //! Every bad input gets a typed error with a clear message and leaves the world as it was.
 
 use glam::DVec3;
-use vadop::{BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
+use vadop::{BodyHandle, BoxBounds, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
 
 fn sphere(x: f64) -> Sphere {
     Sphere { position: DVec3::new(x, 5.0, 5.0), velocity: DVec3::new(1.0, 0.0, 0.0), radius: 0.5, mass: 1.0 }
 }
 
-fn world() -> World {
+/// A world of two bodies, stepped once, and their handles.
+fn world() -> (World, [BodyHandle; 2]) {
     let mut w = World::new(BoxBounds::cube(10.0).unwrap(), WorldConfig::default()).unwrap();
-    w.add_sphere(sphere(2.0)).unwrap();
-    w.add_sphere(sphere(5.0)).unwrap();
+    let a = w.add_sphere(sphere(2.0)).unwrap();
+    let b = w.add_sphere(sphere(5.0)).unwrap();
     w.step(0.01).unwrap();
-    w
+    (w, [a, b])
 }
 
-fn snapshot(w: &World) -> (f64, Vec<(u32, Sphere)>) {
+fn snapshot(w: &World) -> (f64, Vec<(BodyHandle, Sphere)>) {
     (w.time(), w.spheres().collect())
 }
 
 #[test]
 fn bad_spheres_are_rejected_and_change_nothing() {
-    let mut w = world();
+    let (mut w, _) = world();
     let before = snapshot(&w);
     let cases: Vec<(Sphere, &str)> = vec![
         (Sphere { position: DVec3::new(f64::NAN, 5.0, 5.0), ..sphere(1.0) }, "position must be finite"),
@@ -49,7 +50,7 @@ fn bad_spheres_are_rejected_and_change_nothing() {
 
 #[test]
 fn bad_steps_are_rejected_and_change_nothing() {
-    let mut w = world();
+    let (mut w, _) = world();
     let before = snapshot(&w);
     for dt in [0.0, -1.0, f64::NAN, f64::INFINITY] {
         assert!(matches!(w.step(dt), Err(VadopError::BadTimeStep(_))));
@@ -88,10 +89,12 @@ fn empty_worlds_bad_ids_and_bad_configs() {
     let bounds = BoxBounds::cube(10.0).unwrap();
     let mut empty = World::new(bounds, WorldConfig::default()).unwrap();
     assert_eq!(empty.step(0.1).unwrap_err(), VadopError::EmptyWorld);
-    let mut w = world();
-    assert_eq!(w.remove_sphere(7).unwrap_err(), VadopError::NoSuchBody(7));
-    assert_eq!(w.set_velocity(7, DVec3::X).unwrap_err(), VadopError::NoSuchBody(7));
-    assert!(w.set_velocity(0, DVec3::splat(f64::NAN)).is_err());
+    let (mut w, [a, _]) = world();
+    let unknown = BodyHandle::from_bits(7);
+    assert_eq!(w.remove_sphere(unknown).unwrap_err(), VadopError::NoSuchBody(unknown));
+    assert_eq!(w.set_velocity(unknown, DVec3::X).unwrap_err(), VadopError::NoSuchBody(unknown));
+    assert_eq!(w.sphere(unknown).unwrap_err().to_string(), "no body with handle 7 in this world");
+    assert!(w.set_velocity(a, DVec3::splat(f64::NAN)).is_err());
     assert!(BoxBounds::new(DVec3::ZERO, DVec3::new(1.0, 0.0, 1.0)).is_err());
     assert!(BoxBounds::new(DVec3::ZERO, DVec3::new(1.0, f64::INFINITY, 1.0)).is_err());
     let bad = |config: WorldConfig| World::new(bounds, config).unwrap_err();
@@ -115,22 +118,57 @@ fn empty_worlds_bad_ids_and_bad_configs() {
 }
 
 #[test]
-fn removed_bodies_free_their_ids_and_vanish_from_contacts() {
-    let mut w = world();
-    let gone = w.remove_sphere(1).unwrap();
+fn removed_bodies_free_their_slots_and_vanish_from_contacts() {
+    let (mut w, [a, b]) = world();
+    let gone = w.remove_sphere(b).unwrap();
     assert_eq!(gone.radius, 0.5);
-    assert!(w.sphere(1).is_none());
+    assert_eq!(w.sphere(b), Err(VadopError::StaleHandle { handle: b, current: None }));
     for _ in 0..30 {
         for c in w.step(0.1).unwrap() {
-            assert_eq!(c.body, 0);
+            assert_eq!(c.body, a);
         }
     }
-    assert_eq!(w.add_sphere(sphere(5.0)).unwrap(), 1);
+    let again = w.add_sphere(sphere(5.0)).unwrap();
+    assert_eq!((again.index(), again.generation()), (b.index(), b.generation() + 1));
+}
+
+/// A removed body's handle names nothing, even once its slot holds another body: every method
+/// that takes a handle refuses it, with the same error, and changes nothing.
+#[test]
+fn stale_handles_are_refused_by_every_method() {
+    let (mut w, [a, b]) = world();
+    w.remove_sphere(b).unwrap();
+    let c = w.add_sphere(Sphere { velocity: DVec3::new(-1.0, 0.0, 0.0), ..sphere(8.0) }).unwrap();
+    assert_eq!(c.index(), b.index());
+    assert_ne!(c, b);
+    let stale = VadopError::StaleHandle { handle: b, current: Some(c) };
+    assert_eq!(stale.to_string(), "body 1 was removed; its slot now holds body 1v1");
+    let before = snapshot(&w);
+    assert_eq!(w.sphere(b), Err(stale.clone()));
+    assert_eq!(w.remove_sphere(b), Err(stale.clone()));
+    assert_eq!(w.set_velocity(b, DVec3::X), Err(stale.clone()));
+    // A batch with one stale handle changes none of its bodies.
+    assert_eq!(w.set_velocities(&[a, b], &[DVec3::Y, DVec3::X]), Err(stale.clone()));
+    assert_eq!(snapshot(&w), before);
+    // The live handles work, and the new body is the one named in contacts.
+    assert_eq!(w.sphere(c).unwrap().position, DVec3::new(8.0, 5.0, 5.0));
+    w.set_velocities(&[a, c], &[DVec3::new(20.0, 0.0, 0.0), DVec3::new(-20.0, 0.0, 0.0)]).unwrap();
+    let contacts = w.step(0.2).unwrap();
+    assert!(contacts.iter().any(|x| (x.body, x.touched) == (a, Touched::Body(c))), "{contacts:?}");
+    // Once the slot is empty again, the stale handles say so.
+    w.remove_sphere(c).unwrap();
+    for handle in [b, c] {
+        assert_eq!(w.sphere(handle), Err(VadopError::StaleHandle { handle, current: None }));
+    }
+    assert_eq!(VadopError::StaleHandle { handle: c, current: None }.to_string(), "body 1v1 was removed");
+    // A generation the slot never had names nothing.
+    let future = BodyHandle::from_bits(b.to_bits() + (5 << 32));
+    assert_eq!(w.set_velocity(future, DVec3::X), Err(VadopError::NoSuchBody(future)));
 }
 
 #[test]
 fn huge_and_tiny_values_are_rejected_before_they_overflow() {
-    let mut w = world();
+    let (mut w, [a, _]) = world();
     let before = snapshot(&w);
     let cases: Vec<(Sphere, &str)> = vec![
         (Sphere { velocity: DVec3::new(1e51, 0.0, 0.0), ..sphere(8.0) }, "velocity 1e51 is out of range"),
@@ -144,7 +182,7 @@ fn huge_and_tiny_values_are_rejected_before_they_overflow() {
         assert!(err.to_string().contains(message), "{err} should say {message}");
         assert_eq!(snapshot(&w), before);
     }
-    assert!(matches!(w.set_velocity(0, DVec3::new(0.0, -1e300, 0.0)), Err(VadopError::OutOfRange { .. })));
+    assert!(matches!(w.set_velocity(a, DVec3::new(0.0, -1e300, 0.0)), Err(VadopError::OutOfRange { .. })));
     assert_eq!(snapshot(&w), before);
     // A box far beyond 1e50 would square to infinity.
     let err = BoxBounds::cube(1e200).unwrap_err();
@@ -159,15 +197,16 @@ fn huge_and_tiny_values_are_rejected_before_they_overflow() {
         mass: 1e50,
     })
     .unwrap();
-    big.add_sphere(Sphere {
-        position: DVec3::new(9e49, 5e49, 5e49),
-        velocity: DVec3::new(-1e49, 0.0, 0.0),
-        radius: r,
-        mass: 1e-50,
-    })
-    .unwrap();
+    let right = big
+        .add_sphere(Sphere {
+            position: DVec3::new(9e49, 5e49, 5e49),
+            velocity: DVec3::new(-1e49, 0.0, 0.0),
+            radius: r,
+            mass: 1e-50,
+        })
+        .unwrap();
     let contacts = big.step(10.0).unwrap();
-    assert!(contacts.iter().any(|c| c.touched == vadop::Touched::Body(1)), "{contacts:?}");
+    assert!(contacts.iter().any(|c| c.touched == Touched::Body(right)), "{contacts:?}");
 }
 
 #[test]
@@ -180,25 +219,26 @@ fn scenes_too_large_to_generate_are_rejected_at_once() {
 /// after the rows before it were applied.
 #[test]
 fn set_velocities_is_all_or_none() {
-    let mut w = world();
+    let (mut w, [a, b]) = world();
     let before = snapshot(&w);
-    let err = w.set_velocities(&[0, 1], &[DVec3::new(3.0, 0.0, 0.0), DVec3::new(1e60, 0.0, 0.0)]).unwrap_err();
+    let err = w.set_velocities(&[a, b], &[DVec3::new(3.0, 0.0, 0.0), DVec3::new(1e60, 0.0, 0.0)]).unwrap_err();
     assert!(matches!(err, VadopError::OutOfRange { .. }), "{err}");
-    assert!(matches!(w.set_velocities(&[0, 7], &[DVec3::X, DVec3::X]).unwrap_err(), VadopError::NoSuchBody(7)));
-    assert!(matches!(w.set_velocities(&[0, 1], &[DVec3::X]).unwrap_err(), VadopError::LengthMismatch { .. }));
+    let unknown = BodyHandle::from_bits(7);
+    assert_eq!(w.set_velocities(&[a, unknown], &[DVec3::X, DVec3::X]).unwrap_err(), VadopError::NoSuchBody(unknown));
+    assert!(matches!(w.set_velocities(&[a, b], &[DVec3::X]).unwrap_err(), VadopError::LengthMismatch { .. }));
     assert_eq!(snapshot(&w), before);
-    w.set_velocities(&[0, 1], &[DVec3::new(3.0, 0.0, 0.0), DVec3::new(-3.0, 0.0, 0.0)]).unwrap();
-    assert_eq!(w.sphere(1).unwrap().velocity, DVec3::new(-3.0, 0.0, 0.0));
+    w.set_velocities(&[a, b], &[DVec3::new(3.0, 0.0, 0.0), DVec3::new(-3.0, 0.0, 0.0)]).unwrap();
+    assert_eq!(w.sphere(b).unwrap().velocity, DVec3::new(-3.0, 0.0, 0.0));
 }
 
 /// Regression: the speed's square underflowed to 0 below 1e-162, so a tiny speed times a huge dt
 /// escaped the absurd-speed check and the step never returned.
 #[test]
 fn tiny_speed_times_huge_step_is_an_absurd_speed() {
-    let mut w = world();
-    w.set_velocity(0, DVec3::new(1e-200, 0.0, 0.0)).unwrap();
+    let (mut w, [a, _]) = world();
+    w.set_velocity(a, DVec3::new(1e-200, 0.0, 0.0)).unwrap();
     let before = snapshot(&w);
-    assert!(matches!(w.step(1e300).unwrap_err(), VadopError::AbsurdSpeed { body: 0, .. }));
+    assert!(matches!(w.step(1e300).unwrap_err(), VadopError::AbsurdSpeed { body, .. } if body == a));
     assert_eq!(snapshot(&w), before);
 }
 
@@ -206,8 +246,8 @@ fn tiny_speed_times_huge_step_is_an_absurd_speed() {
 /// position into NaN without an error.
 #[test]
 fn time_never_overflows() {
-    let mut w = world();
-    w.set_velocities(&[0, 1], &[DVec3::ZERO, DVec3::ZERO]).unwrap();
+    let (mut w, handles) = world();
+    w.set_velocities(&handles, &[DVec3::ZERO, DVec3::ZERO]).unwrap();
     w.step(1e308).unwrap();
     let before = snapshot(&w);
     assert!(matches!(w.step(1e308).unwrap_err(), VadopError::TimeOverflow { .. }));

@@ -7,7 +7,7 @@ use common::{contact_bits, state_bits};
 use glam::DVec3;
 use std::path::PathBuf;
 use vadop::scene::{PaperScene, Scene};
-use vadop::{Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
+use vadop::{BodyHandle, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
 
 const DT: f64 = 1.0 / 30.0;
 
@@ -19,14 +19,19 @@ fn scene() -> Scene {
     PaperScene { bodies: 300, packing_fraction: 0.3, max_speed: 3.0, radius: 0.5, seed: 21 }.build().unwrap()
 }
 
-/// Edits between frames, so ids are freed, reused and bodies wait unplaced across a save.
+/// The handle of the live body in `slot`, whatever its generation.
+fn body_in_slot(world: &World, slot: u32) -> BodyHandle {
+    world.spheres().map(|(handle, _)| handle).find(|handle| handle.index() == slot).unwrap()
+}
+
+/// Edits between frames, so slots are freed, reused and bodies wait unplaced across a save.
 fn edit(world: &mut World, frame: usize) {
     match frame % 4 {
         1 => {
-            world.remove_sphere(frame as u32).unwrap();
+            world.remove_sphere(body_in_slot(world, frame as u32)).unwrap();
         }
         2 => {
-            world.set_velocity(frame as u32 + 1, DVec3::new(-0.0, 20.0, -3.5)).unwrap();
+            world.set_velocity(body_in_slot(world, frame as u32 + 1), DVec3::new(-0.0, 20.0, -3.5)).unwrap();
         }
         3 => {
             // A small sphere in a corner, which may be free or not: only the outcome must match.
@@ -152,7 +157,7 @@ fn damaged_or_foreign_files_are_errors() {
     let text = std::fs::read_to_string(&path).unwrap();
     let damaged = [
         text[..text.len() / 2].to_string(),
-        text.replace("\"version\":2", "\"version\":99"),
+        text.replace("\"version\":3", "\"version\":99"),
         text.replace("vadop-world", "something-else"),
         text.replacen("\"radius\":0.5", "\"radius\":-0.5", 1),
         text.replacen("\"mass\":", "\"mass\":-", 1),
@@ -185,6 +190,7 @@ fn damaged_or_foreign_files_are_errors() {
         (edited(&|v| v["slots"][1] = v["slots"][0].clone()), "overlap"),
         (edited(&|v| v["slots"][0]["velocity"] = serde_json::json!([1e3, 0.0, 0.0])), "does not fit inside the box"),
         (edited(&|v| v["time"] = serde_json::json!(-1.0)), "time must be finite"),
+        (edited(&|v| v["slots"][0]["generation"] = serde_json::json!(1u64 << 31)), "slot 0: generation must lie in"),
     ];
     for (bad, message) in impossible {
         std::fs::write(&path, bad).unwrap();
@@ -202,21 +208,131 @@ fn damaged_or_foreign_files_are_errors() {
 
 #[test]
 fn contacts_name_live_bodies_only() {
-    // A world resumed after removals never reports a removed id.
+    // A world resumed after removals never reports a removed body, nor a slot's old handle.
     let mut world = scene().world(WorldConfig { mode: Mode::Detect, ..WorldConfig::default() }).unwrap();
-    for id in (0..300).step_by(3) {
-        world.remove_sphere(id).unwrap();
+    let removed: Vec<BodyHandle> = world.spheres().map(|(handle, _)| handle).step_by(3).collect();
+    for &handle in &removed {
+        world.remove_sphere(handle).unwrap();
     }
+    // A few slots taken again, by bodies of the next generation.
+    let added = world.add_spheres(&[small_sphere(0.5), small_sphere(2.5), small_sphere(4.5)]).unwrap();
+    assert_eq!(added.iter().map(|h| (h.index(), h.generation())).collect::<Vec<_>>(), [(0, 1), (3, 1), (6, 1)]);
     let path = scratch("removed");
     world.save(&path).unwrap();
     let mut resumed = World::load(&path).unwrap();
     std::fs::remove_file(&path).unwrap();
+    let mut named = std::collections::BTreeSet::new();
     for _ in 0..10 {
-        for c in resumed.step(DT).unwrap() {
-            assert_ne!(c.body % 3, 0);
-            if let Touched::Body(other) = c.touched {
-                assert_ne!(other % 3, 0);
+        for c in resumed.step(DT).unwrap().to_vec() {
+            let others = match c.touched {
+                Touched::Body(other) => vec![c.body, other],
+                Touched::Wall(_) => vec![c.body],
+            };
+            for handle in others {
+                assert!(!removed.contains(&handle), "{handle} was removed");
+                assert!(resumed.sphere(handle).is_ok(), "{handle} is not live");
+                named.insert(handle);
             }
         }
     }
+    assert!(added.iter().any(|handle| named.contains(handle)), "no contact of a body in a reused slot");
+}
+
+/// A sphere of radius 0.1 near the box's lower corner, `x` along its edge: small enough to fit
+/// between the scene's bodies there or not, which the test does not care about (detect mode).
+fn small_sphere(x: f64) -> Sphere {
+    Sphere { position: DVec3::new(0.11 + x, 0.11, 0.11), velocity: DVec3::new(0.0, 30.0, 0.0), radius: 0.1, mass: 1.0 }
+}
+
+/// Save and resume keep every slot's generation: the resumed world refuses the same stale
+/// handles with the same errors, and gives the same handles to the next bodies added.
+#[test]
+fn save_and_resume_keep_generations() {
+    let mut world = scene().world(WorldConfig { mode: Mode::Detect, ..WorldConfig::default() }).unwrap();
+    let first = body_in_slot(&world, 4);
+    world.remove_sphere(first).unwrap();
+    let second = world.add_sphere(small_sphere(0.0)).unwrap();
+    world.remove_sphere(second).unwrap();
+    let third = world.add_sphere(small_sphere(1.0)).unwrap();
+    let emptied = body_in_slot(&world, 9);
+    world.remove_sphere(emptied).unwrap();
+    assert_eq!([first, second, third].map(|h| (h.index(), h.generation())), [(4, 0), (4, 1), (4, 2)]);
+    world.step(DT).unwrap();
+    let path = scratch("generations");
+    world.save(&path).unwrap();
+    let mut resumed = World::load(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let unknown = BodyHandle::from_bits(9 | 1 << 33);
+    for handle in [first, second, third, emptied, unknown] {
+        assert_eq!(resumed.sphere(handle), world.sphere(handle), "{handle}");
+    }
+    assert_eq!(
+        resumed.sphere(second),
+        Err(VadopError::StaleHandle { handle: second, current: Some(third) }),
+        "a stale handle stays stale"
+    );
+    assert_eq!(resumed.sphere(emptied), Err(VadopError::StaleHandle { handle: emptied, current: None }));
+    assert_eq!(resumed.sphere(unknown), Err(VadopError::NoSuchBody(unknown)));
+    let next = [small_sphere(2.0), small_sphere(3.0)];
+    assert_eq!(resumed.add_spheres(&next).unwrap(), world.add_spheres(&next).unwrap());
+    assert_eq!(body_in_slot(&resumed, 9).generation(), 1);
+    assert_eq!(run(&mut resumed, 0, 3), run(&mut world, 0, 3));
+}
+
+/// A slot whose generations have run out is retired: its last body's handle can never name
+/// another body, because no other body ever takes the slot. (Reaching the last generation takes
+/// 2^31 removals; a saved file gets there at once.)
+#[test]
+fn a_slot_out_of_generations_is_retired() {
+    let mut world = scene().world(WorldConfig { mode: Mode::Detect, ..WorldConfig::default() }).unwrap();
+    world.remove_sphere(body_in_slot(&world, 2)).unwrap();
+    let path = scratch("retired");
+    world.save(&path).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["slots"][2]["generation"] = serde_json::json!(BodyHandle::MAX_GENERATION);
+    std::fs::write(&path, json.to_string()).unwrap();
+    let mut resumed = World::load(&path).unwrap();
+    let last = resumed.add_sphere(small_sphere(0.0)).unwrap();
+    assert_eq!((last.index(), last.generation()), (2, BodyHandle::MAX_GENERATION));
+    assert!(i64::try_from(last.to_bits()).is_ok());
+    resumed.remove_sphere(last).unwrap();
+    let next = resumed.add_sphere(small_sphere(1.0)).unwrap();
+    assert_eq!((next.index(), next.generation()), (300, 0), "a new slot, not the retired one");
+    assert_eq!(resumed.sphere(last), Err(VadopError::StaleHandle { handle: last, current: None }));
+    // The retired slot stays retired across a save, and a file listing it as free is refused.
+    resumed.save(&path).unwrap();
+    let mut again = World::load(&path).unwrap();
+    assert_eq!(again.sphere(last), Err(VadopError::StaleHandle { handle: last, current: None }));
+    assert_eq!(again.add_sphere(small_sphere(2.0)).unwrap().index(), 301);
+    let text = std::fs::read_to_string(&path).unwrap().replacen("\"free_slots\":[]", "\"free_slots\":[2]", 1);
+    std::fs::write(&path, text).unwrap();
+    let err = World::load(&path).map(|_| ()).unwrap_err().to_string();
+    assert!(err.contains("free and unplaced slots do not match"), "{err}");
+    std::fs::remove_file(&path).unwrap();
+}
+
+/// Files saved before generations existed (version 2) still load: their bodies are generation 0,
+/// so their ids are their handles, and a body added to a removed slot is generation 1.
+#[test]
+fn version_2_files_load_with_removed_ids_stale() {
+    let mut world = scene().world(WorldConfig { mode: Mode::Detect, ..WorldConfig::default() }).unwrap();
+    let removed = body_in_slot(&world, 7);
+    world.remove_sphere(removed).unwrap();
+    world.step(DT).unwrap();
+    let path = scratch("version-2");
+    world.save(&path).unwrap();
+    let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["version"] = serde_json::json!(2);
+    for slot in json["slots"].as_array_mut().unwrap() {
+        slot.as_object_mut().unwrap().remove("generation").unwrap();
+    }
+    std::fs::write(&path, json.to_string()).unwrap();
+    let mut resumed = World::load(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    assert_eq!(state_bits(&resumed), state_bits(&world));
+    assert!(resumed.spheres().all(|(handle, _)| handle.generation() == 0));
+    assert_eq!(resumed.sphere(removed), Err(VadopError::StaleHandle { handle: removed, current: None }));
+    let added = resumed.add_sphere(small_sphere(0.0)).unwrap();
+    assert_eq!((added.index(), added.generation()), (7, 1));
+    assert_eq!(added, world.add_sphere(small_sphere(0.0)).unwrap());
 }

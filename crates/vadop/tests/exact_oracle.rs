@@ -194,11 +194,12 @@ fn check(scene: &Scene, dt: f64, frames: usize, method: Method) -> usize {
                 "{method:?}: contact at {} outside frame {frame}",
                 c.time
             );
+            // No body is ever removed: a body's slot is its place in the scene.
             let other = match c.touched {
-                Touched::Body(other) => other,
+                Touched::Body(other) => other.index(),
                 Touched::Wall(_) => WALL,
             };
-            found.push(((c.body, other), frame, c.time));
+            found.push(((c.body.index(), other), frame, c.time));
         }
     }
     let reported = found.len();

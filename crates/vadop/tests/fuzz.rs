@@ -20,7 +20,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
 use vadop::narrow_phase::{sphere_sphere_time, CONTACT_TOLERANCE};
-use vadop::{BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
+use vadop::{BodyHandle, BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
 
 /// The budget: (seed, deadline, most cases).
 fn budget(default_cases: u64) -> (u64, Instant, u64) {
@@ -257,6 +257,16 @@ fn random_bounds(rng: &mut ChaCha8Rng) -> BoxBounds {
         .unwrap()
 }
 
+/// A handle to try: often one the world gave out (live, or stale after a removal), else any
+/// slot up to two past the last live one with a small generation (mostly ones never given out).
+fn random_handle(rng: &mut ChaCha8Rng, world: &World, issued: &[BodyHandle]) -> BodyHandle {
+    if !issued.is_empty() && rng.random_bool(0.6) {
+        return issued[rng.random_range(0..issued.len())];
+    }
+    let slots = world.spheres().map(|(handle, _)| handle.index() as u64 + 1).max().unwrap_or(0) + 2;
+    BodyHandle::from_bits(rng.random_range(0..slots) | rng.random_range(0..3u64) << 32)
+}
+
 #[test]
 fn world_api_survives_random_operation_sequences() {
     let (seed, deadline, cases) = budget(400);
@@ -278,8 +288,9 @@ fn world_api_survives_random_operation_sequences() {
         let mut vadop = World::new(bounds, config).unwrap();
         let mut oracle = World::new(bounds, WorldConfig { method: Method::Brute, ..config }).unwrap();
         let fail = |what: String| -> ! { panic!("seed {seed} case {case}: {what} ({config:?}, {bounds:?})") };
+        // Every handle either world gave out, so removed bodies' handles are tried again.
+        let mut issued = Vec::new();
         for op in 0..60 {
-            let slots = vadop.spheres().map(|(id, _)| id + 1).max().unwrap_or(0) + 2;
             match rng.random_range(0..20) {
                 0..=7 => {
                     let radius = side * power(&mut rng, -4.0, -1.3);
@@ -296,19 +307,24 @@ fn world_api_survives_random_operation_sequences() {
                     if format!("{a:?}") != format!("{b:?}") {
                         fail(format!("op {op}: add_sphere differs: {a:?} vs {b:?}"));
                     }
+                    issued.extend(a.ok());
                 }
                 8..=9 => {
-                    let id = rng.random_range(0..slots);
-                    let (a, b) = (vadop.remove_sphere(id), oracle.remove_sphere(id));
+                    let handle = random_handle(&mut rng, &vadop, &issued);
+                    let (a, b) = (vadop.sphere(handle), oracle.sphere(handle));
+                    if format!("{a:?}") != format!("{b:?}") {
+                        fail(format!("op {op}: sphere differs: {a:?} vs {b:?}"));
+                    }
+                    let (a, b) = (vadop.remove_sphere(handle), oracle.remove_sphere(handle));
                     if format!("{a:?}") != format!("{b:?}") {
                         fail(format!("op {op}: remove_sphere differs: {a:?} vs {b:?}"));
                     }
                 }
                 10..=12 => {
-                    let id = rng.random_range(0..slots);
+                    let handle = random_handle(&mut rng, &vadop, &issued);
                     let velocity = random_direction(&mut rng) * side * power(&mut rng, -3.0, 2.5);
                     let velocity = DVec3::new(maybe_bad(&mut rng, velocity.x), velocity.y, velocity.z);
-                    let (a, b) = (vadop.set_velocity(id, velocity), oracle.set_velocity(id, velocity));
+                    let (a, b) = (vadop.set_velocity(handle, velocity), oracle.set_velocity(handle, velocity));
                     if format!("{a:?}") != format!("{b:?}") {
                         fail(format!("op {op}: set_velocity differs: {a:?} vs {b:?}"));
                     }

@@ -37,7 +37,7 @@ pub fn time_method(n: usize, speed: f64, frames: u64, method: Method, out: &Path
         frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
         for c in step {
             if let Touched::Body(j) = c.touched {
-                contacts.push([frame as u32, c.body.min(j), c.body.max(j)]);
+                contacts.push([frame as u32, c.body.min(j).index(), c.body.max(j).index()]);
             }
         }
     }
@@ -74,10 +74,11 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
         let mut bounces = Vec::new();
         for c in world.step(dt).map_err(|e| e.to_string())? {
             match c.touched {
-                Touched::Body(j) => contacts.push([frame as u32, c.body.min(j), c.body.max(j)]),
+                Touched::Body(j) => contacts.push([frame as u32, c.body.min(j).index(), c.body.max(j).index()]),
                 // The contact point sits one radius out along the normal from the centre.
                 Touched::Wall(_) => {
-                    bounces.push((c.body as u64, c.time - t0, c.point - c.normal * start[c.body as usize].radius))
+                    let i = c.body.index();
+                    bounces.push((u64::from(i), c.time - t0, c.point - c.normal * start[i as usize].radius))
                 }
             }
         }

@@ -154,18 +154,19 @@ pub fn count(bodies: usize, speed: f64, frames: u64) -> CliResult<()> {
     };
     let mut total = 0;
     for _ in 0..frames {
-        // A paper scene's ids are its sphere indices.
+        // No body is ever removed: a body's slot index is its place in the scene.
         let mut boxes: Vec<Aabb> =
             world.spheres().map(|(_, s)| (s.position - s.radius, s.position + s.radius)).collect();
         for c in world.step(1.0 / FRAMES_PER_SECOND).map_err(|e| e.to_string())? {
             if let Touched::Wall(_) = c.touched {
-                let radius = radii[c.body as usize];
+                let i = c.body.index() as usize;
+                let radius = radii[i];
                 // The contact point sits one radius out along the normal from the centre.
-                grow(&mut boxes[c.body as usize], c.point - c.normal * radius, radius);
+                grow(&mut boxes[i], c.point - c.normal * radius, radius);
             }
         }
-        for (id, s) in world.spheres() {
-            grow(&mut boxes[id as usize], s.position, s.radius);
+        for (handle, s) in world.spheres() {
+            grow(&mut boxes[handle.index() as usize], s.position, s.radius);
         }
         total += overlapping_pairs(&mut boxes);
     }

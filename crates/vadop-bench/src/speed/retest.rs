@@ -32,14 +32,14 @@ pub fn measure(bodies: usize, speed: f64, frames: u64, method: Method, calls: us
     for _ in 0..frames {
         world.step(dt).map_err(|e| e.to_string())?;
     }
-    let ids: Vec<u32> = world.spheres().map(|(id, _)| id).collect();
+    let handles: Vec<_> = world.spheres().map(|(handle, _)| handle).collect();
     // The scene's speeds: uniform up to `speed` diameters per frame, random directions.
     let scale = speed * 2.0 * scene.spheres[0].radius * FRAMES_PER_SECOND;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let mut micros = Vec::with_capacity(calls);
     for round in 0..ROUNDS {
         for _ in round * calls / ROUNDS..(round + 1) * calls / ROUNDS {
-            let id = ids[rng.random_range(0..ids.len())];
+            let handle = handles[rng.random_range(0..handles.len())];
             let direction = loop {
                 let v =
                     DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
@@ -49,7 +49,7 @@ pub fn measure(bodies: usize, speed: f64, frames: u64, method: Method, calls: us
             };
             let velocity = direction * rng.random_range(0.0..=scale);
             let started = Instant::now();
-            world.set_velocity(id, velocity).map_err(|e| e.to_string())?;
+            world.set_velocity(handle, velocity).map_err(|e| e.to_string())?;
             micros.push(started.elapsed().as_secs_f64() * 1e6);
         }
         world.step(dt).map_err(|e| e.to_string())?;
@@ -121,7 +121,7 @@ fn write(context: &Context, rows: &[Row], warm_up: u64) -> CliResult<()> {
     let plan = &context.plan;
     let mut md = format!(
         "Paper scene of {} bodies (packing 0.05, seed 1) in detect mode, stepped {warm_up} frames; then {} calls of \
-         `World::set_velocity(id, v)` on random bodies with random velocities of the scene's speed scale (uniform \
+         `World::set_velocity(handle, v)` on random bodies with random velocities of the scene's speed scale (uniform \
          up to the maximum speed, random directions), {} calls before each of the next {ROUNDS} frames, each call \
          timed alone. A call re-tests the body: a broad-phase query and its predictions for the rest of the window. \
          Median of {} runs.\n\n",

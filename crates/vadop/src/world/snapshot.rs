@@ -2,23 +2,24 @@
 //! from which stepping continues bit-exactly as if the world had never stopped.
 //!
 //! It owns the file format and its validation. What is saved: the settings, the box, the time,
-//! every body slot (removed ones too, so ids are reused in the same order) with the time of its
-//! last velocity change and of its last contact (the TC model depends on it), the free ids, the
-//! bodies added since the last step, and for the pseudo-dynamic method the pairs it saw
-//! overlapping. What is not: the broad phase, the proxies and the queue, which are rebuilt. That
+//! every body slot (removed ones too, so slots are reused in the same order) with its generation
+//! (so the handles of removed bodies stay stale), the time of its last velocity change and of its
+//! last contact (the TC model depends on it), the free slots, the bodies added since the last
+//! step, and for the pseudo-dynamic method the pairs it saw overlapping. What is not: the broad phase, the proxies and the queue, which are rebuilt. That
 //! cannot change a contact, because contact times are canonical and candidate generation only
 //! decides which pairs are tested, never what a test finds. Numbers are written in the shortest
 //! form that reads back to the same bits.
 //!
 //! A file is validated as a whole before anything is built from it: every value the world would
 //! have refused, times out of order, bodies outside the box at either end of their current motion,
-//! overlapping bodies in a simulate-mode world of a continuous method, inconsistent ids. A loaded world is one stepping
-//! could have produced. It never writes a file in place: a run killed mid-write leaves the
+//! overlapping bodies in a simulate-mode world of a continuous method, inconsistent slots or
+//! generations. A loaded world is one stepping could have produced. It never writes a file in place: a run killed mid-write leaves the
 //! previous file intact.
 
 use super::{BoxBounds, Engine, Mode, World, WorldConfig};
 use crate::bodies::Sphere;
 use crate::error::{Result, VadopError};
+use crate::handle::BodyHandle;
 use glam::DVec3;
 use std::io::Write;
 use std::path::Path;
@@ -26,8 +27,10 @@ use std::path::Path;
 /// First field of every world file, so other JSON files are recognised as such.
 const FORMAT: &str = "vadop-world";
 /// Bumped on every incompatible change of the layout. Version 1 files (no contact history, every
-/// position at the saved time) still load.
-const VERSION: u32 = 2;
+/// position at the saved time) and version 2 files (no generations) still load.
+const VERSION: u32 = 3;
+/// The first version that saves generations.
+const GENERATIONS: u32 = 3;
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Snapshot {
@@ -53,9 +56,25 @@ struct Slot {
     radius: f64,
     mass: f64,
     alive: bool,
+    /// The slot's generation: of a live slot its body's, of a removed one its next body's.
+    #[serde(default)]
+    generation: u32,
     /// Time of the body's last contact, if any.
     #[serde(default)]
     last_contact: Option<f64>,
+}
+
+impl Slot {
+    /// The slot's generation in a file of `version`. Files before generations named bodies by
+    /// slot alone: their bodies are generation 0, and a removed slot's next body generation 1,
+    /// so the old id of a removed body stays stale.
+    fn generation(&self, version: u32) -> u32 {
+        if version >= GENERATIONS {
+            self.generation
+        } else {
+            u32::from(!self.alive)
+        }
+    }
 }
 
 impl World {
@@ -74,6 +93,7 @@ impl World {
                 radius: b.radius(i),
                 mass: b.mass[i],
                 alive: b.alive[i],
+                generation: b.generation[i],
                 last_contact: history.get(i).copied().filter(|t| t.is_finite()),
             })
             .collect();
@@ -135,19 +155,35 @@ impl World {
                     return Err(bad(format!("slot {i}: last contact must be finite and <= time {time}, got {last}")));
                 }
             }
-            // A removed body's slot only keeps its id; a live one must be where stepping put it.
+            // A removed body's slot only keeps its place and generation; a live one must be where
+            // stepping put it.
             let now = slot.position + (time - slot.since) * slot.velocity;
             let checked = world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
                 true => world.check_sphere(&at(now)),
                 false => Ok(()),
             });
             checked.map_err(|e| bad(format!("slot {i}: {e}")))?;
+            // A live body's generation is one a slot can hold; a removed one's was bumped at least
+            // once, and at most to retirement.
+            let generation = slot.generation(snapshot.version);
+            let generations = match slot.alive {
+                true => 0..=BodyHandle::MAX_GENERATION,
+                false => 1..=BodyHandle::MAX_GENERATION + 1,
+            };
+            if !generations.contains(&generation) {
+                return Err(bad(format!(
+                    "slot {i}: generation must lie in {generations:?} for a {} slot, got {generation}",
+                    if slot.alive { "live" } else { "removed" }
+                )));
+            }
             world.bodies.put(i, at(slot.position), slot.since);
             world.bodies.alive[i] = slot.alive;
+            world.bodies.generation[i] = generation;
         }
         world.bounds = exact;
         let slots = snapshot.slots.len();
         let dead = snapshot.slots.iter().filter(|s| !s.alive).count();
+        let reusable = |i: usize| !world.bodies.alive[i] && world.bodies.is_reusable(i);
         let mut free = snapshot.free_slots.clone();
         free.sort_unstable();
         free.dedup();
@@ -155,12 +191,12 @@ impl World {
         waiting.sort_unstable();
         waiting.dedup();
         let consistent = free.len() == snapshot.free_slots.len()
-            && free.len() == dead
-            && free.iter().all(|&id| (id as usize) < slots && !snapshot.slots[id as usize].alive)
+            && free.len() == (0..slots).filter(|&i| reusable(i)).count()
+            && free.iter().all(|&slot| (slot as usize) < slots && reusable(slot as usize))
             && waiting.len() == snapshot.unplaced.len()
-            && waiting.iter().all(|&id| (id as usize) < slots && snapshot.slots[id as usize].alive);
+            && waiting.iter().all(|&slot| (slot as usize) < slots && snapshot.slots[slot as usize].alive);
         if !consistent {
-            return Err(bad("free and unplaced ids do not match the slots".to_string()));
+            return Err(bad("free and unplaced slots do not match the slots".to_string()));
         }
         let pairs_valid = snapshot.overlapping.windows(2).all(|w| w[0] < w[1])
             && snapshot.overlapping.iter().all(|&(a, b)| {
@@ -180,6 +216,7 @@ impl World {
         // The pseudo-dynamic method finds overlaps only after they happen: its worlds may hold some.
         if world.config.mode == Mode::Simulate && world.config.method != super::Method::Discrete {
             if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.unplaced, time) {
+                let (a, b) = (world.bodies.handle(a as usize), world.bodies.handle(b as usize));
                 return Err(bad(format!(
                     "bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies"
                 )));

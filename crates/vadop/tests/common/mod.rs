@@ -7,7 +7,7 @@ use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use vadop::narrow_phase::CONTACT_TOLERANCE;
-use vadop::{Contact, Mode, Sphere, World};
+use vadop::{BodyHandle, Contact, Mode, Sphere, World};
 
 /// Every field of every contact as bits: a difference in the last bit, or in the sign of a zero,
 /// shows.
@@ -57,7 +57,7 @@ pub fn random_direction(rng: &mut ChaCha8Rng) -> DVec3 {
 pub fn frame_end_violation(world: &World, pairs: bool) -> Option<String> {
     let bounds = world.bounds();
     let scale = bounds.min.abs().max(bounds.max.abs()).max_element();
-    let spheres: Vec<(u32, Sphere)> = world.spheres().collect();
+    let spheres: Vec<(BodyHandle, Sphere)> = world.spheres().collect();
     for (id, s) in &spheres {
         let slack = 1e-9 * s.radius + 4.0 * f64::EPSILON * scale;
         if !((s.position - s.radius).cmpge(bounds.min - slack).all()
