@@ -268,7 +268,7 @@ fn random_direction(rng: &mut ChaCha8Rng) -> DVec3 {
 }
 
 impl Scene {
-    /// A world holding this scene's spheres (ids 0..n in file order).
+    /// A world holding this scene's spheres, their handles in file order (slots 0..n, generation 0).
     pub fn world(&self, config: WorldConfig) -> Result<World> {
         let mut world = World::new(self.bounds, config)?;
         world.add_spheres(&self.spheres)?;
