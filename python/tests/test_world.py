@@ -276,3 +276,24 @@ def test_lists_and_tuples_work_wherever_arrays_do() -> None:
     found = vadop.detect([[1.0, 1, 1], [np.float32(4), 1, 1]], [[40, 0, 0], [0, 0, 0]], [0.5, np.float64(0.5)],
                          box=10, dt=0.1, frames=1)
     assert found.j.tolist() == [1] and found.time.tolist() == [0.05]
+
+
+def test_contact_ends_and_touching_pairs() -> None:
+    w = vadop.World(
+        [[2.0, 5, 5], [8, 5, 5]], [[1.5, 0, 0], [-1.5, 0, 0]], [0.5, 0.5], box=10.0, mode="detect", contact_ends=True
+    )
+    starts = w.step(2.0)
+    assert starts.time.tolist() == [5.0 / 3.0]
+    assert w.touching().tolist() == [[0, 1]] and w.touching().dtype == np.int64
+    assert len(w.contact_ends()) == 0
+    w.step(1.0)
+    ends = w.contact_ends()
+    assert ends.time.tolist() == [7.0 / 3.0]
+    assert (ends.i.tolist(), ends.j.tolist(), ends.impulse.tolist()) == ([0], [1], [0.0])
+    assert w.touching().shape == (0, 2)
+    # Off by default, and refused in simulate mode.
+    plain = vadop.World([[2.0, 5, 5], [8, 5, 5]], [[1.5, 0, 0], [-1.5, 0, 0]], [0.5, 0.5], box=10.0, mode="detect")
+    plain.step(3.0)
+    assert len(plain.contact_ends()) == 0 and plain.touching().shape == (0, 2)
+    with pytest.raises(ValueError, match="detect mode"):
+        vadop.World([[5.0, 5, 5]], [[0.0, 0, 0]], [0.5], box=10.0, contact_ends=True)

@@ -71,6 +71,7 @@ class World:
         restitution: float = 1.0,
         contact_duration: float = 1e-05,
         threads: Optional[int] = None,
+        contact_ends: bool = False,
     ) -> World: ...
     def add(
         self,
@@ -86,6 +87,16 @@ class World:
 
         Runs without the GIL. A Ctrl-C pressed before it starts raises KeyboardInterrupt and
         leaves the world as it was; another thread's call on this world waits for the step.
+        """
+    def contact_ends(self) -> Contacts:
+        """The contacts between bodies that ended in the last frame, in time order (impulse 0).
+
+        Empty unless the world was made with contact_ends=True (detect mode).
+        """
+    def touching(self) -> _Int64Array:
+        """The pairs in contact now, an int64 (k, 2) array of ids, ascending.
+
+        Empty unless the world was made with contact_ends=True (detect mode).
         """
     @property
     def ids(self) -> _Int64Array: ...

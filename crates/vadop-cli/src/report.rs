@@ -45,12 +45,15 @@ pub struct FrameRow {
     /// Contacts whose physics a rule changed: made elastic by the TC model, resolved by the jam rule.
     pub tc_contacts: u64,
     pub jam_contacts: u64,
+    /// Contacts between bodies that ended (with --contact-ends).
+    #[serde(default)]
+    pub contact_ends: u64,
 }
 
 impl FrameRow {
     const CSV_HEADER: &'static str = "frame,time,contacts,pair_contacts,ms,update_ms,sort_ms,test_ms,response_ms,\
         endpoint_swaps,list_entries,candidate_pairs,narrow_tests,invalidations,wall_ms,broad_phase_bytes,\
-        windows,retests,tc_contacts,jam_contacts";
+        windows,retests,tc_contacts,jam_contacts,contact_ends";
 
     pub fn new(frame: u64, time: f64, stats: &FrameStats, wall_seconds: f64) -> FrameRow {
         FrameRow {
@@ -74,13 +77,14 @@ impl FrameRow {
             retests: stats.retests,
             tc_contacts: stats.tc_contacts,
             jam_contacts: stats.jam_contacts,
+            contact_ends: stats.contact_ends,
         }
     }
 
     /// The row in the order of `CSV_HEADER`.
     fn csv_line(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.time,
             self.contacts,
@@ -100,7 +104,8 @@ impl FrameRow {
             self.windows,
             self.retests,
             self.tc_contacts,
-            self.jam_contacts
+            self.jam_contacts,
+            self.contact_ends
         )
     }
 }
@@ -302,6 +307,7 @@ pub struct FrameTotals {
     retests: u64,
     tc_contacts: u64,
     jam_contacts: u64,
+    contact_ends: u64,
     update_ms: f64,
     sort_ms: f64,
     test_ms: f64,
@@ -325,6 +331,7 @@ impl FrameTotals {
         self.retests += row.retests;
         self.tc_contacts += row.tc_contacts;
         self.jam_contacts += row.jam_contacts;
+        self.contact_ends += row.contact_ends;
         self.update_ms += row.update_ms;
         self.sort_ms += row.sort_ms;
         self.test_ms += row.test_ms;
@@ -350,6 +357,9 @@ pub struct ContactTotals {
     pub total: u64,
     pub pairs: u64,
     pub walls: u64,
+    /// Contacts between bodies that ended (with --contact-ends).
+    #[serde(default)]
+    pub ends: u64,
     /// Contacts per second of wall-clock stepping time.
     pub per_wall_second: f64,
 }
@@ -427,6 +437,7 @@ impl Summary {
                 total,
                 pairs,
                 walls: total - pairs,
+                ends: frames.contact_ends,
                 per_wall_second: if wall_seconds > 0.0 { total as f64 / wall_seconds } else { 0.0 },
             },
             accuracy,
@@ -497,8 +508,13 @@ impl fmt::Display for Summary {
         let c = &self.contacts;
         writeln!(
             f,
-            "contacts    {} ({} body pairs, {} walls), {:.1} per frame, {:.0} per wall-clock second",
-            c.total, c.pairs, c.walls, self.per_frame.contacts, c.per_wall_second
+            "contacts    {} ({} body pairs, {} walls), {:.1} per frame, {:.0} per wall-clock second{}",
+            c.total,
+            c.pairs,
+            c.walls,
+            self.per_frame.contacts,
+            c.per_wall_second,
+            if c.ends > 0 { format!("; {} contacts between bodies ended", c.ends) } else { String::new() }
         )?;
         match &self.accuracy {
             Some(a) => {

@@ -116,6 +116,10 @@ pub struct SimulateArgs {
     /// collapse
     #[arg(long, value_name = "SECONDS", default_value_t = vadop::collapse::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
     contact_duration: f64,
+    /// Detect mode: also report when each contact between bodies ends (rows `body-end` in
+    /// --contacts, counted in the summary), as started and stopped events
+    #[arg(long, help_heading = "World")]
+    contact_ends: bool,
     /// Threads a step shares its work among [default: every core]; the results are bit-identical
     /// whatever the number
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(usize), help_heading = "World")]
@@ -130,7 +134,8 @@ pub struct SimulateArgs {
     /// Write the summary and the per-frame rows as JSON
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     json: Option<PathBuf>,
-    /// Write every contact as CSV (frame, time, body, what it touched, point, normal, impulse).
+    /// Write every contact as CSV (frame, time, body, what it touched, point, normal, impulse);
+    /// with --contact-ends also the ends of contacts between bodies, as rows touching `body-end`.
     /// Bodies are numbered from 0 in scene order. A world saved by the library after bodies were
     /// removed and added may hold a body in a reused slot: it is written as slot + 2^32 x
     /// generation, the number of its BodyHandle (the id Python uses too). With --resume an
@@ -240,6 +245,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         restitution: args.restitution,
         contact_duration: args.contact_duration,
         threads: args.threads,
+        contact_ends: args.contact_ends,
     };
     let (scene, source, reference) = match &args.scene {
         Some(path) => {
@@ -605,10 +611,20 @@ impl ContactWriter {
         }
     }
 
-    fn frame(&mut self, frame: u64, contacts: &[Contact]) -> CliResult<()> {
-        for c in contacts {
+    /// Writes a frame's contacts and the ends of contacts, merged in time order (a start before
+    /// an end at the same instant, as the engine handles them).
+    fn frame(&mut self, frame: u64, contacts: &[Contact], ends: &[Contact]) -> CliResult<()> {
+        let (mut starts, mut ends) = (contacts.iter().peekable(), ends.iter().peekable());
+        loop {
+            let (c, ended) = match (starts.peek(), ends.peek()) {
+                (Some(s), Some(e)) if e.time < s.time => (ends.next(), true),
+                (Some(_), _) => (starts.next(), false),
+                (None, Some(_)) => (ends.next(), true),
+                (None, None) => return Ok(()),
+            };
+            let c = c.expect("peeked");
             let (kind, other) = match c.touched {
-                Touched::Body(other) => ("body", other.to_bits().to_string()),
+                Touched::Body(other) => (if ended { "body-end" } else { "body" }, other.to_bits().to_string()),
                 Touched::Wall(wall) => ("wall", format!("{wall:?}")),
             };
             let (body, p, n) = (c.body.to_bits(), c.point, c.normal);
@@ -617,7 +633,6 @@ impl ContactWriter {
                 c.time, p.x, p.y, p.z, n.x, n.y, n.z, c.impulse
             ))?;
         }
-        Ok(())
     }
 
     /// Puts every row written so far on the disk (where the file is one), so that a state saved
@@ -676,8 +691,8 @@ fn step_frames(
     let mut may_reveal = !args.quiet;
     for frame in frames {
         let start = Instant::now();
-        let contacts = match world.step(args.dt) {
-            Ok(contacts) => contacts,
+        match world.step(args.dt) {
+            Ok(_) => {}
             Err(e) => {
                 // A step fails before changing anything, so a failure of the run's first step is
                 // about the scene as given, not about anything a frame did.
@@ -688,8 +703,9 @@ fn step_frames(
             }
         };
         let wall_seconds = start.elapsed().as_secs_f64();
+        let contacts = world.contacts();
         if let Some(out) = &mut outputs.contacts {
-            if let Err(e) = out.frame(frame, contacts) {
+            if let Err(e) = out.frame(frame, contacts, world.contact_ends()) {
                 failure = Some(e);
                 break;
             }

@@ -318,6 +318,7 @@ fn config(
     restitution: f64,
     contact_duration: f64,
     threads: Option<IntArg>,
+    contact_ends: bool,
 ) -> PyResult<WorldConfig> {
     let pool_axes = pool_axes.map(|m| m.in_range("pool_axes", 3, MAX_AXES as i128).map(|m| m as usize)).transpose()?;
     let threads = threads.map(|n| n.in_range("threads", 1, MAX_THREADS).map(|n| n as usize)).transpose()?;
@@ -329,6 +330,7 @@ fn config(
         restitution,
         contact_duration,
         threads,
+        contact_ends,
     })
 }
 
@@ -414,7 +416,9 @@ impl Contacts {
 /// and ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
 /// body's previous one is elastic — the TC model that ends inelastic collapse) and ``threads``
 /// (how many threads a step shares its work among, 1 to 1024; None: every core; results are
-/// bit-identical whatever the number).
+/// bit-identical whatever the number) and ``contact_ends`` (detect mode only: also report when
+/// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
+/// ``touching()`` — started and stopped events).
 ///
 /// Bodies are named by int ids, 0, 1, 2 ... in row order. A removed body's slot is reused by a
 /// later body (lowest slot first) under a new id, the slot plus 2**32 per reuse (the core's
@@ -446,7 +450,7 @@ struct PyWorld {
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None))]
+    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None, contact_ends = false))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         positions: &Bound<'_, PyAny>,
@@ -461,9 +465,10 @@ impl PyWorld {
         restitution: f64,
         contact_duration: f64,
         threads: Option<IntArg>,
+        contact_ends: bool,
     ) -> PyResult<PyWorld> {
         let bounds = bounds(r#box)?;
-        let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads)?;
+        let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads, contact_ends)?;
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
@@ -551,6 +556,32 @@ impl PyWorld {
             world.step(dt).map(|c| c.to_vec()).map_err(value_error)
         })?;
         Ok(Contacts::new(py, &contacts))
+    }
+
+    /// The contacts between bodies that ended in the last frame, in time order: when the two part,
+    /// where they last touched, impulse 0. Empty unless the world was made with
+    /// ``contact_ends=True`` (detect mode).
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[2.0, 5, 5], [8, 5, 5]], [[1.5, 0, 0], [-1.5, 0, 0]], [0.5, 0.5], box=10.0,
+    /// ...                 mode="detect", contact_ends=True)
+    /// >>> [round(float(t), 6) for t in w.step(2.0).time], w.touching().tolist()
+    /// ([1.666667], [[0, 1]])
+    /// >>> _ = w.step(1.0)
+    /// >>> [round(float(t), 6) for t in w.contact_ends().time], w.touching().tolist()
+    /// ([2.333333], [])
+    fn contact_ends(&self, py: Python<'_>) -> PyResult<Contacts> {
+        let ends = self.lock(py)?.contact_ends().to_vec();
+        Ok(Contacts::new(py, &ends))
+    }
+
+    /// The pairs of bodies in contact now, an int64 (k, 2) array of ids, ascending: those whose
+    /// contact started and has not ended. Empty unless the world was made with
+    /// ``contact_ends=True``.
+    fn touching<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let pairs = self.lock(py)?.touching();
+        let flat: Vec<i64> = pairs.iter().flat_map(|&(a, b)| [handle_id(a), handle_id(b)]).collect();
+        Ok(Array2::from_shape_vec((pairs.len(), 2), flat).expect("2 ids per row").into_pyarray(py))
     }
 
     /// Ids of the live bodies, int64, ascending by slot (the row order of every array read back).
@@ -854,7 +885,7 @@ fn scene(
 ) -> PyResult<PyWorld> {
     let bodies = bodies.in_range("bodies", 1, MAX_SCENE_BODIES as i128)? as usize;
     let seed = seed.in_range("seed", 0, u64::MAX.into())? as u64;
-    let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads)?;
+    let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads, false)?;
     check_world_memory(bodies)?;
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
@@ -893,7 +924,7 @@ fn detect(
 ) -> PyResult<Contacts> {
     let frames = frames.in_range("frames", 0, u64::MAX.into())? as u64;
     let bounds = bounds(r#box)?;
-    let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION, threads)?;
+    let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION, threads, false)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
     check_world_memory(spheres.len())?;
     let mut world = World::new(bounds, config).map_err(value_error)?;

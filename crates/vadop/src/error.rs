@@ -40,6 +40,11 @@ pub enum VadopError {
     /// A thread count of zero.
     #[error("threads must be at least 1 (or left unset for every core)")]
     BadThreads,
+    /// Contact ends were asked for in simulate mode, where contacts are impacts that end at once.
+    #[error(
+        "contact ends are reported in detect mode only: in simulate mode a contact is an impact, over as it starts"
+    )]
+    ContactEndsNeedDetectMode,
     /// A length (radius, box side) below the supported range.
     #[error("{what} {value:e} is out of range: radii and box sides must be at least 1e-50 (and at most 1e50)")]
     TooSmall { what: &'static str, value: f64 },

@@ -1,8 +1,8 @@
 //! Time-ordered queue of predicted contacts, with lazy invalidation.
 //!
 //! It owns the min-heap and the rule that makes its order total and deterministic: earlier time
-//! first, then the lower body id, then the partner (bodies before walls before renewals, lower ids
-//! first). Events
+//! first, then the lower body id, then the partner (contacts with bodies, then ends of contacts,
+//! then walls, then renewals, lower ids first). Events
 //! carry the velocity stamps their bodies had when they were predicted; an event whose stamps no
 //! longer match is void and is dropped when it reaches the top, so invalidating a body's contacts
 //! costs O(1). A prediction made twice (a pair found through two pieces of a path, or re-tested
@@ -20,6 +20,9 @@ use std::collections::BinaryHeap;
 pub enum Partner {
     /// Another body, by id (always greater than the event's first body).
     Body(u32),
+    /// The end of the body's contact with another body (detect mode, when contact ends are
+    /// reported): the two part.
+    End(u32),
     /// A wall of the box.
     Wall(Wall),
     /// No contact: the body's proxy ends here and must be renewed (see [`crate::proxy`]).
@@ -27,12 +30,14 @@ pub enum Partner {
 }
 
 impl Partner {
-    /// Sort key: bodies before walls, lower ids first, renewals last (every contact at the
-    /// same instant is handled with the proxy it was predicted from).
+    /// Sort key: bodies, then contact ends, then walls, lower ids first, renewals last (every
+    /// contact at the same instant is handled with the proxy it was predicted from, and a contact
+    /// that ends as the body bounces ends before the bounce).
     fn key(self) -> u64 {
         match self {
             Partner::Body(id) => id as u64,
-            Partner::Wall(wall) => (1u64 << 32) + wall as u64,
+            Partner::End(id) => (1u64 << 32) + id as u64,
+            Partner::Wall(wall) => (2u64 << 32) + wall as u64,
             Partner::Renew => u64::MAX,
         }
     }

@@ -12,8 +12,9 @@
 //! [`axis_pool`] → [`bounding_volume`] → [`proxy`] → [`broad_phase`] → [`narrow_phase`] →
 //! [`event_queue`] → [`response`] (with [`collapse`], the rules that keep inelastic and jammed
 //! contacts finite) → [`pipeline`] → [`world`]; plus [`window`] (the time-window convention),
-//! [`bodies`] (the state store), [`handle`] (how users name a body), [`parallel`] (how bulk work
-//! is shared between threads),
+//! [`bodies`] (the state store), [`handle`] (how users name a body), [`touching`] (the pairs in
+//! contact, when contact ends are reported), [`parallel`] (how bulk work is shared between
+//! threads),
 //! [`coherent_sort`] (insertion sort with a budget),
 //! [`pseudo_dynamic`] (the frame-instant baseline), [`overlap`] (start-of-run validation) and
 //! [`scene`] (the paper's scene and the scene file format).
@@ -54,6 +55,7 @@ pub mod proxy;
 pub mod pseudo_dynamic;
 pub mod response;
 pub mod scene;
+pub mod touching;
 pub mod window;
 pub mod world;
 

@@ -172,6 +172,57 @@ pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64>
     time.is_finite().then_some(time)
 }
 
+/// Time `tau` after the reference instant at which two touching or overlapping spheres separate:
+/// the later root of |offset + tau v| = R, where their centres move apart through the distance R
+/// again. `None` when they never do (no relative motion), and 0 when they are already apart.
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::narrow_phase::sphere_separation_time;
+/// // Centres 1 apart, R = 2, closing at 1: they pass through and separate when 2 apart on the far side.
+/// assert_eq!(sphere_separation_time(DVec3::new(1.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), 2.0), Some(3.0));
+/// ```
+#[inline]
+pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Option<f64> {
+    let (length, speed) = (exponent(radius_sum), exponent(relative_velocity.abs().max_element()));
+    let (offset, velocity, radius) =
+        (offset * power_of_two(-length), relative_velocity * power_of_two(-speed), radius_sum * power_of_two(-length));
+    let speed_sq = velocity.length_squared();
+    if !(speed_sq > 0.0) {
+        return None;
+    }
+    let gap = offset.length_squared() - radius * radius;
+    let recession = offset.dot(velocity);
+    // As in `scaled_time`, b^2 - a c as a R^2 - |offset x v|^2; rounding may take a grazing pair
+    // below zero, and such a pair separates at its closest approach.
+    let root = (speed_sq * radius * radius - offset.cross(velocity).length_squared()).max(0.0).sqrt();
+    // The larger root (-b + sqrt(disc)) / a, in the form without cancellation for either sign of b.
+    let tau = if recession > 0.0 { -gap / (recession + root) } else { (root - recession) / speed_sq };
+    let tau = scale_by_power_of_two(tau.max(0.0), length - speed);
+    tau.is_finite().then_some(tau)
+}
+
+/// Canonical absolute time at which two touching spheres on their current straight motions
+/// separate (see [`sphere_separation_time`]), computed from the later of the two `since` instants
+/// like [`pair_contact_time`]; `None` when they move together and never separate.
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::narrow_phase::{pair_contact_time, pair_separation_time, Motion};
+/// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
+/// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
+/// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
+/// assert_eq!(pair_contact_time(&a, &b, 1.0), Some(5.0 / 3.0));
+/// assert_eq!(pair_separation_time(&a, &b, 1.0), Some(7.0 / 3.0));
+/// ```
+#[inline]
+pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+    let reference = a.since.max(b.since);
+    let tau = sphere_separation_time(b.at(reference) - a.at(reference), b.velocity - a.velocity, radius_sum)?;
+    let time = reference + tau;
+    time.is_finite().then_some(time)
+}
+
 /// A side of the axis-aligned box.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Wall {

@@ -22,10 +22,13 @@ use crate::bodies::Bodies;
 use crate::broad_phase::BroadPhase;
 use crate::collapse::{ContactRules, Rule};
 use crate::event_queue::{Event, EventQueue, Partner};
-use crate::narrow_phase::{direction, pair_contact_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE};
+use crate::narrow_phase::{
+    direction, pair_contact_time, pair_separation_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE,
+};
 use crate::parallel::Workers;
 use crate::proxy::{sampled_quantile, ProxyTable, Reported};
 use crate::response::{pair_impulse, wall_bounce};
+use crate::touching::Touching;
 use crate::window::Window;
 use crate::world::{BoxBounds, Contact, FrameStats, Mode, Touched};
 use glam::DVec3;
@@ -72,11 +75,15 @@ pub(crate) struct Physics {
     pub mode: Mode,
     pub restitution: f64,
     pub contact_duration: f64,
+    /// Detect mode only: contact ends are reported and touching pairs kept.
+    pub report_ends: bool,
 }
 
 /// What a frame produces.
 pub(crate) struct Output<'a> {
     pub contacts: &'a mut Vec<Contact>,
+    /// The contacts that ended, in time order (when ends are reported).
+    pub ends: &'a mut Vec<Contact>,
     pub stats: &'a mut FrameStats,
 }
 
@@ -88,6 +95,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     proxies: ProxyTable,
     queue: EventQueue,
     pub(crate) rules: ContactRules,
+    /// The pairs in contact now, when contact ends are reported.
+    pub(crate) touching: Touching,
     /// The current window (empty before the first).
     window: Window,
     /// Proxies refreshed since the window started.
@@ -117,6 +126,7 @@ impl<B: BroadPhase> Pipeline<B> {
             proxies,
             queue: EventQueue::default(),
             rules: ContactRules::default(),
+            touching: Touching::default(),
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
@@ -140,6 +150,7 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.proxies.memory_bytes()
             + self.queue.memory_bytes()
             + self.rules.memory_bytes()
+            + self.touching.memory_bytes()
             + self.travel.capacity() * 8
             + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
     }
@@ -159,6 +170,8 @@ impl<B: BroadPhase> Pipeline<B> {
     pub(crate) fn remove(&mut self, i: u32) {
         self.proxies.remove(i as usize);
         self.rules.forget(i as usize);
+        // Its contacts end with it, unreported: it is gone, not apart.
+        self.touching.remove_body(i);
     }
 
     /// Steps from `t0` to `t1`: every contact with a time in `[t0, t1)`, in time order.
@@ -253,6 +266,11 @@ impl<B: BroadPhase> Pipeline<B> {
                 }
             }
         });
+        if physics.report_ends {
+            for (a, b) in self.touching.pairs() {
+                predicted.extend(predict_end(bodies, a, b, window));
+            }
+        }
         self.queue.set_bulk(predicted, &self.workers);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;
@@ -270,12 +288,14 @@ impl<B: BroadPhase> Pipeline<B> {
             // asking early lets them arrive while this one is handled.
             if let Some(next) = self.queue.upcoming(EVENTS_AHEAD) {
                 bodies.prefetch(next.body as usize);
-                if let Partner::Body(j) = next.partner {
+                if let Partner::Body(j) | Partner::End(j) = next.partner {
                     bodies.prefetch(j as usize);
                 }
             }
             let partner_current = match event.partner {
-                Partner::Body(j) => bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp,
+                Partner::Body(j) | Partner::End(j) => {
+                    bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp
+                }
                 Partner::Wall(_) | Partner::Renew => true,
             };
             let i = event.body as usize;
@@ -285,6 +305,7 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             match event.partner {
                 Partner::Body(j) => self.pair_contact(bodies, physics, event.body, j, event.time, out),
+                Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
                 Partner::Wall(wall) => self.wall_contact(bodies, physics, event.body, wall, event.time, out),
                 Partner::Renew => {
                     bodies.renew(i);
@@ -310,10 +331,7 @@ impl<B: BroadPhase> Pipeline<B> {
 
     fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, b: u32, t: f64, out: &mut Output) {
         let (i, j) = (a as usize, b as usize);
-        let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
-        // Coincident centres have no normal; the relative velocity gives one.
-        let normal =
-            direction(pj - pi).or_else(|| direction(bodies.velocity(i) - bodies.velocity(j))).unwrap_or(DVec3::X);
+        let (point, normal) = pair_geometry(bodies, i, j, t);
         let mut impulse = 0.0;
         if physics.mode == Mode::Simulate {
             match self.rules.pair(a, b, t, physics.restitution, physics.contact_duration) {
@@ -341,14 +359,32 @@ impl<B: BroadPhase> Pipeline<B> {
             }
         }
         out.stats.pair_contacts += 1;
+        if physics.report_ends {
+            self.touching.insert(a, b);
+            if let Some(event) = predict_end(bodies, a, b, self.window.from(t)) {
+                self.queue.push(event);
+            }
+        }
         out.contacts.push(Contact {
             time: t,
             body: bodies.handle(i),
             touched: Touched::Body(bodies.handle(j)),
-            point: pi + normal * bodies.radius(i),
+            point,
             normal,
             impulse,
         });
+    }
+
+    /// The contact of `a` and `b` ends at `t`: they part (detect mode, ends reported).
+    fn contact_end(&mut self, bodies: &Bodies, a: u32, b: u32, t: f64, out: &mut Output) {
+        if !self.touching.remove(a, b) {
+            return;
+        }
+        let (i, j) = (a as usize, b as usize);
+        let (point, normal) = pair_geometry(bodies, i, j, t);
+        out.stats.contact_ends += 1;
+        let (body, touched) = (bodies.handle(i), Touched::Body(bodies.handle(j)));
+        out.ends.push(Contact { time: t, body, touched, point, normal, impulse: 0.0 });
     }
 
     fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
@@ -483,7 +519,39 @@ impl<B: BroadPhase> Pipeline<B> {
         if self.proxies.expires(body as usize) {
             queue.push(renewal(bodies, &self.proxies, body));
         }
+        if physics.report_ends {
+            for other in self.touching.partners(body) {
+                if let Some(event) = predict_end(bodies, body, other, window) {
+                    queue.push(event);
+                }
+            }
+        }
     }
+}
+
+/// Where two bodies touch at `t` and the unit normal from `i` towards `j`.
+#[inline]
+fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVec3, DVec3) {
+    let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
+    // Coincident centres have no normal; the relative velocity gives one.
+    let normal = direction(pj - pi).or_else(|| direction(bodies.velocity(i) - bodies.velocity(j))).unwrap_or(DVec3::X);
+    (pi + normal * bodies.radius(i), normal)
+}
+
+/// The end of the contact of touching bodies `a` and `b` if its canonical time lies in `window`,
+/// stamped with their current stamps: a velocity change of either voids it.
+#[inline]
+fn predict_end(bodies: &Bodies, a: u32, b: u32, window: Window) -> Option<Event> {
+    let (a, b) = (a.min(b), a.max(b));
+    let (i, j) = (a as usize, b as usize);
+    let time = pair_separation_time(&bodies.motion(i), &bodies.motion(j), bodies.radius(i) + bodies.radius(j))?;
+    window.contains(time).then_some(Event {
+        time,
+        body: a,
+        partner: Partner::End(b),
+        body_stamp: bodies.stamp[i],
+        partner_stamp: bodies.stamp[j],
+    })
 }
 
 /// The contact of two reported bodies if its canonical time lies in `window`, from the motions

@@ -43,6 +43,12 @@ impl PseudoDynamic {
         self.order.push(body);
     }
 
+    /// Forgets body `i`'s overlaps (it was removed): a body added later in its slot starts with
+    /// none, so its first overlap is a new contact.
+    pub(crate) fn remove_body(&mut self, i: u32) {
+        self.current.retain(|&(a, b)| a != i && b != i);
+    }
+
     /// Pairs (i < j) overlapping at the last frame instant, ascending.
     pub(crate) fn overlapping(&self) -> &[(u32, u32)] {
         &self.current
@@ -178,6 +184,26 @@ impl PseudoDynamic {
                 normal,
                 impulse,
             });
+        }
+        if physics.report_ends {
+            // Pairs overlapping at the last instant and not at this one parted in between; a
+            // removed body's pairs are gone, not apart.
+            for &(a, b) in &self.previous {
+                let (i, j) = (a as usize, b as usize);
+                if !(bodies.alive[i] && bodies.alive[j]) || self.current.binary_search(&(a, b)).is_ok() {
+                    continue;
+                }
+                let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
+                out.stats.contact_ends += 1;
+                out.ends.push(Contact {
+                    time: t1,
+                    body: bodies.handle(i),
+                    touched: Touched::Body(bodies.handle(j)),
+                    point: self.centre[i] + normal * bodies.radius(i),
+                    normal,
+                    impulse: 0.0,
+                });
+            }
         }
         out.stats.response_seconds += start.elapsed().as_secs_f64();
     }

@@ -23,8 +23,6 @@ use crate::pseudo_dynamic::PseudoDynamic;
 use glam::DVec3;
 use std::sync::Arc;
 
-mod snapshot;
-
 /// A body moving more box lengths than this in one frame is rejected: it would bounce off the
 /// walls that many times per frame, which is never a meaningful simulation.
 pub const MAX_BOX_LENGTHS_PER_FRAME: f64 = 1e4;
@@ -130,6 +128,11 @@ pub struct WorldConfig {
     /// bit-identical whatever the number; with 1, no thread pool is made.
     #[serde(default)]
     pub threads: Option<usize>,
+    /// Detect mode: also report when each contact between bodies ends ([`World::contact_ends`])
+    /// and keep the pairs in contact ([`World::touching`]), as started and stopped events.
+    /// Off by default: it costs a prediction and a list entry per contact.
+    #[serde(default)]
+    pub contact_ends: bool,
 }
 
 fn default_contact_duration() -> f64 {
@@ -146,6 +149,7 @@ impl Default for WorldConfig {
             restitution: 1.0,
             contact_duration: DEFAULT_CONTACT_DURATION,
             threads: None,
+            contact_ends: false,
         }
     }
 }
@@ -244,6 +248,9 @@ pub struct FrameStats {
     pub tc_contacts: u64,
     /// Contacts resolved as resting contact by the jam rule (see [`crate::collapse`]).
     pub jam_contacts: u64,
+    /// Contacts between bodies that ended (detect mode, when contact ends are reported).
+    #[serde(default)]
+    pub contact_ends: u64,
 }
 
 impl FrameStats {
@@ -288,6 +295,9 @@ macro_rules! with_pipeline {
     };
 }
 
+// After the macro, which it uses too.
+mod snapshot;
+
 /// A world of spheres in a box.
 ///
 /// ```
@@ -320,6 +330,8 @@ pub struct World {
     pool: Arc<AxisPool>,
     time: f64,
     contacts: Vec<Contact>,
+    /// The contacts that ended in the last frame (when [`WorldConfig::contact_ends`] is on).
+    ends: Vec<Contact>,
     stats: FrameStats,
 }
 
@@ -336,6 +348,9 @@ impl World {
         if config.threads == Some(0) {
             return Err(VadopError::BadThreads);
         }
+        if config.contact_ends && config.mode != Mode::Detect {
+            return Err(VadopError::ContactEndsNeedDetectMode);
+        }
         let pool = AxisPool::new(config.pool_axes.unwrap_or(AUTO_POOL_AXES))?;
         check_phi(config.phi.unwrap_or(pool.covering_radius()), &pool)?;
         Ok(World {
@@ -350,6 +365,7 @@ impl World {
             pool,
             time: 0.0,
             contacts: Vec::new(),
+            ends: Vec::new(),
             stats: FrameStats::default(),
         })
     }
@@ -400,7 +416,10 @@ impl World {
         self.bodies.remove(i);
         self.live -= 1;
         self.unplaced.retain(|&u| u != slot);
-        with_pipeline!(&mut self.engine, p => p.remove(slot), ());
+        match &mut self.engine {
+            Engine::Discrete(pd) => pd.remove_body(slot),
+            engine => with_pipeline!(engine, p => p.remove(slot), ()),
+        }
         if self.bodies.is_reusable(i) {
             self.free_slots.push(slot);
             // Pop the lowest slot first.
@@ -490,6 +509,58 @@ impl World {
     pub fn stats(&self) -> &FrameStats {
         &self.stats
     }
+    /// The contacts of the last frame, in time order: what [`World::step`] returned.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+    /// The contacts between bodies that ended in the last frame, in time order: the instants the
+    /// two part, with the point and normal where they last touch (and no impulse). Empty unless
+    /// [`WorldConfig::contact_ends`] is on.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BoxBounds, Mode, Sphere, Touched, World, WorldConfig};
+    /// let config = WorldConfig { mode: Mode::Detect, contact_ends: true, ..WorldConfig::default() };
+    /// let mut world = World::new(BoxBounds::cube(10.0)?, config)?;
+    /// let ball = |x: f64, vx: f64| Sphere { position: DVec3::new(x, 5.0, 5.0), velocity: DVec3::new(vx, 0.0, 0.0), radius: 0.5, mass: 1.0 };
+    /// let (a, b) = (world.add_sphere(ball(2.0, 1.5))?, world.add_sphere(ball(8.0, -1.5))?);
+    /// // They touch at 5/3 s (centres 1 apart), pass through each other and part at 7/3 s.
+    /// assert_eq!(world.step(2.0)?[0].time, 5.0 / 3.0);
+    /// assert_eq!(world.touching(), [(a, b)]);
+    /// assert!(world.contact_ends().is_empty());
+    /// world.step(1.0)?;
+    /// assert_eq!((world.contact_ends()[0].time, world.contact_ends()[0].touched), (7.0 / 3.0, Touched::Body(b)));
+    /// assert!(world.touching().is_empty());
+    /// // The pairs in contact at any instant of the last frame: touching now, or parted during it.
+    /// assert_eq!(world.touching_in_frame(), [(a, b)]);
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn contact_ends(&self) -> &[Contact] {
+        &self.ends
+    }
+    /// The pairs of bodies in contact now (lower index first, ascending): those whose contact
+    /// started and has not ended. Bodies added overlapping are not in contact until they first
+    /// touch. Empty unless [`WorldConfig::contact_ends`] is on.
+    pub fn touching(&self) -> Vec<(BodyHandle, BodyHandle)> {
+        let pairs = match &self.engine {
+            Engine::Discrete(pd) => pd.overlapping().to_vec(),
+            engine => with_pipeline!(engine, p => p.touching.pairs(), Vec::new()),
+        };
+        let handle = |i: u32| self.bodies.handle(i as usize);
+        pairs.into_iter().map(|(a, b)| (handle(a), handle(b))).collect()
+    }
+    /// The pairs in contact at any instant of the last frame: those touching now and those whose
+    /// contact ended during it, ascending. Empty unless [`WorldConfig::contact_ends`] is on.
+    pub fn touching_in_frame(&self) -> Vec<(BodyHandle, BodyHandle)> {
+        let mut pairs = self.touching();
+        pairs.extend(self.ends.iter().filter_map(|c| match c.touched {
+            Touched::Body(other) => Some((c.body, other)),
+            Touched::Wall(_) => None,
+        }));
+        pairs.sort_unstable();
+        pairs.dedup();
+        pairs
+    }
     /// The sweep-and-prune broad phase (methods Vadop, SweptAabb, SweptKdop), once built (for
     /// inspection and tests).
     pub fn sweep_prune(&self) -> Option<&SweepPrune> {
@@ -519,11 +590,12 @@ impl World {
         self.check_step(dt)?;
         let (t0, t1) = (self.time, self.time + dt);
         self.contacts.clear();
+        self.ends.clear();
         self.stats = FrameStats::default();
         self.place_new_bodies();
         let physics = self.physics();
-        let World { engine, bodies, contacts, stats, threads, .. } = self;
-        let mut out = Output { contacts, stats };
+        let World { engine, bodies, contacts, ends, stats, threads, .. } = self;
+        let mut out = Output { contacts, ends, stats };
         let mut run = || match engine {
             Engine::Grid(p) => p.step(bodies, &physics, t0, t1, &mut out),
             Engine::SweepPrune(p) => p.step(bodies, &physics, t0, t1, &mut out),
@@ -547,6 +619,7 @@ impl World {
             mode: self.config.mode,
             restitution: self.config.restitution,
             contact_duration: self.config.contact_duration,
+            report_ends: self.config.contact_ends,
         }
     }
 

@@ -5,7 +5,8 @@
 //! every body slot (removed ones too, so slots are reused in the same order) with its generation
 //! (so the handles of removed bodies stay stale), the time of its last velocity change and of its
 //! last contact (the TC model depends on it), the free slots, the bodies added since the last
-//! step, and for the pseudo-dynamic method the pairs it saw overlapping. What is not: the broad phase, the proxies and the queue, which are rebuilt. That
+//! step, and the pairs in contact (for the pseudo-dynamic method the pairs it saw overlapping,
+//! for a world that reports contact ends its touching pairs). What is not: the broad phase, the proxies and the queue, which are rebuilt. That
 //! cannot change a contact, because contact times are canonical and candidate generation only
 //! decides which pairs are tested, never what a test finds. Numbers are written in the shortest
 //! form that reads back to the same bits.
@@ -42,7 +43,8 @@ struct Snapshot {
     slots: Vec<Slot>,
     free_slots: Vec<u32>,
     unplaced: Vec<u32>,
-    /// Pseudo-dynamic method: pairs (i < j) overlapping at its last frame instant.
+    /// Pairs (i < j) in contact at the saved instant: the pseudo-dynamic method's overlaps at its
+    /// last frame instant, or the touching pairs of a world that reports contact ends.
     #[serde(default)]
     overlapping: Vec<(u32, u32)>,
 }
@@ -99,7 +101,7 @@ impl World {
             .collect();
         let overlapping = match &self.engine {
             Engine::Discrete(pd) => pd.overlapping().to_vec(),
-            _ => Vec::new(),
+            engine => with_pipeline!(engine, p => p.touching.pairs(), Vec::new()),
         };
         let snapshot = Snapshot {
             format: FORMAT.to_string(),
@@ -202,9 +204,11 @@ impl World {
             && snapshot.overlapping.iter().all(|&(a, b)| {
                 a < b && (b as usize) < slots && snapshot.slots[a as usize].alive && snapshot.slots[b as usize].alive
             });
-        if !pairs_valid || (!snapshot.overlapping.is_empty() && snapshot.config.method != super::Method::Discrete) {
+        let keeps_pairs = snapshot.config.method == super::Method::Discrete || snapshot.config.contact_ends;
+        if !pairs_valid || (!snapshot.overlapping.is_empty() && !keeps_pairs) {
             return Err(bad(
-                "overlapping pairs must be ascending pairs of live bodies, saved by the discrete method only"
+                "overlapping pairs must be ascending pairs of live bodies, saved by the discrete method or a world \
+                 that reports contact ends"
                     .to_string(),
             ));
         }
@@ -229,8 +233,13 @@ impl World {
                 rules.last_contact[i] = slot.last_contact.unwrap_or(f64::NEG_INFINITY);
             }
         }
-        if let Engine::Discrete(pd) = &mut world.engine {
-            pd.set_overlapping(snapshot.overlapping);
+        match &mut world.engine {
+            Engine::Discrete(pd) => pd.set_overlapping(snapshot.overlapping),
+            engine => with_pipeline!(engine, p => {
+                for (a, b) in snapshot.overlapping {
+                    p.touching.insert(a, b);
+                }
+            }, ()),
         }
         world.unplaced = snapshot.unplaced;
         Ok(world)
