@@ -248,3 +248,45 @@ fn pools_tabulate_covering_radius_against_the_bound() {
     }
     assert_usage_error(&vadop(&["pools", "--axes", "2"]), "axis pool size");
 }
+
+#[test]
+fn contact_ends_are_written_beside_the_starts_in_time_order() {
+    let dir = scratch("contact-ends");
+    let contacts = dir.join("contacts.csv");
+    let out = vadop(&[
+        "simulate",
+        "--bodies",
+        "300",
+        "--max-speed",
+        "2",
+        "--mode",
+        "detect",
+        "--frames",
+        "20",
+        "--contact-ends",
+        "--contacts",
+        contacts.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&contacts).unwrap();
+    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let (starts, ends) =
+        (rows.iter().filter(|r| r[3] == "body").count(), rows.iter().filter(|r| r[3] == "body-end").count());
+    assert!(starts > 0 && ends > 0 && ends <= starts, "{starts} starts, {ends} ends");
+    // One time order across starts and ends, and every end follows its pair's start.
+    let times: Vec<f64> = rows.iter().map(|r| r[1].parse().unwrap()).collect();
+    assert!(times.windows(2).all(|w| w[0] <= w[1]));
+    let mut open = std::collections::BTreeSet::new();
+    for r in rows.iter().filter(|r| r[3] != "wall") {
+        let pair = (r[2].to_string(), r[4].to_string());
+        assert_eq!(open.insert(pair.clone()), r[3] == "body", "row {r:?}");
+        if r[3] == "body-end" {
+            open.remove(&pair);
+        }
+    }
+    // Refused in simulate mode, with the core's reason.
+    let out = vadop(&["simulate", "--bodies", "10", "--frames", "1", "--contact-ends"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("detect mode"), "{}", stderr(&out));
+}
