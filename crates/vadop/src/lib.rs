@@ -12,7 +12,8 @@
 //! [`axis_pool`] → [`bounding_volume`] → [`proxy`] → [`broad_phase`] → [`narrow_phase`] →
 //! [`event_queue`] → [`response`] (with [`collapse`], the rules that keep inelastic and jammed
 //! contacts finite) → [`pipeline`] → [`world`]; plus [`window`] (the time-window convention),
-//! [`bodies`] (the state store), [`parallel`] (how bulk work is shared between threads),
+//! [`bodies`] (the state store) with [`free_rotation`] (the exact torque-free spin of a rigid
+//! body between collisions), [`parallel`] (how bulk work is shared between threads),
 //! [`coherent_sort`] (insertion sort with a budget),
 //! [`pseudo_dynamic`] (the frame-instant baseline), [`overlap`] (start-of-run validation) and
 //! [`scene`] (the paper's scene and the scene file format).
@@ -43,6 +44,7 @@ pub mod coherent_sort;
 pub mod collapse;
 pub mod error;
 pub mod event_queue;
+pub mod free_rotation;
 pub mod memory;
 pub mod narrow_phase;
 pub mod overlap;
