@@ -33,8 +33,8 @@
 //! - Body-frame angular velocity components below 2^-47 (about 32 ulps) of the largest are zeroed:
 //!   they are the rounding of the frame change, and this is what lets a spin about the unstable
 //!   intermediate axis stay one (the exact solution of the rounded input would leave it after
-//!   some 40 e-foldings). Zeroing a component that small moves L by 7e-15 relative and changes
-//!   the energy and |L| only at second order, so the long-time phase is unaffected.
+//!   some 40 e-foldings). Zeroing a component that small turns ω by at most 7e-15 rad and
+//!   changes the energy and |L| only at second order, so the long-time phase is unaffected.
 //! - A state whose separatrix measure d23 L3² - d12 L1² is within 2^-47 of its terms is put on the
 //!   separatrix (m = 1, hyperbolic functions, infinite period): its distance from it is rounding.
 //!   Just outside, the elliptic parameter m' = 1 - m is computed from that difference directly (no
@@ -324,7 +324,7 @@ impl FreeRotation {
         self.kinetic_energy
     }
 
-    /// An upper bound on |angular velocity| over all time: the exact maximum over the orbit of
+    /// An upper bound on |angular velocity| over all time: its exact maximum over the orbit of
     /// the body-frame angular momentum, plus a relative 2^-40 for rounding. It is at most
     /// |L| / I_min and usually much less.
     ///
@@ -334,7 +334,8 @@ impl FreeRotation {
     /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(0.1, 1.0, 0.1));
     /// let bound = rotation.max_angular_speed();
     /// assert!((0..1000).all(|i| rotation.angular_velocity_at(0.01 * i as f64).length() <= bound));
-    /// assert!(bound < rotation.angular_momentum().length() / 1.0);
+    /// let smallest_moment = 1.0;
+    /// assert!(bound < rotation.angular_momentum().length() / smallest_moment);
     /// ```
     pub fn max_angular_speed(&self) -> f64 {
         self.max_angular_speed
@@ -513,8 +514,9 @@ impl Wobble {
 }
 
 /// The descending Landen transformation of one parameter m, precomputed: sn, cn, dn of u follow
-/// from sin and cos of u / ∏(1 + k_j) by a few rational steps with only positive terms, so
-/// they keep their relative accuracy near their zeros and near m = 1.
+/// from sin and cos of u / ∏(1 + k_j) by a few rational steps with only positive terms, so sn
+/// stays within about an ulp and cn, dn within a few ulps of their size (absolutely), up to m'
+/// as small as the smallest normal number.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Landen {
     /// The moduli k_j of the descent.
@@ -814,6 +816,36 @@ mod tests {
             // The complete-integral route (m > 0.99) is good to a few ulps.
             let tolerance = if m <= TRAPEZOID_MAX_PARAMETER { 4e-16 } else { 3e-15 };
             assert!(close(rate, brute, tolerance), "m {m}: {rate} vs {brute}");
+        }
+    }
+
+    #[test]
+    fn each_kind_of_motion_takes_its_branch() {
+        let kind =
+            |inertia: DVec3, q: DQuat, body_omega: DVec3| match FreeRotation::new(inertia, q, q * body_omega).motion {
+                Motion::Steady { .. } => "steady",
+                Motion::Tumbling(Tumbling { orbit: Orbit::Separatrix { .. }, .. }) => "separatrix",
+                Motion::Tumbling(Tumbling { orbit: Orbit::Periodic { wobble: None, .. }, .. }) => "symmetric",
+                Motion::Tumbling(_) => "asymmetric",
+            };
+        let (brick, turned) = (DVec3::new(1.0, 2.0, 3.0), DQuat::from_euler(glam::EulerRot::XYZ, 0.9, -0.2, 2.4));
+        assert_eq!(kind(brick, turned, DVec3::new(0.3, 1.0, 0.2)), "asymmetric");
+        // About the intermediate axis, through a frame change that rounds.
+        assert_eq!(kind(brick, turned, DVec3::new(0.0, 2.0, 0.0)), "steady");
+        // d23 L3² = d12 L1² to rounding: on the separatrix.
+        assert_eq!(kind(brick, turned, DVec3::new(1.0, 0.05, 3f64.sqrt() / 3.0)), "separatrix");
+        assert_eq!(kind(DVec3::new(1.0, 1.0, 2.0), turned, DVec3::new(0.3, 1.0, 0.2)), "symmetric");
+        assert_eq!(kind(DVec3::new(1.0, 1.0, 2.0), turned, DVec3::new(0.3, 1.0, 0.0)), "steady");
+        assert_eq!(kind(DVec3::ONE, turned, DVec3::new(0.3, 1.0, 0.2)), "steady");
+        assert_eq!(kind(brick, turned, DVec3::ZERO), "steady");
+    }
+
+    #[test]
+    fn landen_descends_to_the_bottom_for_every_normal_parameter() {
+        for mc in [1.0, 0.5, 1e-16, 1e-100, f64::MIN_POSITIVE] {
+            let landen = Landen::new(1.0 - mc, mc);
+            assert!(landen.bottom_parameter <= LANDEN_BOTTOM * LANDEN_BOTTOM, "m' = {mc:e}: {} levels", landen.levels);
+            assert!(landen.levels <= MAX_LANDEN_LEVELS);
         }
     }
 }
