@@ -104,6 +104,12 @@ impl Reference {
         }
         (self.orientation.0 + self.orientation.1).normalize()
     }
+
+    /// World angular velocity now.
+    fn angular_velocity(&self) -> DVec3 {
+        let q = (self.orientation.0 + self.orientation.1).normalize();
+        q * (self.inverse_inertia * (self.momentum.0 + self.momentum.1))
+    }
 }
 
 /// The rotation angle between two orientations.
@@ -112,7 +118,9 @@ fn angle(a: DQuat, b: DQuat) -> f64 {
     2.0 * d.xyz().length().atan2(d.w.abs())
 }
 
-/// Largest angle between `rotation` and the reference over `times`, with the allowance for
+/// Largest difference between `rotation` and the reference over `times` (the angle between the
+/// orientations, and the angular velocities' difference relative to the largest speed), with
+/// the allowance for
 /// the motion's own sensitivity: the largest spread of references whose inertia or angular
 /// velocity are 8 ulps away (the frequencies are only known to that, to the closed form and to
 /// the reference alike).
@@ -127,12 +135,16 @@ fn worst_error(inertia: DVec3, q0: DQuat, omega: DVec3, times: &[f64]) -> (f64, 
         (DVec3::new(1.0 - ulps, 1.0 + ulps, 1.0 - ulps), omega - along * (ulps * omega.length())),
     ];
     let mut nudged = nudges.map(|(scale, spin)| Reference::new(inertia * scale, q0, spin));
+    // Orientation as an angle, angular velocity relative to its largest value.
+    let scale = rotation.max_angular_speed();
     let (mut error, mut allowance) = (0.0f64, 0.0f64);
     for &t in times {
-        let exact = reference.advance_to(t);
+        let (exact, spin) = (reference.advance_to(t), reference.angular_velocity());
         error = error.max(angle(rotation.orientation_at(t), exact));
+        error = error.max((rotation.angular_velocity_at(t) - spin).length() / scale);
         for other in &mut nudged {
             allowance = allowance.max(angle(other.advance_to(t), exact));
+            allowance = allowance.max((other.angular_velocity() - spin).length() / scale);
         }
     }
     (error, allowance)
