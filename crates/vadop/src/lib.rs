@@ -12,7 +12,8 @@
 //! [`axis_pool`] → [`bounding_volume`] → [`proxy`] → [`broad_phase`] → [`narrow_phase`] →
 //! [`event_queue`] → [`response`] (with [`collapse`], the rules that keep inelastic and jammed
 //! contacts finite) → [`pipeline`] → [`world`]; plus [`window`] (the time-window convention),
-//! [`bodies`] (the state store), [`handle`] (how users name a body), [`touching`] (the pairs in
+//! [`bodies`] (the state store) with [`free_rotation`] (the exact torque-free spin of a rigid
+//! body between collisions), [`handle`] (how users name a body), [`touching`] (the pairs in
 //! contact, when contact ends are reported), [`parallel`] (how bulk work is shared between
 //! threads),
 //! [`coherent_sort`] (insertion sort with a budget),
@@ -45,6 +46,7 @@ pub mod coherent_sort;
 pub mod collapse;
 pub mod error;
 pub mod event_queue;
+pub mod free_rotation;
 pub mod handle;
 pub mod memory;
 pub mod narrow_phase;
