@@ -1,10 +1,12 @@
 //! Collision response: the velocity change of an elastic (or partly inelastic) impact.
 //!
-//! It owns the impulse arithmetic only. It never decides *when* bodies touch (narrow phase) nor
-//! what a velocity change invalidates (world); both continuous methods and the pseudo-dynamic
-//! baseline call the same functions.
+//! It owns the impulse arithmetic only: between spheres (along the line of centres) and between
+//! rigid bodies of any shape (at the contact point, with their inertia, restitution and Coulomb
+//! friction). It never decides *when* bodies touch (narrow phase) nor what a velocity change
+//! invalidates (world); both continuous methods and the pseudo-dynamic baseline call the same
+//! functions.
 
-use glam::DVec3;
+use glam::{DMat3, DVec3};
 
 /// Impulse magnitude along `normal` (unit, from body a to body b) that resolves an impact between
 /// bodies with inverse masses `inv_mass_a`, `inv_mass_b` and restitution `restitution`.
@@ -43,6 +45,138 @@ pub fn wall_bounce(velocity: DVec3, axis: usize, restitution: f64) -> DVec3 {
     v
 }
 
+/// One side of a contact between rigid bodies, as the impulse sees it at the instant of contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidSide {
+    /// Velocity of the centre of mass.
+    pub velocity: DVec3,
+    /// Angular velocity, world frame.
+    pub angular_velocity: DVec3,
+    /// 0 for an immovable body (a wall, level geometry).
+    pub inverse_mass: f64,
+    /// Inverse inertia tensor in world axes at the contact instant; zero for an immovable body.
+    pub inverse_inertia: DMat3,
+    /// From the centre of mass to the contact point.
+    pub arm: DVec3,
+}
+
+impl RigidSide {
+    /// An immovable body: a wall or static level geometry.
+    pub const FIXED: RigidSide = RigidSide {
+        velocity: DVec3::ZERO,
+        angular_velocity: DVec3::ZERO,
+        inverse_mass: 0.0,
+        inverse_inertia: DMat3::ZERO,
+        arm: DVec3::ZERO,
+    };
+
+    /// Velocity of the body's material point at the contact.
+    #[inline]
+    pub fn point_velocity(&self) -> DVec3 {
+        self.velocity + self.angular_velocity.cross(self.arm)
+    }
+
+    /// The side's share of the collision matrix: how the contact point's velocity answers an
+    /// impulse, `w I - [r]x I^-1 [r]x`.
+    #[inline]
+    fn response(&self) -> DMat3 {
+        let arm = skew(self.arm);
+        DMat3::from_diagonal(DVec3::splat(self.inverse_mass)) - arm * self.inverse_inertia * arm
+    }
+
+    /// The velocities after an impulse `impulse` applied at the contact point.
+    #[inline]
+    pub fn after(&self, impulse: DVec3) -> (DVec3, DVec3) {
+        (
+            self.velocity + self.inverse_mass * impulse,
+            self.angular_velocity + self.inverse_inertia * self.arm.cross(impulse),
+        )
+    }
+}
+
+/// The cross-product matrix: `skew(a) * b == a.cross(b)`.
+#[inline]
+fn skew(a: DVec3) -> DMat3 {
+    DMat3::from_cols(DVec3::new(0.0, a.z, -a.y), DVec3::new(-a.z, 0.0, a.x), DVec3::new(a.y, -a.x, 0.0))
+}
+
+/// The impulse on body `b` (body `a` takes its opposite) of an impact at a contact with unit
+/// `normal` from `a` to `b`, restitution `restitution` and Coulomb friction coefficient
+/// `friction`; zero when the contact points are not approaching along the normal.
+///
+/// The normal part follows Newton's law: the contact points' normal relative velocity leaves at
+/// `-restitution` times its arrival. Friction (Coulomb, algebraic form): the impulse that also
+/// stops the tangential slip, if it lies in the friction cone; else sliding, along the
+/// arrival slip opposed, at `friction` times the normal impulse. Newton's law with sliding
+/// friction can, for some geometries, return more energy than it takes: such an impulse is
+/// replaced by the frictionless one, so an impact never adds energy. With `restitution` 1 and no
+/// friction, kinetic energy (linear and rotational) is conserved; momentum and angular momentum
+/// always are.
+///
+/// ```
+/// use glam::{DMat3, DVec3};
+/// use vadop::response::{rigid_impulse, RigidSide};
+/// // A unit cube (mass 1) moving at 1 onto a wall, hit off centre: it leaves spinning.
+/// let inertia = 1.0 / 6.0;
+/// let cube = RigidSide {
+///     velocity: DVec3::X,
+///     angular_velocity: DVec3::ZERO,
+///     inverse_mass: 1.0,
+///     inverse_inertia: DMat3::from_diagonal(DVec3::splat(1.0 / inertia)),
+///     arm: DVec3::new(0.5, 0.5, 0.0),
+/// };
+/// let impulse = rigid_impulse(&cube, &RigidSide::FIXED, DVec3::X, 1.0, 0.0);
+/// let (v, w) = cube.after(-impulse);
+/// let energy = |v: DVec3, w: DVec3| 0.5 * v.length_squared() + 0.5 * inertia * w.length_squared();
+/// assert!((energy(v, w) - 0.5).abs() < 1e-15);
+/// assert!(w.z > 0.0 && v.x < 1.0);
+/// ```
+pub fn rigid_impulse(a: &RigidSide, b: &RigidSide, normal: DVec3, restitution: f64, friction: f64) -> DVec3 {
+    let arrival = b.point_velocity() - a.point_velocity();
+    let closing = arrival.dot(normal);
+    if !(closing < 0.0) {
+        return DVec3::ZERO;
+    }
+    let matrix = a.response() + b.response();
+    let normal_weight = normal.dot(matrix * normal);
+    if !(normal_weight > 0.0) {
+        return DVec3::ZERO;
+    }
+    let frictionless = normal * (-(1.0 + restitution) * closing / normal_weight);
+    if !(friction > 0.0) {
+        return frictionless;
+    }
+    let slip = arrival - closing * normal;
+    // Sticking: the tangential slip stopped and the normal velocity reversed by the restitution.
+    let wanted = -(1.0 + restitution) * closing * normal - slip;
+    let sticking = matrix.inverse() * wanted;
+    let normal_part = sticking.dot(normal);
+    let impulse = if (sticking - normal_part * normal).length() <= friction * normal_part {
+        sticking
+    } else {
+        match crate::narrow_phase::direction(slip) {
+            Some(along) => {
+                let direction = normal - friction * along;
+                let weight = normal.dot(matrix * direction);
+                if weight > 0.0 {
+                    direction * (-(1.0 + restitution) * closing / weight)
+                } else {
+                    frictionless
+                }
+            }
+            None => frictionless,
+        }
+    };
+    // The kinetic energy an impulse J adds is J . u + J . K J / 2 (u the arrival velocity).
+    let gained = impulse.dot(arrival) + 0.5 * impulse.dot(matrix * impulse);
+    let frictionless_gained = frictionless.dot(arrival) + 0.5 * frictionless.dot(matrix * frictionless);
+    if impulse.is_finite() && gained <= frictionless_gained.max(0.0) {
+        impulse
+    } else {
+        frictionless
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,5 +206,94 @@ mod tests {
     #[test]
     fn inelastic_wall() {
         assert_eq!(wall_bounce(DVec3::new(1.0, 2.0, 3.0), 1, 0.5), DVec3::new(1.0, -1.0, 3.0));
+    }
+
+    /// A random rigid side: mass, a rotated diagonal inertia, velocities and an arm.
+    fn side(seed: &mut u64) -> RigidSide {
+        let mut next = || {
+            *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let mut vector = || DVec3::new(next(), next(), next());
+        let (velocity, angular_velocity, arm) = (vector(), vector() * 3.0, vector());
+        let axis = vector().normalize();
+        let moments = vector().abs() + DVec3::splat(0.1);
+        let rotation = DMat3::from_axis_angle(axis, 1.3);
+        let inverse_inertia = rotation * DMat3::from_diagonal(moments.recip()) * rotation.transpose();
+        RigidSide { velocity, angular_velocity, inverse_mass: 1.0 / (0.5 + moments.x), inverse_inertia, arm }
+    }
+
+    /// Linear and angular momentum (about the origin, the contact point at `point`) and energy
+    /// of two bodies with these sides, before and after `impulse` on b.
+    fn budgets(a: &RigidSide, b: &RigidSide, point: DVec3, impulse: DVec3) -> [(DVec3, DVec3, f64); 2] {
+        let totals = |sides: [(RigidSide, DVec3, DVec3); 2]| {
+            let (mut p, mut l, mut e) = (DVec3::ZERO, DVec3::ZERO, 0.0);
+            for (s, v, w) in sides {
+                let (m, inertia) = (1.0 / s.inverse_mass, s.inverse_inertia.inverse());
+                let centre = point - s.arm;
+                p += m * v;
+                l += centre.cross(m * v) + inertia * w;
+                e += 0.5 * m * v.length_squared() + 0.5 * w.dot(inertia * w);
+            }
+            (p, l, e)
+        };
+        let (va, wa) = a.after(-impulse);
+        let (vb, wb) = b.after(impulse);
+        [
+            totals([(*a, a.velocity, a.angular_velocity), (*b, b.velocity, b.angular_velocity)]),
+            totals([(*a, va, wa), (*b, vb, wb)]),
+        ]
+    }
+
+    #[test]
+    fn rigid_impacts_keep_momenta_and_elastic_frictionless_ones_keep_energy() {
+        let mut seed = 7;
+        let mut impacts = 0;
+        for _ in 0..2000 {
+            let (a, b) = (side(&mut seed), side(&mut seed));
+            let normal = side(&mut seed).velocity.normalize();
+            let point = DVec3::new(0.3, -0.2, 0.1);
+            for (restitution, friction) in [(1.0, 0.0), (0.5, 0.0), (1.0, 0.4), (0.2, 2.0)] {
+                let impulse = rigid_impulse(&a, &b, normal, restitution, friction);
+                if impulse == DVec3::ZERO {
+                    continue;
+                }
+                impacts += 1;
+                let [(p0, l0, e0), (p1, l1, e1)] = budgets(&a, &b, point, impulse);
+                assert!((p1 - p0).length() <= 1e-12 * (1.0 + p0.length()), "momentum");
+                assert!((l1 - l0).length() <= 1e-11 * (1.0 + l0.length()), "angular momentum");
+                if restitution == 1.0 && friction == 0.0 {
+                    assert!((e1 - e0).abs() <= 1e-12 * e0, "energy {e0} -> {e1}");
+                } else {
+                    assert!(e1 <= e0 * (1.0 + 1e-12), "an impact added energy: {e0} -> {e1}");
+                }
+                // The contact points no longer approach along the normal.
+                let (va, wa) = a.after(-impulse);
+                let (vb, wb) = b.after(impulse);
+                let leaving = (vb + wb.cross(b.arm) - va - wa.cross(a.arm)).dot(normal);
+                assert!(leaving >= -1e-12, "still approaching at {leaving}");
+            }
+        }
+        assert!(impacts > 1000);
+    }
+
+    #[test]
+    fn friction_stops_a_slip_inside_the_cone_and_bounds_a_sliding_one() {
+        // A unit ball dropped at 1 onto the floor while sliding at 0.1 (inside the cone for
+        // friction 1) or at 10 (outside): it grips, or slides with tangential impulse mu j.
+        let ball = |slide: f64| RigidSide {
+            velocity: DVec3::new(slide, -1.0, 0.0),
+            angular_velocity: DVec3::ZERO,
+            inverse_mass: 1.0,
+            inverse_inertia: DMat3::from_diagonal(DVec3::splat(2.5)),
+            arm: DVec3::new(0.0, -1.0, 0.0),
+        };
+        let gripped = ball(0.1);
+        let impulse = rigid_impulse(&RigidSide::FIXED, &gripped, DVec3::Y, 0.0, 1.0);
+        let (v, w) = gripped.after(impulse);
+        assert!((v + w.cross(gripped.arm)).length() < 1e-15, "the contact point stops");
+        let sliding = ball(10.0);
+        let impulse = rigid_impulse(&RigidSide::FIXED, &sliding, DVec3::Y, 0.0, 1.0);
+        assert!((impulse.x + impulse.y).abs() < 1e-12 && impulse.y > 0.0, "tangential = mu x normal: {impulse}");
     }
 }
