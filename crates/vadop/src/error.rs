@@ -46,7 +46,9 @@ pub enum VadopError {
     )]
     ContactEndsNeedDetectMode,
     /// A length (radius, box side) below the supported range.
-    #[error("{what} {value:e} is out of range: radii and box sides must be at least 1e-50 (and at most 1e50)")]
+    #[error(
+        "{what} {value:e} is out of range: radii, box sides and shape sizes must be at least 1e-50 (and at most 1e50)"
+    )]
     TooSmall { what: &'static str, value: f64 },
     /// The time step was zero, negative or not finite.
     #[error("time step must be a finite number > 0, got {0}")]
@@ -89,6 +91,37 @@ pub enum VadopError {
     /// A scene file or scene parameters could not be used.
     #[error("scene: {0}")]
     Scene(String),
+    /// A size of a shape (half extent, radius, half height) was zero, negative or not finite.
+    #[error("{what} must be a finite number > 0, got {value}")]
+    BadSize { what: &'static str, value: f64 },
+    /// One point, vertex or triangle of a shape was rejected; `index` is its place in its list.
+    #[error("{what} {index}: {source}")]
+    InShape { what: &'static str, index: usize, source: Box<VadopError> },
+    /// A convex hull was given fewer than four points.
+    #[error("a convex hull needs at least 4 points that are not all in one plane, got {0} points")]
+    HullTooFewPoints(usize),
+    /// The points of a convex hull all lie in one plane (or on one line): the hull has no volume.
+    #[error("the convex hull's points all lie in one plane or on one line (thickness {thickness:.1e} of its size); give at least 4 points that span a volume")]
+    FlatHull { thickness: f64 },
+    /// The convex hull of valid points could not be built.
+    #[error("the convex hull of the {points} points could not be computed; check for near-duplicate or near-coplanar points")]
+    HullFailed { points: usize },
+    /// A triangle mesh without triangles or without vertices.
+    #[error("a triangle mesh needs at least one triangle, got {vertices} vertices and {triangles} triangles")]
+    EmptyMesh { vertices: usize, triangles: usize },
+    /// A mesh triangle referred to a vertex that does not exist.
+    #[error("mesh triangle {triangle} has vertex indices {indices:?}, but the mesh has {vertices} vertices: indices must be below that")]
+    BadTriangleIndex { triangle: usize, indices: [u32; 3], vertices: usize },
+    /// A mesh triangle had (nearly) zero area.
+    #[error("mesh triangle {triangle} with vertex indices {indices:?} has zero area (a repeated vertex or three vertices on one line); remove it")]
+    DegenerateTriangle { triangle: usize, indices: [u32; 3] },
+    /// A half-space was given a zero normal.
+    #[error("a half-space needs a non-zero outward normal, got {0:?}")]
+    ZeroNormal([f64; 3]),
+    /// A contact search between shapes could not finish: it never silently drops a contact, so
+    /// it reports this instead. No contact starts before `time`.
+    #[error("the contact search of two shapes stopped at time {time:e} after {iterations} steps: {reason}")]
+    ContactSearchStalled { time: f64, iterations: u32, reason: &'static str },
     /// An I/O failure while reading or writing a file.
     #[error("{path}: {message}")]
     Io { path: String, message: String },

@@ -18,7 +18,9 @@
 //! threads),
 //! [`coherent_sort`] (insertion sort with a budget),
 //! [`pseudo_dynamic`] (the frame-instant baseline), [`overlap`] (start-of-run validation) and
-//! [`scene`] (the paper's scene and the scene file format).
+//! [`scene`] (the paper's scene and the scene file format). Non-spherical bodies: [`shape`] (what
+//! a body looks like and the geometry derived from it) and [`shape_contact`] (their narrow phase,
+//! by conservative advancement, beside the spheres' closed forms in [`narrow_phase`]).
 //!
 //! ```
 //! use vadop::{scene::PaperScene, scene::FRAMES_PER_SECOND, Method, Mode, WorldConfig};
@@ -57,6 +59,8 @@ pub mod proxy;
 pub mod pseudo_dynamic;
 pub mod response;
 pub mod scene;
+pub mod shape;
+pub mod shape_contact;
 pub mod touching;
 pub mod window;
 pub mod world;

@@ -1,0 +1,755 @@
+//! The shape narrow phase against an independent oracle: parry's own distance query sampled
+//! densely in time, on random shapes, sizes, poses, velocities and spins. Every pair of solid
+//! kinds, every solid against a static mesh and a half-space, and every solid in the box:
+//!
+//! (a) nothing missed: outside the reported contacts no sample is within `tol/2`, at a reported
+//!     start the distance is at most `tol`, inside a contact at most `2 tol`;
+//! (b) no tunnelling: thin plates crossed at 1000 diameters per frame, a fast-spinning long box;
+//! (c) canonical: the same time for every window holding it, bit-identical repeats, and scaling a
+//!     scene by a power of two scales the times' inputs without changing them;
+//! (d) hand-computed cases.
+//!
+//! The spin used here turns at a constant angular velocity: it stands in for the torque-free
+//! rotation, which only needs to bound its angular speed the same way.
+
+use glam::{DQuat, DVec3};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::time::Instant;
+use vadop::narrow_phase::{pair_contact_time, Motion};
+use vadop::shape::{Shape, ShapeGeometry};
+use vadop::shape_contact::{
+    contact_end_search, contact_end_time, contact_geometry, contact_tolerance, shape_contact_search,
+    shape_contact_time, shape_wall_search, shape_wall_time, wall_contact_geometry, RigidMotion, Spin,
+};
+use vadop::{Wall, Window};
+
+/// Constant angular velocity `omega` (world frame) from orientation `start` (test only).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Steady {
+    start: DQuat,
+    omega: DVec3,
+}
+
+impl Spin for Steady {
+    fn orientation_at(&self, dt: f64) -> DQuat {
+        (DQuat::from_scaled_axis(self.omega * dt) * self.start).normalize()
+    }
+    fn max_angular_speed(&self) -> f64 {
+        self.omega.length() * (1.0 + 1e-12)
+    }
+}
+
+type Body = (ShapeGeometry, RigidMotion<Steady>);
+
+fn body(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, omega: DVec3) -> Body {
+    (geometry, RigidMotion { position, since: 0.0, velocity, spin: Steady { start, omega } })
+}
+
+fn fixed(geometry: ShapeGeometry, position: DVec3, orientation: DQuat) -> Body {
+    body(geometry, position, DVec3::ZERO, orientation, DVec3::ZERO)
+}
+
+fn pair(b: &Body) -> (&ShapeGeometry, &RigidMotion<Steady>) {
+    (&b.0, &b.1)
+}
+
+/// parry's distance of the two shapes at time `t` (0 when they intersect): the oracle.
+///
+/// A hair from contact, and for flat or thin shapes, a single parry query sometimes calls
+/// separated shapes intersecting or returns far-off closest points. The oracle asks four times
+/// (distance and contact queries, both orders; GJK starts differently in each) and takes the
+/// smallest positive answer, unless at least two say the shapes intersect. parry's distance to a
+/// half-space is a closed form and is taken as is (its contact query mistakes the frames when
+/// the half-space comes second).
+fn distance(a: &Body, b: &Body, t: f64) -> f64 {
+    let pose = |b: &Body| b.0.pose_of_shape(b.1.position_at(t), b.1.orientation_at(t));
+    let (pa, sa, pb, sb) = (pose(a), a.0.parry_shape().as_ref(), pose(b), b.0.parry_shape().as_ref());
+    let d = parry3d_f64::query::distance(&pa, sa, &pb, sb).unwrap().distance;
+    if sa.as_halfspace().is_some() || sb.as_halfspace().is_some() {
+        return d;
+    }
+    // Within a prediction of 1 (beyond it the distance query alone is trusted).
+    let contact =
+        |pa, sa, pb, sb| parry3d_f64::query::contact(pa, sa, pb, sb, 1.0).unwrap().map_or(f64::INFINITY, |c| c.dist);
+    let readings = [
+        d,
+        parry3d_f64::query::distance(&pb, sb, &pa, sa).unwrap().distance,
+        contact(&pa, sa, &pb, sb),
+        contact(&pb, sb, &pa, sa),
+    ];
+    if readings.iter().filter(|d| **d <= 0.0).count() >= 2 {
+        return 0.0;
+    }
+    readings.into_iter().filter(|d| *d > 0.0).fold(f64::INFINITY, f64::min)
+}
+
+fn cases(default: u32) -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|s| s.parse().ok()).unwrap_or(default)
+}
+
+/// The name of solid kind `kind` (0 to 5), as [`solid`] numbers them.
+fn name(kind: usize) -> &'static str {
+    ["sphere", "cuboid", "capsule", "cylinder", "cone", "hull"][kind]
+}
+
+/// A solid of kind `kind` with sizes from `size` (each in (0, ~1.5]) and, for a hull, `points`.
+fn solid(kind: usize, size: [f64; 3], points: &[DVec3]) -> ShapeGeometry {
+    let [x, y, z] = size;
+    let shape = match kind {
+        0 => Shape::Sphere { radius: x },
+        1 => Shape::Cuboid { half_extents: DVec3::new(x, y, z) },
+        2 => Shape::Capsule { half_height: x, radius: y },
+        3 => Shape::Cylinder { half_height: x, radius: y },
+        4 => Shape::Cone { half_height: x, radius: y },
+        _ => {
+            // A small tetrahedron among the points keeps the hull solid whatever they are.
+            let core =
+                [DVec3::new(0.3, 0.0, 0.0), DVec3::new(0.0, 0.3, 0.0), DVec3::new(0.0, 0.0, 0.3), DVec3::splat(-0.2)];
+            Shape::ConvexHull { points: points.iter().chain(&core).map(|p| *p * DVec3::new(x, y, z)).collect() }
+        }
+    };
+    shape.geometry().unwrap()
+}
+
+/// Every contact `(start, end)` of the pair in `window`, through the public API: the first start
+/// in the window, its end, then the first start after it, and so on.
+fn contacts(a: &Body, b: &Body, window: Window) -> Vec<(f64, Option<f64>)> {
+    let mut out = Vec::new();
+    let mut from = window.start;
+    let fail = |e| panic!("{e}: {:?} {:?} vs {:?} {:?}", a.0.shape(), a.1, b.0.shape(), b.1);
+    while out.len() < 50 {
+        let next = shape_contact_time(pair(a), pair(b), Window::new(from, window.end)).unwrap_or_else(fail);
+        let Some(start) = next else { break };
+        let end = contact_end_time(pair(a), pair(b), start, window.end).unwrap_or_else(fail);
+        out.push((start, end));
+        match end {
+            Some(_) => from = start.next_up(),
+            None => break,
+        }
+    }
+    out
+}
+
+/// Checks the contract against `samples` evenly spaced times of `window`; returns the contacts.
+fn check_pair(a: &Body, b: &Body, window: Window, samples: usize, what: &str) -> Vec<(f64, Option<f64>)> {
+    let tol = contact_tolerance(&a.0, &b.0);
+    let found = contacts(a, b, window);
+    for &(start, end) in &found {
+        assert!(window.contains(start), "{what}: start {start} outside {window:?}");
+        let d = distance(a, b, start);
+        assert!(d <= tol, "{what}: distance {d:e} > tol {tol:e} at the reported start {start}");
+        if let Some(end) = end {
+            assert!(end > start, "{what}: end {end} before start {start}");
+            let d = distance(a, b, end);
+            assert!(d > tol, "{what}: distance {d:e} <= tol {tol:e} at the reported end {end}");
+        }
+    }
+    for i in 0..samples {
+        let t = window.start + window.duration() * (i as f64 / samples as f64);
+        let inside = found.iter().any(|&(s, e)| s <= t && e.is_none_or(|e| t < e));
+        let d = distance(a, b, t);
+        if inside {
+            assert!(d <= 2.0 * tol, "{what}: distance {d:e} > 2 tol inside a contact at {t} ({found:?})");
+        } else {
+            assert!(d > 0.5 * tol, "{what}: missed: distance {d:e} <= tol/2 at {t}, contacts {found:?}");
+        }
+    }
+    // Canonical: every window holding a start gives it, to the bit, and repeats are identical.
+    let first = shape_contact_time(pair(a), pair(b), window).unwrap();
+    assert_eq!(first.map(f64::to_bits), found.first().map(|c| c.0.to_bits()), "{what}: repeated call");
+    for (k, &(start, _)) in found.iter().enumerate() {
+        // Windows from anywhere after the previous start.
+        let earliest = if k == 0 { window.start } else { found[k - 1].0.next_up() };
+        for (lo, hi) in [(0.0, 1.0), (0.5, 0.5), (1.0, 0.0), (0.9, 0.1)] {
+            let w = Window::new((start - lo * (start - earliest)).max(earliest), start + hi * (window.end - start));
+            let w = Window::new(w.start, w.end.max(start.next_up()));
+            let again = shape_contact_time(pair(a), pair(b), w).unwrap();
+            assert_eq!(
+                again.map(f64::to_bits),
+                Some(start.to_bits()),
+                "{what}: window {w:?} for {start}: {again:?} in {found:?}"
+            );
+        }
+    }
+    found
+}
+
+fn unit(v: [f64; 3]) -> DVec3 {
+    DVec3::from(v).try_normalize().unwrap_or(DVec3::X)
+}
+
+prop_compose! {
+    /// A random solid kind's sizes, hull points, orientation and angular velocity.
+    fn solid_params()(
+        size in prop::array::uniform3(0.15f64..1.5),
+        points in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 8),
+        axis in prop::array::uniform3(-1.0f64..1.0),
+        angle in 0.0f64..6.3,
+        omega in prop::array::uniform3(-3.0f64..3.0),
+    ) -> ([f64; 3], Vec<DVec3>, DQuat, DVec3) {
+        (size, points.into_iter().map(DVec3::from).collect(), DQuat::from_axis_angle(unit(axis), angle), DVec3::from(omega))
+    }
+}
+
+proptest! {
+    // PROPTEST_CASES raises the count for a longer soak.
+    #![proptest_config(ProptestConfig { cases: cases(10), ..ProptestConfig::default() })]
+
+    /// (a) + (c) for every pair of solid kinds, on one random set of parameters per case.
+    #[test]
+    fn every_solid_pair_against_dense_sampling(
+        pa in solid_params(),
+        pb in solid_params(),
+        direction in prop::array::uniform3(-1.0f64..1.0),
+        gap in 0.3f64..4.0,
+        speed in 0.5f64..4.0,
+        drift in prop::array::uniform3(-0.6f64..0.6),
+        va in prop::array::uniform3(-1.0f64..1.0),
+    ) {
+        let u = unit(direction);
+        for ka in 0..6 {
+            for kb in ka..6 {
+                let ga = solid(ka, pa.0, &pa.1);
+                let gb = solid(kb, pb.0, &pb.1);
+                let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+                let va = DVec3::from(va);
+                let vb = va - u * speed + DVec3::from(drift);
+                let a = body(ga, DVec3::new(0.25, -0.5, 1.0), va, pa.2, pa.3);
+                let b = body(gb, a.1.position + u * (reach + gap), vb, pb.2, pb.3);
+                let what = format!("{} vs {}", name(ka), name(kb));
+                check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
+            }
+        }
+    }
+
+    /// (a) + (c) for every solid against a static bumpy mesh and a tilted half-space.
+    #[test]
+    fn every_solid_against_static_geometry(
+        p in solid_params(),
+        heights in prop::collection::vec(-0.4f64..0.4, 49),
+        normal in prop::array::uniform3(-0.3f64..0.3),
+        start in prop::array::uniform3(-2.0f64..2.0),
+        velocity in prop::array::uniform3(-2.0f64..2.0),
+        fall in 0.5f64..3.0,
+    ) {
+        let mesh = bumpy_floor(&heights, 6.0);
+        let floor = Shape::HalfSpace { normal: DVec3::new(normal[0], 1.0, normal[2]) }.geometry().unwrap();
+        for kind in 0..6 {
+            let g = solid(kind, p.0, &p.1);
+            let r = g.bounding_radius().unwrap();
+            let position = DVec3::new(start[0], 1.0 + r + start[1].abs(), start[2]);
+            let velocity = DVec3::new(velocity[0], -fall, velocity[2]);
+            let a = body(g, position, velocity, p.2, p.3);
+            let m = fixed(mesh.clone(), DVec3::new(0.0, 0.2, 0.0), DQuat::from_rotation_y(0.3));
+            check_pair(&m, &a, Window::new(0.0, 3.0), 400, &format!("mesh vs {}", name(kind)));
+            check_pair(&a, &m, Window::new(0.0, 3.0), 100, &format!("{} vs mesh", name(kind)));
+            let h = fixed(floor.clone(), DVec3::new(0.1, -0.3, 0.0), DQuat::IDENTITY);
+            check_pair(&a, &h, Window::new(0.0, 3.0), 1000, &format!("{} vs half-space", name(kind)));
+            check_pair(&h, &a, Window::new(0.0, 3.0), 200, &format!("half-space vs {}", name(kind)));
+        }
+    }
+
+    /// Walls: a spinning solid in the box, against the exact support distance sampled densely.
+    #[test]
+    fn every_solid_against_the_walls(
+        p in solid_params(),
+        start in prop::array::uniform3(-1.0f64..1.0),
+        velocity in prop::array::uniform3(-4.0f64..4.0),
+    ) {
+        let (min, max) = (DVec3::splat(-4.0), DVec3::splat(4.0));
+        for kind in 0..6 {
+            let g = solid(kind, p.0, &p.1);
+            let a = body(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, name(kind));
+        }
+    }
+
+    /// (c) Scaling a scene by a power of two gives bit-identical contact times.
+    #[test]
+    fn scaling_by_powers_of_two_is_exact(
+        pa in solid_params(),
+        pb in solid_params(),
+        direction in prop::array::uniform3(-1.0f64..1.0),
+        exponent in -60i32..60,
+    ) {
+        let u = unit(direction);
+        let s = 2f64.powi(exponent);
+        // Primitives only: a hull's principal axes come out of an eigen-solver.
+        for (ka, kb) in [(1, 2), (3, 4), (1, 1), (0, 4)] {
+            let scene = |s: f64| {
+                let ga = solid(ka, pa.0.map(|x| x * s), &pa.1);
+                let gb = solid(kb, pb.0.map(|x| x * s), &pb.1);
+                let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+                let a = body(ga, DVec3::ZERO, u * 0.5 * s, pa.2, pa.3);
+                let b = body(gb, u * (reach + 1.5 * s), -u * 1.5 * s, pb.2, pb.3);
+                shape_contact_time(pair(&a), pair(&b), Window::new(0.0, 10.0)).unwrap()
+            };
+            let unit_time = scene(1.0);
+            prop_assert!(unit_time.is_some());
+            prop_assert_eq!(scene(s).map(f64::to_bits), unit_time.map(f64::to_bits), "kinds {} {} scale 2^{}", name(ka), name(kb), exponent);
+        }
+    }
+}
+
+/// Checks a body against the walls: reported wall contacts touch within `tol` and nothing closer
+/// than `tol/2` before the first; returns the first.
+fn check_walls(a: &Body, min: DVec3, max: DVec3, window: Window, samples: usize, what: &str) -> Option<(f64, Wall)> {
+    let tol = vadop::shape_contact::SHAPE_CONTACT_TOLERANCE * a.0.bounding_radius().unwrap();
+    let found = shape_wall_time(&a.0, &a.1, min, max, window).unwrap();
+    let wall_distance = |t: f64, wall: Wall| {
+        let c = wall_contact_geometry(&a.0, &a.1, wall, min, max, t).unwrap();
+        // Cross-check the support distance against parry's distance to the wall as a half-space.
+        let n = wall.outward_normal();
+        let plane = Shape::HalfSpace { normal: -n }.geometry().unwrap();
+        let origin = if wall.is_max() { max } else { min };
+        let parry = distance(a, &fixed(plane, origin, DQuat::IDENTITY), t);
+        assert!((parry - c.distance.max(0.0)).abs() <= 1e-9 + 1e-9 * parry, "{what}: {parry} vs {}", c.distance);
+        c.distance
+    };
+    if let Some((t, wall)) = found {
+        let d = wall_distance(t, wall);
+        assert!(d <= tol, "{what}: wall {wall} at {t}: distance {d:e} > tol");
+        let again = shape_wall_time(&a.0, &a.1, min, max, Window::new(t, t.next_up())).unwrap();
+        assert_eq!(again.map(|(t, w)| (t.to_bits(), w)), Some((t.to_bits(), wall)));
+    }
+    let until = found.map_or(window.end, |(t, _)| t);
+    for i in 0..samples {
+        let t = window.start + window.duration() * (i as f64 / samples as f64);
+        if t >= until {
+            break;
+        }
+        for wall in Wall::ALL {
+            let d = wall_distance(t, wall);
+            assert!(d > 0.5 * tol, "{what}: missed wall {wall} at {t}: distance {d:e}, reported {found:?}");
+        }
+    }
+    found
+}
+
+/// A 7 x 7 grid of heights over `[-half, half]^2` in the x-z plane, as a triangle mesh.
+fn bumpy_floor(heights: &[f64], half: f64) -> ShapeGeometry {
+    let n = 7;
+    let mut vertices = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let (x, z) =
+                (-half + 2.0 * half * i as f64 / (n - 1) as f64, -half + 2.0 * half * j as f64 / (n - 1) as f64);
+            vertices.push(DVec3::new(x, heights[i * n + j], z));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..n - 1 {
+        for j in 0..n - 1 {
+            let k = (i * n + j) as u32;
+            let n = n as u32;
+            triangles.push([k, k + 1, k + n]);
+            triangles.push([k + 1, k + n + 1, k + n]);
+        }
+    }
+    Shape::TriMesh { vertices, triangles }.geometry().unwrap()
+}
+
+fn every_solid(size: f64) -> Vec<(usize, ShapeGeometry)> {
+    let points = [
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(-0.7, 0.7, 0.1),
+        DVec3::new(-0.6, -0.8, 0.0),
+        DVec3::new(0.1, 0.2, 1.0),
+        DVec3::new(0.0, 0.1, -0.9),
+    ];
+    (0..6).map(|k| (k, solid(k, [size, 0.6 * size, 0.8 * size], &points))).collect()
+}
+
+/// (b) A thin plate (thickness 1e-3 of its size) crossed at 1000 diameters per frame by every
+/// solid, and every solid plate-shaped... plates both still and moving.
+#[test]
+fn thin_plates_are_never_tunnelled() {
+    let plate = Shape::Cuboid { half_extents: DVec3::new(1.0, 1.0, 1e-3) }.geometry().unwrap();
+    for (kind, g) in every_solid(0.05) {
+        let diameter = 2.0 * g.bounding_radius().unwrap();
+        let speed = 1000.0 * diameter;
+        for (k, axis) in [DVec3::Z, DVec3::new(0.3, -0.2, 1.0).normalize()].into_iter().enumerate() {
+            // Start 400 diameters away: the crossing is in the middle of the frame [0, 1).
+            let start = -axis * 400.0 * diameter + DVec3::new(0.2, -0.1, 0.0);
+            let spin = DVec3::new(50.0, -30.0, 80.0) * k as f64;
+            let a = body(g.clone(), start, axis * speed, DQuat::from_rotation_x(0.4), spin);
+            let p = fixed(plate.clone(), DVec3::ZERO, DQuat::IDENTITY);
+            let what = format!("{} through plate {k}", name(kind));
+            let found = contacts(&a, &p, Window::new(0.0, 1.0));
+            assert!(!found.is_empty(), "{what}: tunnelled");
+            let t = found[0].0;
+            let tol = contact_tolerance(&a.0, &p.0);
+            assert!(distance(&a, &p, t) <= tol, "{what}");
+            // Before the contact it flies towards the plate: the gap closes linearly, so samples
+            // near the contact are the telling ones.
+            for i in 1..=1000 {
+                let s = t * (1.0 - (i as f64 / 1000.0).powi(3));
+                assert!(distance(&a, &p, s) > 0.5 * tol, "{what}: missed at {s}");
+            }
+            // The plate moving instead of the body: the same crossing.
+            let q = body(plate.clone(), -start, -axis * speed, DQuat::IDENTITY, DVec3::ZERO);
+            let b = fixed(g.clone(), DVec3::ZERO, DQuat::from_rotation_x(0.4));
+            let moving = shape_contact_time(pair(&b), pair(&q), Window::new(0.0, 1.0)).unwrap();
+            assert!(moving.is_some(), "{what}: moving plate tunnelled");
+        }
+    }
+}
+
+/// (b) A long box spinning at 2000 rad per frame sweeps past a small cube: its end passes in a
+/// few millionths of a frame, and the contact is found.
+#[test]
+fn fast_spinning_long_box_hits_a_cube_it_sweeps_past() {
+    let long = Shape::Cuboid { half_extents: DVec3::new(5.0, 0.05, 0.05) }.geometry().unwrap();
+    let cube = Shape::Cuboid { half_extents: DVec3::splat(0.1) }.geometry().unwrap();
+    let omega = 2000.0;
+    let spinner = body(long, DVec3::ZERO, DVec3::ZERO, DQuat::IDENTITY, DVec3::new(0.0, 0.0, omega));
+    for (x, y) in [(0.0, 3.0), (-2.0, 4.0), (4.0, -2.5)] {
+        let target = fixed(cube.clone(), DVec3::new(x, y, 0.0), DQuat::from_rotation_z(0.3));
+        let search = shape_contact_search(pair(&spinner), pair(&target), Window::new(0.0, 1.0)).unwrap();
+        let t = search.found.expect("the sweeping box must hit the cube");
+        // It hits within the first half turn, and nothing touched before.
+        assert!(t < std::f64::consts::PI / omega, "{t}");
+        let tol = contact_tolerance(&spinner.0, &target.0);
+        assert!(distance(&spinner, &target, t) <= tol);
+        for i in 0..20000 {
+            let s = t * i as f64 / 20000.0;
+            assert!(distance(&spinner, &target, s) > 0.5 * tol, "missed at {s}");
+        }
+        eprintln!("spinning box hits ({x}, {y}) at {t:.9e} after {} evaluations", search.iterations);
+    }
+}
+
+/// (d) A cube hitting a half-space and a wall face first at a known time.
+#[test]
+fn cube_hits_a_wall_face_first() {
+    let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+    let tol = vadop::shape_contact::SHAPE_CONTACT_TOLERANCE * cube.bounding_radius().unwrap();
+    // Centre at x = 1, speed 3 towards the plane x = 10 (normal -x): the face at 1.5 closes 8.5.
+    let a = body(cube.clone(), DVec3::new(1.0, 2.0, 3.0), DVec3::new(3.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let wall =
+        fixed(Shape::HalfSpace { normal: -DVec3::X }.geometry().unwrap(), DVec3::new(10.0, 0.0, 0.0), DQuat::IDENTITY);
+    let t = shape_contact_time(pair(&a), pair(&wall), Window::new(0.0, 10.0)).unwrap().unwrap();
+    let exact = 8.5 / 3.0;
+    assert!(t <= exact && t >= exact - tol / 3.0, "{t} vs {exact}");
+    let c = contact_geometry(pair(&a), pair(&wall), t).unwrap();
+    assert!((c.normal - DVec3::X).length() < 1e-12, "{c:?}");
+    assert!((c.point.x - 10.0).abs() < 1e-6, "{c:?}");
+    // The same against the box's max-x wall at 10.
+    let (tw, w) =
+        shape_wall_time(&a.0, &a.1, DVec3::splat(-10.0), DVec3::splat(10.0), Window::new(0.0, 10.0)).unwrap().unwrap();
+    assert_eq!(w, Wall::MaxX);
+    assert!(tw <= exact && tw >= exact - tol / 3.0, "{tw}");
+    // Tilted by 45 degrees about z, an edge leads: it reaches the wall 0.5 (sqrt 2 - 1) earlier.
+    let tilted =
+        body(cube, a.1.position, a.1.velocity, DQuat::from_rotation_z(std::f64::consts::FRAC_PI_4), DVec3::ZERO);
+    let t = shape_contact_time(pair(&tilted), pair(&wall), Window::new(0.0, 10.0)).unwrap().unwrap();
+    let exact = (9.0 - 0.5 * 2f64.sqrt()) / 3.0;
+    assert!((t - exact).abs() <= tol, "{t} vs {exact}");
+}
+
+/// (d) Two capsules head on, along their axes and across them.
+#[test]
+fn capsules_head_on() {
+    let capsule = Shape::Capsule { half_height: 1.0, radius: 0.5 }.geometry().unwrap();
+    let tol = contact_tolerance(&capsule, &capsule);
+    // Along the y axis: tips at +1.5 and 10 - 1.5 close 7 at speed 2.
+    let a = body(capsule.clone(), DVec3::ZERO, DVec3::new(0.0, 1.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let b = body(capsule.clone(), DVec3::new(0.0, 10.0, 0.0), DVec3::new(0.0, -1.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let t = shape_contact_time(pair(&a), pair(&b), Window::new(0.0, 10.0)).unwrap().unwrap();
+    assert!(t <= 3.5 && t >= 3.5 - tol / 2.0, "{t}");
+    // Side by side (axes parallel, 3 apart along x): the cylinders' sides close 2 at speed 4.
+    let c = body(capsule.clone(), DVec3::new(3.0, 0.0, 0.0), DVec3::new(-4.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let a = body(capsule.clone(), DVec3::ZERO, DVec3::ZERO, DQuat::IDENTITY, DVec3::ZERO);
+    let t = shape_contact_time(pair(&a), pair(&c), Window::new(0.0, 10.0)).unwrap().unwrap();
+    assert!(t <= 0.5 && t >= 0.5 - tol / 4.0, "{t}");
+    let g = contact_geometry(pair(&a), pair(&c), t).unwrap();
+    assert!((g.normal - DVec3::X).length() < 1e-6, "{g:?}");
+    // Crossed (one along y, one along z), closing along x: they touch when the axes are 1 apart.
+    let crossed =
+        body(capsule, DVec3::new(5.0, 0.0, 0.0), DVec3::new(-2.0, 0.0, 0.0), DQuat::from_rotation_x(1.0), DVec3::ZERO);
+    let t = shape_contact_time(pair(&a), pair(&crossed), Window::new(0.0, 10.0)).unwrap().unwrap();
+    assert!(t <= 2.0 && t >= 2.0 - tol / 2.0, "{t}");
+}
+
+/// Spheres through conservative advancement agree with the closed form of the narrow phase.
+#[test]
+fn spheres_agree_with_the_closed_form() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for _ in 0..200 {
+        let (ra, rb) = (rng.random_range(0.1..2.0), rng.random_range(0.1..2.0));
+        let pa = DVec3::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0), 0.0);
+        let pb = pa + DVec3::new(ra + rb + rng.random_range(0.5..5.0), rng.random_range(-1.0..1.0), 0.3);
+        let va = DVec3::new(rng.random_range(-1.0..1.0), 0.0, rng.random_range(-0.2..0.2));
+        let vb = DVec3::new(-rng.random_range(0.5..4.0), rng.random_range(-0.5..0.5), 0.0);
+        let spin = DVec3::new(rng.random_range(-9.0..9.0), 2.0, 0.0);
+        let a = body(Shape::Sphere { radius: ra }.geometry().unwrap(), pa, va, DQuat::IDENTITY, spin);
+        let b = body(Shape::Sphere { radius: rb }.geometry().unwrap(), pb, vb, DQuat::IDENTITY, -spin);
+        let closed = pair_contact_time(
+            &Motion { position: pa, since: 0.0, velocity: va },
+            &Motion { position: pb, since: 0.0, velocity: vb },
+            ra + rb,
+        )
+        .filter(|&t| t < 100.0);
+        let search = shape_contact_search(pair(&a), pair(&b), Window::new(0.0, 100.0)).unwrap();
+        match (closed, search.found) {
+            (Some(exact), Some(t)) => {
+                // Touching within tol happens at most tol / (closing speed) before the closed form.
+                let tol = contact_tolerance(&a.0, &b.0);
+                let grazing = tol / (vb - va).length() * 1e6;
+                assert!(t <= exact + 1e-12 && t >= exact - grazing, "{t} vs {exact}");
+                // A sphere's spin does not move its surface: no evaluations wasted on it.
+                assert!(search.iterations <= 8, "{} evaluations", search.iterations);
+            }
+            (None, None) => {}
+            // A graze within the tolerance band may go either way.
+            (Some(exact), None) | (None, Some(exact)) => {
+                let d = distance(&a, &b, exact);
+                assert!(d <= contact_tolerance(&a.0, &b.0), "disagree at {exact}: {d:e}");
+            }
+        }
+    }
+}
+
+/// A spinning pair touching several times on one motion: every contact, its end, and the next.
+#[test]
+fn spinning_pair_touches_repeatedly() {
+    let long = Shape::Cuboid { half_extents: DVec3::new(2.0, 0.2, 0.2) }.geometry().unwrap();
+    let post = Shape::Cylinder { half_height: 1.0, radius: 0.3 }.geometry().unwrap();
+    // A bar spinning about z next to a post it clips on every half turn, both passing through
+    // (detect mode), while slowly drifting away: a handful of contacts, then none.
+    let upright = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2);
+    let bar = body(long, DVec3::ZERO, DVec3::new(-0.1, 0.0, 0.0), upright, DVec3::new(0.0, 0.0, 3.0));
+    let post = fixed(post, DVec3::new(1.8, 0.0, 0.0), DQuat::IDENTITY);
+    let found = check_pair(&bar, &post, Window::new(0.0, 12.0), 20000, "bar vs post");
+    assert!(found.len() >= 3, "{found:?}");
+    // Each window between two contacts sees exactly the next start.
+    for k in 1..found.len() {
+        let between = Window::new(found[k - 1].1.unwrap(), 12.0);
+        let t = shape_contact_time(pair(&bar), pair(&post), between).unwrap();
+        assert_eq!(t, Some(found[k].0));
+    }
+}
+
+/// At the reference a touching pair is a new contact only when it goes deeper.
+#[test]
+fn touching_at_the_reference() {
+    let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+    let a = fixed(cube.clone(), DVec3::ZERO, DQuat::IDENTITY);
+    let w = Window::new(0.0, 10.0);
+    for (spin, vx, expect) in [(0.0, -1.0, true), (0.0, 1.0, false), (1.0, 1.0, false), (0.0, 0.0, false)] {
+        // Face to face, exactly touching; b's spin tips its corner into a when it turns.
+        let b =
+            body(cube.clone(), DVec3::new(1.0, 0.0, 0.0), DVec3::new(vx, 0.0, 0.0), DQuat::IDENTITY, DVec3::Z * spin);
+        let t = shape_contact_time(pair(&a), pair(&b), w).unwrap();
+        assert_eq!(t == Some(0.0), expect, "spin {spin} velocity {vx}: {t:?}");
+    }
+    // Turning in place while touching: a corner digs in at once: a contact now.
+    let b = body(cube.clone(), DVec3::new(1.0, 0.0, 0.0), DVec3::ZERO, DQuat::IDENTITY, DVec3::Z * 2.0);
+    assert_eq!(shape_contact_time(pair(&a), pair(&b), w).unwrap(), Some(0.0));
+    // Deep overlap at the reference is a contact in progress (detect mode): the next contact
+    // starts after it ends, not now.
+    let b = body(cube.clone(), DVec3::new(0.5, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    assert_eq!(shape_contact_time(pair(&a), pair(&b), w).unwrap(), None);
+    // Against the walls a body already past one and moving on out is turned back now.
+    let out = body(cube, DVec3::new(9.7, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let found = shape_wall_time(&out.0, &out.1, DVec3::splat(-10.0), DVec3::splat(10.0), w).unwrap();
+    assert_eq!(found, Some((0.0, Wall::MaxX)));
+}
+
+/// A body starting deep in a wall while moving back into the box is not turned back; a body
+/// resting on the floor of the box while sliding never touches it again.
+#[test]
+fn wall_rules() {
+    let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+    let (min, max) = (DVec3::splat(-10.0), DVec3::splat(10.0));
+    let back = body(cube.clone(), DVec3::new(9.7, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let found = shape_wall_time(&back.0, &back.1, min, max, Window::new(0.0, 30.0)).unwrap();
+    assert_eq!(found.map(|(_, w)| w), Some(Wall::MinX));
+    assert!((found.unwrap().0 - 19.2).abs() < 1e-6);
+    let sliding = body(cube, DVec3::new(0.0, -9.5, 0.0), DVec3::new(0.5, 0.0, 0.3), DQuat::IDENTITY, DVec3::ZERO);
+    let found = shape_wall_time(&sliding.0, &sliding.1, min, max, Window::new(0.0, 30.0)).unwrap();
+    assert_eq!(found.map(|(_, w)| w), Some(Wall::MaxX));
+    assert!((found.unwrap().0 - 19.0).abs() < 1e-6);
+}
+
+/// Typical and worst evaluation counts and the time per query, on random pairs in a frame
+/// (printed with `--nocapture`); the counts stay far below the cap.
+#[test]
+fn iteration_statistics() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut counts = Vec::new();
+    let (mut ends, mut end_time) = (Vec::new(), 0.0);
+    let mut found = 0;
+    let started = Instant::now();
+    let points: Vec<DVec3> = (0..10)
+        .map(|_| DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+        .collect();
+    for _ in 0..3000 {
+        let ka = rng.random_range(0..6);
+        let kb = rng.random_range(0..6);
+        let size =
+            |rng: &mut ChaCha8Rng| [rng.random_range(0.2..1.0), rng.random_range(0.2..1.0), rng.random_range(0.2..1.0)];
+        let ga = solid(ka, size(&mut rng), &points);
+        let gb = solid(kb, size(&mut rng), &points);
+        let u = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+            .normalize();
+        let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+        let spin = |rng: &mut ChaCha8Rng| {
+            DVec3::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0))
+        };
+        let a = body(ga, DVec3::ZERO, DVec3::ZERO, DQuat::IDENTITY, spin(&mut rng));
+        let drift = DVec3::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5));
+        let b = body(gb, u * (reach + rng.random_range(0.1..3.0)), -u * 2.0 + drift, DQuat::IDENTITY, spin(&mut rng));
+        let s = shape_contact_search(pair(&a), pair(&b), Window::new(0.0, 2.0)).unwrap();
+        found += s.found.is_some() as usize;
+        counts.push(s.iterations);
+        if let (Some(t), true) = (s.found, ends.len() < 300) {
+            // Detect mode: where the pass-through ends (timed apart).
+            let began = Instant::now();
+            ends.push(contact_end_search(pair(&a), pair(&b), t, 10.0).unwrap().iterations);
+            end_time += began.elapsed().as_secs_f64();
+        }
+    }
+    let elapsed = started.elapsed().as_secs_f64() - end_time;
+    counts.sort();
+    let n = counts.len();
+    eprintln!(
+        "{n} queries, {found} contacts: evaluations median {}, p90 {}, p99 {}, max {}; {:.1} us per query",
+        counts[n / 2],
+        counts[n * 9 / 10],
+        counts[n * 99 / 100],
+        counts[n - 1],
+        elapsed * 1e6 / n as f64
+    );
+    ends.sort();
+    eprintln!(
+        "{} contact ends (replay from the reference included): evaluations median {}, p90 {}, max {}; {:.0} us per query",
+        ends.len(),
+        ends[ends.len() / 2],
+        ends[ends.len() * 9 / 10],
+        ends[ends.len() - 1],
+        end_time * 1e6 / ends.len() as f64
+    );
+    assert!(counts[n - 1] < 10_000);
+    // Solids falling through a bumpy mesh (detect mode): the contact start, then its end.
+    let heights: Vec<f64> = (0..49).map(|_| rng.random_range(-0.4..0.4)).collect();
+    let m = fixed(bumpy_floor(&heights, 6.0), DVec3::new(0.0, 0.2, 0.0), DQuat::from_rotation_y(0.3));
+    let (mut starts, mut ends) = (Vec::new(), Vec::new());
+    let started = Instant::now();
+    for _ in 0..60 {
+        for kind in 0..6 {
+            let g = solid(kind, [0.5, 0.4, 0.3], &points);
+            let spin =
+                DVec3::new(rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0), rng.random_range(-3.0..3.0));
+            let position = DVec3::new(rng.random_range(-2.0..2.0), 2.0, rng.random_range(-2.0..2.0));
+            let a = body(g, position, DVec3::new(0.7, -1.5, 0.2), DQuat::from_rotation_x(0.5), spin);
+            let s = shape_contact_search(pair(&a), pair(&m), Window::new(0.0, 3.0)).unwrap();
+            starts.push(s.iterations);
+            if let Some(t) = s.found {
+                ends.push(contact_end_search(pair(&a), pair(&m), t, 3.0).unwrap().iterations);
+            }
+        }
+    }
+    starts.sort();
+    ends.sort();
+    eprintln!(
+        "mesh: starts median {} max {}, ends (replay included) median {} max {}; {:.0} us per solid (start and end)",
+        starts[starts.len() / 2],
+        starts[starts.len() - 1],
+        ends[ends.len() / 2],
+        ends[ends.len() - 1],
+        started.elapsed().as_secs_f64() * 1e6 / starts.len() as f64
+    );
+    let a = body(
+        Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap(),
+        DVec3::new(0.0, 2.0, 0.0),
+        DVec3::new(0.3, -1.0, 0.0),
+        DQuat::IDENTITY,
+        DVec3::new(1.0, 2.0, 0.5),
+    );
+    let started = Instant::now();
+    let mut counts = Vec::new();
+    for _ in 0..200 {
+        counts.push(
+            shape_wall_search(&a.0, &a.1, DVec3::splat(-3.0), DVec3::splat(3.0), Window::new(0.0, 5.0))
+                .unwrap()
+                .iterations,
+        );
+    }
+    eprintln!(
+        "wall search: {} evaluations, {:.1} us per query",
+        counts[0],
+        started.elapsed().as_secs_f64() * 1e6 / 200.0
+    );
+}
+
+/// Regression: a spinning cylinder crossing a bumpy mesh, where parry's GJK calls a triangle
+/// and the cylinder intersecting from both sides a hair before they touch.
+#[test]
+fn gjk_failing_near_a_mesh_triangle() {
+    let heights = [
+        -0.27998743236960005,
+        -0.31741669512566684,
+        -0.14470459474129954,
+        0.3506536416338036,
+        0.30104244722928375,
+        0.2505359491615926,
+        0.09283624883142425,
+        0.16555003864511533,
+        -0.27379638498609693,
+        -0.20288964776872984,
+        0.2671597770177481,
+        -0.27080272896869295,
+        0.057253653364925335,
+        -0.10868079189489992,
+        0.24035859085458441,
+        0.3580955819347937,
+        0.2070784842003561,
+        0.38448976476318664,
+        0.14535024254483497,
+        0.3946384788696417,
+        0.07444173960067307,
+        0.3125442847070784,
+        -0.019149349974676357,
+        -0.3871939719100782,
+        -0.39574354475298806,
+        -0.1032363617134199,
+        0.03189342533685468,
+        -0.19518269133498228,
+        0.10418161635392377,
+        -0.3920837217688817,
+        -0.17000139631650388,
+        0.22550734719151497,
+        -0.131649886588001,
+        0.3416160630166529,
+        0.09337425680794367,
+        -0.2126241740433737,
+        0.23706396603521102,
+        0.3923859615376652,
+        0.18492442743235996,
+        0.1642156048800444,
+        0.07285672541721756,
+        -0.22560729684636657,
+        0.38419484749704585,
+        0.17414257460253357,
+        0.2786186295268434,
+        -0.12014309809941892,
+        0.04287508891427421,
+        0.15898824086322932,
+        0.006481695713712566,
+    ];
+    let turn = DQuat::from_xyzw(0.0, 0.14943813247359922, 0.0, 0.9887710779360422);
+    let m = fixed(bumpy_floor(&heights, 6.0), DVec3::new(0.0, 0.2, 0.0), turn);
+    let g = Shape::Cylinder { half_height: 0.9196562029574497, radius: 0.9167193105192427 }.geometry().unwrap();
+    let a = body(
+        g,
+        DVec3::new(-0.4596514279054744, 2.5400457919493706, 0.7635567796124711),
+        DVec3::new(0.82375483240813, -1.7114946972812886, -0.15020363499012604),
+        DQuat::from_xyzw(0.4138813718320829, -0.3984082281819546, 0.812776824139709, -0.09678289057822775),
+        DVec3::new(-2.34763059300101, 2.2746900577053686, 0.009144707613501267),
+    );
+    let found = check_pair(&m, &a, Window::new(0.0, 3.0), 400, "mesh vs cylinder");
+    assert!(!found.is_empty());
+}
