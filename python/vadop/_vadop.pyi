@@ -69,6 +69,7 @@ class World:
         pool_axes: Optional[int] = None,
         phi: Optional[float] = None,
         restitution: float = 1.0,
+        friction: float = 0.0,
         contact_duration: float = 1e-05,
         threads: Optional[int] = None,
         contact_ends: bool = False,

@@ -111,6 +111,10 @@ pub struct SimulateArgs {
     /// Coefficient of restitution of every impact, in [0, 1]
     #[arg(long, value_name = "E", default_value_t = 1.0, allow_negative_numbers = true, help_heading = "World")]
     restitution: f64,
+    /// Coulomb friction coefficient of every impact, >= 0 (0: frictionless); friction acts at the
+    /// contact point, so it spins bodies up
+    #[arg(long, value_name = "MU", default_value_t = 0.0, allow_negative_numbers = true, help_heading = "World")]
+    friction: f64,
     /// Contact duration t_c of the TC model in seconds: with restitution below 1, a contact of a
     /// body whose previous contact lies less than t_c before is elastic, which ends inelastic
     /// collapse
@@ -243,6 +247,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         pool_axes: args.pool.0,
         phi: args.phi.map(f64::to_radians),
         restitution: args.restitution,
+        friction: args.friction,
         contact_duration: args.contact_duration,
         threads: args.threads,
         contact_ends: args.contact_ends,

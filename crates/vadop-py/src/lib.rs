@@ -316,6 +316,7 @@ fn config(
     pool_axes: Option<IntArg>,
     phi: Option<f64>,
     restitution: f64,
+    friction: f64,
     contact_duration: f64,
     threads: Option<IntArg>,
     contact_ends: bool,
@@ -328,6 +329,7 @@ fn config(
         pool_axes,
         phi,
         restitution,
+        friction,
         contact_duration,
         threads,
         contact_ends,
@@ -412,8 +414,9 @@ impl Contacts {
 /// overlap checks at frame instants only — or the continuous baselines 'swept-aabb' and
 /// 'swept-kdop'), ``mode`` ('simulate' or 'detect': bodies pass through each other and bounce
 /// only off the walls), ``pool_axes`` (None picks the engine's default, else an int in
-/// 3..=100000), ``phi`` in radians (None: the pool's covering radius), ``restitution`` in [0, 1]
-/// and ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
+/// 3..=100000), ``phi`` in radians (None: the pool's covering radius), ``restitution`` in [0, 1],
+/// ``friction`` (the Coulomb coefficient of every impact, >= 0; 0: frictionless) and
+/// ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
 /// body's previous one is elastic — the TC model that ends inelastic collapse) and ``threads``
 /// (how many threads a step shares its work among, 1 to 1024; None: every core; results are
 /// bit-identical whatever the number) and ``contact_ends`` (detect mode only: also report when
@@ -450,7 +453,7 @@ struct PyWorld {
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, contact_duration = 1e-5, threads = None, contact_ends = false))]
+    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, friction = 0.0, contact_duration = 1e-5, threads = None, contact_ends = false))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         positions: &Bound<'_, PyAny>,
@@ -463,12 +466,14 @@ impl PyWorld {
         pool_axes: Option<IntArg>,
         phi: Option<f64>,
         restitution: f64,
+        friction: f64,
         contact_duration: f64,
         threads: Option<IntArg>,
         contact_ends: bool,
     ) -> PyResult<PyWorld> {
         let bounds = bounds(r#box)?;
-        let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads, contact_ends)?;
+        let config =
+            config(method, mode, pool_axes, phi, restitution, friction, contact_duration, threads, contact_ends)?;
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
@@ -885,7 +890,7 @@ fn scene(
 ) -> PyResult<PyWorld> {
     let bodies = bodies.in_range("bodies", 1, MAX_SCENE_BODIES as i128)? as usize;
     let seed = seed.in_range("seed", 0, u64::MAX.into())? as u64;
-    let config = config(method, mode, pool_axes, phi, restitution, contact_duration, threads, false)?;
+    let config = config(method, mode, pool_axes, phi, restitution, 0.0, contact_duration, threads, false)?;
     check_world_memory(bodies)?;
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
@@ -924,7 +929,7 @@ fn detect(
 ) -> PyResult<Contacts> {
     let frames = frames.in_range("frames", 0, u64::MAX.into())? as u64;
     let bounds = bounds(r#box)?;
-    let config = config(method, "detect", pool_axes, phi, 1.0, DEFAULT_CONTACT_DURATION, threads, false)?;
+    let config = config(method, "detect", pool_axes, phi, 1.0, 0.0, DEFAULT_CONTACT_DURATION, threads, false)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
     check_world_memory(spheres.len())?;
     let mut world = World::new(bounds, config).map_err(value_error)?;

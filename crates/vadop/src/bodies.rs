@@ -1,19 +1,26 @@
-//! The body store: the state of every sphere in flat arrays, indexed by body id.
+//! The body store: the state of every body in flat arrays, indexed by body id.
 //!
 //! Inside the engine a body's id is its slot index, reused after a removal; users name bodies by
 //! [`BodyHandle`], the slot and its generation. The store owns each body's motion and bounding
 //! radius, its mass, the per-body velocity stamp that voids stale predictions and each slot's
-//! generation. It never moves bodies on its own or knows about axes or contacts. A position is
+//! generation; and, once the world holds a body that is not a plain sphere, the [`Rigid`] part:
+//! the world's shapes, each body's shape, its exact spin ([`FreeRotation`]) and whether it is
+//! static. A world of spheres never allocates that part. It never moves bodies on its own or
+//! knows about axes or contacts. A position is
 //! stored together with the time it refers to (`since`), so a body that changed velocity
 //! mid-frame is evaluated exactly as p(t) = p + (t - since) * v by every method alike.
 //! The motion and the radius share one cache line per body ([`BodyState`]): it is what the
 //! narrow phase reads for a candidate pair, and the proxy table reads it from here rather than
 //! keeping a copy.
 
+use crate::free_rotation::FreeRotation;
 use crate::handle::BodyHandle;
 use crate::narrow_phase::Motion;
 use crate::proxy::prefetch;
-use glam::DVec3;
+use crate::response::RigidSide;
+use crate::shape::ShapeGeometry;
+use crate::shape_contact::{RigidMotion, Spin};
+use glam::{DMat3, DQuat, DVec3};
 
 /// One sphere as users see it.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -59,6 +66,102 @@ pub struct Bodies {
     /// `Bodies::tighten_speed_bound`, so a step need not read every body to rule out an absurd
     /// speed.
     pub speed_bound: f64,
+    /// Shapes, spins and static bodies: empty in a world of plain spheres.
+    pub rigid: Rigid,
+}
+
+/// What bodies that are not plain spheres add to the store, kept only once a world holds one:
+/// then every slot has an entry, and a sphere added as a plain [`Sphere`] gets the shape of its
+/// radius (one per distinct radius), its spin steady.
+#[derive(Debug, Default, Clone)]
+pub struct Rigid {
+    /// The world's shapes, by [`crate::world::ShapeId`]: the users' and the plain spheres'.
+    pub shapes: Vec<ShapeGeometry>,
+    /// The shape of each plain sphere's radius (by its bits), among `shapes`.
+    sphere_shapes: std::collections::BTreeMap<u64, u32>,
+    /// Per slot: the body's shape.
+    pub shape: Vec<u32>,
+    /// Per slot: the body's exact rotation since its last velocity change.
+    pub spin: Vec<FreeRotation>,
+    /// Per slot: the orientation and angular velocity its spin started from (at its last
+    /// velocity change), which rebuild the spin bit-exactly (a saved world).
+    pub spin_start: Vec<(DQuat, DVec3)>,
+    /// Per slot: a static body, which never moves, has infinite mass and is no broad phase's.
+    pub fixed: Vec<bool>,
+    /// Bumped whenever a static body is added or removed, so the static geometry is rebuilt.
+    pub statics_revision: u64,
+    /// True once the per-slot arrays are kept (a world of spheres never sets it).
+    active: bool,
+}
+
+/// The spin of a body that does not turn.
+fn steady() -> FreeRotation {
+    FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::ZERO)
+}
+
+/// Principal moments of a body of `geometry` (a solid ball of `radius` without one) and `mass`;
+/// a static body (infinite mass) never turns, and any positive moments describe its spin.
+fn inertia_of(geometry: Option<&ShapeGeometry>, mass: f64, radius: f64) -> DVec3 {
+    match geometry {
+        _ if !mass.is_finite() => DVec3::ONE,
+        Some(g) => g.principal_inertia_unit() * (mass / g.volume()),
+        None => DVec3::splat(0.4 * mass * radius * radius),
+    }
+}
+
+impl Spin for FreeRotation {
+    #[inline]
+    fn orientation_at(&self, dt: f64) -> DQuat {
+        FreeRotation::orientation_at(self, dt)
+    }
+    #[inline]
+    fn max_angular_speed(&self) -> f64 {
+        FreeRotation::max_angular_speed(self)
+    }
+}
+
+/// A [`RigidState::shape`] meaning: a sphere of the state's radius.
+pub(crate) const SPHERE: u32 = u32::MAX;
+
+impl Rigid {
+    /// Restores the shape table of a saved world: `shapes` in id order, the users' at `user`
+    /// (the others are plain spheres' shapes).
+    pub(crate) fn restore_shapes(&mut self, shapes: Vec<ShapeGeometry>, user: &[u32]) {
+        for (id, geometry) in shapes.into_iter().enumerate() {
+            if let (crate::shape::Shape::Sphere { radius }, false) = (geometry.shape(), user.contains(&(id as u32))) {
+                self.sphere_shapes.insert(radius.to_bits(), id as u32);
+            }
+            self.shapes.push(geometry);
+        }
+    }
+
+    /// The shape of a plain sphere of `radius`, added to the shapes the first time.
+    fn sphere_shape(&mut self, radius: f64) -> u32 {
+        let shapes = &mut self.shapes;
+        *self.sphere_shapes.entry(radius.to_bits()).or_insert_with(|| {
+            let geometry = crate::shape::Shape::Sphere { radius }.geometry().expect("a body's radius is a valid size");
+            shapes.push(geometry);
+            (shapes.len() - 1) as u32
+        })
+    }
+}
+
+/// A rigid body's motion and mass as the store keeps it; what [`Bodies::put_rigid`] writes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct RigidState {
+    /// Index into [`Rigid::shapes`], or [`SPHERE`].
+    pub shape: u32,
+    /// Bounding radius about the centre of mass.
+    pub radius: f64,
+    /// Centre of mass.
+    pub position: DVec3,
+    /// Rotates body-frame (principal) vectors to world vectors.
+    pub orientation: DQuat,
+    pub velocity: DVec3,
+    pub angular_velocity: DVec3,
+    /// Infinite for a static body.
+    pub mass: f64,
+    pub fixed: bool,
 }
 
 /// The length of `velocity`, robust to squares that underflow: below about 1e-162 the largest
@@ -128,6 +231,122 @@ impl Bodies {
         self.state[i].radius
     }
 
+    /// True once the world holds a body that is not a plain sphere: the [`Rigid`] part is kept.
+    #[inline]
+    pub fn has_rigid(&self) -> bool {
+        self.rigid.active
+    }
+
+    /// Body `i`'s shape geometry; `None` in a world of plain spheres.
+    #[inline]
+    pub fn geometry(&self, i: usize) -> Option<&ShapeGeometry> {
+        let shape = *self.rigid.shape.get(i)?;
+        self.rigid.shapes.get(shape as usize)
+    }
+
+    /// True when body `i` is a sphere (of its state's radius), plain or added as a shape.
+    #[inline]
+    pub fn is_sphere(&self, i: usize) -> bool {
+        self.geometry(i).is_none_or(|g| matches!(g.shape(), crate::shape::Shape::Sphere { .. }))
+    }
+
+    /// True for a static body.
+    #[inline]
+    pub fn is_fixed(&self, i: usize) -> bool {
+        self.rigid.fixed.get(i).copied().unwrap_or(false)
+    }
+
+    /// Body `i`'s rotation since its last velocity change (steady in a world of spheres).
+    #[inline]
+    pub fn spin(&self, i: usize) -> FreeRotation {
+        self.rigid.spin.get(i).copied().unwrap_or_else(steady)
+    }
+
+    /// Orientation of body `i` (its principal axes to world) at absolute time `t`.
+    #[inline]
+    pub fn orientation_at(&self, i: usize, t: f64) -> DQuat {
+        self.spin(i).orientation_at(t - self.state[i].motion.since)
+    }
+
+    /// Angular velocity of body `i` (world frame) at absolute time `t`.
+    #[inline]
+    pub fn angular_velocity_at(&self, i: usize, t: f64) -> DVec3 {
+        self.spin(i).angular_velocity_at(t - self.state[i].motion.since)
+    }
+
+    /// Body `i`'s motion for the shape narrow phase.
+    #[inline]
+    pub fn rigid_motion(&self, i: usize) -> RigidMotion<FreeRotation> {
+        let m = self.state[i].motion;
+        RigidMotion { position: m.position, since: m.since, velocity: m.velocity, spin: self.spin(i) }
+    }
+
+    /// Principal moments of inertia of body `i`: its shape's for its mass (a solid ball's in a
+    /// world of spheres).
+    pub fn principal_inertia(&self, i: usize) -> DVec3 {
+        inertia_of(self.geometry(i), self.mass[i], self.radius(i))
+    }
+
+    /// Body `i` at time `t` as a side of a contact at `point` (what the impulse needs).
+    pub fn rigid_side(&self, i: usize, t: f64, point: DVec3) -> RigidSide {
+        if self.is_fixed(i) {
+            return RigidSide::FIXED;
+        }
+        let rotation = DMat3::from_quat(self.orientation_at(i, t));
+        let inverse = DMat3::from_diagonal(self.principal_inertia(i).recip());
+        RigidSide {
+            velocity: self.velocity(i),
+            angular_velocity: self.angular_velocity_at(i, t),
+            inverse_mass: self.inverse_mass(i),
+            inverse_inertia: rotation * inverse * rotation.transpose(),
+            arm: point - self.position_at(i, t),
+        }
+    }
+
+    /// Keeps the [`Rigid`] part from now on: every slot gets an entry (its sphere, steady).
+    pub(crate) fn make_rigid(&mut self) {
+        if !self.has_rigid() {
+            let slots = self.slots();
+            self.rigid.shape = (0..slots).map(|i| self.rigid.sphere_shape(self.state[i].radius)).collect();
+            self.rigid.spin = vec![steady(); slots];
+            self.rigid.spin_start = vec![(DQuat::IDENTITY, DVec3::ZERO); slots];
+            self.rigid.fixed = vec![false; slots];
+            self.rigid.active = true;
+        }
+    }
+
+    /// Writes a rigid body into slot `i` (appending when `i` is one past the end), like
+    /// [`Bodies::put`]; the store keeps its [`Rigid`] part from now on.
+    pub(crate) fn put_rigid(&mut self, i: usize, mut body: RigidState, time: f64) {
+        self.make_rigid();
+        if body.shape == SPHERE {
+            body.shape = self.rigid.sphere_shape(body.radius);
+        }
+        let sphere = Sphere { position: body.position, velocity: body.velocity, radius: body.radius, mass: body.mass };
+        self.put_state(i, sphere, time);
+        (self.rigid.shape[i], self.rigid.fixed[i]) = (body.shape, body.fixed);
+        self.start_spin(i, body.orientation, body.angular_velocity);
+        if body.fixed {
+            self.rigid.statics_revision += 1;
+        }
+    }
+
+    /// Moves body `i` to time `t` with new linear and angular velocities, voiding its
+    /// predictions: its spin starts again from its orientation at `t`.
+    pub(crate) fn set_motion_at(&mut self, i: usize, t: f64, velocity: DVec3, angular_velocity: DVec3) {
+        let orientation = self.orientation_at(i, t);
+        self.move_to(i, t, velocity);
+        if self.has_rigid() {
+            self.start_spin(i, orientation, angular_velocity);
+        }
+    }
+
+    /// Body `i` spins from now (its `since`) from `orientation` with `angular_velocity`.
+    pub(crate) fn start_spin(&mut self, i: usize, orientation: DQuat, angular_velocity: DVec3) {
+        self.rigid.spin[i] = FreeRotation::new(self.principal_inertia(i), orientation, angular_velocity);
+        self.rigid.spin_start[i] = (orientation, angular_velocity);
+    }
+
     /// Makes room for `additional` more slots, exactly: a world built from a scene of a million
     /// bodies holds a million slots, not the next power of two.
     pub(crate) fn reserve(&mut self, additional: usize) {
@@ -141,6 +360,17 @@ impl Bodies {
     /// Writes `sphere` into slot `i`, appending when `i` is one past the end; a reused slot keeps
     /// the generation its last removal set.
     pub(crate) fn put(&mut self, i: usize, sphere: Sphere, time: f64) {
+        self.put_state(i, sphere, time);
+        if self.has_rigid() {
+            let shape = self.rigid.sphere_shape(sphere.radius);
+            (self.rigid.shape[i], self.rigid.spin[i], self.rigid.fixed[i]) = (shape, steady(), false);
+            self.rigid.spin_start[i] = (DQuat::IDENTITY, DVec3::ZERO);
+        }
+    }
+
+    /// Writes the state of slot `i` (appending when `i` is one past the end), the [`Rigid`]
+    /// entries too (to be set by the caller).
+    fn put_state(&mut self, i: usize, sphere: Sphere, time: f64) {
         self.speed_bound = self.speed_bound.max(speed(sphere.velocity));
         let state = BodyState {
             motion: Motion { position: sphere.position, since: time, velocity: sphere.velocity },
@@ -152,6 +382,12 @@ impl Bodies {
             self.stamp.push(0);
             self.alive.push(true);
             self.generation.push(0);
+            if self.has_rigid() {
+                self.rigid.shape.push(SPHERE);
+                self.rigid.spin.push(steady());
+                self.rigid.spin_start.push((DQuat::IDENTITY, DVec3::ZERO));
+                self.rigid.fixed.push(false);
+            }
         } else {
             self.state[i] = state;
             self.mass[i] = sphere.mass;
@@ -163,6 +399,9 @@ impl Bodies {
     /// Empties slot `i`: voids the body's predictions and moves the slot on to its next
     /// generation, so the body's handle names nothing from now on.
     pub(crate) fn remove(&mut self, i: usize) {
+        if self.is_fixed(i) {
+            self.rigid.statics_revision += 1;
+        }
         self.alive[i] = false;
         self.stamp[i] = self.stamp[i].wrapping_add(1);
         self.generation[i] += 1;
@@ -179,9 +418,20 @@ impl Bodies {
         self.generation[i] <= BodyHandle::MAX_GENERATION
     }
 
-    /// Moves body `i` to time `t` and gives it a new velocity, voiding its predictions.
+    /// Moves body `i` to time `t` and gives it a new velocity, voiding its predictions; its spin
+    /// goes on unchanged (from its orientation and angular velocity at `t`).
     #[inline]
     pub(crate) fn set_velocity_at(&mut self, i: usize, t: f64, velocity: DVec3) {
+        if self.has_rigid() {
+            self.set_motion_at(i, t, velocity, self.angular_velocity_at(i, t));
+        } else {
+            self.move_to(i, t, velocity);
+        }
+    }
+
+    /// Moves body `i`'s centre to time `t` with a new velocity, voiding its predictions.
+    #[inline]
+    fn move_to(&mut self, i: usize, t: f64, velocity: DVec3) {
         self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
         self.stamp[i] = self.stamp[i].wrapping_add(1);
         self.speed_bound = self.speed_bound.max(speed(velocity));

@@ -19,6 +19,10 @@ pub enum VadopError {
     /// the batch, so a user can find it among thousands.
     #[error("sphere {index}: {source}")]
     InSphere { index: usize, source: Box<VadopError> },
+    /// A body of a batch (`add_bodies`, a scene file) was rejected; `index` is its place in the
+    /// batch.
+    #[error("body {index}: {source}")]
+    InBody { index: usize, source: Box<VadopError> },
     /// A mass was zero, negative or not finite.
     #[error("mass must be a finite number > 0, got {0}")]
     BadMass(f64),
@@ -34,6 +38,32 @@ pub enum VadopError {
     /// A sphere did not fit entirely inside the box.
     #[error("sphere at {position:?} with radius {radius} does not fit inside the box {min:?}..{max:?}")]
     OutsideBox { position: [f64; 3], radius: f64, min: [f64; 3], max: [f64; 3] },
+    /// A body's shape reaches out of the box.
+    #[error("the body at {position:?} reaches out of the box: its shape spans {low:?}..{high:?}")]
+    ShapeOutsideBox { position: [f64; 3], low: [f64; 3], high: [f64; 3] },
+    /// A shape id the world never gave out.
+    #[error("no shape {0}: give a ShapeId from World::add_shape")]
+    NoSuchShape(u32),
+    /// A triangle mesh or half-space given to a moving body.
+    #[error("shape {0} is level geometry (a triangle mesh or a half-space): it can only be a static body (World::add_static)")]
+    StaticOnlyShape(u32),
+    /// An orientation that is not a rotation.
+    #[error("orientation must be a finite, non-zero quaternion, got {0:?}")]
+    BadOrientation([f64; 4]),
+    /// A sphere's call on a body of another shape.
+    #[error("body {0} is not a sphere: use World::body, World::remove_body")]
+    NotASphere(BodyHandle),
+    /// A velocity given to a static body.
+    #[error("body {0} is static: it never moves")]
+    StaticBody(BodyHandle),
+    /// The discrete (frame-instant) method was given a body other than a moving sphere.
+    #[error(
+        "the discrete method checks overlaps of spheres only: give shapes and static bodies to a continuous method"
+    )]
+    DiscreteSpheresOnly,
+    /// The friction coefficient was negative or not finite.
+    #[error("friction must be a finite number >= 0, got {0}")]
+    BadFriction(f64),
     /// The contact duration of the TC model was negative or not finite.
     #[error("contact duration must be a finite number >= 0 seconds, got {0}")]
     BadContactDuration(f64),

@@ -23,21 +23,29 @@ pub enum Partner {
     /// The end of the body's contact with another body (detect mode, when contact ends are
     /// reported): the two part.
     End(u32),
+    /// The search for a contact with another body (or its end) could not decide before this
+    /// time: the two are resting or sliding a hair apart while turning.
+    Stalled(u32),
     /// A wall of the box.
     Wall(Wall),
+    /// The search for the body's wall contact could not decide before this time.
+    WallStalled,
     /// No contact: the body's proxy ends here and must be renewed (see [`crate::proxy`]).
     Renew,
 }
 
 impl Partner {
-    /// Sort key: bodies, then contact ends, then walls, lower ids first, renewals last (every
+    /// Sort key: bodies, then contact ends, then stalled searches, then walls (and a stalled wall
+    /// search), lower ids first, renewals last (every
     /// contact at the same instant is handled with the proxy it was predicted from, and a contact
     /// that ends as the body bounces ends before the bounce).
     fn key(self) -> u64 {
         match self {
             Partner::Body(id) => id as u64,
             Partner::End(id) => (1u64 << 32) + id as u64,
-            Partner::Wall(wall) => (2u64 << 32) + wall as u64,
+            Partner::Stalled(id) => (2u64 << 32) + id as u64,
+            Partner::Wall(wall) => (3u64 << 32) + wall as u64,
+            Partner::WallStalled => 4u64 << 32,
             Partner::Renew => u64::MAX,
         }
     }

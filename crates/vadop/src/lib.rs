@@ -46,6 +46,7 @@ pub mod bounding_volume;
 pub mod broad_phase;
 pub mod coherent_sort;
 pub mod collapse;
+mod contacts;
 pub mod error;
 pub mod event_queue;
 pub mod free_rotation;
@@ -61,6 +62,7 @@ pub mod response;
 pub mod scene;
 pub mod shape;
 pub mod shape_contact;
+mod static_geometry;
 pub mod touching;
 pub mod window;
 pub mod world;
@@ -70,7 +72,7 @@ pub use error::{Result, VadopError};
 pub use handle::BodyHandle;
 pub use narrow_phase::Wall;
 pub use window::Window;
-pub use world::{BoxBounds, Contact, FrameStats, Method, Mode, Touched, World, WorldConfig};
+pub use world::{Body, BodyShape, BoxBounds, Contact, FrameStats, Method, Mode, ShapeId, Touched, World, WorldConfig};
 
 /// The README's Rust examples, compiled and run with the doctests so they cannot go stale.
 #[cfg(doctest)]

@@ -21,13 +21,13 @@
 use crate::bodies::Bodies;
 use crate::broad_phase::BroadPhase;
 use crate::collapse::{ContactRules, Rule};
+use crate::contacts;
 use crate::event_queue::{Event, EventQueue, Partner};
-use crate::narrow_phase::{
-    direction, pair_contact_time, pair_separation_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE,
-};
+use crate::narrow_phase::{Wall, CONTACT_TOLERANCE};
 use crate::parallel::Workers;
-use crate::proxy::{sampled_quantile, ProxyTable, Reported};
-use crate::response::{pair_impulse, wall_bounce};
+use crate::proxy::{sampled_quantile, Proxies, ProxyTable, Reported};
+use crate::response::{pair_impulse, rigid_impulse, wall_bounce, RigidSide};
+use crate::static_geometry::StaticGeometry;
 use crate::touching::Touching;
 use crate::window::Window;
 use crate::world::{BoxBounds, Contact, FrameStats, Mode, Touched};
@@ -74,6 +74,8 @@ pub(crate) struct Physics {
     pub bounds: BoxBounds,
     pub mode: Mode,
     pub restitution: f64,
+    /// Coulomb friction coefficient of every impact.
+    pub friction: f64,
     pub contact_duration: f64,
     /// Detect mode only: contact ends are reported and touching pairs kept.
     pub report_ends: bool,
@@ -97,6 +99,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     pub(crate) rules: ContactRules,
     /// The pairs in contact now, when contact ends are reported.
     pub(crate) touching: Touching,
+    /// The static bodies, bounded once.
+    statics: StaticGeometry,
     /// The current window (empty before the first).
     window: Window,
     /// Proxies refreshed since the window started.
@@ -127,6 +131,7 @@ impl<B: BroadPhase> Pipeline<B> {
             queue: EventQueue::default(),
             rules: ContactRules::default(),
             touching: Touching::default(),
+            statics: StaticGeometry::default(),
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
@@ -178,6 +183,11 @@ impl<B: BroadPhase> Pipeline<B> {
     pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
         self.rules.resize(bodies.slots());
         self.rules.next_step();
+        // A static body added or removed since: every body's contacts with the level change, so
+        // a new window starts now.
+        if self.statics.is_stale(bodies) {
+            self.window.end = self.window.end.min(t0);
+        }
         let mut now = t0;
         loop {
             if !(self.window.end > now) {
@@ -250,19 +260,21 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.sort_seconds += start.elapsed().as_secs_f64();
 
         let start = Instant::now();
+        self.statics.update(bodies);
         let mut predicted = self.queue.take_bulk();
         let candidates = self.broad.find_pairs(
             self.proxies.view(bodies),
             &self.workers,
-            |a, b, window, out| out.extend(predict_pair(a, b, window)),
+            |a, b, window, out| out.extend(predict_pair(bodies, a, b, window)),
             &mut predicted,
         );
-        let (proxies, window) = (&self.proxies, self.window);
+        let (proxies, statics, window) = (self.proxies.view(bodies), &self.statics, self.window);
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
                 found.extend(predict_wall(bodies, &physics.bounds, i as u32, window));
+                for_each_static_event(bodies, proxies, statics, i, window, |event| found.push(event));
                 if proxies.expires(i) {
-                    found.push(renewal(bodies, proxies, i as u32));
+                    found.push(renewal(bodies, &proxies, i as u32));
                 }
             }
         });
@@ -288,15 +300,15 @@ impl<B: BroadPhase> Pipeline<B> {
             // asking early lets them arrive while this one is handled.
             if let Some(next) = self.queue.upcoming(EVENTS_AHEAD) {
                 bodies.prefetch(next.body as usize);
-                if let Partner::Body(j) | Partner::End(j) = next.partner {
+                if let Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) = next.partner {
                     bodies.prefetch(j as usize);
                 }
             }
             let partner_current = match event.partner {
-                Partner::Body(j) | Partner::End(j) => {
+                Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) => {
                     bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp
                 }
-                Partner::Wall(_) | Partner::Renew => true,
+                Partner::Wall(_) | Partner::WallStalled | Partner::Renew => true,
             };
             let i = event.body as usize;
             if !(bodies.alive[i] && bodies.stamp[i] == event.body_stamp && partner_current) {
@@ -306,7 +318,9 @@ impl<B: BroadPhase> Pipeline<B> {
             match event.partner {
                 Partner::Body(j) => self.pair_contact(bodies, physics, event.body, j, event.time, out),
                 Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
+                Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
                 Partner::Wall(wall) => self.wall_contact(bodies, physics, event.body, wall, event.time, out),
+                Partner::WallStalled => self.stalled(bodies, physics, &[event.body], event.time, out),
                 Partner::Renew => {
                     bodies.renew(i);
                     self.retest(event.body, None, bodies, physics, event.time, out.stats);
@@ -331,17 +345,22 @@ impl<B: BroadPhase> Pipeline<B> {
 
     fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, b: u32, t: f64, out: &mut Output) {
         let (i, j) = (a as usize, b as usize);
-        let (point, normal) = pair_geometry(bodies, i, j, t);
+        let stamps = (bodies.stamp[i], bodies.stamp[j]);
+        let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
+        let plain = bodies.is_sphere(i) && bodies.is_sphere(j) && physics.friction == 0.0;
+        // Static level geometry turns bodies back in detect mode too, as the walls do.
+        let responds = physics.mode == Mode::Simulate || bodies.is_fixed(i) || bodies.is_fixed(j);
         let mut impulse = 0.0;
-        if physics.mode == Mode::Simulate {
-            match self.rules.pair(a, b, t, physics.restitution, physics.contact_duration) {
+        if responds {
+            let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
+            match self.rules.pair(a, b, t, physics.restitution, duration) {
                 Rule::Jam => {
                     let before = bodies.velocity(i);
                     out.stats.jam_contacts += 1;
                     self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
                     impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
                 }
-                Rule::Impulse { restitution, changed } => {
+                Rule::Impulse { restitution, changed } if plain => {
                     let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
                     let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
                     impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
@@ -356,10 +375,39 @@ impl<B: BroadPhase> Pipeline<B> {
                         self.retest(b, None, bodies, physics, t, out.stats);
                     }
                 }
+                Rule::Impulse { restitution, changed } => {
+                    let (side_i, side_j) = (bodies.rigid_side(i, t, point), bodies.rigid_side(j, t, point));
+                    let push = rigid_impulse(&side_i, &side_j, normal, restitution, physics.friction);
+                    impulse = push.dot(normal);
+                    if push != DVec3::ZERO {
+                        out.stats.tc_contacts += changed as u64;
+                        for (k, side, push) in [(i, side_i, -push), (j, side_j, push)] {
+                            if !bodies.is_fixed(k) {
+                                let (velocity, angular_velocity) = side.after(push);
+                                bodies.set_motion_at(k, t, velocity, angular_velocity);
+                            }
+                        }
+                        self.retest_pair(a, b, bodies, physics, t, out.stats);
+                    }
+                }
+            }
+        }
+        // Spinning shapes may touch again on the same motions (spheres never do): with nothing
+        // changed, the pair's next contact is predicted now, as a later window would find it.
+        if impulse == 0.0
+            && !(bodies.is_sphere(i) && bodies.is_sphere(j))
+            && bodies.stamp[i] == stamps.0
+            && bodies.stamp[j] == stamps.1
+        {
+            let (state_a, state_b) = (bodies.state[i], bodies.state[j]);
+            let later = self.window.from(t.next_up());
+            if let Some((time, stalled)) = contacts::pair_start(bodies, (i, &state_a), (j, &state_b), later) {
+                let partner = if stalled { Partner::Stalled(b) } else { Partner::Body(b) };
+                self.queue.push(Event { time, body: a, partner, body_stamp: stamps.0, partner_stamp: stamps.1 });
             }
         }
         out.stats.pair_contacts += 1;
-        if physics.report_ends {
+        if physics.report_ends && !responds {
             self.touching.insert(a, b);
             if let Some(event) = predict_end(bodies, a, b, self.window.from(t)) {
                 self.queue.push(event);
@@ -375,13 +423,50 @@ impl<B: BroadPhase> Pipeline<B> {
         });
     }
 
+    /// A search that could not decide stopped at `t` with `stuck` (one body and a wall, or two
+    /// bodies) a hair apart: resting or sliding in contact while turning. In simulate mode the
+    /// jam rule freezes them (no spin, the cluster's velocity); in detect mode, where bodies keep
+    /// their paths, their motions start afresh from `t` (the same paths, a new reference instant),
+    /// so the next search begins there. Every method stalls at the same instant: canonical.
+    fn stalled(&mut self, bodies: &mut Bodies, physics: &Physics, stuck: &[u32], t: f64, out: &mut Output) {
+        if physics.mode == Mode::Simulate {
+            out.stats.jam_contacts += 1;
+            self.freeze_cluster(bodies, physics, stuck, t, out.stats);
+            return;
+        }
+        for &k in stuck {
+            let i = k as usize;
+            if !bodies.is_fixed(i) {
+                bodies.set_motion_at(i, t, bodies.velocity(i), bodies.angular_velocity_at(i, t));
+            }
+        }
+        match *stuck {
+            [a, b] => self.retest_pair(a, b, bodies, physics, t, out.stats),
+            _ => self.retest(stuck[0], None, bodies, physics, t, out.stats),
+        }
+    }
+
+    /// Re-tests the bodies of pair `a`, `b` that moved, the pair itself once (by the second, when
+    /// both proxies are fresh); a static body never moves and is never re-tested.
+    fn retest_pair(&mut self, a: u32, b: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        match (bodies.is_fixed(a as usize), bodies.is_fixed(b as usize)) {
+            (false, false) => {
+                self.retest(a, Some(b), bodies, physics, t, stats);
+                self.retest(b, None, bodies, physics, t, stats);
+            }
+            (false, true) => self.retest(a, None, bodies, physics, t, stats),
+            (true, false) => self.retest(b, None, bodies, physics, t, stats),
+            (true, true) => {}
+        }
+    }
+
     /// The contact of `a` and `b` ends at `t`: they part (detect mode, ends reported).
     fn contact_end(&mut self, bodies: &Bodies, a: u32, b: u32, t: f64, out: &mut Output) {
         if !self.touching.remove(a, b) {
             return;
         }
         let (i, j) = (a as usize, b as usize);
-        let (point, normal) = pair_geometry(bodies, i, j, t);
+        let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
         out.stats.contact_ends += 1;
         let (body, touched) = (bodies.handle(i), Touched::Body(bodies.handle(j)));
         out.ends.push(Contact { time: t, body, touched, point, normal, impulse: 0.0 });
@@ -389,8 +474,7 @@ impl<B: BroadPhase> Pipeline<B> {
 
     fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
         let i = a as usize;
-        let normal = wall.outward_normal();
-        let point = bodies.position_at(i, t) + normal * bodies.radius(i);
+        let (point, normal) = contacts::wall_geometry(bodies, i, wall, &physics.bounds, t);
         // The TC model is for collapse between bodies; detect mode only needs the jam rule
         // (a body exactly as wide as the box).
         let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
@@ -401,13 +485,25 @@ impl<B: BroadPhase> Pipeline<B> {
                 self.freeze_cluster(bodies, physics, &[a], t, out.stats);
                 bodies.mass[i] * (before - bodies.velocity(i)).length()
             }
-            Rule::Impulse { restitution, changed } => {
+            Rule::Impulse { restitution, changed } if bodies.is_sphere(i) && physics.friction == 0.0 => {
                 out.stats.tc_contacts += changed as u64;
                 let v = bodies.velocity(i);
                 let bounced = wall_bounce(v, wall.axis(), restitution);
                 bodies.set_velocity_at(i, t, bounced);
                 self.retest(a, None, bodies, physics, t, out.stats);
                 bodies.mass[i] * (v - bounced).length()
+            }
+            Rule::Impulse { restitution, changed } => {
+                // The wall is an immovable body on the far side of the contact.
+                let side = bodies.rigid_side(i, t, point);
+                let push = rigid_impulse(&RigidSide::FIXED, &side, -normal, restitution, physics.friction);
+                if push != DVec3::ZERO {
+                    out.stats.tc_contacts += changed as u64;
+                    let (velocity, angular_velocity) = side.after(push);
+                    bodies.set_motion_at(i, t, velocity, angular_velocity);
+                    self.retest(a, None, bodies, physics, t, out.stats);
+                }
+                push.length()
             }
         };
         out.contacts.push(Contact {
@@ -436,7 +532,13 @@ impl<B: BroadPhase> Pipeline<B> {
         cluster.clear();
         self.cluster_epoch = self.cluster_epoch.wrapping_add(1);
         self.cluster_mark.resize(bodies.slots(), 0);
+        // A cluster pressed against static geometry stops: the level holds it.
+        let mut pinned = false;
         for &seed in seeds {
+            if bodies.is_fixed(seed as usize) {
+                pinned = true;
+                continue;
+            }
             self.cluster_mark[seed as usize] = self.cluster_epoch;
             cluster.push(seed);
         }
@@ -446,9 +548,9 @@ impl<B: BroadPhase> Pipeline<B> {
         while k < cluster.len() {
             let m = cluster[k] as usize;
             k += 1;
-            let (pm, vm, rm) = (bodies.position_at(m, t), bodies.velocity(m), bodies.radius(m));
+            let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
             mass += bodies.mass[m];
-            momentum += bodies.mass[m] * vm;
+            momentum += bodies.mass[m] * bodies.velocity(m);
             for axis in 0..3 {
                 let slack = 4.0 * CONTACT_TOLERANCE * rm;
                 touches_min[axis] |= pm[axis] - rm <= physics.bounds.min[axis] + slack;
@@ -458,28 +560,27 @@ impl<B: BroadPhase> Pipeline<B> {
             self.broad.query(m as u32, self.proxies.view(bodies), None, |o, _| near.push(o.body));
             for &o in &near {
                 let o = o as usize;
-                if self.cluster_mark[o] == self.cluster_epoch {
-                    continue;
-                }
-                let reach = (rm + bodies.radius(o)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
-                let scale = unit_scale(reach);
-                let offset = (bodies.position_at(o, t) - pm) * scale;
-                let separating = (bodies.velocity(o) - vm).dot(offset) > 0.0;
-                if offset.length_squared() <= (reach * scale) * (reach * scale) && !separating {
+                if self.cluster_mark[o] != self.cluster_epoch && contacts::pressed_together(bodies, m, o, t) {
                     self.cluster_mark[o] = self.cluster_epoch;
                     cluster.push(o as u32);
                 }
             }
+            if !pinned && !self.statics.is_empty() {
+                self.statics.for_each_near(pm - rm, pm + rm, |s| {
+                    pinned |= contacts::pressed_together(bodies, m, s as usize, t);
+                });
+            }
         }
-        let mut velocity = momentum / mass;
+        let mut velocity = if pinned || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
         for axis in 0..3 {
             if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {
                 velocity[axis] = 0.0;
             }
         }
+        // One rigid motion for all: no spin, or members would turn into each other.
         for &m in &cluster {
             self.rules.freeze(m, t);
-            bodies.set_velocity_at(m as usize, t, velocity);
+            bodies.set_motion_at(m as usize, t, velocity, DVec3::ZERO);
         }
         for &m in &cluster {
             self.retest(m, None, bodies, physics, t, stats);
@@ -508,7 +609,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let own = proxies.reported(body as usize);
         self.broad.update(body, proxies, skip, |other, bounds_window| {
             tests += 1;
-            if let Some(event) = predict_pair(own, other, bounds_window.intersect(window)) {
+            if let Some(event) = predict_pair(bodies, own, other, bounds_window.intersect(window)) {
                 queue.push(event);
             }
         });
@@ -516,6 +617,7 @@ impl<B: BroadPhase> Pipeline<B> {
         if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
             queue.push(event);
         }
+        for_each_static_event(bodies, proxies, &self.statics, body as usize, window, |event| queue.push(event));
         if self.proxies.expires(body as usize) {
             queue.push(renewal(bodies, &self.proxies, body));
         }
@@ -529,26 +631,17 @@ impl<B: BroadPhase> Pipeline<B> {
     }
 }
 
-/// Where two bodies touch at `t` and the unit normal from `i` towards `j`.
-#[inline]
-fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVec3, DVec3) {
-    let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
-    // Coincident centres have no normal; the relative velocity gives one.
-    let normal = direction(pj - pi).or_else(|| direction(bodies.velocity(i) - bodies.velocity(j))).unwrap_or(DVec3::X);
-    (pi + normal * bodies.radius(i), normal)
-}
-
 /// The end of the contact of touching bodies `a` and `b` if its canonical time lies in `window`,
 /// stamped with their current stamps: a velocity change of either voids it.
 #[inline]
 fn predict_end(bodies: &Bodies, a: u32, b: u32, window: Window) -> Option<Event> {
     let (a, b) = (a.min(b), a.max(b));
     let (i, j) = (a as usize, b as usize);
-    let time = pair_separation_time(&bodies.motion(i), &bodies.motion(j), bodies.radius(i) + bodies.radius(j))?;
-    window.contains(time).then_some(Event {
+    let (time, stalled) = contacts::pair_end(bodies, i, j, window)?;
+    Some(Event {
         time,
         body: a,
-        partner: Partner::End(b),
+        partner: if stalled { Partner::Stalled(b) } else { Partner::End(b) },
         body_stamp: bodies.stamp[i],
         partner_stamp: bodies.stamp[j],
     })
@@ -559,17 +652,42 @@ fn predict_end(bodies: &Bodies, a: u32, b: u32, window: Window) -> Option<Event>
 /// from: a prediction made from a proxy not yet refreshed after a velocity change is void when
 /// it pops.
 #[inline]
-fn predict_pair(x: Reported, y: Reported, window: Window) -> Option<Event> {
+fn predict_pair(bodies: &Bodies, x: Reported, y: Reported, window: Window) -> Option<Event> {
     // Always the lower id first, so every method does bit-identical arithmetic for a pair.
     let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    let time = pair_contact_time(&a.state.motion, &b.state.motion, a.state.radius + b.state.radius)?;
-    window.contains(time).then_some(Event {
+    let (time, stalled) = contacts::pair_start(bodies, (a.body as usize, a.state), (b.body as usize, b.state), window)?;
+    Some(Event {
         time,
         body: a.body,
-        partner: Partner::Body(b.body),
+        partner: if stalled { Partner::Stalled(b.body) } else { Partner::Body(b.body) },
         body_stamp: a.stamp,
         partner_stamp: b.stamp,
     })
+}
+
+/// Calls `found` with body `i`'s contact with every static body its proxy's box meets, inside
+/// the proxy's window and `window`. Static bodies have no proxy; their stamps never change.
+#[inline]
+fn for_each_static_event(
+    bodies: &Bodies,
+    proxies: Proxies,
+    statics: &StaticGeometry,
+    i: usize,
+    window: Window,
+    mut found: impl FnMut(Event),
+) {
+    if statics.is_empty() {
+        return;
+    }
+    let (low, high) = proxies.bbox(i).corners();
+    let window = proxies.window_of(i).intersect(window);
+    let own = proxies.reported(i);
+    statics.for_each_near(proxies.box_min() + low, proxies.box_min() + high, |s| {
+        let fixed = Reported { body: s, stamp: bodies.stamp[s as usize], state: &bodies.state[s as usize] };
+        if let Some(event) = predict_pair(bodies, own, fixed, window) {
+            found(event);
+        }
+    });
 }
 
 /// The renewal of body `body`'s proxy at its end.
@@ -585,16 +703,14 @@ fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
     }
 }
 
-/// Body `body`'s wall contact if its canonical time lies in `window`.
+/// Body `body`'s wall contact if its canonical time lies in `window` (or where an undecided
+/// search stalled).
 #[inline]
 fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
     let i = body as usize;
-    let (time, wall) = wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max)?;
-    window.contains(time).then_some(Event {
-        time,
-        body,
-        partner: Partner::Wall(wall),
-        body_stamp: bodies.stamp[i],
-        partner_stamp: 0,
-    })
+    let (time, partner) = match contacts::wall_start(bodies, i, bounds, window)? {
+        Ok((time, wall)) => (time, Partner::Wall(wall)),
+        Err(time) => (time, Partner::WallStalled),
+    };
+    Some(Event { time, body, partner, body_stamp: bodies.stamp[i], partner_stamp: 0 })
 }

@@ -433,8 +433,12 @@ impl ProxyRule {
         let velocity = motion.velocity;
         let radius = bodies.bounding_radius(i);
         // Up to and including the wall contact: a pair touching at that very instant is still
-        // found with the motion before the bounce, whichever of the two events comes first.
-        let mut end = match wall_contact_time(&motion, radius, self.box_min, self.box_max) {
+        // found with the motion before the bounce, whichever of the two events comes first. A
+        // body of another shape reaches the walls later than its bounding sphere: its proxy goes
+        // on to the window's end, and its own wall contact changes its velocity.
+        let wall =
+            bodies.is_sphere(i).then(|| wall_contact_time(&motion, radius, self.box_min, self.box_max)).flatten();
+        let mut end = match wall {
             Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };

@@ -120,6 +120,10 @@ pub struct WorldConfig {
     pub phi: Option<f64>,
     /// Coefficient of restitution for body and wall impacts, in [0, 1].
     pub restitution: f64,
+    /// Coulomb friction coefficient of every impact (0: frictionless), finite and >= 0. Friction
+    /// acts at the contact point, so it spins bodies up (spheres included).
+    #[serde(default)]
+    pub friction: f64,
     /// Contact duration t_c of the TC model, in seconds: with restitution below 1, a contact of a
     /// body whose previous contact lies less than t_c before is elastic (see [`crate::collapse`]).
     #[serde(default = "default_contact_duration")]
@@ -147,6 +151,7 @@ impl Default for WorldConfig {
             pool_axes: None,
             phi: None,
             restitution: 1.0,
+            friction: 0.0,
             contact_duration: DEFAULT_CONTACT_DURATION,
             threads: None,
             contact_ends: false,
@@ -295,8 +300,11 @@ macro_rules! with_pipeline {
     };
 }
 
-// After the macro, which it uses too.
+// After the macro, which they use too.
+mod rigid;
 mod snapshot;
+
+pub use rigid::{Body, BodyShape, ShapeId};
 
 /// A world of spheres in a box.
 ///
@@ -329,6 +337,9 @@ pub struct World {
     threads: Option<rayon::ThreadPool>,
     pool: Arc<AxisPool>,
     time: f64,
+    /// The shapes users added (ascending ids among the store's shapes, which also hold one per
+    /// plain sphere radius once the world has rigid bodies).
+    user_shapes: Vec<u32>,
     contacts: Vec<Contact>,
     /// The contacts that ended in the last frame (when [`WorldConfig::contact_ends`] is on).
     ends: Vec<Contact>,
@@ -341,6 +352,9 @@ impl World {
         let bounds = BoxBounds::new(bounds.min, bounds.max)?;
         if !(0.0..=1.0).contains(&config.restitution) {
             return Err(VadopError::BadRestitution(config.restitution));
+        }
+        if !(config.friction.is_finite() && config.friction >= 0.0) {
+            return Err(VadopError::BadFriction(config.friction));
         }
         if !(config.contact_duration.is_finite() && config.contact_duration >= 0.0) {
             return Err(VadopError::BadContactDuration(config.contact_duration));
@@ -364,6 +378,7 @@ impl World {
             threads: None,
             pool,
             time: 0.0,
+            user_shapes: Vec::new(),
             contacts: Vec::new(),
             ends: Vec::new(),
             stats: FrameStats::default(),
@@ -374,14 +389,15 @@ impl World {
     /// each under a new generation, so the handles of removed bodies stay stale.
     pub fn add_sphere(&mut self, sphere: Sphere) -> Result<BodyHandle> {
         self.check_sphere(&sphere)?;
-        if self.used_slots() >= u32::MAX as usize - 1 {
-            return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
-        }
-        let slot = match self.free_slots.pop() {
-            Some(slot) => slot,
-            None => self.bodies.slots() as u32,
-        };
-        self.bodies.put(slot as usize, sphere, self.time);
+        self.place_with(|bodies, slot, time| bodies.put(slot, sphere, time))
+    }
+
+    /// Takes the lowest free slot for a validated body that `write` puts there at the world's
+    /// time; the engine enters it at the next step.
+    fn place_with(&mut self, write: impl FnOnce(&mut Bodies, usize, f64)) -> Result<BodyHandle> {
+        self.check_room(1)?;
+        let slot = self.free_slots.pop().unwrap_or(self.bodies.slots() as u32);
+        write(&mut self.bodies, slot as usize, self.time);
         if let Some(rules) = self.rules_mut() {
             rules.forget(slot as usize);
         }
@@ -396,9 +412,7 @@ impl World {
         for (index, s) in spheres.iter().enumerate() {
             self.check_sphere(s).map_err(|e| VadopError::InSphere { index, source: Box::new(e) })?;
         }
-        if self.used_slots() + spheres.len() >= u32::MAX as usize - 1 {
-            return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
-        }
+        self.check_room(spheres.len())?;
         self.bodies.reserve(spheres.len().saturating_sub(self.free_slots.len()));
         self.unplaced.reserve_exact(spheres.len());
         let mut handles = Vec::with_capacity(spheres.len());
@@ -410,9 +424,15 @@ impl World {
 
     /// Removes a body and returns it as it was now. Its handle is stale from now on.
     pub fn remove_sphere(&mut self, handle: BodyHandle) -> Result<Sphere> {
+        let sphere = self.sphere(handle)?;
+        self.remove_slot(handle)?;
+        Ok(sphere)
+    }
+
+    /// Empties the slot of the live body `handle`.
+    fn remove_slot(&mut self, handle: BodyHandle) -> Result<()> {
         let i = self.live_slot(handle)?;
         let slot = i as u32;
-        let sphere = self.bodies.sphere_at(i, self.time);
         self.bodies.remove(i);
         self.live -= 1;
         self.unplaced.retain(|&u| u != slot);
@@ -425,20 +445,23 @@ impl World {
             // Pop the lowest slot first.
             self.free_slots.sort_unstable_by(|a, b| b.cmp(a));
         }
-        Ok(sphere)
+        Ok(())
     }
 
-    /// Sets a body's velocity (between frames).
-    pub fn set_velocity(&mut self, handle: BodyHandle, velocity: DVec3) -> Result<()> {
-        let i = self.live_slot(handle)?;
-        check_vector("velocity", velocity)?;
-        let slot = i as u32;
-        self.bodies.set_velocity_at(i, self.time, velocity);
-        if !self.unplaced.contains(&slot) {
-            let physics = self.physics();
-            let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);
-            with_pipeline!(&mut self.engine, p => p.enter(slot, bodies, &physics, time, stats), ());
+    /// Fails when `more` bodies would not fit the slots.
+    fn check_room(&self, more: usize) -> Result<()> {
+        if self.used_slots() + more >= u32::MAX as usize - 1 {
+            return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
         }
+        Ok(())
+    }
+
+    /// Sets a moving body's velocity (between frames); it goes on spinning as it did.
+    pub fn set_velocity(&mut self, handle: BodyHandle, velocity: DVec3) -> Result<()> {
+        let i = self.moving_slot(handle)?;
+        check_vector("velocity", velocity)?;
+        self.bodies.set_velocity_at(i, self.time, velocity);
+        self.reenter(i);
         Ok(())
     }
 
@@ -448,7 +471,7 @@ impl World {
             return Err(VadopError::LengthMismatch { handles: handles.len(), velocities: velocities.len() });
         }
         for (&handle, &velocity) in handles.iter().zip(velocities) {
-            self.live_slot(handle)?;
+            self.moving_slot(handle)?;
             check_vector("velocity", velocity)?;
         }
         for (&handle, &velocity) in handles.iter().zip(velocities) {
@@ -457,15 +480,22 @@ impl World {
         Ok(())
     }
 
-    /// The body `handle` now.
+    /// The sphere `handle` now; [`VadopError::NotASphere`] for a body of another shape (see
+    /// [`World::body`]).
     pub fn sphere(&self, handle: BodyHandle) -> Result<Sphere> {
         let i = self.live_slot(handle)?;
+        if !self.bodies.is_sphere(i) || self.bodies.is_fixed(i) {
+            return Err(VadopError::NotASphere(handle));
+        }
         Ok(self.bodies.sphere_at(i, self.time))
     }
 
-    /// Live bodies with their handles, in ascending order of handle (and slot).
+    /// The live bodies that are moving spheres, with their handles, in ascending order of handle
+    /// (and slot): every body of a world of spheres. [`World::bodies`] lists every shape.
     pub fn spheres(&self) -> impl Iterator<Item = (BodyHandle, Sphere)> + '_ {
-        self.bodies.alive_ids().map(|i| (self.bodies.handle(i as usize), self.bodies.sphere_at(i as usize, self.time)))
+        self.moving_ids()
+            .filter(|&i| self.bodies.is_sphere(i))
+            .map(|i| (self.bodies.handle(i), self.bodies.sphere_at(i, self.time)))
     }
 
     /// Number of live bodies.
@@ -569,16 +599,14 @@ impl World {
             _ => None,
         }
     }
-    /// Total kinetic energy.
+    /// Total kinetic energy: of the centres' motion and of the spins.
     pub fn kinetic_energy(&self) -> f64 {
-        self.bodies
-            .alive_ids()
-            .map(|i| 0.5 * self.bodies.mass[i as usize] * self.bodies.velocity(i as usize).length_squared())
-            .sum()
+        let b = &self.bodies;
+        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity(i).length_squared() + b.spin(i).kinetic_energy()).sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
-        self.bodies.alive_ids().map(|i| self.bodies.mass[i as usize] * self.bodies.velocity(i as usize)).sum()
+        self.moving_ids().map(|i| self.bodies.mass[i] * self.bodies.velocity(i)).sum()
     }
 
     /// Advances the world by `dt` and returns the frame's contacts in time order: every contact
@@ -618,6 +646,7 @@ impl World {
             bounds: self.bounds,
             mode: self.config.mode,
             restitution: self.config.restitution,
+            friction: self.config.friction,
             contact_duration: self.config.contact_duration,
             report_ends: self.config.contact_ends,
         }
@@ -738,7 +767,8 @@ impl World {
         }
         let physics = self.physics();
         let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);
-        for &id in &self.unplaced {
+        // Static bodies have no proxy: the pipeline bounds them when their revision changes.
+        for &id in self.unplaced.iter().filter(|&&id| !bodies.is_fixed(id as usize)) {
             match &mut self.engine {
                 Engine::Discrete(pd) => {
                     pd.rules.resize(bodies.slots());

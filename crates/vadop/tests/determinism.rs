@@ -157,7 +157,7 @@ fn damaged_or_foreign_files_are_errors() {
     let text = std::fs::read_to_string(&path).unwrap();
     let damaged = [
         text[..text.len() / 2].to_string(),
-        text.replace("\"version\":3", "\"version\":99"),
+        text.replace("\"version\":4", "\"version\":99"),
         text.replace("vadop-world", "something-else"),
         text.replacen("\"radius\":0.5", "\"radius\":-0.5", 1),
         text.replacen("\"mass\":", "\"mass\":-", 1),

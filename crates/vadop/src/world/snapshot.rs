@@ -18,10 +18,11 @@
 //! previous file intact.
 
 use super::{BoxBounds, Engine, Mode, World, WorldConfig};
-use crate::bodies::Sphere;
+use crate::bodies::{RigidState, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
-use glam::DVec3;
+use crate::shape::{Shape, ShapeGeometry};
+use glam::{DQuat, DVec3};
 use std::io::Write;
 use std::path::Path;
 
@@ -29,7 +30,7 @@ use std::path::Path;
 const FORMAT: &str = "vadop-world";
 /// Bumped on every incompatible change of the layout. Version 1 files (no contact history, every
 /// position at the saved time) and version 2 files (no generations) still load.
-const VERSION: u32 = 3;
+const VERSION: u32 = 4;
 /// The first version that saves generations.
 const GENERATIONS: u32 = 3;
 
@@ -47,6 +48,26 @@ struct Snapshot {
     /// last frame instant, or the touching pairs of a world that reports contact ends.
     #[serde(default)]
     overlapping: Vec<(u32, u32)>,
+    /// The store's shapes in id order (the users', and one per plain sphere radius once the world
+    /// holds rigid bodies), and which are the users'.
+    #[serde(default)]
+    shapes: Vec<Shape>,
+    #[serde(default)]
+    user_shapes: Vec<u32>,
+    /// True when the store keeps shapes and spins for every slot (then every slot has one).
+    #[serde(default)]
+    rigid: bool,
+}
+
+/// A rigid body's shape and spin: its shape's id, its orientation and angular velocity at its
+/// last velocity change, and whether it is static (a static slot's mass, infinite, is written as
+/// 0: JSON has no infinity).
+#[derive(serde::Serialize, serde::Deserialize)]
+struct SlotSpin {
+    shape: u32,
+    orientation: DQuat,
+    angular_velocity: DVec3,
+    fixed: bool,
 }
 
 #[derive(serde::Serialize, serde::Deserialize)]
@@ -64,6 +85,9 @@ struct Slot {
     /// Time of the body's last contact, if any.
     #[serde(default)]
     last_contact: Option<f64>,
+    /// A world with rigid bodies: the slot's shape and spin.
+    #[serde(default)]
+    spin: Option<SlotSpin>,
 }
 
 impl Slot {
@@ -93,10 +117,16 @@ impl World {
                 velocity: b.velocity(i),
                 since: b.state[i].motion.since,
                 radius: b.radius(i),
-                mass: b.mass[i],
+                mass: if b.is_fixed(i) { 0.0 } else { b.mass[i] },
                 alive: b.alive[i],
                 generation: b.generation[i],
                 last_contact: history.get(i).copied().filter(|t| t.is_finite()),
+                spin: b.has_rigid().then(|| SlotSpin {
+                    shape: b.rigid.shape[i],
+                    orientation: b.rigid.spin_start[i].0,
+                    angular_velocity: b.rigid.spin_start[i].1,
+                    fixed: b.rigid.fixed[i],
+                }),
             })
             .collect();
         let overlapping = match &self.engine {
@@ -113,6 +143,9 @@ impl World {
             free_slots: self.free_slots.clone(),
             unplaced: self.unplaced.clone(),
             overlapping,
+            shapes: b.rigid.shapes.iter().map(|g| g.shape().clone()).collect(),
+            user_shapes: self.user_shapes.clone(),
+            rigid: b.has_rigid(),
         };
         let text = serde_json::to_string(&snapshot).map_err(|e| io(&e))?;
         let mut temporary = path.as_os_str().to_owned();
@@ -146,6 +179,26 @@ impl World {
         let slack = 1e-9 * (exact.max - exact.min).max_element()
             + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
         world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack };
+        let shapes = snapshot
+            .shapes
+            .iter()
+            .enumerate()
+            .map(|(k, shape)| shape.geometry().map_err(|e| bad(format!("shape {k}: {e}"))))
+            .collect::<Result<Vec<ShapeGeometry>>>()?;
+        let users_valid = snapshot.user_shapes.windows(2).all(|w| w[0] < w[1])
+            && snapshot.user_shapes.iter().all(|&k| (k as usize) < shapes.len());
+        if !users_valid {
+            return Err(bad("user shapes must be ascending ids of saved shapes".to_string()));
+        }
+        let rigid = snapshot.rigid;
+        if snapshot.slots.iter().any(|slot| slot.spin.is_some() != rigid) {
+            return Err(bad("every slot has a shape and spin exactly when the world keeps them".to_string()));
+        }
+        world.bodies.rigid.restore_shapes(shapes, &snapshot.user_shapes);
+        world.user_shapes = snapshot.user_shapes.clone();
+        if rigid {
+            world.bodies.make_rigid();
+        }
         for (i, slot) in snapshot.slots.iter().enumerate() {
             let at =
                 |position: DVec3| Sphere { position, velocity: slot.velocity, radius: slot.radius, mass: slot.mass };
@@ -160,10 +213,13 @@ impl World {
             // A removed body's slot only keeps its place and generation; a live one must be where
             // stepping put it.
             let now = slot.position + (time - slot.since) * slot.velocity;
-            let checked = world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
-                true => world.check_sphere(&at(now)),
-                false => Ok(()),
-            });
+            let checked = match &slot.spin {
+                None => world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
+                    true => world.check_sphere(&at(now)),
+                    false => Ok(()),
+                }),
+                Some(spin) => world.check_slot_spin(slot, spin, now),
+            };
             checked.map_err(|e| bad(format!("slot {i}: {e}")))?;
             // A live body's generation is one a slot can hold; a removed one's was bumped at least
             // once, and at most to retirement.
@@ -178,7 +234,22 @@ impl World {
                     if slot.alive { "live" } else { "removed" }
                 )));
             }
-            world.bodies.put(i, at(slot.position), slot.since);
+            match &slot.spin {
+                None => world.bodies.put(i, at(slot.position), slot.since),
+                Some(spin) => {
+                    let state = RigidState {
+                        shape: spin.shape,
+                        radius: slot.radius,
+                        position: slot.position,
+                        orientation: spin.orientation,
+                        velocity: slot.velocity,
+                        angular_velocity: spin.angular_velocity,
+                        mass: if spin.fixed { f64::INFINITY } else { slot.mass },
+                        fixed: spin.fixed,
+                    };
+                    world.bodies.put_rigid(i, state, slot.since);
+                }
+            }
             world.bodies.alive[i] = slot.alive;
             world.bodies.generation[i] = generation;
         }
@@ -243,5 +314,42 @@ impl World {
         }
         world.unplaced = snapshot.unplaced;
         Ok(world)
+    }
+}
+
+impl World {
+    /// A saved rigid slot is one stepping could have produced: a saved shape (level geometry only
+    /// when static), a rotation, finite motion, and a moving body inside the box at its last
+    /// velocity change and now.
+    fn check_slot_spin(&self, slot: &Slot, spin: &SlotSpin, now: DVec3) -> Result<()> {
+        let Some(geometry) = self.bodies.rigid.shapes.get(spin.shape as usize) else {
+            return Err(VadopError::NoSuchShape(spin.shape));
+        };
+        crate::error::check_vector("velocity", slot.velocity)?;
+        crate::error::check_vector("angular velocity", spin.angular_velocity)?;
+        let q = spin.orientation;
+        if !(q.is_finite() && (q.length_squared() - 1.0).abs() < 1e-9) {
+            return Err(VadopError::BadOrientation(q.to_array()));
+        }
+        if spin.fixed {
+            return Ok(());
+        }
+        if geometry.is_static_only() {
+            return Err(VadopError::StaticOnlyShape(spin.shape));
+        }
+        if !(slot.mass.is_finite() && slot.mass > 0.0) {
+            return Err(VadopError::BadMass(slot.mass));
+        }
+        self.check_inside(geometry, slot.position, q, slot.position)?;
+        // Its orientation now follows from the spin; its centre of mass, inside its shape, stays
+        // inside the box.
+        if slot.alive && !(now.cmpge(self.bounds.min).all() && now.cmple(self.bounds.max).all()) {
+            return Err(VadopError::ShapeOutsideBox {
+                position: now.to_array(),
+                low: now.to_array(),
+                high: now.to_array(),
+            });
+        }
+        Ok(())
     }
 }

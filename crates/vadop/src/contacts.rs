@@ -1,0 +1,154 @@
+//! Contacts between bodies of the store, as the pipeline asks about them: when two bodies (or a
+//! body and a wall) start or stop touching within a window, and where.
+//!
+//! It owns the choice of narrow phase: two spheres by the closed forms of
+//! [`crate::narrow_phase`], anything else by the conservative advancement of
+//! [`crate::shape_contact`], from the body store's motions, shapes and spins. A search that cannot
+//! decide (see [`crate::shape_contact`]'s termination guard) is answered as *stalled* at the time
+//! it stopped, before which no contact starts: the pipeline then starts the pair's motions afresh
+//! from that instant (or, in simulate mode, applies the jam rule), so a contact is never dropped.
+//! It never schedules, responds or changes a body.
+
+use crate::bodies::{Bodies, BodyState};
+use crate::error::{Result, VadopError};
+use crate::narrow_phase::{
+    direction, pair_contact_time, pair_separation_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE,
+};
+use crate::shape_contact::{contact_end_time, contact_geometry, shape_contact_time, shape_wall_time};
+use crate::shape_contact::{contact_tolerance, wall_contact_geometry};
+use crate::window::Window;
+use crate::world::BoxBounds;
+use glam::DVec3;
+
+/// When something happens, and whether the search stalled there instead of deciding.
+pub(crate) type Found = Option<(f64, bool)>;
+
+/// A search's answer within `window`, an undecided search answered as stalled where it stopped.
+fn settled(found: Result<Option<f64>>, window: Window) -> Found {
+    let found = match found {
+        Ok(found) => found.map(|t| (t, false)),
+        Err(VadopError::ContactSearchStalled { time, .. }) => Some((time, true)),
+        // The shape narrow phase fails in no other way on validated bodies.
+        Err(_) => None,
+    };
+    found.filter(|&(t, _)| window.contains(t))
+}
+
+/// The canonical time in `window` at which bodies `a` and `b` start to touch, `a` the lower id,
+/// from their motions `state_a`, `state_b` (current for the stamps the caller holds).
+#[inline]
+pub(crate) fn pair_start(
+    bodies: &Bodies,
+    (a, state_a): (usize, &BodyState),
+    (b, state_b): (usize, &BodyState),
+    window: Window,
+) -> Found {
+    if bodies.is_sphere(a) && bodies.is_sphere(b) {
+        let time = pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
+        return window.contains(time).then_some((time, false));
+    }
+    let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
+    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    settled(shape_contact_time((ga, &ma), (gb, &mb), window), window)
+}
+
+/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part.
+pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
+    if bodies.is_sphere(a) && bodies.is_sphere(b) {
+        let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
+        return window.contains(time).then_some((time, false));
+    }
+    let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
+    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    // They touch at the window's start, so it lies inside the contact in progress.
+    settled(contact_end_time((ga, &ma), (gb, &mb), window.start, window.end), window)
+}
+
+/// Body `i`'s first contact with a wall of `bounds` in `window`: the time and the wall, or
+/// `Err(time)` where an undecided search stalled.
+#[inline]
+pub(crate) fn wall_start(
+    bodies: &Bodies,
+    i: usize,
+    bounds: &BoxBounds,
+    window: Window,
+) -> Option<std::result::Result<(f64, Wall), f64>> {
+    let found = match bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) {
+        None => Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max)?),
+        Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), bounds.min, bounds.max, window) {
+            Ok(found) => Ok(found?),
+            Err(VadopError::ContactSearchStalled { time, .. }) => Err(time),
+            Err(_) => return None,
+        },
+    };
+    let time = match found {
+        Ok((time, _)) | Err(time) => time,
+    };
+    window.contains(time).then_some(found)
+}
+
+/// Where bodies `i` and `j` touch at `t`, and the unit normal from `i` towards `j`.
+#[inline]
+pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVec3, DVec3) {
+    if !(bodies.is_sphere(i) && bodies.is_sphere(j)) {
+        if let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) {
+            let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
+            if let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) {
+                return (contact.point, contact.normal);
+            }
+        }
+    }
+    let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
+    // Coincident centres have no normal; the relative velocity gives one.
+    let normal = direction(pj - pi).or_else(|| direction(bodies.velocity(i) - bodies.velocity(j))).unwrap_or(DVec3::X);
+    (pi + normal * bodies.radius(i), normal)
+}
+
+/// Where body `i` touches `wall` at `t`, and the wall's outward normal.
+#[inline]
+pub(crate) fn wall_geometry(bodies: &Bodies, i: usize, wall: Wall, bounds: &BoxBounds, t: f64) -> (DVec3, DVec3) {
+    let normal = wall.outward_normal();
+    if let Some(g) = bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) {
+        let motion = bodies.rigid_motion(i);
+        if let Some(contact) = wall_contact_geometry(g, &motion, wall, bounds.min, bounds.max, t) {
+            return (contact.point, normal);
+        }
+    }
+    (bodies.position_at(i, t) + normal * bodies.radius(i), normal)
+}
+
+/// True when bodies `i` and `j` touch at `t` and are not moving apart at the contact: the jam
+/// rule's test for who belongs to a jammed cluster.
+pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> bool {
+    if bodies.is_sphere(i) && bodies.is_sphere(j) {
+        let reach = (bodies.radius(i) + bodies.radius(j)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
+        let scale = unit_scale(reach);
+        let offset = (bodies.position_at(j, t) - bodies.position_at(i, t)) * scale;
+        let separating = (bodies.velocity(j) - bodies.velocity(i)).dot(offset) > 0.0;
+        return offset.length_squared() <= (reach * scale) * (reach * scale) && !separating;
+    }
+    let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) else { return false };
+    let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
+    let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) else { return false };
+    let (side_i, side_j) = (bodies.rigid_side(i, t, contact.point), bodies.rigid_side(j, t, contact.point));
+    let separating = (side_j.point_velocity() - side_i.point_velocity()).dot(contact.normal) > 0.0;
+    contact.distance <= 2.0 * contact_tolerance(gi, gj) && !separating
+}
+
+/// How deep bodies `i` and `j` interpenetrate at `t` beyond the contact tolerance (touching is
+/// allowed), for the start-of-run check of simulate mode.
+pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option<f64> {
+    if bodies.is_sphere(i) && bodies.is_sphere(j) {
+        let reach = bodies.radius(i) + bodies.radius(j);
+        // Scaled so the square neither underflows nor overflows at any scale.
+        let scale = unit_scale(reach);
+        let distance = ((bodies.position_at(i, t) - bodies.position_at(j, t)) * scale).length() / scale;
+        let depth = reach - distance;
+        return (depth > CONTACT_TOLERANCE * reach).then_some(depth);
+    }
+    let (a, b) = (i.min(j), i.max(j));
+    let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
+    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    let contact = contact_geometry((ga, &ma), (gb, &mb), t)?;
+    (-contact.distance > contact_tolerance(ga, gb)).then_some(-contact.distance)
+}

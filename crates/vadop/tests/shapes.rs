@@ -1,0 +1,302 @@
+//! Worlds of rigid bodies of every shape: each continuous method reports the same contacts as the
+//! brute-force oracle (which uses the same narrow phase) in detect and simulate mode, elastic
+//! frictionless impacts keep energy, momentum and angular momentum, static level geometry stops
+//! what falls on it, and nothing tunnels through a thin body however fast.
+
+use glam::{DQuat, DVec3};
+use proptest::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use vadop::shape::Shape;
+use vadop::{Body, BodyShape, BoxBounds, Contact, Method, Mode, ShapeId, Touched, World, WorldConfig};
+
+/// The moving shapes under test, each about one unit across.
+fn shapes() -> Vec<Shape> {
+    vec![
+        Shape::Sphere { radius: 0.5 },
+        Shape::Cuboid { half_extents: DVec3::new(0.6, 0.3, 0.2) },
+        Shape::Capsule { half_height: 0.4, radius: 0.2 },
+        Shape::Cylinder { half_height: 0.3, radius: 0.4 },
+        Shape::Cone { half_height: 0.4, radius: 0.35 },
+        Shape::ConvexHull {
+            points: vec![
+                DVec3::new(0.5, 0.0, 0.0),
+                DVec3::new(-0.3, 0.4, 0.1),
+                DVec3::new(-0.2, -0.4, 0.2),
+                DVec3::new(0.0, 0.1, -0.5),
+                DVec3::new(0.1, 0.0, 0.45),
+            ],
+        },
+    ]
+}
+
+fn random_orientation(rng: &mut ChaCha8Rng) -> DQuat {
+    DQuat::from_xyzw(
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+        rng.random_range(-1.0..1.0),
+    )
+    .normalize()
+}
+
+fn random_vector(rng: &mut ChaCha8Rng, scale: f64) -> DVec3 {
+    DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale
+}
+
+/// A world of `n` bodies of random shapes on a loose lattice (so none overlap), random
+/// orientations, velocities of up to `speed` and spins of up to `spin`.
+fn scene(config: WorldConfig, n: usize, speed: f64, spin: f64, seed: u64) -> World {
+    let per_side = (n as f64).cbrt().ceil() as usize;
+    let side = 2.0 * per_side as f64 + 2.0;
+    let mut world = World::new(BoxBounds::cube(side).unwrap(), config).unwrap();
+    let ids: Vec<ShapeId> = shapes().into_iter().map(|s| world.add_shape(s).unwrap()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for k in 0..n {
+        let cell =
+            DVec3::new((k % per_side) as f64, ((k / per_side) % per_side) as f64, (k / per_side / per_side) as f64);
+        let body = Body {
+            shape: BodyShape::Shape(ids[rng.random_range(0..ids.len())]),
+            position: DVec3::splat(2.0) + 2.0 * cell,
+            orientation: random_orientation(&mut rng),
+            velocity: random_vector(&mut rng, speed),
+            angular_velocity: random_vector(&mut rng, spin),
+            mass: rng.random_range(0.5..2.0),
+        };
+        world.add_body(body).unwrap();
+    }
+    world
+}
+
+fn config(method: Method, mode: Mode) -> WorldConfig {
+    WorldConfig { method, mode, ..WorldConfig::default() }
+}
+
+/// Steps a world of `method` beside the oracle; every frame's contacts must be identical.
+fn assert_same_as_oracle(
+    method: Method,
+    mode: Mode,
+    n: usize,
+    speed: f64,
+    spin: f64,
+    seed: u64,
+    frames: usize,
+) -> usize {
+    let mut world = scene(config(method, mode), n, speed, spin, seed);
+    let mut oracle = scene(config(Method::Brute, mode), n, speed, spin, seed);
+    let mut total = 0;
+    for frame in 0..frames {
+        let found: Vec<Contact> = world.step(0.1).unwrap().to_vec();
+        let expected = oracle.step(0.1).unwrap();
+        assert_eq!(found, expected, "{method:?} {mode:?} frame {frame}");
+        total += found.len();
+    }
+    let bodies: Vec<_> = world.bodies().collect();
+    assert_eq!(bodies, oracle.bodies().collect::<Vec<_>>(), "final states");
+    total
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 12, ..ProptestConfig::default() })]
+
+    #[test]
+    fn every_method_matches_brute_force_on_mixed_spinning_shapes(
+        n in 2usize..40,
+        speed in prop_oneof![Just(1.0), Just(20.0), 0.1f64..60.0],
+        spin in prop_oneof![Just(0.0), 0.0f64..40.0],
+        seed in 0u64..1000,
+        method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::SweptAabb)],
+        simulate in any::<bool>(),
+    ) {
+        let mode = if simulate { Mode::Simulate } else { Mode::Detect };
+        assert_same_as_oracle(method, mode, n, speed, spin, seed, 10);
+    }
+}
+
+#[test]
+fn a_busy_mixed_scene_matches_brute_force_and_has_contacts() {
+    for mode in [Mode::Detect, Mode::Simulate] {
+        let contacts = assert_same_as_oracle(Method::Auto, mode, 60, 30.0, 20.0, 3, 15);
+        assert!(contacts > 50, "{mode:?}: only {contacts} contacts");
+    }
+}
+
+#[test]
+fn elastic_frictionless_impacts_keep_energy_momentum_and_angular_momentum() {
+    // Far from the walls (the box is large and the run short), so only body impacts act.
+    let config = WorldConfig { mode: Mode::Simulate, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(400.0).unwrap(), config).unwrap();
+    let ids: Vec<ShapeId> = shapes().into_iter().map(|s| world.add_shape(s).unwrap()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for k in 0..64 {
+        let cell = DVec3::new((k % 4) as f64, ((k / 4) % 4) as f64, (k / 16) as f64);
+        world
+            .add_body(Body {
+                shape: BodyShape::Shape(ids[k % ids.len()]),
+                position: DVec3::splat(195.0) + 1.6 * cell,
+                orientation: random_orientation(&mut rng),
+                // Towards the centre of the cluster, so they collide many times.
+                velocity: (DVec3::splat(197.4) - (DVec3::splat(195.0) + 1.6 * cell)) * 0.6
+                    + random_vector(&mut rng, 0.3),
+                angular_velocity: random_vector(&mut rng, 3.0),
+                mass: rng.random_range(0.5..2.0),
+            })
+            .unwrap();
+    }
+    let (e0, p0, l0) = (world.kinetic_energy(), world.momentum(), world.angular_momentum());
+    let mut impacts = 0;
+    for _ in 0..300 {
+        let contacts = world.step(1.0 / 30.0).unwrap();
+        assert!(contacts.iter().all(|c| matches!(c.touched, Touched::Body(_))), "no wall may be reached");
+        impacts += contacts.len();
+    }
+    let (e1, p1, l1) = (world.kinetic_energy(), world.momentum(), world.angular_momentum());
+    assert!(impacts > 100, "only {impacts} impacts");
+    assert!((e1 - e0).abs() <= 1e-9 * e0, "energy {e0} -> {e1}");
+    assert!((p1 - p0).length() <= 1e-9 * (1.0 + p0.length()), "momentum {p0} -> {p1}");
+    assert!((l1 - l0).length() <= 1e-9 * l0.length(), "angular momentum {l0} -> {l1}");
+}
+
+#[test]
+fn debris_falling_on_a_static_mesh_bounces_off_it() {
+    let config = WorldConfig { mode: Mode::Simulate, restitution: 0.5, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(20.0).unwrap(), config).unwrap();
+    // A bumpy floor at y = 2, larger than the box.
+    let mut vertices = Vec::new();
+    for i in 0..=10 {
+        for k in 0..=10 {
+            let bump = 0.3 * ((i * 7 + k * 3) % 5) as f64 / 5.0;
+            vertices.push(DVec3::new(-2.0 + 2.4 * i as f64, 2.0 + bump, -2.0 + 2.4 * k as f64));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..10u32 {
+        for k in 0..10u32 {
+            let v = i * 11 + k;
+            triangles.push([v, v + 1, v + 11]);
+            triangles.push([v + 1, v + 12, v + 11]);
+        }
+    }
+    let floor = world.add_shape(Shape::TriMesh { vertices, triangles }).unwrap();
+    let floor = world.add_static(floor, DVec3::ZERO, DQuat::IDENTITY).unwrap();
+    let ids: Vec<ShapeId> = shapes().into_iter().map(|s| world.add_shape(s).unwrap()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut debris = Vec::new();
+    for k in 0..24 {
+        let at = DVec3::new(3.0 + 2.5 * (k % 6) as f64, 12.0 + 2.0 * (k / 6) as f64, 4.0 + 2.0 * (k % 4) as f64);
+        debris.push(
+            world
+                .add_body(Body {
+                    shape: BodyShape::Shape(ids[k % ids.len()]),
+                    position: at,
+                    orientation: random_orientation(&mut rng),
+                    // Falling fast: a few units per frame.
+                    velocity: DVec3::new(0.0, -90.0, 0.0) + random_vector(&mut rng, 5.0),
+                    angular_velocity: random_vector(&mut rng, 10.0),
+                    mass: 1.0,
+                })
+                .unwrap(),
+        );
+    }
+    let mut floor_hits = 0;
+    for _ in 0..60 {
+        let contacts = world.step(1.0 / 30.0).unwrap();
+        floor_hits += contacts.iter().filter(|c| c.body == floor || c.touched == Touched::Body(floor)).count();
+        // Nothing ever gets below the floor.
+        for &d in &debris {
+            assert!(world.body(d).unwrap().position.y > 1.9, "a body passed through the mesh");
+        }
+    }
+    assert!(floor_hits >= 24, "only {floor_hits} hits on the floor");
+}
+
+#[test]
+fn nothing_tunnels_through_a_thin_box_at_a_thousand_diameters_per_frame() {
+    for mode in [Mode::Detect, Mode::Simulate] {
+        let mut world = World::new(BoxBounds::cube(3000.0).unwrap(), config(Method::Auto, mode)).unwrap();
+        let plate = world.add_shape(Shape::Cuboid { half_extents: DVec3::new(0.001, 5.0, 5.0) }).unwrap();
+        let brick = world.add_shape(Shape::Cuboid { half_extents: DVec3::new(0.5, 0.5, 0.5) }).unwrap();
+        let still = Body {
+            shape: BodyShape::Shape(plate),
+            position: DVec3::splat(1500.0),
+            orientation: DQuat::IDENTITY,
+            velocity: DVec3::ZERO,
+            angular_velocity: DVec3::ZERO,
+            mass: 1.0,
+        };
+        let wall = world.add_body(still).unwrap();
+        // A unit brick 1000 units from the plate, at 1000 units per frame, spinning fast.
+        let bullet = world
+            .add_body(Body {
+                shape: BodyShape::Shape(brick),
+                position: DVec3::new(500.0, 1500.3, 1499.8),
+                velocity: DVec3::new(30_000.0, 0.0, 0.0),
+                angular_velocity: DVec3::new(40.0, 300.0, 10.0),
+                ..still
+            })
+            .unwrap();
+        let contacts = world.step(1.0 / 30.0).unwrap().to_vec();
+        assert!(
+            contacts.iter().any(|c| c.body == wall && c.touched == Touched::Body(bullet)),
+            "{mode:?}: the brick went through the plate: {contacts:?}"
+        );
+    }
+}
+
+#[test]
+fn stale_and_static_bodies_are_refused_where_they_cannot_go() {
+    let mut world = World::new(BoxBounds::cube(10.0).unwrap(), WorldConfig::default()).unwrap();
+    let plane = world.add_shape(Shape::HalfSpace { normal: DVec3::Y }).unwrap();
+    let body = Body {
+        shape: BodyShape::Shape(plane),
+        position: DVec3::splat(5.0),
+        orientation: DQuat::IDENTITY,
+        velocity: DVec3::ZERO,
+        angular_velocity: DVec3::ZERO,
+        mass: 1.0,
+    };
+    assert!(matches!(world.add_body(body), Err(vadop::VadopError::StaticOnlyShape(_))));
+    let ground = world.add_static(plane, DVec3::new(0.0, 1.0, 0.0), DQuat::IDENTITY).unwrap();
+    assert!(matches!(world.set_velocity(ground, DVec3::X), Err(vadop::VadopError::StaticBody(_))));
+    assert!(matches!(world.sphere(ground), Err(vadop::VadopError::NotASphere(_))));
+    let brick = world.add_shape(Shape::Cuboid { half_extents: DVec3::splat(1.0) }).unwrap();
+    let outside = Body { shape: BodyShape::Shape(brick), position: DVec3::new(0.5, 5.0, 5.0), ..body };
+    assert!(matches!(world.add_body(outside), Err(vadop::VadopError::ShapeOutsideBox { .. })));
+    let bad = Body { shape: BodyShape::Shape(brick), orientation: DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0), ..body };
+    assert!(matches!(world.add_body(bad), Err(vadop::VadopError::BadOrientation(_))));
+    // A shape id of another world that this one never gave out.
+    let mut other = World::new(BoxBounds::cube(10.0).unwrap(), WorldConfig::default()).unwrap();
+    let foreign = (0..5).map(|_| other.add_shape(Shape::Sphere { radius: 1.0 }).unwrap()).last().unwrap();
+    assert!(matches!(world.shape(foreign), Err(vadop::VadopError::NoSuchShape(4))));
+    let discrete = WorldConfig { method: Method::Discrete, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(10.0).unwrap(), discrete).unwrap();
+    let brick = world.add_shape(Shape::Cuboid { half_extents: DVec3::splat(1.0) }).unwrap();
+    let boxed = Body { shape: BodyShape::Shape(brick), ..body };
+    assert_eq!(world.add_body(boxed), Err(vadop::VadopError::DiscreteSpheresOnly));
+}
+
+#[test]
+fn a_world_of_shapes_resumes_bit_exactly() {
+    for mode in [Mode::Detect, Mode::Simulate] {
+        let mut straight = scene(config(Method::Auto, mode), 30, 20.0, 15.0, 9);
+        let mut saved = scene(config(Method::Auto, mode), 30, 20.0, 15.0, 9);
+        let floor = saved.add_shape(Shape::HalfSpace { normal: DVec3::Y }).unwrap();
+        saved.add_static(floor, DVec3::new(0.0, 0.5, 0.0), DQuat::IDENTITY).unwrap();
+        let floor = straight.add_shape(Shape::HalfSpace { normal: DVec3::Y }).unwrap();
+        straight.add_static(floor, DVec3::new(0.0, 0.5, 0.0), DQuat::IDENTITY).unwrap();
+        for _ in 0..5 {
+            straight.step(0.1).unwrap();
+            saved.step(0.1).unwrap();
+        }
+        let path = std::env::temp_dir().join(format!("vadop-shapes-{}-{mode:?}.json", std::process::id()));
+        saved.save(&path).unwrap();
+        let mut resumed = World::load(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(resumed.bodies().collect::<Vec<_>>(), straight.bodies().collect::<Vec<_>>());
+        for frame in 0..5 {
+            let expected = straight.step(0.1).unwrap().to_vec();
+            assert_eq!(resumed.step(0.1).unwrap(), expected, "{mode:?} frame {frame}");
+        }
+        assert_eq!(resumed.bodies().collect::<Vec<_>>(), straight.bodies().collect::<Vec<_>>());
+    }
+}
