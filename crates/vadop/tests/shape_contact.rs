@@ -685,6 +685,113 @@ fn iteration_statistics() {
     );
 }
 
+/// Median, 90th percentile and largest of `counts`.
+fn spread(counts: &mut [u32]) -> (u32, u32, u32) {
+    counts.sort();
+    let n = counts.len();
+    (counts[n / 2], counts[n * 9 / 10], counts[n - 1])
+}
+
+/// Evaluations and time per query by pair kind (printed with `--nocapture`), on three sets of
+/// random spinning pairs: pairs aimed at each other as in [`iteration_statistics`], broad-phase
+/// candidates (bodies in a cube whose swept boxes overlap in the frame, most of which never
+/// touch), and solids against a tilted half-space.
+#[test]
+fn statistics_by_pair_kind() {
+    let mut rng = ChaCha8Rng::seed_from_u64(13);
+    let points: Vec<DVec3> = (0..10)
+        .map(|_| DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)))
+        .collect();
+    let size =
+        |rng: &mut ChaCha8Rng| [rng.random_range(0.2..1.0), rng.random_range(0.2..1.0), rng.random_range(0.2..1.0)];
+    let vector = |rng: &mut ChaCha8Rng, scale: f64| {
+        DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)) * scale
+    };
+    let report = |what: &str, counts: &mut Vec<u32>, seconds: f64, found: usize| {
+        let n = counts.len();
+        let (median, p90, max) = spread(counts);
+        eprintln!(
+            "{what:>22}: {n:5} queries, {found:5} contacts, evaluations median {median:4} p90 {p90:4} max {max:5}; \
+             {:7.1} us per query",
+            seconds * 1e6 / n as f64
+        );
+    };
+    let timed = |a: &Body, b: &Body, window: Window| {
+        let began = Instant::now();
+        let s = shape_contact_search(pair(a), pair(b), window).unwrap();
+        (s, began.elapsed().as_secs_f64())
+    };
+    eprintln!("aimed pairs (as in iteration_statistics), window [0, 2):");
+    for ka in 0..6 {
+        for kb in ka..6 {
+            let (mut counts, mut seconds, mut found) = (Vec::new(), 0.0, 0);
+            for _ in 0..100 {
+                let (ga, gb) = (solid(ka, size(&mut rng), &points), solid(kb, size(&mut rng), &points));
+                let u = vector(&mut rng, 1.0).normalize();
+                let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+                let a = body(ga, DVec3::ZERO, DVec3::ZERO, DQuat::IDENTITY, vector(&mut rng, 3.0));
+                let velocity = -u * 2.0 + vector(&mut rng, 0.5);
+                let at = u * (reach + rng.random_range(0.1..3.0));
+                let b = body(gb, at, velocity, DQuat::IDENTITY, vector(&mut rng, 3.0));
+                let (s, t) = timed(&a, &b, Window::new(0.0, 2.0));
+                (seconds, found) = (seconds + t, found + s.found.is_some() as usize);
+                counts.push(s.iterations);
+            }
+            report(&format!("{} vs {}", name(ka), name(kb)), &mut counts, seconds, found);
+        }
+    }
+    // Broad-phase candidates: random bodies in a cube of side 8 moving up to 2 per axis, kept
+    // when their bounding boxes swept over the frame [0, 1) overlap and they do not touch at 0.
+    let (mut by_kind, mut all) = (vec![(Vec::new(), 0.0, 0); 36], (Vec::new(), 0.0, 0));
+    while all.0.len() < 3000 {
+        let (ka, kb) = (rng.random_range(0..6), rng.random_range(0..6));
+        let (ga, gb) = (solid(ka, size(&mut rng), &points), solid(kb, size(&mut rng), &points));
+        let (ra, rb) = (ga.bounding_radius().unwrap(), gb.bounding_radius().unwrap());
+        let (pa, pb) = (vector(&mut rng, 4.0), vector(&mut rng, 4.0));
+        let (va, vb) = (vector(&mut rng, 2.0), vector(&mut rng, 2.0));
+        let swept = |p: DVec3, v: DVec3, r: f64| (p.min(p + v) - r, p.max(p + v) + r);
+        let ((la, ha), (lb, hb)) = (swept(pa, va, ra), swept(pb, vb, rb));
+        if !(la.cmple(hb).all() && lb.cmple(ha).all()) {
+            continue;
+        }
+        let qa = DQuat::from_scaled_axis(vector(&mut rng, 3.0));
+        let a = body(ga, pa, va, qa, vector(&mut rng, 3.0));
+        let b = body(gb, pb, vb, DQuat::IDENTITY, vector(&mut rng, 3.0));
+        if distance(&a, &b, 0.0) < 0.05 {
+            continue;
+        }
+        let (s, t) = timed(&a, &b, Window::new(0.0, 1.0));
+        for set in [&mut by_kind[ka.min(kb) * 6 + ka.max(kb)], &mut all] {
+            set.0.push(s.iterations);
+            (set.1, set.2) = (set.1 + t, set.2 + s.found.is_some() as usize);
+        }
+    }
+    eprintln!("broad-phase candidates, window [0, 1):");
+    for ka in 0..6 {
+        for kb in ka..6 {
+            let (counts, seconds, found) = &mut by_kind[ka * 6 + kb];
+            report(&format!("{} vs {}", name(ka), name(kb)), counts, *seconds, *found);
+        }
+    }
+    report("all candidates", &mut all.0, all.1, all.2);
+    // Solids thrown at a tilted half-space from random heights and directions, window [0, 2).
+    let floor = Shape::HalfSpace { normal: DVec3::new(0.2, 1.0, -0.1) }.geometry().unwrap();
+    let h = fixed(floor, DVec3::ZERO, DQuat::IDENTITY);
+    eprintln!("half-space, window [0, 2):");
+    for kind in 0..6 {
+        let (mut counts, mut seconds, mut found) = (Vec::new(), 0.0, 0);
+        for _ in 0..100 {
+            let g = solid(kind, size(&mut rng), &points);
+            let at = DVec3::new(0.0, g.bounding_radius().unwrap() + rng.random_range(0.1..3.0), 0.0);
+            let a = body(g, at, vector(&mut rng, 2.0), DQuat::IDENTITY, vector(&mut rng, 3.0));
+            let (s, t) = timed(&a, &h, Window::new(0.0, 2.0));
+            (seconds, found) = (seconds + t, found + s.found.is_some() as usize);
+            counts.push(s.iterations);
+        }
+        report(&format!("{} vs half-space", name(kind)), &mut counts, seconds, found);
+    }
+}
+
 /// Regression: a spinning cylinder crossing a bumpy mesh, where parry's GJK calls a triangle
 /// and the cylinder intersecting from both sides a hair before they touch.
 #[test]
