@@ -15,6 +15,17 @@
 //! also bounds the angular speed for all time. A static body is a [`RigidMotion`] with zero
 //! velocity and the [`Fixed`] spin; static-only shapes must not turn.
 //!
+//! # Bounding volumes first
+//!
+//! Each solid lies in a sphere of its bounding radius about its centre of mass, and the centres
+//! move in straight lines: the closed forms of [`crate::narrow_phase`] give the one interval of
+//! time in which the two spheres, grown by `2 tol` (see below), overlap. Outside it the shapes are
+//! more than `2 tol` apart: neither touching nor in contact. Against a half-space the sphere's
+//! height above the plane, and against a mesh the sphere against the mesh's box, give the
+//! interval alike. A pair whose interval misses the window costs no distance evaluation; any
+//! other is searched from the interval's start (the reference when it lies inside) and known
+//! apart, for good, from its end. Most candidate pairs of the broad phase never come that close.
+//!
 //! # Conservative advancement
 //!
 //! At a time t, let d be a lower bound on the distance of the shapes obtained as their
@@ -65,8 +76,9 @@
 //! # Canonical times
 //!
 //! Every search starts from the reference instant `max(a.since, b.since)` (the wall search from
-//! `since`), and every iterate is a function of the two motions and of the time since the
-//! reference only, never of the window asked about: every caller, window or method gets the same
+//! `since`), or from where the bounding volumes first come within reach, and every iterate is a
+//! function of the two motions and of the time since the reference only, never of the window
+//! asked about: every caller, window or method gets the same
 //! time to the bit. A search stops once past the window's end; a later window recomputes the same
 //! iterates. The pair is ordered: the world passes it in a fixed order (lower body id first), as
 //! (a, b) and (b, a) may differ in the last bits.
@@ -80,7 +92,7 @@
 //! contact starts: it never silently drops a contact.
 
 use crate::error::{Result, VadopError};
-use crate::narrow_phase::{unit_scale, Wall};
+use crate::narrow_phase::{sphere_separation_time, sphere_sphere_time, unit_scale, Wall};
 use crate::shape::ShapeGeometry;
 use crate::window::Window;
 use glam::{DQuat, DVec3};
@@ -431,6 +443,51 @@ struct Probe {
 /// reference, in scaled lengths.
 trait Gauge {
     fn probe(&self, tau: f64, depth: bool) -> Probe;
+    /// The times within which the distance may be at most `within`, from the bodies' bounding
+    /// volumes alone: `None` when it never is.
+    fn reach(&self, within: f64) -> Option<Reach>;
+}
+
+/// The times since the reference `[enter, leave]` outside which a pair is certainly farther apart
+/// than some distance: bounding volumes moving in straight lines meet in one interval at most.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Reach {
+    enter: f64,
+    /// Infinite when they never part again.
+    leave: f64,
+}
+
+impl Reach {
+    /// The times `tau >= 0` with `height + rate * tau <= limit`.
+    fn below(height: f64, rate: f64, limit: f64) -> Option<Reach> {
+        if height <= limit {
+            let leave = if rate > 0.0 { (limit - height) / rate } else { f64::INFINITY };
+            Some(Reach { enter: 0.0, leave })
+        } else if rate < 0.0 {
+            Some(Reach { enter: (height - limit) / -rate, leave: f64::INFINITY })
+        } else {
+            None
+        }
+    }
+
+    /// The times `tau >= 0` with `|offset + velocity * tau| <= limit`: the closed forms of two
+    /// spheres of radii summing to `limit`.
+    fn sphere(offset: DVec3, velocity: DVec3, limit: f64) -> Option<Reach> {
+        // Without relative motion the spheres part never.
+        let leave = sphere_separation_time(offset, velocity, limit).unwrap_or(f64::INFINITY);
+        if offset.length() <= limit {
+            return Some(Reach { enter: 0.0, leave });
+        }
+        // None when receding or missing, with a margin far below the `limit` this is called with.
+        let enter = sphere_sphere_time(offset, velocity, limit)?;
+        Some(Reach { enter, leave: leave.max(enter) })
+    }
+
+    /// The times in both.
+    fn meet(self, other: Reach) -> Option<Reach> {
+        let met = Reach { enter: self.enter.max(other.enter), leave: self.leave.min(other.leave) };
+        (met.enter <= met.leave).then_some(met)
+    }
 }
 
 /// Separation of `a` and `b` along the unit axis `n` from a to b: a lower bound on their signed
@@ -660,6 +717,12 @@ impl Gauge for ConvexPair<'_> {
             grow: self.velocity.length() + self.spin,
         }
     }
+
+    /// The shapes lie in their bounding spheres about the centres of mass.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
+        Reach::sphere(self.offset, self.velocity, limit)
+    }
 }
 
 /// A solid and a half-space. The frame has world axes and its origin at the half-space's origin.
@@ -698,6 +761,13 @@ impl Gauge for PlanePair<'_> {
             shrink: (-approach).max(0.0) + self.spin,
             grow: approach.max(0.0) + self.spin,
         }
+    }
+
+    /// The body lies in its bounding sphere; the plane does not turn.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let n = self.plane.orientation(0.0) * self.normal;
+        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
+        Reach::below(n.dot(self.offset), n.dot(self.velocity), limit)
     }
 }
 
@@ -797,6 +867,24 @@ impl Gauge for MeshPair<'_> {
         };
         Probe { lower, upper, shrink: rate, grow: rate }
     }
+
+    /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
+    /// the box grown by the sphere's radius (and more at its corners) on each axis.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let q_mesh = self.mesh.orientation(0.0).inverse();
+        let (centre, velocity) = (q_mesh * self.offset, q_mesh * self.velocity);
+        let aabb = self.trimesh.local_aabb();
+        let (low, high) = (aabb.mins * self.scale, aabb.maxs * self.scale);
+        let extent = low.abs().max(high.abs()).max_element();
+        let grown = self.size + within + SLACK * (centre.length() + extent + self.size);
+        let mut reach = Reach { enter: 0.0, leave: f64::INFINITY };
+        for axis in 0..3 {
+            let (c, v) = (centre[axis], velocity[axis]);
+            reach = reach.meet(Reach::below(c, v, high[axis] + grown)?)?;
+            reach = reach.meet(Reach::below(-c, -v, grown - low[axis])?)?;
+        }
+        Some(reach)
+    }
 }
 
 /// The pair-specific gauge of two shapes.
@@ -815,14 +903,23 @@ impl Gauge for PairGauge<'_> {
             PairGauge::Mesh(g, _) => g.probe(tau, depth),
         }
     }
+    fn reach(&self, within: f64) -> Option<Reach> {
+        match self {
+            PairGauge::Convex(g) => g.reach(within),
+            PairGauge::Plane(g, _) => g.reach(within),
+            PairGauge::Mesh(g, _) => g.reach(within),
+        }
+    }
 }
 
-/// The iteration of one search: the reference, the scaled tolerance and the step count.
+/// The iteration of one search: the reference, the scaled tolerance, the step count, and the
+/// times outside which the pair is more than `2 tol` apart (neither touching nor in contact).
 struct Searcher<G> {
     gauge: G,
     reference: f64,
     tol: f64,
     iterations: u32,
+    reach: Option<Reach>,
 }
 
 /// What the pair does when it touches at the reference.
@@ -838,6 +935,16 @@ enum AtReference {
 }
 
 impl<G: Gauge> Searcher<G> {
+    fn new(gauge: G, reference: f64, tol: f64) -> Self {
+        let reach = gauge.reach(2.0 * tol);
+        Searcher { gauge, reference, tol, iterations: 0, reach }
+    }
+
+    /// From this time since the reference on the pair stays more than `2 tol` apart.
+    fn leave(&self) -> f64 {
+        self.reach.map_or(0.0, |r| r.leave)
+    }
+
     fn stall(&self, tau: f64, reason: &'static str) -> VadopError {
         VadopError::ContactSearchStalled { time: self.reference + tau, iterations: self.iterations, reason }
     }
@@ -883,7 +990,7 @@ impl<G: Gauge> Searcher<G> {
     /// `end`.
     fn next_start(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
         loop {
-            if !(self.reference + tau < end) {
+            if !(self.reference + tau < end && tau <= self.leave()) {
                 return Ok(None);
             }
             let p = self.probe(tau, false)?;
@@ -911,6 +1018,10 @@ impl<G: Gauge> Searcher<G> {
             if !(self.reference + tau < end) {
                 return Ok(None);
             }
+            if tau >= self.leave() {
+                // The bounding volumes have parted: more than `2 tol` apart.
+                return Ok(Some(tau));
+            }
             let p = self.probe(tau, true)?;
             if p.lower > self.clear() {
                 return Ok(Some(tau));
@@ -922,8 +1033,9 @@ impl<G: Gauge> Searcher<G> {
             if !(p.grow > 0.0) {
                 return Ok(None);
             }
+            // In contact until the step's end, and apart from `leave` on.
             match self.advance(tau, room / p.grow)? {
-                Some(next) => tau = next,
+                Some(next) => tau = next.min(self.leave()),
                 None => return Ok(None),
             }
         }
@@ -951,6 +1063,8 @@ impl<G: Gauge> Searcher<G> {
             let down = if p.shrink > 0.0 { (p.lower - floor) / p.shrink } else { f64::INFINITY };
             let up = if p.grow > 0.0 { room / p.grow } else { f64::INFINITY };
             match self.advance(tau, down.min(up))? {
+                // Neither deeper nor apart before the bounding volumes part.
+                Some(next) if next >= self.leave() => return Ok(AtReference::Ended(self.leave())),
                 Some(next) => tau = next,
                 None => return Ok(AtReference::Resting),
             }
@@ -960,12 +1074,15 @@ impl<G: Gauge> Searcher<G> {
 
     /// The first contact start in `window`, as a time since the reference.
     fn first_start_in(&mut self, window: Window, deep_is_contact: bool) -> Result<Option<f64>> {
-        if !(self.reference < window.end) {
+        let Some(reach) = self.reach else { return Ok(None) };
+        if !(self.reference + reach.enter < window.end) {
             return Ok(None);
         }
-        let mut tau = 0.0;
-        let p0 = self.probe(0.0, true)?;
-        if p0.upper <= self.touch() {
+        // Before `enter` the pair is more than `2 tol` apart: the search starts there, and the
+        // rules at the reference apply only when it is in reach at the reference.
+        let mut tau = reach.enter;
+        let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
+        if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
             let end = match self.classify(p0, deep_is_contact)? {
                 AtReference::Approaching if self.reference >= window.start => return Ok(Some(0.0)),
                 AtReference::Approaching | AtReference::Inside => self.contact_end(0.0, window.end)?,
@@ -1053,7 +1170,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
             }
         }
     };
-    Ok(Some(Searcher { gauge, reference, tol, iterations: 0 }))
+    Ok(Some(Searcher::new(gauge, reference, tol)))
 }
 
 /// The first time in `window` (half-open `[start, end)`) at which two shapes begin to touch,
@@ -1243,6 +1360,11 @@ impl Gauge for WallGauge<'_> {
             grow: (-self.speed).max(0.0) + self.spin,
         }
     }
+
+    /// The body lies in its bounding sphere.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        Reach::below(self.gap, -self.speed, self.size + within + SLACK * (self.gap.abs() + self.size))
+    }
 }
 
 /// The searcher of a body against one wall of the box `[min, max]`.
@@ -1269,7 +1391,7 @@ fn wall_searcher<'a, S: Spin>(
         scale,
         body,
     };
-    Some(Searcher { gauge, reference: motion.since, tol: SHAPE_CONTACT_TOLERANCE * size * scale, iterations: 0 })
+    Some(Searcher::new(gauge, motion.since, SHAPE_CONTACT_TOLERANCE * size * scale))
 }
 
 /// The first time in `window` at which a (spinning) shape inside the box `[min, max]` begins to
