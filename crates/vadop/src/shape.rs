@@ -165,8 +165,10 @@ impl Shape {
             Shape::Capsule { half_height, radius } => {
                 check_size("capsule half height", *half_height)?;
                 check_size("capsule radius", *radius)?;
+                // The points within `radius` of its segment: turning moves them as it moves the
+                // segment's ends.
                 let bound = half_height + radius;
-                Ok(self.solid(SharedShape::capsule_y(*half_height, *radius), bound, bound))
+                Ok(self.solid(SharedShape::capsule_y(*half_height, *radius), bound, *half_height))
             }
             Shape::Cylinder { half_height, radius } => {
                 check_size("cylinder half height", *half_height)?;
@@ -195,8 +197,8 @@ impl Shape {
     }
 
     /// The geometry of a solid shape whose parry form is `parry`, given a bound on its distance
-    /// from the centre of mass (`bound`) and on how far a support point can be from it
-    /// (`rotation_radius`, zero for a ball).
+    /// from the centre of mass (`bound`) and on that of its core (`rotation_radius`, see
+    /// [`ShapeGeometry::rotation_radius`]).
     fn solid(&self, parry: SharedShape, bound: f64, rotation_radius: f64) -> ShapeGeometry {
         let props = parry.mass_properties(1.0);
         ShapeGeometry {
@@ -389,9 +391,11 @@ impl ShapeGeometry {
         self.bounding_radius.unwrap_or(0.0)
     }
 
-    /// Bound on the distance from the centre of mass of any support point: how fast a turn at
-    /// angular speed w can move the surface is at most w times this. Zero for a ball, whose
-    /// surface does not move when it turns, and for static-only shapes.
+    /// Bound on the distance from the centre of mass of the shape's core, the set the shape holds
+    /// every point within a fixed radius of (a ball's centre, a capsule's segment, the whole shape
+    /// otherwise): a turn at angular speed w moves the shape's support in any fixed direction at
+    /// most w times this. Zero for a ball, whose surface does not move when it turns, and for
+    /// static-only shapes.
     pub(crate) fn rotation_radius(&self) -> f64 {
         self.rotation_radius
     }

@@ -32,10 +32,10 @@
 //! separation along a fixed unit axis n from a to b (`min over b of n.y - max over a of n.x`).
 //! That separation cannot shrink faster than
 //! `mu = max(0, (v_a - v_b) . n) + w_a r_a + w_b r_b`,
-//! w being a body's angular speed bound and r its bounding radius about the centre of mass (0 for
-//! a sphere, whose surface does not move when it turns). So the distance stays above `tol/2`
-//! until `t + (d - tol/2) / mu`, and the search steps there; the steps are at least
-//! `(tol/2) / mu` long. Against a triangle mesh, whose nearest triangle may change, `mu` uses
+//! w being a body's angular speed bound and r how far its core (below) reaches from the centre of
+//! mass: its bounding radius, a capsule's half height, 0 for a sphere, whose surface does not move
+//! when it turns. So the distance stays above `tol/2` until `t + (d - tol/2) / mu`, and the
+//! search steps there; the steps are at least `(tol/2) / mu` long. Against a triangle mesh, whose nearest triangle may change, `mu` uses
 //! `|v_a - v_b|` instead of the projection; against a half-space or a wall, n is the fixed plane
 //! normal and the separation along it is the exact signed distance.
 //!
@@ -43,11 +43,19 @@
 //! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
 //! a hair from contact, where GJK's simplices grow ill-conditioned and its directions drift, the
 //! shapes' face normals, edge cross products and a local climb of the separation) only choose a
-//! tight one. The upper bound is the distance between two points of the shapes (GJK's closest
-//! points, or each shape's extreme point projected on the other), or EPA's depth when they
-//! intersect (EPA's polytope lies inside the Minkowski difference). Everything runs in lengths
-//! scaled by an exact power of two near the pair's size, so parry's absolute tolerances act
-//! alike at every scale, and a scene scaled by a power of two gives bit-identical times.
+//! tight one. The upper bound is the distance between two points of the shapes (closest points
+//! from closed forms or GJK, or each shape's extreme point projected on the other), or EPA's depth
+//! when they intersect (EPA's polytope lies inside the Minkowski difference). Everything runs in
+//! lengths scaled by an exact power of two near the pair's size, so parry's absolute tolerances
+//! act alike at every scale, and a scene scaled by a power of two gives bit-identical times.
+//!
+//! A ball is the set of points within its radius of its centre, a capsule within its radius of
+//! its segment: their *cores*; any other solid is its own core. Two shapes are as far apart as
+//! their cores less the radii, and between points and segments, or a point and a solid (parry's
+//! projections), that distance has closed forms, exact to rounding where GJK would converge
+//! slowly on the round surfaces. GJK and EPA, where still needed, run on the cores, except a few
+//! tolerances from contact, where their precision, relative to the distance they measure, would
+//! be the cores': there they run on the shapes themselves.
 //!
 //! # Tolerance: the contract
 //!
@@ -98,11 +106,11 @@ use crate::window::Window;
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::partitioning::{BvhLeafCost, BvhNode};
-use parry3d_f64::query::details::contact_support_map_support_map;
+use parry3d_f64::query::details::{closest_points_segment_segment_with_locations_nD, contact_support_map_support_map};
 use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d_f64::query::point::local_point_projection_on_support_map;
 use parry3d_f64::query::PointQuery;
-use parry3d_f64::shape::{Ball, Capsule, Cone, Cuboid, Cylinder, Shape, SupportMap, TriMesh, Triangle};
+use parry3d_f64::shape::{Ball, Capsule, Cone, Cuboid, Cylinder, Segment, Shape, SupportMap, TriMesh, Triangle};
 use std::cell::Cell;
 
 /// How a body's orientation evolves since its last velocity change: the exact torque-free
@@ -239,9 +247,55 @@ pub fn contact_tolerance(a: &ShapeGeometry, b: &ShapeGeometry) -> f64 {
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
 /// for its flat features.
 struct Scaled<'a> {
-    shape: &'a dyn SupportMap,
+    /// The shape is the set of points within `margin` of its core.
+    core: Core<'a>,
+    margin: f64,
     parry: &'a dyn Shape,
     scale: f64,
+}
+
+/// The convex set a shape is the neighbourhood of, in the shape frame and scaled: a ball's
+/// centre, a capsule's segment, or the shape itself. Distances between points and segments have
+/// closed forms, where GJK would converge slowly on the round surfaces around them.
+#[derive(Clone, Copy)]
+enum Core<'a> {
+    Point,
+    Segment(Segment),
+    Solid(&'a dyn SupportMap),
+}
+
+impl<'a> Scaled<'a> {
+    /// The shape `parry`, scaled by `scale`.
+    fn new(parry: &'a dyn Shape, scale: f64) -> Self {
+        let (core, margin) = if let Some(ball) = parry.as_ball() {
+            (Core::Point, ball.radius)
+        } else if let Some(capsule) = parry.as_capsule() {
+            let segment = Segment::new(capsule.segment.a * scale, capsule.segment.b * scale);
+            (Core::Segment(segment), capsule.radius)
+        } else {
+            (Core::Solid(parry.as_support_map().expect("solid shapes have support maps")), 0.0)
+        };
+        Scaled { core, margin: margin * scale, parry, scale }
+    }
+
+    /// The shape's core, as a support map.
+    fn core(&self) -> CoreOf<'_, 'a> {
+        CoreOf(self)
+    }
+}
+
+/// The support map of a shape's core.
+struct CoreOf<'s, 'a>(&'s Scaled<'a>);
+
+impl SupportMap for CoreOf<'_, '_> {
+    #[inline]
+    fn local_support_point(&self, dir: DVec3) -> DVec3 {
+        match &self.0.core {
+            Core::Point => DVec3::ZERO,
+            Core::Segment(segment) => segment.local_support_point(dir),
+            Core::Solid(shape) => shape.local_support_point(dir) * self.0.scale,
+        }
+    }
 }
 
 /// Directions of a shape's flat features near a direction: face normals and edge (or ruling)
@@ -374,7 +428,11 @@ impl Scaled<'_> {
 impl SupportMap for Scaled<'_> {
     #[inline]
     fn local_support_point(&self, dir: DVec3) -> DVec3 {
-        self.shape.local_support_point(dir) * self.scale
+        let core = self.core().local_support_point(dir);
+        match self.core {
+            Core::Solid(_) => core,
+            _ => core + dir.normalize_or_zero() * self.margin,
+        }
     }
 }
 
@@ -415,9 +473,7 @@ impl<'a> Body<'a> {
     }
 
     fn support(&self, scale: f64) -> Scaled<'a> {
-        let parry = self.geometry.parry_shape().as_ref();
-        let shape = parry.as_support_map().expect("solid shapes have support maps");
-        Scaled { shape, parry, scale }
+        Scaled::new(self.geometry.parry_shape().as_ref(), scale)
     }
 
     /// The scaled parry pose of the shape for centre of mass `centre` and orientation `q`.
@@ -572,26 +628,69 @@ struct Bounds {
     witness: Option<(DVec3, DVec3)>,
 }
 
-/// Lower and upper bounds on the signed distance of two convex support maps, with the axis (from
-/// `a` to `b`) whose separation is the lower bound.
-///
-/// The upper bound is the distance of two points of the shapes (GJK's closest points, and each
-/// shape's extreme point along the axis projected on the other), or EPA's depth when they
-/// intersect (EPA's polytope lies inside the Minkowski difference, so its depth never exceeds
-/// the true one); the lower bound is a separation along an axis, computed from the exact support
-/// functions. With `depth` false, an intersection only needs to be recognised, not measured.
-/// The bounds are tightened where it matters: within a few `tol` of contact.
-fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bool, tol: f64, slack: f64) -> Bounds {
+/// A first estimate of the distance of two shapes (scaled, in the frame of their poses): closed
+/// forms where they exist, GJK (and EPA when the shapes intersect) otherwise.
+struct Estimate {
+    /// At least the signed distance; infinite when unknown.
+    upper: f64,
+    /// Unit axis from the first shape to the second.
+    axis: DVec3,
+    /// Points of the shapes whose distance is `upper`, when known.
+    witness: Option<(DVec3, DVec3)>,
+    /// GJK's own last search direction, which is often better than its closest points'.
+    search: Option<DVec3>,
+    /// EPA's depth (negative) and deepest points when the shapes intersect.
+    penetration: Option<(f64, (DVec3, DVec3))>,
+}
+
+/// The estimate from closed forms when both cores are points or segments, or one is a point
+/// outside the other shape: the cores' distance less the margins, exact to rounding, with its
+/// witness points and axis. `None` otherwise.
+fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) -> Option<Estimate> {
+    let posed = |segment: &Segment, pose: &Pose| Segment::new(pose * segment.a, pose * segment.b);
+    let on = |segment: &Segment, point: DVec3| segment.project_local_point(point, true).point;
+    let (x, y) = match (&a.core, &b.core) {
+        (Core::Point, Core::Point) => (pose_a.translation, pose_b.translation),
+        (Core::Point, Core::Segment(t)) => (pose_a.translation, on(&posed(t, pose_b), pose_a.translation)),
+        (Core::Segment(s), Core::Point) => (on(&posed(s, pose_a), pose_b.translation), pose_b.translation),
+        (Core::Segment(s), Core::Segment(t)) => {
+            let (s, t) = (posed(s, pose_a), posed(t, pose_b));
+            let (at_s, at_t) = closest_points_segment_segment_with_locations_nD((&s.a, &s.b), (&t.a, &t.b));
+            (s.point_at(&at_s), t.point_at(&at_t))
+        }
+        (Core::Point, Core::Solid(_)) => (pose_a.translation, nearest(b, pose_b, pose_a.translation)?.1),
+        (Core::Solid(_), Core::Point) => (nearest(a, pose_a, pose_b.translation)?.1, pose_b.translation),
+        _ => return None,
+    };
+    let (axis, distance) = (y - x).normalize_and_length();
+    // Coincident cores (deep inside each other): any axis bounds the separation.
+    let axis = if distance > 0.0 {
+        axis
+    } else {
+        (pose_b.translation - pose_a.translation).try_normalize().unwrap_or(DVec3::X)
+    };
+    Some(Estimate {
+        upper: distance - a.margin - b.margin,
+        axis,
+        witness: Some((x + axis * a.margin, y - axis * b.margin)),
+        search: None,
+        penetration: None,
+    })
+}
+
+/// GJK's estimate (EPA's when the sets intersect and `depth` asks for it) from the sets `a` and
+/// `b` at `pos12` (b's pose in a's frame), grown by `margins` into the shapes; `toward` (in a's
+/// frame) is where GJK starts from and the axis to fall back on.
+fn gjk_estimate<A: SupportMap, B: SupportMap>(
+    (a, pose_a): (&A, &Pose),
+    (b, pose_b): (&B, &Pose),
+    margins: (f64, f64),
+    toward: DVec3,
+    depth: bool,
+) -> Estimate {
     let pos12 = pose_a.inv_mul(pose_b);
-    // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
-    // fall back on if it fails.
-    let toward = (pos12 * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
-    let mut upper = f64::INFINITY;
-    let mut witness = None;
-    let mut penetration = None;
-    let mut axis = toward;
-    // GJK's own last search direction, which is often better than its closest points'.
-    let mut search = None;
+    let mut estimate = Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None };
+    let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
     let gjk_from = |dir: DVec3| {
         let mut simplex = VoronoiSimplex::new();
         simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
@@ -608,41 +707,71 @@ fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bo
     match result {
         GJKResult::ClosestPoints(p1, p2, dir) => {
             let d = p2 - p1;
-            upper = d.length();
-            axis = d.try_normalize().unwrap_or(toward);
-            search = Some(dir);
-            witness = Some((*pose_a * p1, *pose_a * p2));
+            estimate.axis = d.try_normalize().unwrap_or(toward);
+            estimate.upper = d.length() - margins.0 - margins.1;
+            estimate.search = Some(pose_a.rotation * dir);
+            estimate.witness = Some(grown((*pose_a * p1, *pose_a * p2), pose_a.rotation * estimate.axis));
         }
         GJKResult::Intersection if !depth => {}
         // Intersecting (measure the depth), or GJK did not converge (try again).
         _ => {
             if let Some(contact) = contact_support_map_support_map(&pos12, a, b, f64::MAX) {
-                axis = contact.normal1.try_normalize().unwrap_or(toward);
-                let (p1, p2) = (*pose_a * contact.point1, *pose_b * contact.point2);
-                if contact.dist >= 0.0 {
-                    upper = (p2 - p1).length();
-                    witness = Some((p1, p2));
+                estimate.axis = contact.normal1.try_normalize().unwrap_or(toward);
+                let points =
+                    grown((*pose_a * contact.point1, *pose_b * contact.point2), pose_a.rotation * estimate.axis);
+                let dist = contact.dist - margins.0 - margins.1;
+                if dist >= 0.0 {
+                    estimate.upper = (points.1 - points.0).length();
+                    estimate.witness = Some(points);
                 } else {
-                    penetration = Some((contact.dist, (p1, p2)));
+                    estimate.penetration = Some((dist, points));
                 }
             }
         }
     }
-    let axis = pose_a.rotation * axis;
+    estimate.axis = pose_a.rotation * estimate.axis;
+    estimate
+}
+
+/// Lower and upper bounds on the signed distance of two convex support maps, with the axis (from
+/// `a` to `b`) whose separation is the lower bound.
+///
+/// The upper bound is the distance of two points of the shapes (closest points from closed forms
+/// or GJK, and each shape's extreme point along the axis projected on the other), or EPA's depth
+/// when they intersect (EPA's polytope lies inside the Minkowski difference, so its depth never
+/// exceeds the true one); the lower bound is a separation along an axis, computed from the exact
+/// support functions. With `depth` false, an intersection only needs to be recognised, not
+/// measured. GJK runs on the cores where they are smaller than the shapes, except near contact,
+/// where its precision (relative to the distance it measures) would be the cores'. The bounds are
+/// tightened where it matters: within a few `tol` of contact.
+fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bool, tol: f64, slack: f64) -> Bounds {
+    // Precision matters only where the bounds reach within a few tolerances of contact.
+    let band = 8.0 * tol;
+    // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
+    // fall back on if it fails.
+    let toward = (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
+    let estimate = closed_form(a, pose_a, b, pose_b).unwrap_or_else(|| {
+        let margins = (a.margin, b.margin);
+        let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth);
+        let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
+        if margins == (0.0, 0.0) || !(distance.abs() < band) {
+            cores
+        } else {
+            gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth)
+        }
+    });
+    let Estimate { mut upper, axis, mut witness, search, penetration } = estimate;
     let mut best = (separation(a, pose_a, b, pose_b, axis), axis);
     // Near contact GJK loses accuracy (its simplices grow ill-conditioned), and a flat feature
     // makes the axis matter to first order: look for a tighter axis and for closer points.
     let tight = |best: (f64, DVec3), upper: f64| best.0 >= (upper - 2.0 * slack) * (1.0 - 1e-3);
     if let (Some(dir), false) = (search, tight(best, upper)) {
-        let dir = pose_a.rotation * dir;
         let dir = if dir.dot(axis) < 0.0 { -dir } else { dir };
         let gap = separation(a, pose_a, b, pose_b, dir);
         if gap > best.0 {
             best = (gap, dir);
         }
     }
-    // Precision matters only where the bounds reach within a few tolerances of contact.
-    let band = 8.0 * tol;
     if !tight(best, upper) && best.0 < band && upper > -band {
         // Each shape's extreme point along the axis, projected on the other: closer points.
         let mut closer = |m: DVec3| {
@@ -847,7 +976,7 @@ impl MeshPair<'_> {
             |id, _| {
                 let triangle = self.triangle(id, centre);
                 let slack = SLACK * (triangle.a.length() + self.size);
-                let support = Scaled { shape: &triangle, parry: &triangle, scale: 1.0 };
+                let support = Scaled::new(&triangle, 1.0);
                 let bounds = convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack);
                 if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
                     nearest.set(Some(bounds));
