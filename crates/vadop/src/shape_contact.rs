@@ -39,6 +39,13 @@
 //! `|v_a - v_b|` instead of the projection; against a half-space or a wall, n is the fixed plane
 //! normal and the separation along it is the exact signed distance.
 //!
+//! Where spins dominate `mu` the steps are short and the bodies turn little between two probes:
+//! each probe of two solids first tries the last one's axis, turned with either body (a face
+//! normal turns with its face), and its witness points, carried along with the bodies. Any axis
+//! still gives a lower bound and any two points of the shapes an upper bound; when they lie within
+//! half the room above `tol/2` of each other, the step on them goes at least two thirds as far as
+//! on exact bounds, and GJK is not needed.
+//!
 //! The bounds never rest on GJK's own accuracy. The lower bound is a separation along an axis,
 //! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
 //! a hair from contact, where GJK's simplices grow ill-conditioned and its directions drift, the
@@ -85,11 +92,12 @@
 //!
 //! Every search starts from the reference instant `max(a.since, b.since)` (the wall search from
 //! `since`), or from where the bounding volumes first come within reach, and every iterate is a
-//! function of the two motions and of the time since the reference only, never of the window
-//! asked about: every caller, window or method gets the same
-//! time to the bit. A search stops once past the window's end; a later window recomputes the same
-//! iterates. The pair is ordered: the world passes it in a fixed order (lower body id first), as
-//! (a, b) and (b, a) may differ in the last bits.
+//! function of the two motions and of the time since the reference only (each probe starts from
+//! what the one before found, and every search replays the chain from its start), never of the
+//! window asked about: every caller, window or method gets the same time to the bit. A search
+//! stops once past the window's end; a later window recomputes the same iterates. The pair is
+//! ordered: the world passes it in a fixed order (lower body id first), as (a, b) and (b, a) may
+//! differ in the last bits.
 //!
 //! # Termination guard
 //!
@@ -224,6 +232,15 @@ pub const SHAPE_CONTACT_TOLERANCE: f64 = 1e-6;
 /// below `(1 - MARGIN) 2 tol`), so that an independent distance oracle (parry's own query, with
 /// its own convergence threshold) agrees with the contract.
 const MARGIN: f64 = 0.125;
+
+/// Within this many tolerances of contact the distance bounds are tightened to a fraction of the
+/// tolerance; beyond, they need only be tight relative to the distance, which sets the step.
+const BAND: f64 = 8.0;
+
+/// The distance a search keeps above until a contact starts: `tol/2` plus the margin.
+fn guard(tol: f64) -> f64 {
+    0.5 * tol * (1.0 + MARGIN)
+}
 
 /// Relative rounding allowance on support points and closest points, times the size of the
 /// coordinates involved.
@@ -613,6 +630,28 @@ fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64, DVec3)> {
     (!projection.is_inside).then(|| ((local - projection.point).length(), pose * projection.point))
 }
 
+/// The closer of `known` (a distance and the points at it) and the pairs of each shape's extreme
+/// point along the axis `m` (from a to b) with its projection on the other shape.
+fn closer_points(
+    a: &Scaled,
+    pose_a: &Pose,
+    b: &Scaled,
+    pose_b: &Pose,
+    m: DVec3,
+    known: (f64, Option<(DVec3, DVec3)>),
+) -> (f64, Option<(DVec3, DVec3)>) {
+    let mut closest = known;
+    let y = b.support_point(pose_b, -m);
+    if let Some((d, x)) = nearest(a, pose_a, y).filter(|(d, _)| *d < closest.0) {
+        closest = (d, Some((x, y)));
+    }
+    let x = a.support_point(pose_a, m);
+    if let Some((d, y)) = nearest(b, pose_b, x).filter(|(d, _)| *d < closest.0) {
+        closest = (d, Some((x, y)));
+    }
+    closest
+}
+
 /// Bounds on the signed distance of two shapes at one instant (scaled lengths, in the frame of
 /// their poses).
 #[derive(Debug, Clone, Copy)]
@@ -745,8 +784,7 @@ fn gjk_estimate<A: SupportMap, B: SupportMap>(
 /// where its precision (relative to the distance it measures) would be the cores'. The bounds are
 /// tightened where it matters: within a few `tol` of contact.
 fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bool, tol: f64, slack: f64) -> Bounds {
-    // Precision matters only where the bounds reach within a few tolerances of contact.
-    let band = 8.0 * tol;
+    let band = BAND * tol;
     // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
     // fall back on if it fails.
     let toward = (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
@@ -773,16 +811,8 @@ fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bo
         }
     }
     if !tight(best, upper) && best.0 < band && upper > -band {
-        // Each shape's extreme point along the axis, projected on the other: closer points.
         let mut closer = |m: DVec3| {
-            let y = b.support_point(pose_b, -m);
-            if let Some((d, x)) = nearest(a, pose_a, y).filter(|(d, _)| *d < upper) {
-                (upper, witness) = (d, Some((x, y)));
-            }
-            let x = a.support_point(pose_a, m);
-            if let Some((d, y)) = nearest(b, pose_b, x).filter(|(d, _)| *d < upper) {
-                (upper, witness) = (d, Some((x, y)));
-            }
+            (upper, witness) = closer_points(a, pose_a, b, pose_b, m, (upper, witness));
             upper
         };
         best = refine(a, pose_a, b, pose_b, best.1, best);
@@ -821,6 +851,17 @@ struct ConvexPair<'a> {
     size: f64,
     /// Scaled contact tolerance.
     tol: f64,
+    /// What the last probe found, to start the next one from.
+    warm: Cell<Option<Warm>>,
+}
+
+/// A probe's axis and witness points, fixed in the bodies (in the frames of their poses): after a
+/// step the points still bound the distance, and so does the axis turned with the body whose face
+/// (or curved surface) it is the normal of, nearly as tightly.
+#[derive(Debug, Clone, Copy)]
+struct Warm {
+    axis: (DVec3, DVec3),
+    witness: (DVec3, DVec3),
 }
 
 impl ConvexPair<'_> {
@@ -831,6 +872,24 @@ impl ConvexPair<'_> {
             self.b.pose(self.b.orientation(tau), centre, self.scale),
         )
     }
+
+    /// Bounds from the last probe's axis, turned with either body, and witness points, carried
+    /// along with the bodies (or, if those drifted apart, each shape's extreme point projected on
+    /// the other), when they lie within half the room above the guard of each other: the step on
+    /// them then goes at least two thirds as far as on exact bounds. `None` otherwise (GJK then).
+    fn warm_bounds(&self, a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, slack: f64) -> Option<Bounds> {
+        let warm = self.warm.get()?;
+        let witness = (*pose_a * warm.witness.0, *pose_b * warm.witness.1);
+        let (lower, axis) = [pose_a.rotation * warm.axis.0, pose_b.rotation * warm.axis.1]
+            .map(|n| (separation(a, pose_a, b, pose_b, n), n))
+            .into_iter()
+            .fold((f64::NEG_INFINITY, DVec3::X), |best, c| if c.0 > best.0 { c } else { best });
+        let tight = |upper: f64| upper - lower <= 0.5 * (lower - guard(self.tol));
+        let carried = ((witness.1 - witness.0).length(), Some(witness));
+        let (upper, witness) =
+            if tight(carried.0) { carried } else { closer_points(a, pose_a, b, pose_b, axis, carried) };
+        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
+    }
 }
 
 impl Gauge for ConvexPair<'_> {
@@ -838,7 +897,12 @@ impl Gauge for ConvexPair<'_> {
         let (pose_a, pose_b) = self.poses(tau);
         let slack = SLACK * (pose_b.translation.length() + self.size);
         let (ga, gb) = (self.a.support(self.scale), self.b.support(self.scale));
-        let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack);
+        let bounds = self
+            .warm_bounds(&ga, &pose_a, &gb, &pose_b, slack)
+            .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
+        let carried = |(x, y): (DVec3, DVec3)| (pose_a.inverse_transform_point(x), pose_b.inverse_transform_point(y));
+        let axis = (pose_a.rotation.inverse() * bounds.axis, pose_b.rotation.inverse() * bounds.axis);
+        self.warm.set(bounds.witness.map(|w| Warm { axis, witness: carried(w) }));
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
@@ -1104,7 +1168,7 @@ impl<G: Gauge> Searcher<G> {
     }
     /// The distance is kept above this until a contact starts (`tol/2` plus the margin).
     fn guard(&self) -> f64 {
-        0.5 * self.tol * (1.0 + MARGIN)
+        guard(self.tol)
     }
     /// Above this, a contact has ended (`tol` plus the margin).
     fn clear(&self) -> f64 {
@@ -1281,6 +1345,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
             spin,
             size: size * scale,
             tol,
+            warm: Cell::new(None),
         }),
         (first_static, _) => {
             let (body, fixed) = if first_static { (b, a) } else { (a, b) };
