@@ -51,18 +51,21 @@
 //! a hair from contact, where GJK's simplices grow ill-conditioned and its directions drift, the
 //! shapes' face normals, edge cross products and a local climb of the separation) only choose a
 //! tight one. The upper bound is the distance between two points of the shapes (closest points
-//! from closed forms or GJK, or each shape's extreme point projected on the other), or EPA's depth
-//! when they intersect (EPA's polytope lies inside the Minkowski difference). Everything runs in
-//! lengths scaled by an exact power of two near the pair's size, so parry's absolute tolerances
-//! act alike at every scale, and a scene scaled by a power of two gives bit-identical times.
+//! from closed forms or GJK, or each shape's extreme point projected on the other, and back and
+//! forth), or EPA's depth when they intersect (EPA's polytope lies inside the Minkowski
+//! difference). Near contact the bounds are tightened until their gap is half the search's
+//! margin (below), enough to decide. Everything runs in lengths scaled by an exact power of two
+//! near the pair's size, so parry's absolute tolerances act alike at every scale, and a scene
+//! scaled by a power of two gives bit-identical times.
 //!
 //! A ball is the set of points within its radius of its centre, a capsule within its radius of
 //! its segment: their *cores*; any other solid is its own core. Two shapes are as far apart as
 //! their cores less the radii, and between points and segments, or a point and a solid (parry's
 //! projections), that distance has closed forms, exact to rounding where GJK would converge
-//! slowly on the round surfaces. GJK and EPA, where still needed, run on the cores, except a few
-//! tolerances from contact, where their precision, relative to the distance they measure, would
-//! be the cores': there they run on the shapes themselves.
+//! slowly on the round surfaces. GJK and EPA, where still needed, run on the cores, and on the
+//! shapes themselves too where the shapes' distance is a small part of the cores' (their
+//! precision is relative to the distance they measure); either can fail a hair from contact, and
+//! the tighter bounds count.
 //!
 //! # Tolerance: the contract
 //!
@@ -241,6 +244,10 @@ const BAND: f64 = 8.0;
 fn guard(tol: f64) -> f64 {
     0.5 * tol * (1.0 + MARGIN)
 }
+
+/// Projections, alternating between the shapes, that look for closer points from each shape's
+/// extreme point a few tolerances from contact (see `closer_points`).
+const PROJECTION_ROUNDS: usize = 4;
 
 /// Relative rounding allowance on support points and closest points, times the size of the
 /// coordinates involved.
@@ -630,24 +637,33 @@ fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64, DVec3)> {
     (!projection.is_inside).then(|| ((local - projection.point).length(), pose * projection.point))
 }
 
-/// The closer of `known` (a distance and the points at it) and the pairs of each shape's extreme
-/// point along the axis `m` (from a to b) with its projection on the other shape.
+/// The closer of `known` (a distance and the points at it) and the pairs met projecting each of
+/// the known points and each shape's extreme point along the axis `m` (from a to b) on the other
+/// shape, and back, `rounds` times in all: alternating projections approach closest points, also
+/// where GJK's are off or an extreme point is an arbitrary point of a flat face.
 fn closer_points(
-    a: &Scaled,
-    pose_a: &Pose,
-    b: &Scaled,
-    pose_b: &Pose,
+    (a, pose_a): (&Scaled, &Pose),
+    (b, pose_b): (&Scaled, &Pose),
     m: DVec3,
     known: (f64, Option<(DVec3, DVec3)>),
+    rounds: usize,
 ) -> (f64, Option<(DVec3, DVec3)>) {
     let mut closest = known;
-    let y = b.support_point(pose_b, -m);
-    if let Some((d, x)) = nearest(a, pose_a, y).filter(|(d, _)| *d < closest.0) {
-        closest = (d, Some((x, y)));
-    }
-    let x = a.support_point(pose_a, m);
-    if let Some((d, y)) = nearest(b, pose_b, x).filter(|(d, _)| *d < closest.0) {
-        closest = (d, Some((x, y)));
+    let extreme = [(true, b.support_point(pose_b, -m)), (false, a.support_point(pose_a, m))];
+    let known_points = known.1.map_or([None, None], |(x, y)| [Some((true, y)), Some((false, x))]);
+    // From a point of b, projecting on a, then on b, and so on; from a point of a, the other way.
+    for (from_b, mut point) in known_points.into_iter().flatten().chain(extreme) {
+        for round in 0..rounds {
+            let onto_a = from_b == (round % 2 == 0);
+            let Some((d, projected)) = (if onto_a { nearest(a, pose_a, point) } else { nearest(b, pose_b, point) })
+            else {
+                break;
+            };
+            if d < closest.0 {
+                closest = (d, Some(if onto_a { (projected, point) } else { (point, projected) }));
+            }
+            point = projected;
+        }
     }
     closest
 }
@@ -676,7 +692,7 @@ struct Estimate {
     axis: DVec3,
     /// Points of the shapes whose distance is `upper`, when known.
     witness: Option<(DVec3, DVec3)>,
-    /// GJK's own last search direction, which is often better than its closest points'.
+    /// GJK's own last search direction (unit, world frame).
     search: Option<DVec3>,
     /// EPA's depth (negative) and deepest points when the shapes intersect.
     penetration: Option<(f64, (DVec3, DVec3))>,
@@ -780,45 +796,65 @@ fn gjk_estimate<A: SupportMap, B: SupportMap>(
 /// when they intersect (EPA's polytope lies inside the Minkowski difference, so its depth never
 /// exceeds the true one); the lower bound is a separation along an axis, computed from the exact
 /// support functions. With `depth` false, an intersection only needs to be recognised, not
-/// measured. GJK runs on the cores where they are smaller than the shapes, except near contact,
-/// where its precision (relative to the distance it measures) would be the cores'. The bounds are
-/// tightened where it matters: within a few `tol` of contact.
+/// measured. GJK runs on the cores, and on the shapes too where their distance is a small part of
+/// the cores' (its precision is relative to the distance it measures). The bounds are tightened
+/// where it matters: within a few `tol` of contact.
 fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bool, tol: f64, slack: f64) -> Bounds {
     let band = BAND * tol;
     // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
     // fall back on if it fails.
     let toward = (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
-    let estimate = closed_form(a, pose_a, b, pose_b).unwrap_or_else(|| {
-        let margins = (a.margin, b.margin);
-        let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth);
-        let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
-        if margins == (0.0, 0.0) || !(distance.abs() < band) {
-            cores
-        } else {
-            gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth)
+    let (first, second) = match closed_form(a, pose_a, b, pose_b) {
+        Some(exact) => (exact, None),
+        None => {
+            let margins = (a.margin, b.margin);
+            let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth);
+            let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
+            // GJK's precision is relative to the distance it measures, the cores' with the
+            // margins: where the shapes' own is a small part of it, GJK runs on them too, and the
+            // tighter estimate counts (either fails at times a hair from contact).
+            let near = distance.abs() < (margins.0 + margins.1) / 16.0;
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth)))
         }
-    });
-    let Estimate { mut upper, axis, mut witness, search, penetration } = estimate;
-    let mut best = (separation(a, pose_a, b, pose_b, axis), axis);
-    // Near contact GJK loses accuracy (its simplices grow ill-conditioned), and a flat feature
-    // makes the axis matter to first order: look for a tighter axis and for closer points.
-    let tight = |best: (f64, DVec3), upper: f64| best.0 >= (upper - 2.0 * slack) * (1.0 - 1e-3);
-    if let (Some(dir), false) = (search, tight(best, upper)) {
-        let dir = if dir.dot(axis) < 0.0 { -dir } else { dir };
-        let gap = separation(a, pose_a, b, pose_b, dir);
-        if gap > best.0 {
-            best = (gap, dir);
+    };
+    let estimates = || std::iter::once(&first).chain(&second);
+    // Every estimate bounds the distance: the closest points and the deepest overlap of any.
+    let (mut upper, mut witness) =
+        estimates().map(|e| (e.upper, e.witness)).fold((f64::INFINITY, None), |x, y| if y.0 < x.0 { y } else { x });
+    let penetration = estimates().filter_map(|e| e.penetration).min_by(|x, y| x.0.total_cmp(&y.0));
+    // The upper bound the shapes will get: EPA's depth stands unless an axis separates them.
+    let effective = |best: (f64, DVec3), upper: f64| match penetration {
+        Some((dist, _)) if best.0 <= 0.0 => dist.min(upper),
+        _ => upper,
+    };
+    // Near contact the bounds must decide within the search's margins: a gap of half of one.
+    let settled = |best: (f64, DVec3), upper: f64| best.0 >= effective(best, upper) - 2.0 * slack - 0.5 * MARGIN * tol;
+    let mut best = (f64::NEG_INFINITY, first.axis);
+    for estimate in estimates() {
+        // GJK's own last search direction is often better than its closest points'.
+        let search = estimate.search.map(|dir| if dir.dot(estimate.axis) < 0.0 { -dir } else { dir });
+        for axis in std::iter::once(estimate.axis).chain(search) {
+            if settled(best, upper) {
+                break;
+            }
+            let gap = separation(a, pose_a, b, pose_b, axis);
+            if gap > best.0 {
+                best = (gap, axis);
+            }
         }
     }
-    if !tight(best, upper) && best.0 < band && upper > -band {
+    // Near contact GJK loses accuracy (its simplices grow ill-conditioned), and a flat feature
+    // makes the axis matter to first order: look for a tighter axis and for closer points.
+    if !settled(best, upper) && best.0 < band && effective(best, upper) > -band {
         let mut closer = |m: DVec3| {
-            (upper, witness) = closer_points(a, pose_a, b, pose_b, m, (upper, witness));
+            (upper, witness) = closer_points((a, pose_a), (b, pose_b), m, (upper, witness), PROJECTION_ROUNDS);
             upper
         };
         best = refine(a, pose_a, b, pose_b, best.1, best);
         let mut bound = closer(best.1);
-        if !tight(best, bound) {
-            best = polish(a, pose_a, b, pose_b, best, (bound - 2.0 * slack) * (1.0 - 1e-3));
+        if !settled(best, bound) {
+            let enough = effective(best, bound) - 2.0 * slack - 0.5 * MARGIN * tol;
+            best = polish(a, pose_a, b, pose_b, best, enough);
             bound = closer(best.1);
         }
         upper = bound;
@@ -887,7 +923,7 @@ impl ConvexPair<'_> {
         let tight = |upper: f64| upper - lower <= 0.5 * (lower - guard(self.tol));
         let carried = ((witness.1 - witness.0).length(), Some(witness));
         let (upper, witness) =
-            if tight(carried.0) { carried } else { closer_points(a, pose_a, b, pose_b, axis, carried) };
+            if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), axis, carried, 1) };
         tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
     }
 }

@@ -685,6 +685,77 @@ fn iteration_statistics() {
     );
 }
 
+/// Regression: a capsule leaving a spinning cone it passed through, where GJK on the capsule's
+/// segment alone (its precision relative to the segment's distance, about the capsule's radius)
+/// left the bounds too loose to step.
+#[test]
+fn capsule_leaving_a_cone() {
+    let a = body(
+        Shape::Capsule { half_height: 1.2336772592669938, radius: 0.8672969900862867 }.geometry().unwrap(),
+        DVec3::new(0.25, -0.5, 1.0),
+        DVec3::new(-0.5940085947679125, -0.9742081019494209, -0.385482758481817),
+        DQuat::from_xyzw(-0.8776400911890241, 0.21500905900518802, -0.4124587603196337, -0.11574431268540215),
+        DVec3::new(-0.23115694061719555, 0.6154141791500346, -2.297423917464457),
+    );
+    let b = body(
+        Shape::Cone { half_height: 0.8649473073384151, radius: 1.3536948598296066 }.geometry().unwrap(),
+        DVec3::new(-3.6681280409749095, -3.0271771208817015, 3.7070358665842926),
+        DVec3::new(0.7224778773230642, -0.7472120174875421, -1.2612798253345507),
+        DQuat::from_xyzw(0.023698843783052398, -0.2664633499413703, -0.5894163605573816, 0.7622493042624966),
+        DVec3::new(-0.4846658371565571, -1.6064629342221186, -2.3300452048254856),
+    );
+    assert!(check_pair(&a, &b, Window::new(0.0, 5.0), 4000, "capsule vs cone").len() >= 2);
+}
+
+/// Regression: a capsule passing through a spinning cylinder, where parry's GJK on the whole
+/// shapes a hair from contact returns closest points thousands of tolerances apart (parry's own
+/// distance query agrees with it there) while GJK on the capsule's segment does not.
+#[test]
+fn capsule_through_a_cylinder_where_gjk_fails() {
+    let a = body(
+        Shape::Capsule { half_height: 0.6732743885909533, radius: 0.4673471442095855 }.geometry().unwrap(),
+        DVec3::new(0.25, -0.5, 1.0),
+        DVec3::ZERO,
+        DQuat::from_xyzw(-0.86364283982503, 0.11849531548158597, 0.47038123332172366, 0.13719111037749956),
+        DVec3::new(2.6727864647873223, -2.104618913968983, 1.7378029678510636),
+    );
+    let b = body(
+        Shape::Cylinder { half_height: 1.4965987989382539, radius: 0.8299030379555883 }.geometry().unwrap(),
+        DVec3::new(-2.1962712480028137, 1.877521985320215, 3.4559357670716992),
+        DVec3::new(1.8584576227995722, -2.183949514052383, -2.1070119424139166),
+        DQuat::from_xyzw(0.28169180272687155, 0.004164265794124586, -0.6863357898774047, -0.6705039676991034),
+        DVec3::new(2.3293452233814804, 2.900805932110492, -1.0125379094001992),
+    );
+    assert!(check_pair(&a, &b, Window::new(0.0, 5.0), 4000, "capsule vs cylinder").len() >= 2);
+}
+
+/// Regression: a cylinder leaving a spinning cone, where GJK, a hair from contact, returns closest
+/// points hundreds of tolerances apart and the shapes' extreme points lie far off (flat faces
+/// nearly parallel): projecting GJK's points back and forth between the shapes finds close ones.
+#[test]
+fn cylinder_leaving_a_cone_where_gjk_fails() {
+    let a = body(
+        Shape::Cylinder { half_height: 0.9949133571143649, radius: 0.4959836576802795 }.geometry().unwrap(),
+        DVec3::new(0.25, -0.5, 1.0),
+        DVec3::new(0.0, 0.9306341675632507, 0.0),
+        DQuat::from_xyzw(-0.22190393481404433, -0.16114904805538158, -0.5060231966508482, -0.8177592264695922),
+        DVec3::new(-2.9900735965495486, 2.8381225175578733, -2.922482088626912),
+    );
+    let b = body(
+        Shape::Cone { half_height: 1.2446937448858635, radius: 0.6553087706419543 }.geometry().unwrap(),
+        DVec3::new(1.6207715326839647, -2.734576962533308, 3.337612356172342),
+        DVec3::new(-0.7813763348997127, 2.1128118331127523, -1.666724913866342),
+        DQuat::from_xyzw(0.9149309557236104, -0.24090611544485463, 0.31965240122042443, 0.05184527166451982),
+        DVec3::new(-0.9306778894067625, 2.4336735107299203, -0.6017994943166973),
+    );
+    assert!(!check_pair(&a, &b, Window::new(0.0, 5.0), 4000, "cylinder vs cone").is_empty());
+    // Where GJK failed: the bounds are as tight as the oracle.
+    let t = 2.1072636577201256;
+    let c = contact_geometry(pair(&a), pair(&b), t).unwrap();
+    let tol = contact_tolerance(&a.0, &b.0);
+    assert!((c.distance - distance(&a, &b, t)).abs() <= tol / 8.0, "{c:?} vs {}", distance(&a, &b, t));
+}
+
 /// Median, 90th percentile and largest of `counts`.
 fn spread(counts: &mut [u32]) -> (u32, u32, u32) {
     counts.sort();
