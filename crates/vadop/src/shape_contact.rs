@@ -910,9 +910,9 @@ impl ConvexPair<'_> {
     }
 
     /// Bounds from the last probe's axis, turned with either body, and witness points, carried
-    /// along with the bodies (or, if those drifted apart, each shape's extreme point projected on
-    /// the other), when they lie within half the room above the guard of each other: the step on
-    /// them then goes at least two thirds as far as on exact bounds. `None` otherwise (GJK then).
+    /// along with the bodies (or, if those drifted apart, closer points: see `closer_points`),
+    /// when they lie within half the room above the guard of each other: the step on them then
+    /// goes at least two thirds as far as on exact bounds. `None` otherwise (GJK then).
     fn warm_bounds(&self, a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, slack: f64) -> Option<Bounds> {
         let warm = self.warm.get()?;
         let witness = (*pose_a * warm.witness.0, *pose_b * warm.witness.1);
