@@ -638,21 +638,21 @@ fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64, DVec3)> {
 }
 
 /// The closer of `known` (a distance and the points at it) and the pairs met projecting each of
-/// the known points and each shape's extreme point along the axis `m` (from a to b) on the other
-/// shape, and back, `rounds` times in all: alternating projections approach closest points, also
-/// where GJK's are off or an extreme point is an arbitrary point of a flat face.
+/// the known points, and each shape's extreme point along `axis` (from a to b) if given, on the
+/// other shape, and back, `rounds` times in all: alternating projections approach closest points,
+/// also where GJK's are off or an extreme point is an arbitrary point of a flat face.
 fn closer_points(
     (a, pose_a): (&Scaled, &Pose),
     (b, pose_b): (&Scaled, &Pose),
-    m: DVec3,
     known: (f64, Option<(DVec3, DVec3)>),
+    axis: Option<DVec3>,
     rounds: usize,
 ) -> (f64, Option<(DVec3, DVec3)>) {
     let mut closest = known;
-    let extreme = [(true, b.support_point(pose_b, -m)), (false, a.support_point(pose_a, m))];
-    let known_points = known.1.map_or([None, None], |(x, y)| [Some((true, y)), Some((false, x))]);
+    let known_points = known.1.map(|(x, y)| [(true, y), (false, x)]);
+    let extreme = axis.map(|m| [(true, b.support_point(pose_b, -m)), (false, a.support_point(pose_a, m))]);
     // From a point of b, projecting on a, then on b, and so on; from a point of a, the other way.
-    for (from_b, mut point) in known_points.into_iter().flatten().chain(extreme) {
+    for (from_b, mut point) in known_points.into_iter().chain(extreme).flatten() {
         for round in 0..rounds {
             let onto_a = from_b == (round % 2 == 0);
             let Some((d, projected)) = (if onto_a { nearest(a, pose_a, point) } else { nearest(b, pose_b, point) })
@@ -847,7 +847,7 @@ fn convex_bounds(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, depth: bo
     // makes the axis matter to first order: look for a tighter axis and for closer points.
     if !settled(best, upper) && best.0 < band && effective(best, upper) > -band {
         let mut closer = |m: DVec3| {
-            (upper, witness) = closer_points((a, pose_a), (b, pose_b), m, (upper, witness), PROJECTION_ROUNDS);
+            (upper, witness) = closer_points((a, pose_a), (b, pose_b), (upper, witness), Some(m), PROJECTION_ROUNDS);
             upper
         };
         best = refine(a, pose_a, b, pose_b, best.1, best);
@@ -910,7 +910,7 @@ impl ConvexPair<'_> {
     }
 
     /// Bounds from the last probe's axis, turned with either body, and witness points, carried
-    /// along with the bodies (or, if those drifted apart, closer points: see `closer_points`),
+    /// along with the bodies (or, if those drifted apart, their projections on the other shape),
     /// when they lie within half the room above the guard of each other: the step on them then
     /// goes at least two thirds as far as on exact bounds. `None` otherwise (GJK then).
     fn warm_bounds(&self, a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, slack: f64) -> Option<Bounds> {
@@ -923,7 +923,7 @@ impl ConvexPair<'_> {
         let tight = |upper: f64| upper - lower <= 0.5 * (lower - guard(self.tol));
         let carried = ((witness.1 - witness.0).length(), Some(witness));
         let (upper, witness) =
-            if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), axis, carried, 1) };
+            if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
         tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
     }
 }
