@@ -40,11 +40,12 @@
 //! normal and the separation along it is the exact signed distance.
 //!
 //! Where spins dominate `mu` the steps are short and the bodies turn little between two probes:
-//! each probe of two solids first tries the last one's axis, turned with either body (a face
-//! normal turns with its face), and its witness points, carried along with the bodies. Any axis
-//! still gives a lower bound and any two points of the shapes an upper bound; when they lie within
-//! half the room above `tol/2` of each other, the step on them goes at least two thirds as far as
-//! on exact bounds, and GJK is not needed.
+//! each probe of two solids (or of a solid and each mesh triangle the last probe measured) first
+//! tries the last one's axis, turned with either shape (a face normal turns with its face), and
+//! its witness points, carried along with the shapes. Any axis still gives a lower bound and any
+//! two points of the shapes an upper bound; when they lie within half the room above `tol/2` of
+//! each other, the step on them goes at least two thirds as far as on exact bounds, and GJK is not
+//! needed.
 //!
 //! The bounds never rest on GJK's own accuracy. The lower bound is a separation along an axis,
 //! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
@@ -122,7 +123,7 @@ use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d_f64::query::point::local_point_projection_on_support_map;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::{Ball, Capsule, Cone, Cuboid, Cylinder, Segment, Shape, SupportMap, TriMesh, Triangle};
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 /// How a body's orientation evolves since its last velocity change: the exact torque-free
 /// rotation for a free body, [`Fixed`] for one that never turns.
@@ -891,13 +892,49 @@ struct ConvexPair<'a> {
     warm: Cell<Option<Warm>>,
 }
 
-/// A probe's axis and witness points, fixed in the bodies (in the frames of their poses): after a
-/// step the points still bound the distance, and so does the axis turned with the body whose face
-/// (or curved surface) it is the normal of, nearly as tightly.
+/// A probe's axis and witness points, fixed in the bodies (in frames that move with them): after
+/// a step the points still bound the distance, and so does the axis turned with the body whose
+/// face (or curved surface) it is the normal of, nearly as tightly.
 #[derive(Debug, Clone, Copy)]
 struct Warm {
     axis: (DVec3, DVec3),
     witness: (DVec3, DVec3),
+}
+
+impl Warm {
+    /// What a probe's `bounds` leave for the next one; `carry` maps each shape's moving frame to
+    /// the probe's.
+    fn new(bounds: &Bounds, carry: (&Pose, &Pose)) -> Option<Warm> {
+        let (x, y) = bounds.witness?;
+        Some(Warm {
+            axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
+            witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
+        })
+    }
+
+    /// Bounds from the axis, turned with either shape, and the witness points, carried along with
+    /// them (or, if those drifted apart, their projections on the other shape), when they lie
+    /// within half the room above `guard(tol)` of each other: the step on them then goes at least
+    /// two thirds as far as on exact bounds. `None` otherwise (GJK then).
+    fn bounds(
+        &self,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        carry: (&Pose, &Pose),
+        tol: f64,
+        slack: f64,
+    ) -> Option<Bounds> {
+        let witness = (*carry.0 * self.witness.0, *carry.1 * self.witness.1);
+        let (lower, axis) = [carry.0.rotation * self.axis.0, carry.1.rotation * self.axis.1]
+            .map(|n| (separation(a, pose_a, b, pose_b, n), n))
+            .into_iter()
+            .fold((f64::NEG_INFINITY, DVec3::X), |best, c| if c.0 > best.0 { c } else { best });
+        let tight = |upper: f64| upper - lower <= 0.5 * (lower - guard(tol));
+        let carried = ((witness.1 - witness.0).length(), Some(witness));
+        let (upper, witness) =
+            if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
+        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
+    }
 }
 
 impl ConvexPair<'_> {
@@ -908,24 +945,6 @@ impl ConvexPair<'_> {
             self.b.pose(self.b.orientation(tau), centre, self.scale),
         )
     }
-
-    /// Bounds from the last probe's axis, turned with either body, and witness points, carried
-    /// along with the bodies (or, if those drifted apart, their projections on the other shape),
-    /// when they lie within half the room above the guard of each other: the step on them then
-    /// goes at least two thirds as far as on exact bounds. `None` otherwise (GJK then).
-    fn warm_bounds(&self, a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, slack: f64) -> Option<Bounds> {
-        let warm = self.warm.get()?;
-        let witness = (*pose_a * warm.witness.0, *pose_b * warm.witness.1);
-        let (lower, axis) = [pose_a.rotation * warm.axis.0, pose_b.rotation * warm.axis.1]
-            .map(|n| (separation(a, pose_a, b, pose_b, n), n))
-            .into_iter()
-            .fold((f64::NEG_INFINITY, DVec3::X), |best, c| if c.0 > best.0 { c } else { best });
-        let tight = |upper: f64| upper - lower <= 0.5 * (lower - guard(self.tol));
-        let carried = ((witness.1 - witness.0).length(), Some(witness));
-        let (upper, witness) =
-            if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
-        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
-    }
 }
 
 impl Gauge for ConvexPair<'_> {
@@ -933,12 +952,12 @@ impl Gauge for ConvexPair<'_> {
         let (pose_a, pose_b) = self.poses(tau);
         let slack = SLACK * (pose_b.translation.length() + self.size);
         let (ga, gb) = (self.a.support(self.scale), self.b.support(self.scale));
-        let bounds = self
-            .warm_bounds(&ga, &pose_a, &gb, &pose_b, slack)
+        // Each shape's frame moves with its body.
+        let carry = (&pose_a, &pose_b);
+        let bounds = (self.warm.get())
+            .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
-        let carried = |(x, y): (DVec3, DVec3)| (pose_a.inverse_transform_point(x), pose_b.inverse_transform_point(y));
-        let axis = (pose_a.rotation.inverse() * bounds.axis, pose_b.rotation.inverse() * bounds.axis);
-        self.warm.set(bounds.witness.map(|w| Warm { axis, witness: carried(w) }));
+        self.warm.set(Warm::new(&bounds, carry));
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
@@ -1013,6 +1032,8 @@ struct MeshPair<'a> {
     spin: f64,
     size: f64,
     tol: f64,
+    /// What the last probe found for each triangle it measured, to start the next one from.
+    warm: RefCell<Vec<(u32, Warm)>>,
 }
 
 /// One triangle's bounds rank by their lower bound in parry's best-first search of the mesh.
@@ -1060,7 +1081,9 @@ impl MeshPair<'_> {
         let extent = |d: DVec3| d.dot(body.support_point(&pose, d));
         let high = DVec3::new(extent(DVec3::X), extent(DVec3::Y), extent(DVec3::Z));
         let low = -DVec3::new(extent(-DVec3::X), extent(-DVec3::Y), extent(-DVec3::Z));
-        self.trimesh.bvh().find_best(
+        let mut previous = self.warm.borrow_mut();
+        let next = RefCell::new(Vec::with_capacity(previous.len()));
+        let found = self.trimesh.bvh().find_best(
             f64::MAX,
             |node: &BvhNode, _| {
                 // No triangle in the node's box is nearer than that box is to the body's.
@@ -1077,13 +1100,23 @@ impl MeshPair<'_> {
                 let triangle = self.triangle(id, centre);
                 let slack = SLACK * (triangle.a.length() + self.size);
                 let support = Scaled::new(&triangle, 1.0);
-                let bounds = convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack);
+                // The triangle's frame is fixed to it at its first vertex, the body's to the body.
+                let carry = (&Pose::from_translation(triangle.a), &pose);
+                let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
+                let bounds = (warm
+                    .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
+                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack));
+                if let Some(warm) = Warm::new(&bounds, carry) {
+                    next.borrow_mut().push((id, warm));
+                }
                 if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
                     nearest.set(Some(bounds));
                 }
                 Some(bounds)
             },
-        )
+        );
+        *previous = next.into_inner();
+        found
     }
 }
 
@@ -1394,8 +1427,19 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
                 PairGauge::Plane(pair, first_static)
             } else {
                 let trimesh = parry.as_trimesh().expect("static-only shapes are half-spaces or meshes");
-                let pair =
-                    MeshPair { body, mesh: fixed, trimesh, scale, offset, velocity, spin, size: size * scale, tol };
+                let warm = RefCell::new(Vec::new());
+                let pair = MeshPair {
+                    body,
+                    mesh: fixed,
+                    trimesh,
+                    scale,
+                    offset,
+                    velocity,
+                    spin,
+                    size: size * scale,
+                    tol,
+                    warm,
+                };
                 PairGauge::Mesh(pair, first_static)
             }
         }
