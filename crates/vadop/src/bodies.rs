@@ -94,9 +94,11 @@ pub struct Rigid {
     active: bool,
 }
 
-/// The spin of a body that does not turn.
+/// The spin of a body that does not turn, made once.
 fn steady() -> FreeRotation {
-    FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::ZERO)
+    static STEADY: std::sync::LazyLock<FreeRotation> =
+        std::sync::LazyLock::new(|| FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::ZERO));
+    *STEADY
 }
 
 /// Principal moments of a body of `geometry` (a solid ball of `radius` without one) and `mass`;
@@ -247,7 +249,13 @@ impl Bodies {
     /// True when body `i` is a sphere (of its state's radius), plain or added as a shape.
     #[inline]
     pub fn is_sphere(&self, i: usize) -> bool {
-        self.geometry(i).is_none_or(|g| matches!(g.shape(), crate::shape::Shape::Sphere { .. }))
+        !self.rigid.active || self.geometry(i).is_none_or(|g| matches!(g.shape(), crate::shape::Shape::Sphere { .. }))
+    }
+
+    /// True when bodies `i` and `j` are both spheres: a world of spheres answers with one load.
+    #[inline]
+    pub fn are_spheres(&self, i: usize, j: usize) -> bool {
+        !self.rigid.active || (self.is_sphere(i) && self.is_sphere(j))
     }
 
     /// True for a static body.
@@ -265,13 +273,31 @@ impl Bodies {
     /// Orientation of body `i` (its principal axes to world) at absolute time `t`.
     #[inline]
     pub fn orientation_at(&self, i: usize, t: f64) -> DQuat {
-        self.spin(i).orientation_at(t - self.state[i].motion.since)
+        match self.rigid.spin.get(i) {
+            Some(spin) => spin.orientation_at(t - self.state[i].motion.since),
+            None => DQuat::IDENTITY,
+        }
     }
 
     /// Angular velocity of body `i` (world frame) at absolute time `t`.
     #[inline]
     pub fn angular_velocity_at(&self, i: usize, t: f64) -> DVec3 {
-        self.spin(i).angular_velocity_at(t - self.state[i].motion.since)
+        match self.rigid.spin.get(i) {
+            Some(spin) => spin.angular_velocity_at(t - self.state[i].motion.since),
+            None => DVec3::ZERO,
+        }
+    }
+
+    /// Kinetic energy of body `i`'s spin (none in a world of spheres).
+    #[inline]
+    pub fn spin_energy(&self, i: usize) -> f64 {
+        self.rigid.spin.get(i).map_or(0.0, FreeRotation::kinetic_energy)
+    }
+
+    /// Angular momentum of body `i`'s spin about its centre of mass, world frame.
+    #[inline]
+    pub fn spin_momentum(&self, i: usize) -> DVec3 {
+        self.rigid.spin.get(i).map_or(DVec3::ZERO, FreeRotation::angular_momentum)
     }
 
     /// Body `i`'s motion for the shape narrow phase.

@@ -43,7 +43,7 @@ pub(crate) fn pair_start(
     (b, state_b): (usize, &BodyState),
     window: Window,
 ) -> Found {
-    if bodies.is_sphere(a) && bodies.is_sphere(b) {
+    if bodies.are_spheres(a, b) {
         let time = pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
         return window.contains(time).then_some((time, false));
     }
@@ -54,7 +54,7 @@ pub(crate) fn pair_start(
 
 /// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part.
 pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
-    if bodies.is_sphere(a) && bodies.is_sphere(b) {
+    if bodies.are_spheres(a, b) {
         let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
         return window.contains(time).then_some((time, false));
     }
@@ -73,7 +73,8 @@ pub(crate) fn wall_start(
     bounds: &BoxBounds,
     window: Window,
 ) -> Option<std::result::Result<(f64, Wall), f64>> {
-    let found = match bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) {
+    let shape = if bodies.is_sphere(i) { None } else { bodies.geometry(i) };
+    let found = match shape {
         None => Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max)?),
         Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), bounds.min, bounds.max, window) {
             Ok(found) => Ok(found?),
@@ -90,7 +91,7 @@ pub(crate) fn wall_start(
 /// Where bodies `i` and `j` touch at `t`, and the unit normal from `i` towards `j`.
 #[inline]
 pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVec3, DVec3) {
-    if !(bodies.is_sphere(i) && bodies.is_sphere(j)) {
+    if !bodies.are_spheres(i, j) {
         if let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) {
             let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
             if let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) {
@@ -120,7 +121,7 @@ pub(crate) fn wall_geometry(bodies: &Bodies, i: usize, wall: Wall, bounds: &BoxB
 /// True when bodies `i` and `j` touch at `t` and are not moving apart at the contact: the jam
 /// rule's test for who belongs to a jammed cluster.
 pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> bool {
-    if bodies.is_sphere(i) && bodies.is_sphere(j) {
+    if bodies.are_spheres(i, j) {
         let reach = (bodies.radius(i) + bodies.radius(j)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
         let scale = unit_scale(reach);
         let offset = (bodies.position_at(j, t) - bodies.position_at(i, t)) * scale;
@@ -138,7 +139,7 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
 /// How deep bodies `i` and `j` interpenetrate at `t` beyond the contact tolerance (touching is
 /// allowed), for the start-of-run check of simulate mode.
 pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option<f64> {
-    if bodies.is_sphere(i) && bodies.is_sphere(j) {
+    if bodies.are_spheres(i, j) {
         let reach = bodies.radius(i) + bodies.radius(j);
         // Scaled so the square neither underflows nor overflows at any scale.
         let scale = unit_scale(reach);

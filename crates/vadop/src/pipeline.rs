@@ -347,7 +347,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let plain = bodies.is_sphere(i) && bodies.is_sphere(j) && physics.friction == 0.0;
+        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0;
         // Static level geometry turns bodies back in detect mode too, as the walls do.
         let responds = physics.mode == Mode::Simulate || bodies.is_fixed(i) || bodies.is_fixed(j);
         let mut impulse = 0.0;

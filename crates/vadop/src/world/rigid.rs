@@ -164,7 +164,7 @@ impl World {
         self.moving_ids()
             .map(|i| {
                 let p = self.bodies.position_at(i, t).cross(self.bodies.mass[i] * self.bodies.velocity(i));
-                p + self.bodies.spin(i).angular_momentum()
+                p + self.bodies.spin_momentum(i)
             })
             .sum()
     }
