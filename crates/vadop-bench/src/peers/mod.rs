@@ -73,7 +73,7 @@ impl Scene {
 
 #[derive(Debug, Args)]
 #[command(after_help = "Defaults: --bodies 1000,2000,10000,100000,1000000 (shapes: 1000,2000,10000,100000; with \
---quick: 1000,2000); --frames 30 up to 10^4 bodies, 10 up to 10^5, 3 above (with --quick: 10); --timeout 120 (with \
+--quick: 1000,2000, shapes 500,1000); --frames 30 up to 10^4 bodies, 10 up to 10^5, 3 above (with --quick: 10); --timeout 120 (with \
 --quick: 60).")]
 pub struct PeersArgs {
     #[command(flatten)]
@@ -174,7 +174,9 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
         ));
     }
     let bodies = args.grid.bodies.clone().unwrap_or(match (quick, scene) {
-        (true, _) => vec![1000, 2000],
+        (true, Scene::Spheres) => vec![1000, 2000],
+        // vadop-brute and the brute-force reference cost more per pair of shapes than of spheres.
+        (true, Scene::Shapes) => vec![500, 1000],
         (false, Scene::Spheres) => vec![1000, 2000, 10_000, 100_000, 1_000_000],
         (false, Scene::Shapes) => vec![1000, 2000, 10_000, 100_000],
     });
@@ -203,7 +205,7 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
             })
             .collect::<CliResult<_>>()?,
     };
-    let programs = build_peers(&repository_root()?, &pipelines)?;
+    let programs = build_peers(&pipelines)?;
     let scratch = runner.scratch_file("peers");
     crate::common::create_dir(&scratch)?;
     let (trajectory, reference_file, contacts) =
@@ -351,7 +353,10 @@ impl Programs {
 /// the C++ and rapier peers they need (both builds do nothing when up to date), so vadop's own
 /// pipelines run without them. Installing system packages is left to scripts/install-peers.sh,
 /// run as root: this program only says what is missing.
-fn build_peers(root: &Path, pipelines: &[(&str, bool, Program)]) -> CliResult<Programs> {
+fn build_peers(pipelines: &[(&str, bool, Program)]) -> CliResult<Programs> {
+    let needs = |wanted: fn(&Program) -> bool| pipelines.iter().any(|p| wanted(&p.2));
+    let peers = |p: &Program| !matches!(p, Program::Vadop(_));
+    let root = if needs(peers) { repository_root()? } else { PathBuf::new() };
     let cpp = root.join("bench/peers/cpp");
     let rapier = root.join("bench/peers/rapier");
     let programs = Programs {
@@ -359,9 +364,8 @@ fn build_peers(root: &Path, pipelines: &[(&str, bool, Program)]) -> CliResult<Pr
         fcl: cpp.join("build/peer-fcl"),
         rapier: rapier.join("target/release/vadop-peer-rapier"),
     };
-    let needs = |wanted: fn(&Program) -> bool| pipelines.iter().any(|p| wanted(&p.2));
     if needs(|p| matches!(p, Program::Bullet | Program::Fcl)) {
-        check_libraries(root)?;
+        check_libraries(&root)?;
         eprintln!("building the Bullet and FCL peers (make -C {})", cpp.display());
         checked(Command::new("make").arg("-s").arg("-C").arg(&cpp), "make")?;
     }

@@ -38,9 +38,10 @@ use vadop::{Body, BodyShape, BoxBounds, Method, Mode, Touched, World, WorldConfi
 
 const MAGIC: &[u8; 8] = b"VADOPSH1";
 
-/// Spins are uniform in [0, this] radians per frame. Below pi, so a frame's start and end
-/// orientations name its rotation unambiguously, as Bullet and FCL need (they derive the angular
-/// velocity from the two).
+/// Spins are uniform in [-this, this] radians per frame. Bullet and FCL derive a frame's angular
+/// velocity from its start and end orientations, which name the rotation only below 2 pi / 3
+/// (Bullet's quaternion from a matrix may take the long way round above it; FCL's angle-axis
+/// holds to pi).
 pub const MAX_SPIN: f64 = 1.0;
 
 /// How the scene's shapes are written in the trajectory file.
@@ -250,4 +251,69 @@ fn put_u64s(bytes: &mut Vec<u8>, values: &[u64]) {
 
 fn put_f64s(bytes: &mut Vec<u8>, values: &[f64]) {
     bytes.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::peers::trajectory::read_contacts;
+
+    /// Reads the file the way the peers do and checks that every frame is the motion the peers
+    /// assume: the centre of mass moves in a straight line at its velocity and the body turns about
+    /// it at its constant angular velocity, from each state to the next; and no body leaves the box.
+    #[test]
+    fn trajectory_file_holds_straight_paths_and_steady_spins() {
+        let dir = std::env::temp_dir().join(format!("vadop-peers-shapes-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        export(60, 5.0, 4, true, &dir).unwrap();
+        let bytes = std::fs::read(dir.join("trajectory.bin")).unwrap();
+        let contacts = read_contacts(&dir.join("reference.bin")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let at = std::cell::Cell::new(8);
+        let take = |count: usize| {
+            at.set(at.get() + count);
+            &bytes[at.get() - count..at.get()]
+        };
+        let word = || u64::from_le_bytes(take(8).try_into().unwrap());
+        let float = || f64::from_le_bytes(take(8).try_into().unwrap());
+        let vector = || DVec3::new(float(), float(), float());
+        assert_eq!(&bytes[..8], MAGIC);
+        let (n, frames, dt) = (word() as usize, word(), float());
+        let (low, high) = (vector(), vector());
+        assert_eq!((n, frames, dt), (60, 4, 1.0 / FRAMES_PER_SECOND));
+        let table: Vec<(DVec3, f64)> = (0..word())
+            .map(|_| {
+                let (kind, _sizes, centre, radius) = (word(), vector(), vector(), float());
+                let (vertices, triangles) = (word() as usize, word() as usize);
+                assert_eq!(kind == Kind::ConvexHull as u64, vertices >= 4 && triangles >= 4);
+                take(24 * vertices + 12 * triangles);
+                (centre, radius)
+            })
+            .collect();
+        assert_eq!(table.len(), shapes().len());
+        let shape_of: Vec<usize> = (0..n).map(|_| u32::from_le_bytes(take(4).try_into().unwrap()) as usize).collect();
+        let states: Vec<Vec<[f64; 13]>> =
+            (0..=frames).map(|_| (0..n).map(|_| std::array::from_fn(|_| float())).collect()).collect();
+        assert_eq!(at.get(), bytes.len());
+        let orientation = |s: &[f64; 13]| DQuat::from_xyzw(s[3], s[4], s[5], s[6]);
+        let centre_of_mass =
+            |s: &[f64; 13], i: usize| DVec3::new(s[0], s[1], s[2]) + orientation(s) * table[shape_of[i]].0;
+        for pair in states.windows(2) {
+            for i in 0..n {
+                let (now, next) = (&pair[0][i], &pair[1][i]);
+                let (velocity, spin) = (DVec3::new(now[7], now[8], now[9]), DVec3::new(now[10], now[11], now[12]));
+                let moved = centre_of_mass(now, i) + velocity * dt;
+                assert!((centre_of_mass(next, i) - moved).length() < 1e-9, "body {i} leaves its line");
+                let turned = DQuat::from_scaled_axis(spin * dt) * orientation(now);
+                assert!(turned.dot(orientation(next)).abs() > 1.0 - 1e-12, "body {i} does not spin steadily");
+                assert!((DVec3::new(next[10], next[11], next[12]) - spin).length() < 1e-9 * (1.0 + spin.length()));
+                assert!(spin.length() * dt <= MAX_SPIN * (1.0 + 1e-12));
+                let r = table[shape_of[i]].1;
+                let c = centre_of_mass(next, i);
+                assert!((c - r).cmpgt(low).all() && (c + r).cmplt(high).all(), "body {i} reaches a wall");
+            }
+        }
+        assert!(!contacts.is_empty());
+        assert!(contacts.iter().all(|c| (c[0] as u64) < frames && c[1] < c[2] && (c[2] as usize) < n));
+    }
 }
