@@ -622,7 +622,9 @@ fn markdown_section(outputs: &Outputs, rows: &[Row], plot: Option<String>) -> St
             "Each library decides touching within its own tolerance, so grazing pairs may differ: vadop within 1e-6 of \
              the pair's bounding radii (1e-9 for two spheres); parry's nonlinear cast (double precision) at its GJK \
              convergence threshold; Bullet's btContinuousConvexCollision within 0.001 length units, in single precision; \
-             FCL's conservative advancement within 1e-4 of the frame in time. Every library has all six shapes; \
+             FCL's conservative advancement within 1e-4 of the frame in time. A pair that overlaps at the frame \
+             start, separates and touches again within the frame is a contact for vadop, while the peers' casts stop \
+             at the first time of impact, the frame start: they miss it. Every library has all six shapes; \
              vadop-discrete does not run (vadop's discrete method handles spheres only).\n"
         );
     }
