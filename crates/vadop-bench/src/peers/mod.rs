@@ -356,6 +356,7 @@ impl Programs {
 fn build_peers(pipelines: &[(&str, bool, Program)]) -> CliResult<Programs> {
     let needs = |wanted: fn(&Program) -> bool| pipelines.iter().any(|p| wanted(&p.2));
     let peers = |p: &Program| !matches!(p, Program::Vadop(_));
+    // vadop's own pipelines run anywhere: the repository is looked for only when a peer runs.
     let root = if needs(peers) { repository_root()? } else { PathBuf::new() };
     let cpp = root.join("bench/peers/cpp");
     let rapier = root.join("bench/peers/rapier");
