@@ -60,14 +60,21 @@ def test_stubs_and_marker_are_installed() -> None:
         ("bouncing_spheres.py", ["--bodies", "100", "--frames", "10"], "kinetic energy drift"),
         ("bullets_through_crowd.py", ["--crowd", "300", "--bullets", "2"], "bullet 300: touched"),
         ("detect_comparison.py", ["--bodies", "200", "--frames", "5"], "discrete"),
+        ("spinning_boxes.py", ["--boxes", "40", "--bullets", "2", "--frames", "10", "--out", "{page}"], "contact starts at"),
+        ("debris_on_mesh.py", ["--debris", "20", "--frames", "30", "--out", "{page}"], "bounces on the terrain; kinetic energy"),
     ],
 )
-def test_example_scripts_run(script: str, args: list[str], expected: str) -> None:
-    assert {p.name for p in EXAMPLES} == {"bouncing_spheres.py", "bullets_through_crowd.py", "detect_comparison.py"}
+def test_example_scripts_run(script: str, args: list[str], expected: str, tmp_path: Path) -> None:
+    assert {p.name for p in EXAMPLES} == {"bouncing_spheres.py", "bullets_through_crowd.py", "detect_comparison.py",
+                                          "spinning_boxes.py", "debris_on_mesh.py"}
+    page = tmp_path / "run.html"
+    args = [arg.replace("{page}", str(page)) for arg in args]
     result = subprocess.run([sys.executable, str(ROOT / "examples" / "python" / script), *args],
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert expected in result.stdout
+    # The examples that write a viewer page write it where they are told.
+    assert page.exists() == ("--out" in args)
 
 
 def test_version_matches_pyproject_and_the_installed_metadata() -> None:
