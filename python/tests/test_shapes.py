@@ -3,6 +3,8 @@ level geometry stops what reaches it, every continuous method finds the contacts
 brute-force oracle in a mixed world, and elastic frictionless impacts keep energy and momenta.
 Bad input is in test_errors.py."""
 
+import threading
+import time
 from typing import Any
 
 import numpy as np
@@ -269,3 +271,27 @@ def test_volumes_bound_every_moving_body_about_its_centre_of_mass() -> None:
     end = start + np.einsum("ij,ij->i", world.velocities[rows], axes) / 30
     assert np.all(lo <= np.minimum(start, end)) and np.all(hi >= np.maximum(start, end))
     assert np.all(hi - lo <= np.abs(end - start) + 2 * radii * (1 + 1e-9))
+
+
+def test_add_bodies_releases_the_gil() -> None:
+    # As test_world.py's test_step_releases_the_gil: the longest stretch the main thread was kept
+    # from running while another thread added bodies, against the time the call took. Only the
+    # reading of the arrays holds the GIL; placing each shape in the box does not.
+    world = vadop.World(box=1000.0, mode="detect")
+    brick = world.add_shape("cuboid", half_extents=[0.5, 0.3, 0.2])
+    positions = np.random.default_rng(1).uniform(2, 998, (200_000, 3))
+    took: list[float] = []
+
+    def add() -> None:
+        started = time.perf_counter()
+        world.add_bodies(brick, positions)
+        took.append(time.perf_counter() - started)
+
+    worker = threading.Thread(target=add)
+    longest_gap, last = 0.0, time.perf_counter()
+    worker.start()
+    while worker.is_alive():
+        now = time.perf_counter()
+        longest_gap, last = max(longest_gap, now - last), now
+    worker.join()
+    assert took and longest_gap < 0.5 * took[0], (longest_gap, took)
