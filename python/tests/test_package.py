@@ -89,7 +89,7 @@ def test_version_matches_pyproject_and_the_installed_metadata() -> None:
     assert "__version__" in vadop.__all__
 
 
-def test_readme_python_example_and_plot_calls_run(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_readme_python_examples_and_plot_calls_run(monkeypatch: pytest.MonkeyPatch) -> None:
     import re
 
     import matplotlib
@@ -98,11 +98,14 @@ def test_readme_python_example_and_plot_calls_run(monkeypatch: pytest.MonkeyPatc
     readme = (ROOT / "README.md").read_text()
     section = readme.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
     blocks = re.findall(r"```python\n(.*?)```", section, re.DOTALL)
-    assert len(blocks) == 1
+    assert len(blocks) == 2  # spheres, then shapes
     monkeypatch.chdir(ROOT)  # the benchmark CSV's path is relative to the clone
-    namespace: dict[str, object] = {}
-    exec(compile(blocks[0], "README.md", "exec"), namespace)
-    # The plot calls the section shows, run on what the example made.
+    # Each block on its own, as a reader would paste it.
+    namespaces: list[dict[str, object]] = [{} for _ in blocks]
+    for block, namespace in zip(blocks, namespaces):
+        exec(compile(block, "README.md", "exec"), namespace)
+    # The plot calls the section shows use what the first block made.
+    namespace = namespaces[0]
     calls = re.findall(r"`(vadop\.plot\.\w+\(.*?\))`", section)
     assert {c.split("(")[0] for c in calls} == {"vadop.plot.benchmark", "vadop.plot.cost_split", "vadop.plot.contact_timeline"}
     exec("import vadop.plot", namespace)
