@@ -2,10 +2,10 @@
 //! [`Shape`], a [`Shape`] written back as the keyword arguments that make it, and the triangles
 //! of a shape's surface for drawing.
 //!
-//! Each kind's parameters are listed once, in [`KINDS`]: the parser, the messages and the
-//! read-back all follow that table. Values are only converted here (an array of the right dtype
-//! and shape, a finite number); what makes a shape valid (sizes > 0, hulls with volume, meshes
-//! with good indices) is the core's to say, in [`Shape::geometry`].
+//! Each kind's parameters are listed once, in [`KINDS`], which the parser and its messages follow;
+//! [`describe`] writes the same names back. Values are only converted here (an array of the right
+//! dtype and shape, a finite number); what makes a shape valid (sizes > 0, hulls with volume,
+//! meshes with good indices) is the core's to say, in [`Shape::geometry`].
 
 use super::{checked_array, finite_row, vectors, vectors_array};
 use glam::DVec3;
@@ -18,7 +18,7 @@ use pyo3::types::PyDict;
 use vadop::shape::{Shape, ShapeGeometry};
 
 /// Every kind `add_shape` takes, with its parameters in the order messages list them.
-pub(crate) const KINDS: [(&str, &[&str]); 8] = [
+const KINDS: [(&str, &[&str]); 8] = [
     ("sphere", &["radius"]),
     ("cuboid", &["half_extents"]),
     ("capsule", &["half_height", "radius"]),
