@@ -22,7 +22,6 @@ use std::time::{Duration, Instant};
 use vadop::axis_pool::MAX_AXES;
 use vadop::bounding_volume::interval;
 use vadop::collapse::DEFAULT_CONTACT_DURATION;
-use vadop::error::MAX_MAGNITUDE;
 use vadop::memory;
 use vadop::scene::{PaperScene, MAX_SCENE_BODIES};
 use vadop::shape::ShapeGeometry;
@@ -876,16 +875,9 @@ impl PyWorld {
         let ids = ids_of(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
         let angular_velocities = vectors(angular_velocities, "angular_velocities", Some(ids.len()))?;
-        // The core sets one body at a time and checks each as it goes: check every row's range
-        // first, so a bad last row changes no body.
-        check_in_range(&velocities, "velocities")?;
-        check_in_range(&angular_velocities, "angular_velocities")?;
         let mut state = self.lock(py)?;
         let handles = moving_handles(&state.world, &ids, "ids")?;
-        for ((handle, velocity), angular_velocity) in handles.into_iter().zip(velocities).zip(angular_velocities) {
-            state.world.set_motion(handle, velocity, angular_velocity).map_err(value_error)?;
-        }
-        Ok(())
+        state.world.set_motions(&handles, &velocities, &angular_velocities).map_err(value_error)
     }
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
@@ -1257,18 +1249,6 @@ fn moving_handles(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<BodyH
         }
     }
     Ok(handles)
-}
-
-/// Fails naming the first row of `rows` with a component beyond the core's range (the message of
-/// the core's own check, with the row's place).
-fn check_in_range(rows: &[DVec3], name: &str) -> PyResult<()> {
-    match rows.iter().position(|v| v.abs().max_element() > MAX_MAGNITUDE) {
-        Some(i) => Err(PyValueError::new_err(format!(
-            "{name}[{i}] = {:?} is out of range: every component must have magnitude at most {MAX_MAGNITUDE:e}",
-            rows[i].to_array()
-        ))),
-        None => Ok(()),
-    }
 }
 
 /// A shape id given as an int, before `WorldState::shape_id` checks that it names a shape.
