@@ -17,7 +17,7 @@ use crate::free_rotation::FreeRotation;
 use crate::handle::BodyHandle;
 use crate::narrow_phase::Motion;
 use crate::proxy::prefetch;
-use crate::response::RigidSide;
+use crate::response::{Impacted, RigidSide};
 use crate::shape::ShapeGeometry;
 use crate::shape_contact::{RigidMotion, Spin};
 use glam::{DMat3, DQuat, DVec3};
@@ -315,17 +315,22 @@ impl Bodies {
 
     /// Body `i` at time `t` as a side of a contact at `point` (what the impulse needs).
     pub fn rigid_side(&self, i: usize, t: f64, point: DVec3) -> RigidSide {
+        self.impacted(i, t).side(point)
+    }
+
+    /// Body `i` at time `t` as an impact sees it: immovable when static.
+    pub fn impacted(&self, i: usize, t: f64) -> Impacted {
         if self.is_fixed(i) {
-            return RigidSide::FIXED;
+            return Impacted::FIXED;
         }
         let rotation = DMat3::from_quat(self.orientation_at(i, t));
         let inverse = DMat3::from_diagonal(self.principal_inertia(i).recip());
-        RigidSide {
+        Impacted {
             velocity: self.velocity(i),
             angular_velocity: self.angular_velocity_at(i, t),
             inverse_mass: self.inverse_mass(i),
             inverse_inertia: rotation * inverse * rotation.transpose(),
-            arm: point - self.position_at(i, t),
+            centre: self.position_at(i, t),
         }
     }
 
