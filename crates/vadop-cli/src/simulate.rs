@@ -339,7 +339,7 @@ fn resume(path: &Path, files: Files, args: &SimulateArgs) -> CliResult<()> {
             args.dt
         )
     })?;
-    let scene = Scene { bounds: world.bounds(), spheres: world.spheres().map(|(_, s)| s).collect() };
+    let scene = Scene::new(world.bounds(), world.spheres().map(|(_, s)| s).collect());
     let source = format!("saved world {} at time {} (frame {frames_done})", path.display(), world.time());
     run_world(world, None, scene, source, frames_done, files, args)
 }
