@@ -121,6 +121,10 @@ fn kind_shapes_prints_what_it_holds_and_reports_spins_and_its_scene_replays() {
     ok(vadop(&["simulate", "--scene", &text(&scene), "--frames", "10", "--quiet", "--json", &text(&replay)]));
     let replayed: serde_json::Value = serde_json::from_slice(&std::fs::read(&replay).unwrap()).unwrap();
     assert_eq!(replayed["summary"]["contacts"]["total"].as_u64(), Some(total));
+    // Brute force tests every pair, which for shapes costs far more: by default it checks only
+    // scenes of up to 300 bodies with shapes (3000 of spheres).
+    let large = ok(vadop(&["simulate", "--kind", "shapes", "--bodies", "400", "--frames", "1"]));
+    assert!(large.contains("accuracy    not checked"), "{large}");
     // A sphere-only run says nothing of spins.
     let spheres = ok(vadop(&["simulate", "--bodies", "100", "--frames", "2"]));
     assert!(!spheres.contains("spin"), "{spheres}");
