@@ -51,7 +51,9 @@ def world_with(**changes: Any) -> vadop.World:
         (dict(positions=np.zeros((2, 3, 1))), ValueError, "got float64 of shape (2, 3, 1)"),
         (dict(velocities=np.zeros((3, 3))), ValueError, "velocities must be a float64 array of shape (2, 3), got float64 of shape (3, 3)"),
         (dict(velocities=np.zeros((2, 3), dtype=np.complex128)), TypeError, "velocities must be a float64 array"),
-        (dict(velocities=None), TypeError, "velocities must be a float64 array of shape (2, 3), got NoneType"),
+        (dict(velocities=None), TypeError, "World() missing velocities: spheres need positions, velocities and radii (give none of them for a world with no spheres yet)"),
+        (dict(positions=None, radii=None), TypeError, "World() missing positions and radii: spheres need positions, velocities and radii"),
+        (dict(positions=None, velocities=None, radii=None), TypeError, "World() missing positions, velocities and radii: spheres need"),
         (dict(radii=np.array([0.5])), ValueError, "radii must be a float64 array of shape (2,), got float64 of shape (1,)"),
         (dict(radii=np.array([1, 1])), TypeError, "radii must be a float64 array of shape (2,), got int64"),
         (dict(radii=np.array([0.5, 0.0])), ValueError, "radii[1] must be a finite number > 0, got 0"),
@@ -187,6 +189,138 @@ def test_bad_calls_change_nothing(call: Callable[[vadop.World], object], error: 
     assert snapshot(world) == before
     # The world still works.
     world.step(0.1)
+
+
+def shaped_world(**settings: Any) -> vadop.World:
+    """GOOD's two spheres (ids 0, 1), shapes 0 (a brick), 1 (a mesh triangle) and 2 (a floor), a
+    moving brick (id 2) and the static floor (id 3)."""
+    world = world_with(**settings)
+    brick = world.add_shape("cuboid", half_extents=[0.5, 0.25, 0.25])
+    world.add_shape("trimesh", vertices=[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]], triangles=[[0, 1, 2]])
+    floor = world.add_shape("halfspace", normal=[0.0, 0, 1])
+    world.add_bodies(brick, [[5.0, 2, 5]], [[0.0, 1, 0]], angular_velocities=[[0.0, 0, 1]])
+    world.add_static(floor, [0.0, 0, 1])
+    return world
+
+
+def shaped_snapshot(world: vadop.World) -> tuple[object, ...]:
+    shapes = [{k: np.asarray(v).tolist() for k, v in shape.items()} for shape in world.shapes()]
+    return (*snapshot(world), world.orientations.tolist(), world.angular_velocities.tolist(),
+            world.shape_ids.tolist(), world.static.tolist(), shapes)
+
+
+FLAT = [[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]
+TRIANGLE = [[0.0, 0, 0], [1, 0, 0], [0, 1, 0]]
+
+
+@pytest.mark.parametrize(
+    "call, error, message",
+    [
+        (lambda w: w.add_shape("box", half_extents=[1.0, 1, 1]), ValueError,
+         "kind must be one of 'sphere', 'cuboid', 'capsule', 'cylinder', 'cone', 'convex_hull', 'trimesh', 'halfspace', got \"box\""),
+        (lambda w: w.add_shape(5), TypeError, "argument 'kind'"),
+        (lambda w: w.add_shape("cuboid"), TypeError, "add_shape('cuboid') missing keyword argument 'half_extents'; a 'cuboid' takes half_extents"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE), TypeError, "add_shape('trimesh') missing keyword argument 'triangles'; a 'trimesh' takes vertices, triangles"),
+        (lambda w: w.add_shape("sphere", radius=1.0, half_height=1.0), TypeError, "add_shape('sphere') got an unexpected keyword argument 'half_height'; a 'sphere' takes radius"),
+        (lambda w: w.add_shape("sphere", radius="big"), TypeError, "radius must be a number, got str"),
+        (lambda w: w.add_shape("capsule", half_height=None, radius=1.0), TypeError, "half_height must be a number, got NoneType"),
+        (lambda w: w.add_shape("sphere", radius=-1.0), ValueError, "sphere radius must be a finite number > 0, got -1"),
+        (lambda w: w.add_shape("sphere", radius=NAN), ValueError, "sphere radius must be a finite number > 0, got NaN"),
+        (lambda w: w.add_shape("cone", half_height=1.0, radius=0.0), ValueError, "cone radius must be a finite number > 0, got 0"),
+        (lambda w: w.add_shape("cylinder", half_height=1e60, radius=1.0), ValueError, "cylinder half height 1e60 is out of range"),
+        (lambda w: w.add_shape("cuboid", half_extents=[1.0, 1]), ValueError, "half_extents must be a float64 array of shape (3,), got a list of shape (2,)"),
+        (lambda w: w.add_shape("cuboid", half_extents=np.array([1, 1, 1])), TypeError, "half_extents must be a float64 array of shape (3,), got int64 of shape (3,)"),
+        (lambda w: w.add_shape("cuboid", half_extents=[1.0, NAN, 1]), ValueError, "half_extents must be finite, got [1.0, NaN, 1.0]"),
+        (lambda w: w.add_shape("cuboid", half_extents=[1.0, -1, 1]), ValueError, "cuboid half extent y must be a finite number > 0, got -1"),
+        (lambda w: w.add_shape("convex_hull", points=FLAT), ValueError, "the convex hull's points all lie in one plane or on one line"),
+        (lambda w: w.add_shape("convex_hull", points=TRIANGLE), ValueError, "a convex hull needs at least 4 points"),
+        (lambda w: w.add_shape("convex_hull", points=[*FLAT, [0.0, 0, NAN]]), ValueError, "points[4] must be finite"),
+        (lambda w: w.add_shape("convex_hull", points=np.zeros((4, 2))), ValueError, "points must be a float64 array of shape (n, 3), got float64 of shape (4, 2)"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=[[0, 1, 3]]), ValueError,
+         "mesh triangle 0 has vertex indices [0, 1, 3], but the mesh has 3 vertices: indices must be below that"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=[[0, 1, 2], [0, 1, -1]]), ValueError,
+         "triangles[1] = [0, 1, -1] must hold vertex indices from 0 up to the number of vertices"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=[[0, 1, 2**40]]), ValueError, "triangles[0] = [0, 1, 1099511627776] must hold vertex indices"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=[[0, 1, 1]]), ValueError, "mesh triangle 0 with vertex indices [0, 1, 1] has zero area"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=np.array([[0, 1, 2]], dtype=np.int32)), TypeError,
+         "triangles must be an int64 array of shape (n, 3), got int32 of shape (1, 3)"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=[[0.0, 1, 2]]), TypeError, "triangles must be an int64 array of shape (n, 3), got a list of float64 values"),
+        (lambda w: w.add_shape("trimesh", vertices=TRIANGLE, triangles=np.zeros((0, 3), dtype=np.int64)), ValueError, "a triangle mesh needs at least one triangle"),
+        (lambda w: w.add_shape("halfspace", normal=[0.0, 0, 0]), ValueError, "a half-space needs a non-zero outward normal, got [0.0, 0.0, 0.0]"),
+        (lambda w: w.shape_surface(2), ValueError, "shape 2 is a half-space: it is unbounded and has no surface to draw"),
+        (lambda w: w.shape_surface(3), ValueError, "shape must be a shape id from add_shape (0 to 2), got 3"),
+        (lambda w: w.add_bodies(3, [[5.0, 5, 5]]), ValueError, "shapes must be a shape id from add_shape (0 to 2), got 3"),
+        (lambda w: w.add_bodies([0, -1], [[5.0, 5, 5], [5, 8, 5]]), ValueError, "shapes[1] must be a shape id from add_shape (0 to 2), got -1"),
+        (lambda w: w.add_bodies([0], [[5.0, 5, 5], [5, 8, 5]]), ValueError, "shapes must be an int or an int64 array of shape (2,), got a list of shape (1,)"),
+        (lambda w: w.add_bodies(np.array([0], dtype=np.int32), [[5.0, 5, 5]]), TypeError, "shapes must be an int or an int64 array of shape (1,), got int32"),
+        (lambda w: w.add_bodies(1, [[5.0, 5, 5]]), ValueError, "shapes = 1 is level geometry (a triangle mesh or a half-space): add it with add_static"),
+        (lambda w: w.add_bodies([0, 2], [[5.0, 5, 5], [5, 8, 5]]), ValueError, "shapes[1] = 2 is level geometry"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], orientations=[[0.0, 0, 0, 0]]), ValueError,
+         "body 0: orientation must be a finite, non-zero quaternion, got [0.0, 0.0, 0.0, 0.0]"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5], [5, 8, 5]], orientations=[[0.0, 0, 0, 1], [NAN, 0, 0, 1]]), ValueError, "orientations[1] must be finite, got [NaN, 0.0, 0.0, 1.0]"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], orientations=[[0.0, 0, 1]]), ValueError, "orientations must be a float64 array of shape (1, 4), got a list of shape (1, 3)"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], orientations=np.array([[0, 0, 0, 1]])), TypeError, "orientations must be a float64 array of shape (1, 4), got int64"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], angular_velocities=[[np.inf, 0, 0]]), ValueError, "angular_velocities[0] must be finite"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], angular_velocities=[[1e60, 0, 0]]), ValueError, "body 0: angular velocity 1e60 is out of range"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], velocities=np.zeros((2, 3))), ValueError, "velocities must be a float64 array of shape (1, 3), got float64 of shape (2, 3)"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5]], masses=[0.0]), ValueError, "masses[0] must be a finite number > 0, got 0"),
+        (lambda w: w.add_bodies(0, np.array([[5.0, 5, 5]]).astype(np.float32)), TypeError, "positions must be a float64 array of shape (n, 3), got float32"),
+        (lambda w: w.add_bodies(0, [[5.0, 5, 5], [9.8, 5, 5]]), ValueError, "body 1: the body at [9.8, 5.0, 5.0] reaches out of the box"),
+        (lambda w: w.add_static(3, [0.0, 0, 0]), ValueError, "shape must be a shape id from add_shape (0 to 2), got 3"),
+        (lambda w: w.add_static(2, [0.0, 0]), ValueError, "position must be a float64 array of shape (3,), got a list of shape (2,)"),
+        (lambda w: w.add_static(2, [0.0, 0, NAN]), ValueError, "position must be finite, got [0.0, 0.0, NaN]"),
+        (lambda w: w.add_static(2, [0.0, 0, 0], [0.0, 0, 0, 0]), ValueError, "orientation must be a finite, non-zero quaternion, got [0.0, 0.0, 0.0, 0.0]"),
+        (lambda w: w.add_static(2, [0.0, 0, 0], [0.0, 0, NAN, 1]), ValueError, "orientation must be finite, got [0.0, 0.0, NaN, 1.0]"),
+        (lambda w: w.add_static(2, [0.0, 0, 0], np.array([0, 0, 0, 1])), TypeError, "orientation must be a float64 array of shape (4,), got int64"),
+        (lambda w: w.set_motions(3, [[1.0, 0, 0]], [[0.0, 0, 0]]), ValueError, "ids must name moving bodies, got 3: a static body"),
+        (lambda w: w.set_velocities([2, 3], [[1.0, 0, 0], [0, 1, 0]]), ValueError, "ids must name moving bodies, got 3: a static body"),
+        (lambda w: w.set_motions([0, 2], [[1.0, 0, 0]], [[0.0, 0, 0], [0, 0, 0]]), ValueError, "velocities must be a float64 array of shape (2, 3), got a list of shape (1, 3)"),
+        (lambda w: w.set_motions([0, 2], [[1.0, 0, 0], [0, 0, 0]], [[0.0, 0, 0]]), ValueError, "angular_velocities must be a float64 array of shape (2, 3), got a list of shape (1, 3)"),
+        (lambda w: w.set_motions([0, 2], [[1.0, 0, 0], [0, 0, 0]], [[0.0, 0, 0], [0, 0, NAN]]), ValueError, "angular_velocities[1] must be finite"),
+        (lambda w: w.set_motions([0, 2], [[1.0, 0, 0], [0, 0, 0]], [[0.0, 0, 0], [0, 1e60, 0]]), ValueError,
+         "body 1: angular velocity 1e60 is out of range"),
+        (lambda w: w.set_motions([0, 2], [[1.0, 0, 0], [-1e60, 0, 0]], [[0.0, 0, 0], [0, 0, 0]]), ValueError, "body 1: velocity 1e60 is out of range"),
+        (lambda w: w.set_motions([2, 2], [[1.0, 0, 0], [0, 0, 0]], [[0.0, 0, 0], [0, 0, 0]]), ValueError, "ids must not repeat an id, got 2 twice"),
+        (lambda w: w.set_motions([0, 9], [[1.0, 0, 0], [0, 0, 0]], [[0.0, 0, 0], [0, 0, 0]]), ValueError, "ids must name live bodies, got 9"),
+    ],
+)
+def test_bad_shape_calls_change_nothing(call: Callable[[vadop.World], object], error: type[Exception], message: str) -> None:
+    world = shaped_world()
+    before = shaped_snapshot(world)
+    with pytest.raises(error) as raised:
+        call(world)
+    assert message in str(raised.value)
+    assert shaped_snapshot(world) == before
+    world.step(0.1)
+
+
+def test_the_discrete_method_takes_spheres_only() -> None:
+    world = world_with(method="discrete")
+    brick = world.add_shape("cuboid", half_extents=[0.5, 0.5, 0.5])
+    for call in (lambda: world.add_bodies(brick, [[5.0, 2, 5]]), lambda: world.add_static(brick, [5.0, 2, 5])):
+        with pytest.raises(ValueError, match="the discrete method checks overlaps of spheres only"):
+            call()
+    assert len(world) == 2
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda w: w.remove(2),
+        lambda w: w.set_velocities(2, [[1.0, 0, 0]]),
+        lambda w: w.set_motions(2, [[1.0, 0, 0]], [[0.0, 0, 1]]),
+    ],
+    ids=["remove", "set_velocities", "set_motions"],
+)
+def test_a_removed_shaped_bodys_id_is_refused(call: Callable[[vadop.World], object]) -> None:
+    world = shaped_world()
+    world.remove([2, 3])
+    (new,) = world.add_bodies(0, [[5.0, 8, 5]]).tolist()
+    assert new == 2**32 + 2  # slot 2, generation 1
+    before = shaped_snapshot(world)
+    with pytest.raises(ValueError, match=f"^ids must name live bodies, got 2: that body was removed; its slot now holds {new}$"):
+        call(world)
+    assert shaped_snapshot(world) == before
 
 
 @pytest.mark.parametrize(
@@ -413,6 +547,10 @@ INT_ARGUMENTS: dict[str, tuple[str, Callable[[Any], object]]] = {
     "remove ids list": ("ids", lambda v: world_with().remove([v])),
     "set_velocities ids": ("ids", lambda v: world_with().set_velocities(v, np.zeros((1, 3)))),
     "set_velocities ids tuple": ("ids", lambda v: world_with().set_velocities((v,), [[0.0, 0, 0]])),
+    "add_bodies shapes": ("shapes", lambda v: shaped_world().add_bodies(v, [[5.0, 8, 5]])),
+    "add_static shape": ("shape", lambda v: shaped_world().add_static(v, [0.0, 0, 0])),
+    "shape_surface shape": ("shape", lambda v: shaped_world().shape_surface(v)),
+    "set_motions ids": ("ids", lambda v: shaped_world().set_motions(v, [[0.0, 0, 0]], [[0.0, 0, 0]])),
     "record frames": ("frames", lambda v: record(vadop.scene(10), frames=v)),
     "record watch": ("watch[0]", lambda v: record(vadop.scene(10), frames=1, watch=[v])),
 }

@@ -60,14 +60,21 @@ def test_stubs_and_marker_are_installed() -> None:
         ("bouncing_spheres.py", ["--bodies", "100", "--frames", "10"], "kinetic energy drift"),
         ("bullets_through_crowd.py", ["--crowd", "300", "--bullets", "2"], "bullet 300: touched"),
         ("detect_comparison.py", ["--bodies", "200", "--frames", "5"], "discrete"),
+        ("spinning_boxes.py", ["--boxes", "40", "--bullets", "2", "--frames", "10", "--out", "{page}"], "contact starts at"),
+        ("debris_on_mesh.py", ["--debris", "20", "--frames", "30", "--out", "{page}"], "bounces on the terrain; kinetic energy"),
     ],
 )
-def test_example_scripts_run(script: str, args: list[str], expected: str) -> None:
-    assert {p.name for p in EXAMPLES} == {"bouncing_spheres.py", "bullets_through_crowd.py", "detect_comparison.py"}
+def test_example_scripts_run(script: str, args: list[str], expected: str, tmp_path: Path) -> None:
+    assert {p.name for p in EXAMPLES} == {"bouncing_spheres.py", "bullets_through_crowd.py", "detect_comparison.py",
+                                          "spinning_boxes.py", "debris_on_mesh.py"}
+    page = tmp_path / "run.html"
+    args = [arg.replace("{page}", str(page)) for arg in args]
     result = subprocess.run([sys.executable, str(ROOT / "examples" / "python" / script), *args],
                             capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr
     assert expected in result.stdout
+    # The examples that write a viewer page write it where they are told.
+    assert page.exists() == ("--out" in args)
 
 
 def test_version_matches_pyproject_and_the_installed_metadata() -> None:
@@ -82,7 +89,7 @@ def test_version_matches_pyproject_and_the_installed_metadata() -> None:
     assert "__version__" in vadop.__all__
 
 
-def test_readme_python_example_and_plot_calls_run(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_readme_python_examples_and_plot_calls_run(monkeypatch: pytest.MonkeyPatch) -> None:
     import re
 
     import matplotlib
@@ -91,11 +98,14 @@ def test_readme_python_example_and_plot_calls_run(monkeypatch: pytest.MonkeyPatc
     readme = (ROOT / "README.md").read_text()
     section = readme.split("\n## Python\n", 1)[1].split("\n## ", 1)[0]
     blocks = re.findall(r"```python\n(.*?)```", section, re.DOTALL)
-    assert len(blocks) == 1
+    assert len(blocks) == 2  # spheres, then shapes
     monkeypatch.chdir(ROOT)  # the benchmark CSV's path is relative to the clone
-    namespace: dict[str, object] = {}
-    exec(compile(blocks[0], "README.md", "exec"), namespace)
-    # The plot calls the section shows, run on what the example made.
+    # Each block on its own, as a reader would paste it.
+    namespaces: list[dict[str, object]] = [{} for _ in blocks]
+    for block, namespace in zip(blocks, namespaces):
+        exec(compile(block, "README.md", "exec"), namespace)
+    # The plot calls the section shows use what the first block made.
+    namespace = namespaces[0]
     calls = re.findall(r"`(vadop\.plot\.\w+\(.*?\))`", section)
     assert {c.split("(")[0] for c in calls} == {"vadop.plot.benchmark", "vadop.plot.cost_split", "vadop.plot.contact_timeline"}
     exec("import vadop.plot", namespace)

@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -80,6 +81,83 @@ def test_page_runs_without_errors(page: Path) -> None:
     assert status["error"] == "" and status["gl"] == "webgl2"
     assert status["rendered"] >= 1 and status["frame"] == 20 and status["body"] == 7
     assert status["slabs"] >= 2  # a body uses at least two axes of the 3-axis pool
+
+
+def mixed_world() -> vadop.World:
+    """Plain spheres and spinning bodies of every moving shape over a static terrain mesh, with a
+    half-space wall and a static box: 4 + 6 moving bodies, 3 static."""
+    world = vadop.World([[2.0, 2, 6], [4, 2, 6], [6, 2, 6], [8, 2, 6]], np.zeros((4, 3)), np.full(4, 0.4),
+                        box=10.0, mode="detect")
+    kinds: list[dict[str, Any]] = [
+        dict(kind="sphere", radius=0.4),
+        dict(kind="cuboid", half_extents=[0.6, 0.3, 0.2]),
+        dict(kind="capsule", half_height=0.4, radius=0.2),
+        dict(kind="cylinder", half_height=0.3, radius=0.4),
+        dict(kind="cone", half_height=0.4, radius=0.35),
+        dict(kind="convex_hull", points=[[0.5, 0, 0], [-0.3, 0.4, 0.1], [-0.2, -0.4, 0.2], [0, 0.1, -0.5], [0.1, 0, 0.45]]),
+    ]
+    shapes = [world.add_shape(**kind) for kind in kinds]
+    rng = np.random.default_rng(5)
+    world.add_bodies(shapes, [[2.0 + 1.5 * k, 6, 6] for k in range(6)], rng.normal(size=(6, 3)),
+                     rng.normal(size=(6, 4)), rng.normal(scale=3.0, size=(6, 3)))
+    grid = np.stack(np.meshgrid(np.arange(4), np.arange(4), indexing="ij"), axis=-1).reshape(-1, 2) * 10 / 3
+    terrain = world.add_shape("trimesh", vertices=np.column_stack([grid, 1 + 0.3 * np.cos(grid.sum(axis=1))]),
+                              triangles=[[4 * i + k, 4 * i + k + 4, 4 * i + k + 1] for i in range(3) for k in range(3)]
+                              + [[4 * i + k + 1, 4 * i + k + 4, 4 * i + k + 5] for i in range(3) for k in range(3)])
+    world.add_static(terrain, [0.0, 0, 0])
+    world.add_static(world.add_shape("halfspace", normal=[-1.0, 0, 0]), [10.0, 0, 0])
+    world.add_static(shapes[1], [5.0, 9, 5], [0.0, 0, 0.38, 0.92])
+    return world
+
+
+def test_recording_keeps_shapes_orientations_and_level_geometry() -> None:
+    world = mixed_world()
+    run = record(world, frames=3)
+    assert run["shape_ids"] == [-1] * 4 + list(range(6)) + [6, 7, 1]
+    assert run["static"] == [False] * 10 + [True] * 3
+    assert run["radii"][10] is None and run["radii"][11] is None and run["radii"][12] is not None
+    kinds = [shape["kind"] for shape in run["shapes"]]
+    assert kinds == ["sphere", "cuboid", "capsule", "cylinder", "cone", "convex_hull", "trimesh", "halfspace"]
+    assert run["shapes"][0] == {"kind": "sphere", "radius": 0.4}
+    assert run["shapes"][7] == {"kind": "halfspace", "normal": [-1.0, 0.0, 0.0]}
+    for shape in run["shapes"][1:7]:
+        assert len(shape["vertices"]) % 3 == 0 and len(shape["triangles"]) % 3 == 0
+        assert max(shape["triangles"]) < len(shape["vertices"]) // 3
+    for frame in run["frames"]:
+        q = np.array(frame["q"]).reshape(-1, 4)
+        assert q.shape == (13, 4)
+        np.testing.assert_allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-5)
+    # The bodies turn; the static ones stay as they were.
+    first, last = np.array(run["frames"][0]["q"]).reshape(-1, 4), np.array(run["frames"][-1]["q"]).reshape(-1, 4)
+    assert not np.allclose(np.abs(np.sum(first[4:10] * last[4:10], axis=1)), 1.0)
+    np.testing.assert_array_equal(first[10:], last[10:])
+    # A page is valid JSON inside: no infinities.
+    json.dumps(run, allow_nan=False)
+
+
+@pytest.fixture(scope="module")
+def mixed_page(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return write_html(record(mixed_world(), frames=20), tmp_path_factory.mktemp("viewer") / "mixed.html")
+
+
+def test_a_mixed_shape_page_draws_every_body(mixed_page: Path) -> None:
+    dom = browse(mixed_page, "frame=10&body=5&pause", "--dump-dom")
+    status = json.loads(html.unescape(dom.split('data-status="', 1)[1].split('"', 1)[0]))
+    assert status["error"] == "" and status["gl"] == "webgl2" and status["rendered"] >= 1
+    # 4 plain spheres and one "sphere" shape as spheres, 5 moving solids, and 3 pieces of level
+    # geometry: the terrain, the half-space and the static box.
+    assert (status["spheres"], status["solids"], status["level"]) == (5, 5, 3)
+    assert status["frame"] == 10 and status["body"] == 5
+
+
+def test_a_mixed_shape_screenshot_shows_solids_and_level_geometry(mixed_page: Path, tmp_path: Path) -> None:
+    image = screenshot(mixed_page, "frame=10&body=5&pause&volumes=0", tmp_path / "mixed.png")
+    r, g, b = image[:640, 340:, 0], image[:640, 340:, 1], image[:640, 340:, 2]
+    # Blue-grey moving bodies, the orange selected cuboid, and the green-grey level geometry.
+    moving = (b > r + 0.08) & (b > 0.3)
+    selected = (r > 0.4) & (g > 0.4 * r) & (g < 0.7 * r) & (b < 0.25 * r)
+    level = (g > b + 0.05) & (g > r) & (g > 0.2)
+    assert moving.sum() > 2000 and selected.sum() > 50 and level.sum() > 5000
 
 
 def screenshot(page: Path, fragment: str, path: Path) -> npt.NDArray[np.float32]:

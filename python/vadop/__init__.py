@@ -1,8 +1,10 @@
-"""vadop: exact continuous collision detection of many fast-moving spheres.
+"""vadop: exact continuous collision detection of many fast-moving spheres and rigid bodies.
 
 Every contact inside a frame is found, in time order, with its exact time, point and normal,
 using velocity-aligned discrete oriented polytopes (Coming & Staadt). Bodies go in and come out
-as numpy arrays; the engine is Rust and releases the GIL while it steps.
+as numpy arrays; the engine is Rust and releases the GIL while it steps. Besides spheres, a
+``World`` holds spinning rigid bodies of any shape (``World.add_shape``, ``World.add_bodies``)
+and static level geometry (``World.add_static``: triangle meshes, half-spaces).
 
 >>> import numpy as np, vadop
 >>> world = vadop.World(np.array([[2.0, 5, 5], [8, 5, 5]]), np.array([[30.0, 0, 0], [0, 0, 0]]),

@@ -1,6 +1,6 @@
 """Type stubs of the vadop extension module (checked against it with mypy's stubtest)."""
 
-from typing import Any, Literal, Optional, Sequence, Union, final
+from typing import Any, Literal, Optional, Sequence, Union, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -13,7 +13,12 @@ _Number = Union[int, float, np.integer[Any], np.floating[Any]]
 _Vectors = Union[_Float64Array, Sequence[Sequence[_Number]]]
 _Values = Union[_Float64Array, Sequence[_Number]]
 _Box = Union[float, _Float64Array, Sequence[Sequence[_Number]]]
+_Vector = _Values
 _Ids = Union[int, _Int64Array, Sequence[int]]
+# Shape ids: 0, 1, 2 ... in the order World.add_shape made them.
+_ShapeIds = Union[int, _Int64Array, Sequence[int]]
+_Triangles = Union[_Int64Array, Sequence[Sequence[int]]]
+_BoolArray = npt.NDArray[np.bool_]
 _MethodName = Literal["auto", "vadop", "grid", "brute", "discrete", "swept-aabb", "swept-kdop"]
 _ModeName = Literal["simulate", "detect"]
 
@@ -44,11 +49,16 @@ class Contacts:
 
 @final
 class World:
-    """Spheres in a box, stepped frame by frame; every contact inside a frame is found.
+    """Bodies in a box, stepped frame by frame; every contact inside a frame is found.
+
+    Bodies are spheres (given to the constructor or to add) or rigid bodies of any shape
+    (add_shape, then add_bodies, or add_static for fixed level geometry). friction is the Coulomb
+    coefficient of every impact (0: frictionless); contact_ends (detect mode only) also reports
+    when each contact between bodies ends (contact_ends(), touching()).
 
     Bodies are named by int ids, 0, 1, 2 ... in row order; a removed body's slot is reused under
     a new id (the slot plus 2**32 per reuse), so a removed body's id raises ValueError and never
-    names another body.
+    names another body. Arrays read back hold every live body, static ones too, in slot order.
 
     Threads may share a world: calls on it take turns (steps are serialised by a lock inside the
     world). A thread that calls while another steps waits, without holding the GIL, until that
@@ -58,9 +68,9 @@ class World:
 
     def __new__(
         cls,
-        positions: _Vectors,
-        velocities: _Vectors,
-        radii: _Values,
+        positions: Optional[_Vectors] = None,
+        velocities: Optional[_Vectors] = None,
+        radii: Optional[_Values] = None,
         masses: Optional[_Values] = None,
         *,
         box: _Box,
@@ -81,8 +91,42 @@ class World:
         radii: _Values,
         masses: Optional[_Values] = None,
     ) -> _Int64Array: ...
+    @overload
+    def add_shape(self, kind: Literal["sphere"], *, radius: float) -> int:
+        """Adds a shape bodies can then take; returns its id (0, 1, 2 ... in order added)."""
+    @overload
+    def add_shape(self, kind: Literal["cuboid"], *, half_extents: _Vector) -> int: ...
+    @overload
+    def add_shape(self, kind: Literal["capsule", "cylinder", "cone"], *, half_height: float, radius: float) -> int: ...
+    @overload
+    def add_shape(self, kind: Literal["convex_hull"], *, points: _Vectors) -> int: ...
+    @overload
+    def add_shape(self, kind: Literal["trimesh"], *, vertices: _Vectors, triangles: _Triangles) -> int: ...
+    @overload
+    def add_shape(self, kind: Literal["halfspace"], *, normal: _Vector) -> int: ...
+    def shapes(self) -> list[dict[str, Any]]:
+        """The shapes added so far, each as the keyword arguments of add_shape that make it."""
+    def shape_surface(self, shape: int) -> tuple[_Float64Array, _Int64Array]:
+        """The shape's surface in its own frame, for drawing: (vertices (v, 3), triangles (t, 3))."""
+    def add_bodies(
+        self,
+        shapes: _ShapeIds,
+        positions: _Vectors,
+        velocities: Optional[_Vectors] = None,
+        orientations: Optional[_Vectors] = None,
+        angular_velocities: Optional[_Vectors] = None,
+        masses: Optional[_Values] = None,
+    ) -> _Int64Array:
+        """Adds moving rigid bodies of the world's shapes, all or none; returns their ids.
+
+        orientations are quaternions (x, y, z, w); runs without the GIL.
+        """
+    def add_static(self, shape: int, position: _Vector, orientation: Optional[_Vector] = None) -> int:
+        """Adds a static body (level geometry, or any shape fixed in place); returns its id."""
     def remove(self, ids: _Ids) -> None: ...
     def set_velocities(self, ids: _Ids, velocities: _Vectors) -> None: ...
+    def set_motions(self, ids: _Ids, velocities: _Vectors, angular_velocities: _Vectors) -> None:
+        """Sets the velocities and angular velocities of moving bodies, all or none."""
     def step(self, dt: float) -> Contacts:
         """Advances the world by dt; the frame's contacts in time order.
 
@@ -110,6 +154,14 @@ class World:
     @property
     def masses(self) -> _Float64Array: ...
     @property
+    def orientations(self) -> _Float64Array: ...
+    @property
+    def angular_velocities(self) -> _Float64Array: ...
+    @property
+    def shape_ids(self) -> _Int64Array: ...
+    @property
+    def static(self) -> _BoolArray: ...
+    @property
     def box(self) -> _Float64Array: ...
     @property
     def time(self) -> float: ...
@@ -128,6 +180,7 @@ class World:
     def stats(self) -> dict[str, float]: ...
     def kinetic_energy(self) -> float: ...
     def momentum(self) -> _Float64Array: ...
+    def angular_momentum(self) -> _Float64Array: ...
     def volumes(self, dt: float) -> tuple[_Int64Array, _Int64Array, _Float64Array, _Float64Array]: ...
     def __len__(self) -> int: ...
 

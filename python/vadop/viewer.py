@@ -1,10 +1,12 @@
 """Record a run and play it back in the browser.
 
-``record`` steps a world and keeps, per frame, every body's position and velocity, the frame's
-contacts and the VADOP volumes (the pool axes each body uses and its interval on each) of the
-frame about to start. ``write_html`` turns a recording into one self-contained HTML page with a
-WebGL renderer: spheres in their box, contacts flashing, play/pause and scrub, and the volume of
-a selected body drawn as its slabs. ``main`` is the ``vadop-view`` command::
+``record`` steps a world and keeps, per frame, every body's position, velocity and (when the
+world holds shapes) orientation, the frame's contacts and the VADOP volumes (the pool axes each
+body uses and its interval on each) of the frame about to start; once, the world's shapes as
+surfaces to draw. ``write_html`` turns a recording into one self-contained HTML page with a
+WebGL renderer: spheres and solids of every shape turning in their box, static meshes and
+half-spaces as level geometry, contacts flashing, play/pause and scrub, and the volume of a
+selected body drawn as its slabs. ``main`` is the ``vadop-view`` command::
 
     vadop-view --bodies 200 --max-speed 2 --frames 150 --out run.html
 
@@ -57,6 +59,23 @@ def _rounded(values: np.ndarray[Any, Any], digits: int) -> list[float]:
     return [float(v) for v in np.round(values, digits).ravel()]
 
 
+# Orientations are kept to 1e-6: far below a pixel's turn for any body on screen.
+ORIENTATION_DIGITS = 6
+
+
+def _drawable(world: World, shape_id: int, shape: dict[str, Any], digits: int) -> dict[str, Any]:
+    """What the page needs to draw shape ``shape_id``: a sphere's radius (spheres are drawn as
+    spheres), a half-space's normal, any other shape's surface triangles (flat vertex
+    coordinates in the shape's frame, flat vertex indices)."""
+    kind = shape["kind"]
+    if kind == "sphere":
+        return {"kind": kind, "radius": float(shape["radius"])}
+    if kind == "halfspace":
+        return {"kind": kind, "normal": [float(v) for v in shape["normal"]]}
+    vertices, triangles = world.shape_surface(shape_id)
+    return {"kind": kind, "vertices": _rounded(vertices, digits), "triangles": triangles.ravel().tolist()}
+
+
 def record(
     world: World,
     frames: int = 150,
@@ -70,11 +89,25 @@ def record(
     method 'vadop' from the first step on, so frame 0 has none. Bodies must not be added or
     removed while recording.
 
+    Per body, once: ``ids``, ``radii`` (None for level geometry, which has no bounding radius),
+    ``shape_ids`` (-1 for plain spheres) and ``static``; ``shapes``, the world's shapes to draw.
+    Per frame: ``t``, the positions ``p`` and velocities ``u`` (flat, 3 per body), the
+    orientations ``q`` (flat quaternions x, y, z, w; only when the world holds shapes), the
+    contacts ``c`` and the volumes ``v``.
+
     >>> import vadop
     >>> from vadop.viewer import record
     >>> run = record(vadop.scene(20, 0.1, 1.0, method="vadop"), frames=2, watch=[0, 1])
     >>> sorted({row[0] for row in run["frames"][1]["v"]})
     [0, 1]
+
+    A world of shapes keeps their surfaces and the bodies' orientations:
+
+    >>> w = vadop.World([[2.0, 5, 5]], [[1.0, 0, 0]], [0.5], box=10.0)
+    >>> _ = w.add_bodies(w.add_shape("cuboid", half_extents=[0.5, 0.5, 0.5]), [[6.0, 5, 5]], angular_velocities=[[0, 0, 1.0]])
+    >>> run = record(w, frames=2)
+    >>> run["shape_ids"], run["shapes"][0]["kind"], len(run["shapes"][0]["triangles"]) // 3, len(run["frames"][2]["q"])
+    ([-1, 0], 'cuboid', 12, 8)
     """
     frames = _int_arg(frames, "frames", 1, MAX_FRAMES)
     ids = world.ids
@@ -91,24 +124,35 @@ def record(
     # Positions to 1e-5 of the box: far below a pixel, and the page stays small.
     digits = max(0, int(np.ceil(5 - np.log10(extent))))
 
+    shape_ids = world.shape_ids
+    # Spheres look the same however they turn: a world of plain spheres keeps no orientations.
+    turning = bool((shape_ids >= 0).any())
+
     def state(contacts: Optional[Any], volumes: Optional[list[list[float]]]) -> dict[str, Any]:
         c: list[list[float]] = []
         if contacts is not None:
             for i, j, point in zip(contacts.i, contacts.j, contacts.point):
                 c.append([int(i), int(j), *_rounded(point, digits)])
-        return {
+        frame = {
             "t": world.time,
             "p": _rounded(world.positions, digits),
             "u": _rounded(world.velocities, digits),
             "c": c,
             "v": volumes,
         }
+        if turning:
+            frame["q"] = _rounded(world.orientations, ORIENTATION_DIGITS)
+        return frame
 
     run: dict[str, Any] = {
         "box": world.box.tolist(),
         "dt": dt,
         "ids": ids.tolist(),
-        "radii": world.radii.tolist(),
+        # JSON has no infinity: level geometry's radius is None.
+        "radii": [float(r) if np.isfinite(r) else None for r in world.radii],
+        "shape_ids": shape_ids.tolist(),
+        "static": world.static.tolist(),
+        "shapes": [_drawable(world, k, shape, digits) for k, shape in enumerate(world.shapes())],
         "axes": world.axes.tolist(),
         "method": world.method,
         "mode": world.mode,

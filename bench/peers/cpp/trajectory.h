@@ -2,7 +2,7 @@
 // time, answers where a body is at any instant of the frame, and records and reports what a
 // pipeline found. Owns the file format (written by crates/vadop-bench/src/peers/trajectory.rs;
 // keep the two in step) and the timing and memory report, so every library is measured the same
-// way.
+// way. The mixed-shape scene's file is shapes.h's; peer_main tells the two apart.
 //
 // File (little-endian): "VADOPTR1", n u64, frames u64, dt f64, radius f64, box min 3 f64, box
 // max 3 f64; then per frame: n x (position 3 f64, velocity 3 f64) at the frame start, n x
@@ -20,6 +20,7 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+#include "shapes.h"
 
 struct Knot {
   double tau;
@@ -209,18 +210,37 @@ class NewOverlaps {
   std::vector<uint64_t> previous_, current_;
 };
 
-// Runs `pipeline` over every frame of the trajectory file and reports: the shared main of the
-// peer programs. Usage: PROGRAM PIPELINE TRAJECTORY CONTACTS_OUT.
-template <class Run>
-int peer_main(int argc, char** argv, Run&& run) {
+// The first eight bytes of a file: its format's magic.
+inline std::string magic_of(const char* path) {
+  char magic[8] = {};
+  FILE* file = std::fopen(path, "rb");
+  if (!file) throw std::runtime_error(std::string("cannot open ") + path);
+  size_t read = std::fread(magic, 1, 8, file);
+  std::fclose(file);
+  return std::string(magic, read);
+}
+
+// Runs the pipeline named on the command line over every frame of the trajectory file and
+// reports: the shared main of the peer programs. `spheres` runs it on a sphere scene's file,
+// `shapes` on a mixed-shape scene's, each returning false for a pipeline it does not know.
+// Usage: PROGRAM PIPELINE TRAJECTORY CONTACTS_OUT.
+template <class Spheres, class Shapes>
+int peer_main(int argc, char** argv, Spheres&& spheres, Shapes&& shapes) {
   if (argc != 4) {
     std::fprintf(stderr, "usage: %s PIPELINE TRAJECTORY CONTACTS_OUT\n", argv[0]);
     return 2;
   }
   try {
-    Trajectory trajectory(argv[2]);
     Report report;
-    if (!run(std::string(argv[1]), trajectory, report)) {
+    bool known;
+    if (magic_of(argv[2]) == "VADOPSH1") {
+      ShapeTrajectory trajectory(argv[2]);
+      known = shapes(std::string(argv[1]), trajectory, report);
+    } else {
+      Trajectory trajectory(argv[2]);
+      known = spheres(std::string(argv[1]), trajectory, report);
+    }
+    if (!known) {
       std::fprintf(stderr, "error: unknown pipeline %s\n", argv[1]);
       return 2;
     }

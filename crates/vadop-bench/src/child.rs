@@ -2,7 +2,7 @@
 //! its own so that its time, core and peak memory are its own. The suites start these through
 //! the runner; each job prints its result on stdout (one JSON line, or the peers' contacts file).
 
-use crate::peers::trajectory;
+use crate::peers::{shapes, trajectory, Scene};
 use crate::speed::{candidates, retest};
 use crate::CliResult;
 use clap::{Args, ValueEnum};
@@ -13,7 +13,10 @@ use vadop::Method;
 pub struct ChildArgs {
     #[arg(long, value_enum)]
     job: Job,
-    /// Bodies of the paper scene (packing 0.05, seed 1)
+    /// The peers' scene (peers-export, peers-time)
+    #[arg(long, value_enum, default_value_t = Scene::Spheres)]
+    scene: Scene,
+    /// Bodies of the scene (packing 0.05, seed 1)
     #[arg(long)]
     bodies: usize,
     /// Its maximum speed in diameters per frame
@@ -52,8 +55,11 @@ pub fn run(args: &ChildArgs) -> CliResult<()> {
     let method = Method::from_name(&args.method).ok_or_else(|| format!("unknown method {}", args.method))?;
     let out = || args.out.clone().ok_or_else(|| "this job needs --out".to_string());
     match args.job {
-        Job::PeersExport => trajectory::export(args.bodies, args.speed, args.frames, args.brute, &out()?),
-        Job::PeersTime => trajectory::time_method(args.bodies, args.speed, args.frames, method, &out()?),
+        Job::PeersExport => match args.scene {
+            Scene::Spheres => trajectory::export(args.bodies, args.speed, args.frames, args.brute, &out()?),
+            Scene::Shapes => shapes::export(args.bodies, args.speed, args.frames, args.brute, &out()?),
+        },
+        Job::PeersTime => trajectory::time_method(args.scene, args.bodies, args.speed, args.frames, method, &out()?),
         Job::Candidates => candidates::count(args.bodies, args.speed, args.frames),
         Job::Retest => retest::measure(args.bodies, args.speed, args.frames, method, args.calls),
     }

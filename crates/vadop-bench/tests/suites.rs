@@ -210,6 +210,69 @@ fn peers_render_their_table_and_plot_from_a_csv() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// The mixed-shape scene end to end on a few bodies: vadop's pipelines always, and the Bullet
+/// and FCL peers' continuous and discrete pipelines where Debian's libbullet-dev and libfcl-dev
+/// are installed (scripts/install-peers.sh); rapier/parry is left out, its first build takes
+/// minutes. Its own section, CSV and plot; the sphere scene's section stays untouched.
+#[test]
+fn peers_run_the_mixed_shape_scene_in_its_own_section() {
+    let dir = scratch("peers-shapes");
+    std::fs::write(dir.join("B.md"), "<!-- peers:begin -->\nspheres\n<!-- peers:end -->\n").expect("markdown written");
+    let libraries = Path::new("/usr/include/bullet/btBulletCollisionCommon.h").is_file()
+        && Path::new("/usr/include/fcl/fcl.h").is_file();
+    let mut pipelines = vec!["vadop-auto", "vadop-brute"];
+    if libraries {
+        pipelines.extend(["bullet-ccd", "bullet-dbvt", "fcl-ccd", "fcl-dtree"]);
+    } else {
+        eprintln!("libbullet-dev or libfcl-dev missing: only vadop's pipelines run");
+    }
+    let (markdown, results) = (dir.join("B.md"), dir.join("results"));
+    let args = [
+        "peers",
+        "--scene",
+        "shapes",
+        "--quick",
+        "--bodies",
+        "80",
+        "--speeds",
+        "2",
+        "--frames",
+        "3",
+        "--pipelines",
+        &pipelines.join(","),
+        "--output",
+        markdown.to_str().unwrap(),
+        "--results",
+        results.to_str().unwrap(),
+    ];
+    // Inside the repository, where the C++ peers are built.
+    let exe = Path::new(env!("CARGO_BIN_EXE_vadop-bench"));
+    let output =
+        Command::new(exe).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().expect("the binary runs");
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = read(&markdown);
+    assert!(text.starts_with("<!-- peers:begin -->\nspheres\n<!-- peers:end -->\n"), "{text}");
+    assert!(text.contains("<!-- peers-shapes:begin -->") && text.contains("Mixed-shape scene"), "{text}");
+    let rows = table_after(&text, "| n | speed | pipeline");
+    assert_eq!(rows.len(), pipelines.len(), "{text}");
+    for row in &rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert!(cells[6].parse::<f64>().is_ok(), "{row}");
+        // vadop's pipelines are exact; a peer's misses are its own tolerance's, but it finds contacts.
+        let (found, missed, false_contacts) = (cells[7], cells[8], cells[9]);
+        if cells[3].starts_with("vadop") {
+            assert_eq!((missed, false_contacts), ("0", "0"), "{row}");
+        }
+        assert!(found.parse::<u64>().is_ok_and(|f| f > 0), "{row}");
+    }
+    assert_eq!(read(&results.join("peers/shapes.csv")).lines().count(), 1 + pipelines.len());
+    assert_png(&results.join("peers/shapes.png"));
+    // vadop's discrete method takes spheres only: asking for it is a usage error.
+    let refused = bench(&dir, &["peers", "--scene", "shapes", "--pipelines", "vadop-discrete"]);
+    assert_usage_error(&refused, "handles spheres only");
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn bad_input_is_reported_not_panicked() {
     let dir = scratch("bad");

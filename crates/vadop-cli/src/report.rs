@@ -8,6 +8,7 @@
 //! back.
 
 use crate::CliResult;
+use glam::DVec3;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -15,8 +16,8 @@ use std::fs::File;
 use std::io::{BufWriter, IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use vadop::memory::format_bytes;
-use vadop::scene::Scene;
-use vadop::FrameStats;
+use vadop::shape::Shape;
+use vadop::{BodyShape, FrameStats, World};
 
 /// One frame as written to the per-frame CSV and JSON: its counters, the cost split of
 /// c_total in milliseconds and the wall-clock time of the whole step.
@@ -110,32 +111,117 @@ impl FrameRow {
     }
 }
 
-/// What was simulated, described from the scene itself so that paper scenes and files read alike.
+/// What was simulated, described from the world itself so that generated scenes, scene files and
+/// saved worlds read alike.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct SceneInfo {
-    /// Where the scene came from ("paper scene ..." or "scene file ...").
+    /// Where the scene came from ("paper scene ...", "scene file ...", "saved world ...").
     pub source: String,
+    /// Moving bodies.
     pub bodies: usize,
+    /// The moving bodies by kind of shape, in the order of [`KINDS`] (kinds with none left out).
+    #[serde(default)]
+    pub kinds: Vec<KindCount>,
+    /// The static bodies by kind of shape.
+    #[serde(default)]
+    pub static_bodies: Vec<KindCount>,
     /// Side lengths of the box.
     pub extent: [f64; 3],
-    /// Fraction of the box volume the spheres fill.
+    /// Fraction of the box volume the moving bodies fill.
     pub packing: f64,
-    /// Speed of the fastest body in its own diameters per frame.
+    /// Speed of the fastest body in its own diameters per frame (a shape's diameter is its
+    /// bounding sphere's).
     pub max_speed: f64,
+    /// Fastest spin in radians per frame.
+    #[serde(default)]
+    pub max_spin: f64,
+}
+
+/// How many bodies of one kind of shape.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct KindCount {
+    pub kind: String,
+    pub count: usize,
+}
+
+/// The kinds of shape, singular and plural, in the order of the core's `Shape`.
+const KINDS: [(&str, &str); 8] = [
+    ("sphere", "spheres"),
+    ("cuboid", "cuboids"),
+    ("capsule", "capsules"),
+    ("cylinder", "cylinders"),
+    ("cone", "cones"),
+    ("convex hull", "convex hulls"),
+    ("triangle mesh", "triangle meshes"),
+    ("half-space", "half-spaces"),
+];
+
+/// The place of `shape`'s kind in [`KINDS`].
+fn kind_of(shape: &Shape) -> usize {
+    match shape {
+        Shape::Sphere { .. } => 0,
+        Shape::Cuboid { .. } => 1,
+        Shape::Capsule { .. } => 2,
+        Shape::Cylinder { .. } => 3,
+        Shape::Cone { .. } => 4,
+        Shape::ConvexHull { .. } => 5,
+        Shape::TriMesh { .. } => 6,
+        Shape::HalfSpace { .. } => 7,
+    }
+}
+
+/// `count` bodies of `kind`, as a reader says it: "1 cone", "3 convex hulls".
+fn counted(count: usize, kind: &str) -> String {
+    let plural = KINDS.iter().find(|(one, _)| *one == kind).map_or(kind, |(_, many)| many);
+    format!("{count} {}", if count == 1 { kind } else { plural })
 }
 
 impl SceneInfo {
-    pub fn of(scene: &Scene, source: String, dt: f64) -> SceneInfo {
-        let extent = scene.bounds.max - scene.bounds.min;
-        let volume: f64 = scene.spheres.iter().map(|s| 4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3)).sum();
-        let max_speed = scene.spheres.iter().map(|s| s.velocity.length() * dt / (2.0 * s.radius)).fold(0.0, f64::max);
-        SceneInfo {
+    pub fn of(world: &World, source: String, dt: f64) -> CliResult<SceneInfo> {
+        let extent = world.bounds().max - world.bounds().min;
+        let (mut moving, mut fixed) = ([0usize; KINDS.len()], [0usize; KINDS.len()]);
+        let (mut volume, mut max_speed, mut max_spin) = (0.0, 0.0f64, 0.0f64);
+        for (_, body) in world.bodies() {
+            let (kind, body_volume, radius) = match body.shape {
+                BodyShape::Sphere { radius } => (0, 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3), radius),
+                BodyShape::Shape(id) => {
+                    let geometry = world.shape(id).map_err(|e| e.to_string())?;
+                    (kind_of(geometry.shape()), geometry.volume(), geometry.bounding_radius().unwrap_or(0.0))
+                }
+            };
+            if !body.mass.is_finite() {
+                fixed[kind] += 1;
+                continue;
+            }
+            moving[kind] += 1;
+            volume += body_volume;
+            max_speed = max_speed.max(body.velocity.length() * dt / (2.0 * radius));
+            max_spin = max_spin.max(body.angular_velocity.length() * dt);
+        }
+        let by_kind = |counts: [usize; KINDS.len()]| {
+            KINDS
+                .iter()
+                .zip(counts)
+                .filter(|(_, count)| *count > 0)
+                .map(|((kind, _), count)| KindCount { kind: kind.to_string(), count })
+                .collect::<Vec<_>>()
+        };
+        Ok(SceneInfo {
             source,
-            bodies: scene.spheres.len(),
+            bodies: moving.iter().sum(),
+            kinds: by_kind(moving),
+            static_bodies: by_kind(fixed),
             extent: extent.to_array(),
             packing: volume / extent.element_product(),
             max_speed,
-        }
+            max_spin,
+        })
+    }
+
+    /// True when bodies spin or may be set spinning by an impact: bodies other than spheres,
+    /// static bodies, spins.
+    pub fn may_spin(&self) -> bool {
+        self.kinds.iter().any(|k| k.kind != KINDS[0].0) || !self.static_bodies.is_empty() || self.max_spin > 0.0
     }
 }
 
@@ -147,6 +233,9 @@ pub struct RunInfo {
     pub mode: String,
     pub dt: f64,
     pub restitution: f64,
+    /// Coulomb friction coefficient of every impact.
+    #[serde(default)]
+    pub friction: f64,
     pub frames_requested: u64,
 }
 
@@ -176,7 +265,26 @@ pub struct Accuracy {
     pub first_difference_frame: Option<u64>,
 }
 
-/// Kinetic energy and momentum at the start and end of a run.
+/// What a run keeps, or exchanges only with the walls and static bodies, at one instant: the
+/// world's totals over its moving bodies, spins included.
+pub struct Motion {
+    kinetic: f64,
+    momentum: DVec3,
+    angular_momentum: DVec3,
+}
+
+impl Motion {
+    pub fn of(world: &World) -> Motion {
+        Motion {
+            kinetic: world.kinetic_energy(),
+            momentum: world.momentum(),
+            angular_momentum: world.angular_momentum(),
+        }
+    }
+}
+
+/// Kinetic energy (of translation and of spin), momentum and, when bodies spin, angular momentum
+/// at the start and end of a run.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Conservation {
     pub kinetic_start: f64,
@@ -187,6 +295,33 @@ pub struct Conservation {
     pub momentum_end: [f64; 3],
     /// |end - start|.
     pub momentum_change: f64,
+    /// Angular momentum about the origin, of the centres' motion and of the spins: reported when
+    /// bodies spin or may be set spinning (shapes, static bodies, friction), absent otherwise.
+    #[serde(default)]
+    pub angular_momentum_start: Option<[f64; 3]>,
+    #[serde(default)]
+    pub angular_momentum_end: Option<[f64; 3]>,
+    /// |end - start|.
+    #[serde(default)]
+    pub angular_momentum_change: Option<f64>,
+}
+
+impl Conservation {
+    /// From `start` to `end`, with angular momentum when `spins`.
+    pub fn new(start: &Motion, end: &Motion, spins: bool) -> Conservation {
+        let angular = |value: DVec3| spins.then_some(value.to_array());
+        Conservation {
+            kinetic_start: start.kinetic,
+            kinetic_end: end.kinetic,
+            kinetic_relative_drift: (start.kinetic > 0.0).then(|| (end.kinetic - start.kinetic) / start.kinetic),
+            momentum_start: start.momentum.to_array(),
+            momentum_end: end.momentum.to_array(),
+            momentum_change: (end.momentum - start.momentum).length(),
+            angular_momentum_start: angular(start.angular_momentum),
+            angular_momentum_end: angular(end.angular_momentum),
+            angular_momentum_change: spins.then(|| (end.angular_momentum - start.angular_momentum).length()),
+        }
+    }
 }
 
 /// Median, mean and 95th percentile.
@@ -476,17 +611,33 @@ impl fmt::Display for Summary {
         let shape =
             if x == y && y == z { format!("cube of side {x:.4}") } else { format!("box {x:.4} x {y:.4} x {z:.4}") };
         writeln!(f, "scene       {}", scene.source)?;
+        let bodies = format!("{} {}", scene.bodies, if scene.bodies == 1 { "body" } else { "bodies" });
+        if scene.may_spin() {
+            let listed =
+                |kinds: &[KindCount]| kinds.iter().map(|k| counted(k.count, &k.kind)).collect::<Vec<_>>().join(", ");
+            let fixed: usize = scene.static_bodies.iter().map(|k| k.count).sum();
+            let fixed = match fixed {
+                0 => String::new(),
+                1 => format!(" and 1 static body ({})", listed(&scene.static_bodies)),
+                n => format!(" and {n} static bodies ({})", listed(&scene.static_bodies)),
+            };
+            writeln!(f, "            {bodies} ({}){fixed}", listed(&scene.kinds))?;
+            writeln!(
+                f,
+                "            {shape}, packing {:.4}, max speed {:.4} diameters/frame (fastest body; a shape's diameter is its bounding sphere's), max spin {:.4} rad/frame",
+                scene.packing, scene.max_speed, scene.max_spin
+            )?;
+        } else {
+            writeln!(
+                f,
+                "            {bodies}, {shape}, packing {:.4}, max speed {:.4} diameters/frame (fastest body)",
+                scene.packing, scene.max_speed
+            )?;
+        }
+        let friction = if run.friction > 0.0 { format!(", friction {}", run.friction) } else { String::new() };
         writeln!(
             f,
-            "            {} {}, {shape}, packing {:.4}, max speed {:.4} diameters/frame (fastest body)",
-            scene.bodies,
-            if scene.bodies == 1 { "body" } else { "bodies" },
-            scene.packing,
-            scene.max_speed
-        )?;
-        writeln!(
-            f,
-            "method      {}, {} mode, dt {}, restitution {}",
+            "method      {}, {} mode, dt {}, restitution {}{friction}",
             run.method,
             run.mode,
             seconds(run.dt),
@@ -579,9 +730,19 @@ impl fmt::Display for Summary {
                 Some(drift) => format!("{drift:+.3e}"),
                 None => "n/a (nothing moves)".to_string(),
             };
+            // Spins are in the totals whenever bodies spin; say so when they do.
+            let (spin, angular, exchanged) = match c.angular_momentum_change {
+                Some(change) => (
+                    " (translation and spin)",
+                    format!("; angular momentum change {change:.3e} (about the origin, orbits and spins)"),
+                    " and angular momentum",
+                ),
+                None => ("", String::new(), ""),
+            };
+            let statics = if scene.static_bodies.is_empty() { "" } else { " and static bodies" };
             writeln!(
                 f,
-                "energy      kinetic-energy relative drift {drift}; momentum change {:.3e} (walls exchange momentum with the bodies)",
+                "energy      kinetic-energy relative drift {drift}{spin}; momentum change {:.3e}{angular} (walls{statics} exchange momentum{exchanged} with the bodies)",
                 c.momentum_change
             )?;
         }

@@ -8,7 +8,7 @@
 //! simulated before it is still reported and written. Nothing it keeps grows with the frames.
 
 use crate::report::{
-    self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, JsonReport, OutputFile, PoolInfo, RunInfo,
+    self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, JsonReport, Motion, OutputFile, PoolInfo, RunInfo,
     SceneInfo, Summary,
 };
 use crate::CliResult;
@@ -19,11 +19,17 @@ use std::path::{Path, PathBuf};
 use std::str::FromStr;
 use std::time::{Duration, Instant};
 use vadop::memory;
-use vadop::scene::{GeneratedScene, Scene, Velocities, FRAMES_PER_SECOND, MAX_SCENE_BODIES};
+use vadop::scene::{
+    GeneratedScene, Scene, SceneLayout, ShapesScene, Velocities, DEFAULT_MAX_SPIN, FRAMES_PER_SECOND, MAX_SCENE_BODIES,
+};
 use vadop::{BodyHandle, Contact, Method, Mode, Touched, VadopError, World, WorldConfig};
 
-/// Scenes up to this many bodies are checked against brute force unless told otherwise.
+/// Scenes up to this many moving bodies are checked against brute force unless told otherwise.
 const DEFAULT_REFERENCE_MAX_BODIES: usize = 3000;
+/// The same for scenes with shapes other than spheres: brute force tests every pair, and a pair
+/// test of shapes costs about a hundred times one of spheres (an iterative search, not a closed
+/// form), so this many take about as long a frame as 3000 spheres.
+const DEFAULT_REFERENCE_MAX_SHAPE_BODIES: usize = 300;
 /// Runs shorter than this finish before a progress bar would help.
 const PROGRESS_DELAY: Duration = Duration::from_secs(2);
 
@@ -40,13 +46,17 @@ Memory: a run that needs more memory than is available (free memory, cgroup limi
 refused before it starts; the estimate is about 640 bytes per body, twice with a reference method.")]
 pub struct SimulateArgs {
     /// Scene file (JSON: {"bounds": {"min": [x,y,z], "max": [x,y,z]}, "spheres": [{"position",
-    /// "velocity", "radius", "mass"}, ...]}) instead of the paper's scene
+    /// "velocity", "radius", "mass"}, ...], and for other shapes "shapes": [{"name", "shape"}, ...],
+    /// "bodies": [{"shape" (a name), "position", "orientation" ([x,y,z,w]), "velocity",
+    /// "angular_velocity", "mass"}, ...], "static_bodies": [{"shape", "position", "orientation"},
+    /// ...]; README.md, "Scene files") instead of a generated scene
     #[arg(long, value_name = "FILE", help_heading = "Scene")]
     scene: Option<PathBuf>,
-    /// Number of spheres in the paper's scene
+    /// Number of moving bodies of the generated scene
     #[arg(long, value_name = "N", default_value_t = 1000, conflicts_with = "scene", help_heading = "Scene")]
     bodies: usize,
-    /// Fraction of the box volume the spheres fill, in (0, 0.6]
+    /// Fraction of the box volume the bodies fill, in (0, 0.6] (with --kind shapes their own
+    /// volume: at most about 0.2 fits)
     #[arg(
         long,
         value_name = "F",
@@ -67,14 +77,24 @@ pub struct SimulateArgs {
         help_heading = "Scene"
     )]
     max_speed: f64,
-    /// The velocities of the generated scene: paper (random directions, uniform speeds), gas (an
-    /// equilibrium gas: Maxwell velocities, no net momentum), stream (every body within --spread
-    /// of +x, as bullets, rain or a beam), heavy-tail (Pareto speeds: a few bodies far faster)
+    /// The generated scene: spheres of one size with the velocities of paper (random directions,
+    /// uniform speeds), gas (an equilibrium gas: Maxwell velocities, no net momentum), stream
+    /// (every body within --spread of +x, as bullets, rain or a beam) or heavy-tail (Pareto speeds:
+    /// a few bodies far faster); or shapes, a crowd of spheres, cuboids, capsules, cylinders, cones
+    /// and convex hulls, each one diameter across, at random orientations, with uniform speeds and
+    /// spins up to --spin (and a floor with --floor)
     #[arg(long, value_enum, default_value_t = KindArg::Paper, conflicts_with = "scene", help_heading = "Scene")]
     kind: KindArg,
     /// Half-angle of a stream's directions, in degrees
     #[arg(long, value_name = "DEGREES", default_value_t = 10.0, allow_negative_numbers = true, help_heading = "Scene")]
     spread: f64,
+    /// Spins of --kind shapes are uniform in [0, W] radians per frame, about random axes
+    #[arg(long, value_name = "W", default_value_t = DEFAULT_MAX_SPIN, allow_negative_numbers = true, help_heading = "Scene")]
+    spin: f64,
+    /// --kind shapes: a static floor under the crowd, a bumpy triangle mesh (the box reaches one
+    /// diameter lower for it)
+    #[arg(long, help_heading = "Scene")]
+    floor: bool,
     /// Seed of the scene generator
     #[arg(long, value_name = "K", default_value_t = 1, conflicts_with = "scene", help_heading = "Scene")]
     seed: u64,
@@ -98,7 +118,8 @@ pub struct SimulateArgs {
     #[arg(long, value_enum, default_value_t = MethodArg::Auto, help_heading = "Run")]
     method: MethodArg,
     /// Method stepped alongside on the same scene to count missed and extra pair contacts
-    /// [default: brute for at most 3000 bodies unless --method is brute, else none]
+    /// [default: brute for at most 3000 bodies (300 in a scene with shapes other than spheres,
+    /// whose pair tests cost far more) unless --method is brute, else none]
     #[arg(long, value_enum, help_heading = "Run")]
     reference: Option<ReferenceArg>,
 
@@ -140,11 +161,12 @@ pub struct SimulateArgs {
     json: Option<PathBuf>,
     /// Write every contact as CSV (frame, time, body, what it touched, point, normal, impulse);
     /// with --contact-ends also the ends of contacts between bodies, as rows touching `body-end`.
-    /// Bodies are numbered from 0 in scene order. A world saved by the library after bodies were
-    /// removed and added may hold a body in a reused slot: it is written as slot + 2^32 x
-    /// generation, the number of its BodyHandle (the id Python uses too). With --resume an
-    /// existing file is continued: rows of frames after the saved state are dropped, and the new
-    /// frames' rows appended
+    /// Bodies are numbered from 0 in scene order: a scene file's spheres, then its bodies, then its
+    /// static bodies (--save-scene writes a generated scene's file). A world saved by the library
+    /// after bodies were removed and added may hold a body in a reused slot: it is written as
+    /// slot + 2^32 x generation, the number of its BodyHandle (the id Python uses too). With
+    /// --resume an existing file is continued: rows of frames after the saved state are dropped,
+    /// and the new frames' rows appended
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     contacts: Option<PathBuf>,
     /// Save the scene, before stepping, as a scene file (a regular file; links are followed)
@@ -191,6 +213,7 @@ enum KindArg {
     Gas,
     Stream,
     HeavyTail,
+    Shapes,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -235,6 +258,9 @@ fn describe(error: VadopError) -> String {
 
 pub fn run(args: &SimulateArgs) -> CliResult<()> {
     let files = Files::check(args)?;
+    if args.floor && args.kind != KindArg::Shapes {
+        return Err("--floor lays a floor under --kind shapes only".to_string());
+    }
     if let Some(path) = &args.resume {
         return resume(path, files, args);
     }
@@ -252,64 +278,95 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         threads: args.threads,
         contact_ends: args.contact_ends,
     };
-    let (scene, source, reference) = match &args.scene {
+    let (scene, source) = match &args.scene {
         Some(path) => {
             let scene = Scene::load(path).map_err(describe)?;
-            let reference = reference_method(args, scene.spheres.len(), config.method);
-            check_memory(scene.spheres.len(), reference)?;
-            (scene, format!("scene file {}", path.display()), reference)
+            let layout = scene.layout();
+            check_memory(layout.count(), reference_method(args, &layout, config.method))?;
+            (scene, format!("scene file {}", path.display()))
         }
         None => {
-            let (velocities, what) = match args.kind {
-                KindArg::Paper => (
-                    Velocities::Uniform { max_speed: args.max_speed },
-                    format!("paper scene (speeds up to {} diameters/frame", args.max_speed),
-                ),
-                KindArg::Gas => (
-                    Velocities::Maxwell { rms_speed: args.max_speed },
-                    format!("equilibrium gas (rms speed {} diameters/frame", args.max_speed),
-                ),
-                KindArg::Stream => (
-                    Velocities::Stream { speed: args.max_speed, spread: args.spread.to_radians() },
-                    format!("stream ({} diameters/frame within {} degrees of +x", args.max_speed, args.spread),
-                ),
-                KindArg::HeavyTail => (
-                    Velocities::HeavyTail { median_speed: args.max_speed, tail_index: 1.5 },
-                    format!("heavy-tailed speeds (median {} diameters/frame, tail index 1.5", args.max_speed),
-                ),
-            };
-            let generated = GeneratedScene {
-                bodies: args.bodies,
-                packing_fraction: args.packing,
-                velocities,
-                radius: 0.5,
-                seed: args.seed,
-            };
-            let reference = reference_method(args, generated.bodies, config.method);
-            // Only a valid scene's size is worth checking: the core names bad parameters better.
-            if generated.bodies <= MAX_SCENE_BODIES {
-                check_memory(generated.bodies, reference)?;
+            // Before generating, so that a scene too large is refused before it is built. Only a
+            // valid scene's size is worth checking: the core names bad parameters better.
+            if args.bodies <= MAX_SCENE_BODIES {
+                let expected = match args.kind {
+                    KindArg::Shapes => SceneLayout { bodies: args.bodies, ..SceneLayout::default() },
+                    _ => SceneLayout { spheres: args.bodies, ..SceneLayout::default() },
+                };
+                check_memory(args.bodies, reference_method(args, &expected, config.method))?;
             }
-            let source = format!("{what}, seed {})", args.seed);
-            (generated.build().map_err(describe)?, source, reference)
+            generate(args)?
         }
     };
+    let layout = scene.layout();
+    let reference = reference_method(args, &layout, config.method);
     let world = scene.world(config).map_err(describe)?;
     let reference_world = match reference {
         Some(method) => Some(scene.world(WorldConfig { method, ..config }).map_err(describe)?),
         None => None,
     };
-    run_world(world, reference_world, scene, source, 0, files, args)
+    let save = files.save_scene.is_some().then_some(scene);
+    run_world(world, reference_world, save, Origin { source, frames_done: 0, layout: Some(layout) }, files, args)
 }
 
-/// The method stepped alongside a run of `bodies` bodies, if any.
-fn reference_method(args: &SimulateArgs, bodies: usize, method: Method) -> Option<Method> {
+/// The scene `--kind` asks for, and where it came from, for the summary.
+fn generate(args: &SimulateArgs) -> CliResult<(Scene, String)> {
+    let (velocities, what) = match args.kind {
+        KindArg::Paper => (
+            Velocities::Uniform { max_speed: args.max_speed },
+            format!("paper scene (speeds up to {} diameters/frame", args.max_speed),
+        ),
+        KindArg::Gas => (
+            Velocities::Maxwell { rms_speed: args.max_speed },
+            format!("equilibrium gas (rms speed {} diameters/frame", args.max_speed),
+        ),
+        KindArg::Stream => (
+            Velocities::Stream { speed: args.max_speed, spread: args.spread.to_radians() },
+            format!("stream ({} diameters/frame within {} degrees of +x", args.max_speed, args.spread),
+        ),
+        KindArg::HeavyTail => (
+            Velocities::HeavyTail { median_speed: args.max_speed, tail_index: 1.5 },
+            format!("heavy-tailed speeds (median {} diameters/frame, tail index 1.5", args.max_speed),
+        ),
+        KindArg::Shapes => {
+            let shapes = ShapesScene {
+                bodies: args.bodies,
+                packing_fraction: args.packing,
+                max_speed: args.max_speed,
+                max_spin: args.spin,
+                floor: args.floor,
+                seed: args.seed,
+            };
+            let floor = if args.floor { ", on a floor mesh" } else { "" };
+            let what = format!(
+                "mixed shapes (speeds up to {} diameters/frame, spins up to {} rad/frame{floor}, seed {})",
+                args.max_speed, args.spin, args.seed
+            );
+            return Ok((shapes.build().map_err(describe)?, what));
+        }
+    };
+    let generated = GeneratedScene {
+        bodies: args.bodies,
+        packing_fraction: args.packing,
+        velocities,
+        radius: 0.5,
+        seed: args.seed,
+    };
+    Ok((generated.build().map_err(describe)?, format!("{what}, seed {})", args.seed)))
+}
+
+/// The method stepped alongside a run of a scene of `layout`, if any.
+fn reference_method(args: &SimulateArgs, layout: &SceneLayout, method: Method) -> Option<Method> {
     match args.reference {
         Some(ReferenceArg::Brute) => Some(Method::Brute),
         Some(ReferenceArg::Vadop) => Some(Method::Vadop),
         Some(ReferenceArg::None) => None,
-        // Checking brute force against itself would only double the cost.
-        None => (bodies <= DEFAULT_REFERENCE_MAX_BODIES && method != Method::Brute).then_some(Method::Brute),
+        None => {
+            let shapes = layout.bodies + layout.static_bodies > 0;
+            let most = if shapes { DEFAULT_REFERENCE_MAX_SHAPE_BODIES } else { DEFAULT_REFERENCE_MAX_BODIES };
+            // Checking brute force against itself would only double the cost.
+            (layout.spheres + layout.bodies <= most && method != Method::Brute).then_some(Method::Brute)
+        }
     }
 }
 
@@ -339,9 +396,10 @@ fn resume(path: &Path, files: Files, args: &SimulateArgs) -> CliResult<()> {
             args.dt
         )
     })?;
-    let scene = Scene { bounds: world.bounds(), spheres: world.spheres().map(|(_, s)| s).collect() };
     let source = format!("saved world {} at time {} (frame {frames_done})", path.display(), world.time());
-    run_world(world, None, scene, source, frames_done, files, args)
+    let save = files.save_scene.is_some().then(|| Scene::from_world(&world));
+    // The world's handles are its own, not a scene's entries.
+    run_world(world, None, save, Origin { source, frames_done, layout: None }, files, args)
 }
 
 /// Time a frame may end off `frames * dt` in a world that added `dt` frame after frame: a
@@ -444,24 +502,36 @@ fn destination(path: &Path) -> CliResult<PathBuf> {
     Err(format!("{}: too many levels of symbolic links", path.display()))
 }
 
-/// Steps `world` (and `reference_world` alongside) from frame `frames_done` on, streaming the
-/// outputs, then reports.
-fn run_world(
-    world: World,
-    reference_world: Option<World>,
-    scene: Scene,
+/// Where a run's world came from.
+struct Origin {
+    /// What the summary calls it: a generated scene, a scene file, a saved world.
     source: String,
+    /// Frames stepped before: a resumed run's frame numbers go on from them.
     frames_done: u64,
+    /// The scene's body lists, which name its entries in errors; none for a saved world, whose
+    /// handles are its own.
+    layout: Option<SceneLayout>,
+}
+
+/// Steps `world` (and `reference_world` alongside) from frame `origin.frames_done` on, streaming
+/// the outputs, then reports. `scene` is what --save-scene writes, when given.
+fn run_world(
+    mut world: World,
+    reference_world: Option<World>,
+    scene: Option<Scene>,
+    origin: Origin,
     files: Files,
     args: &SimulateArgs,
 ) -> CliResult<()> {
     let config = world.config();
-    let mut outputs = Outputs::open(args, frames_done)?;
-    if let Some(path) = &files.save_scene {
+    let mut outputs = Outputs::open(args, origin.frames_done)?;
+    if let (Some(path), Some(scene)) = (&files.save_scene, scene) {
         scene.save(path).map_err(describe)?;
+        // The scene is no longer needed; at a million bodies it is worth giving back before
+        // stepping.
     }
     let info = RunInfo {
-        scene: SceneInfo::of(&scene, source, args.dt),
+        scene: SceneInfo::of(&world, origin.source, args.dt)?,
         method: match config.method {
             Method::Auto => format!("auto ({})", config.method.resolve().name()),
             method => method.name().to_string(),
@@ -473,12 +543,13 @@ fn run_world(
         .to_string(),
         dt: args.dt,
         restitution: config.restitution,
+        friction: config.friction,
         frames_requested: args.frames,
     };
-    // The scene is no longer needed; at a million bodies it is worth giving back before stepping.
-    drop(scene);
-    let frames = frames_done + 1..=frames_done + args.frames;
-    let mut outcome = step_frames(world, reference_world, args, frames, files.save_state.as_deref(), &mut outputs);
+    let start = Motion::of(&world);
+    let frames = origin.frames_done + 1..=origin.frames_done + args.frames;
+    let save_state = files.save_state.as_deref();
+    let mut outcome = step_frames(&mut world, reference_world, args, frames, save_state, &mut outputs, origin.layout);
     // A failed flush loses contacts or rows, not frames: it is reported like a failed frame.
     for finished in
         [outputs.contacts.map(ContactWriter::finish), outputs.csv.map(FramesCsv::finish)].into_iter().flatten()
@@ -487,14 +558,22 @@ fn run_world(
             outcome.failure.get_or_insert(e);
         }
     }
-    let summary = Summary::new(
-        info,
-        &outcome.frames,
-        outcome.pool,
-        outcome.accuracy,
-        outcome.conservation,
-        outcome.failure.clone(),
-    );
+    let pool = Some(world.pool()).filter(|_| matches!(world.method(), Method::Vadop | Method::SweptKdop)).map(|pool| {
+        let rho = pool.covering_radius();
+        let body_frames = outcome.frames.frames.max(1) as f64 * info.scene.bodies as f64;
+        PoolInfo {
+            axes: pool.len(),
+            covering_radius_deg: rho.to_degrees(),
+            phi_deg: world.config().phi.unwrap_or(rho).to_degrees(),
+            axes_per_body: outcome.frames.list_entries as f64 / body_frames,
+        }
+    });
+    let conservation = (config.mode == Mode::Simulate).then(|| {
+        // Spins are worth reporting once anything can spin: shapes, static bodies, friction.
+        let spins = info.scene.may_spin() || config.friction > 0.0;
+        Conservation::new(&start, &Motion::of(&world), spins)
+    });
+    let summary = Summary::new(info, &outcome.frames, pool, outcome.accuracy, conservation, outcome.failure.clone());
     if !args.quiet && outcome.frames.frames > 0 {
         report::print(&summary.to_string())?;
     }
@@ -665,25 +744,24 @@ fn not_contacts(path: &Path, line: u64) -> String {
 /// What the frame loop produced.
 struct Outcome {
     frames: FrameTotals,
-    pool: Option<PoolInfo>,
     accuracy: Option<Accuracy>,
-    conservation: Option<Conservation>,
     /// Why the run stopped early.
     failure: Option<String>,
 }
 
 /// Steps `world` (and `reference` alongside) through `frames`, or until a frame fails, writing
-/// each frame's contacts and row as it completes.
+/// each frame's contacts and row as it completes. `layout` names a scene's entries in the errors
+/// of the first step, which checks the scene as a whole.
 fn step_frames(
-    mut world: World,
+    world: &mut World,
     mut reference: Option<World>,
     args: &SimulateArgs,
     frames: std::ops::RangeInclusive<u64>,
     save_state: Option<&Path>,
     outputs: &mut Outputs,
+    layout: Option<SceneLayout>,
 ) -> Outcome {
     let simulate = world.config().mode == Mode::Simulate;
-    let (kinetic_start, momentum_start) = (world.kinetic_energy(), world.momentum());
     let mut accuracy = reference.as_ref().map(|r| Accuracy {
         reference: r.config().method.name().to_string(),
         identical_paths: !simulate,
@@ -700,7 +778,12 @@ fn step_frames(
             Ok(_) => {}
             Err(e) => {
                 // A step fails before changing anything, so a failure of the run's first step is
-                // about the scene as given, not about anything a frame did.
+                // about the scene as given, not about anything a frame did: its entries name the
+                // bodies.
+                let e = match layout {
+                    Some(layout) => layout.name_entries(e),
+                    None => e,
+                };
                 let when =
                     if totals.frames == 0 { "before the first frame".to_string() } else { format!("frame {frame}") };
                 failure = Some(format!("{when}: {}", describe(e)));
@@ -757,28 +840,7 @@ fn step_frames(
         }
     }
     bar.finish_and_clear();
-
-    let pool = Some(world.pool()).filter(|_| matches!(world.method(), Method::Vadop | Method::SweptKdop)).map(|pool| {
-        let rho = pool.covering_radius();
-        PoolInfo {
-            axes: pool.len(),
-            covering_radius_deg: rho.to_degrees(),
-            phi_deg: world.config().phi.unwrap_or(rho).to_degrees(),
-            axes_per_body: totals.list_entries as f64 / (totals.frames.max(1) as f64 * world.len() as f64),
-        }
-    });
-    let conservation = simulate.then(|| {
-        let (kinetic_end, momentum_end) = (world.kinetic_energy(), world.momentum());
-        Conservation {
-            kinetic_start,
-            kinetic_end,
-            kinetic_relative_drift: (kinetic_start > 0.0).then(|| (kinetic_end - kinetic_start) / kinetic_start),
-            momentum_start: momentum_start.to_array(),
-            momentum_end: momentum_end.to_array(),
-            momentum_change: (momentum_end - momentum_start).length(),
-        }
-    });
-    Outcome { frames: totals, pool, accuracy, conservation, failure }
+    Outcome { frames: totals, accuracy, failure }
 }
 
 /// The body-body contacts of a frame as sorted (lower handle, higher handle) pairs.

@@ -200,7 +200,7 @@ fn bad_scene_files_are_reported_not_panicked() {
         (
             "overlap",
             two_spheres(r#"{"position": [2.5, 5, 5], "velocity": [0, 0, 0], "radius": 0.5, "mass": 1}"#),
-            "error: before the first frame: spheres 0 and 1 overlap",
+            "error: before the first frame: sphere 0 and sphere 1 overlap",
         ),
         (
             "empty",

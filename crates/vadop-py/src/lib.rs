@@ -8,7 +8,9 @@
 //! the core still rejects (overlaps, absurd speeds, bad settings) becomes a `ValueError` with the
 //! core's message. Body handles cross as ints, [`BodyHandle::to_bits`]. Stepping releases the GIL.
 
-use glam::DVec3;
+mod shapes;
+
+use glam::{DQuat, DVec3};
 use numpy::ndarray::{Array1, Array2};
 use numpy::prelude::*;
 use numpy::{PyArray1, PyArray2, PyArrayDescr, PyUntypedArray};
@@ -22,7 +24,11 @@ use vadop::bounding_volume::interval;
 use vadop::collapse::DEFAULT_CONTACT_DURATION;
 use vadop::memory;
 use vadop::scene::{PaperScene, MAX_SCENE_BODIES};
-use vadop::{BodyHandle, BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
+use vadop::shape::ShapeGeometry;
+use vadop::{
+    Body, BodyHandle, BodyShape, BoxBounds, Contact, Method, Mode, ShapeId, Sphere, Touched, VadopError, World,
+    WorldConfig,
+};
 
 /// Names of the six walls, indexed by the `wall` column of [`Contacts`].
 const WALLS: [&str; 6] = ["min_x", "max_x", "min_y", "max_y", "min_z", "max_z"];
@@ -165,21 +171,45 @@ impl IntArg {
     }
 }
 
-/// Rows of a float64 array of shape (n, 3) as vectors, each checked to be finite.
-fn vectors(obj: &Bound<'_, PyAny>, name: &str, rows: Option<usize>) -> PyResult<Vec<DVec3>> {
+/// Rows of a float64 array of shape (n, N), each checked to be finite.
+fn finite_rows<const N: usize>(obj: &Bound<'_, PyAny>, name: &str, rows: Option<usize>) -> PyResult<Vec<[f64; N]>> {
     let py = obj.py();
-    let array = checked_array(obj, name, numpy::dtype::<f64>(py), &[rows, Some(3)])?;
+    let array = checked_array(obj, name, numpy::dtype::<f64>(py), &[rows, Some(N)])?;
     let array = array.downcast::<PyArray2<f64>>()?.readonly();
     let view = array.as_array();
     let mut out = Vec::with_capacity(view.nrows());
     for (i, row) in view.rows().into_iter().enumerate() {
-        let v = DVec3::new(row[0], row[1], row[2]);
-        if !v.is_finite() {
-            return Err(PyValueError::new_err(format!("{name}[{i}] must be finite, got {:?}", v.to_array())));
+        let values: [f64; N] = std::array::from_fn(|k| row[k]);
+        if !values.iter().all(|v| v.is_finite()) {
+            return Err(PyValueError::new_err(format!("{name}[{i}] must be finite, got {values:?}")));
         }
-        out.push(v);
+        out.push(values);
     }
     Ok(out)
+}
+
+/// Rows of a float64 array of shape (n, 3) as vectors, each checked to be finite.
+fn vectors(obj: &Bound<'_, PyAny>, name: &str, rows: Option<usize>) -> PyResult<Vec<DVec3>> {
+    Ok(finite_rows::<3>(obj, name, rows)?.into_iter().map(DVec3::from_array).collect())
+}
+
+/// Rows of a float64 array of shape (n, 4) as quaternions (x, y, z, w), each checked to be finite
+/// (whether one is a rotation, non-zero, is the core's check).
+fn quaternions(obj: &Bound<'_, PyAny>, name: &str, rows: Option<usize>) -> PyResult<Vec<DQuat>> {
+    Ok(finite_rows::<4>(obj, name, rows)?.into_iter().map(DQuat::from_array).collect())
+}
+
+/// A float64 array of shape (N,), checked to be finite.
+fn finite_row<const N: usize>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<[f64; N]> {
+    let py = obj.py();
+    let array = checked_array(obj, name, numpy::dtype::<f64>(py), &[Some(N)])?;
+    let array = array.downcast::<PyArray1<f64>>()?.readonly();
+    let view = array.as_array();
+    let values: [f64; N] = std::array::from_fn(|k| view[k]);
+    if !values.iter().all(|v| v.is_finite()) {
+        return Err(PyValueError::new_err(format!("{name} must be finite, got {values:?}")));
+    }
+    Ok(values)
 }
 
 /// A float64 array of shape (n,), each value checked to be finite and > 0.
@@ -402,9 +432,11 @@ impl Contacts {
     }
 }
 
-/// Spheres in a box, stepped frame by frame; every contact inside a frame is found, in time order.
+/// Bodies in a box, stepped frame by frame; every contact inside a frame is found, in time order.
+/// Bodies are spheres (given here or with ``add``) or rigid bodies of any shape (``add_shape``,
+/// then ``add_bodies``, or ``add_static`` for fixed level geometry).
 ///
-/// Bodies are given as numpy columns: ``positions`` and ``velocities`` float64 (n, 3), ``radii``
+/// Spheres are given as numpy columns: ``positions`` and ``velocities`` float64 (n, 3), ``radii``
 /// and ``masses`` float64 (n,) (``masses`` defaults to 1). ``box`` is a cube side or a float64
 /// array ``[[min x, y, z], [max x, y, z]]``. Lists and tuples of numbers (ints too) are taken
 /// wherever an array is, read with ``numpy.asarray``; numpy arrays must have the dtype itself.
@@ -427,7 +459,8 @@ impl Contacts {
 /// later body (lowest slot first) under a new id, the slot plus 2**32 per reuse (the core's
 /// ``BodyHandle``: ``generation << 32 | slot``), so a removed body's id never names another body:
 /// it raises ``ValueError`` wherever ids are taken. Arrays read back (``positions``,
-/// ``velocities`` ...) hold the live bodies in ascending slot order (``ids``).
+/// ``velocities`` ...) hold every live body, of any shape, static ones too, in ascending slot
+/// order (``ids``).
 ///
 /// >>> import numpy as np, vadop
 /// >>> w = vadop.World(np.array([[2.0, 5, 5], [8, 5, 5]]), np.array([[30.0, 0, 0], [0, 0, 0]]),
@@ -447,18 +480,94 @@ impl Contacts {
 /// waits, without holding the GIL, until that step is done.
 #[pyclass(name = "World", module = "vadop._vadop", frozen)]
 struct PyWorld {
-    world: Mutex<World>,
+    state: Mutex<WorldState>,
+}
+
+/// A world and the shapes added to it from Python, in order: a shape's Python id is its index in
+/// `shapes`. The core makes a [`ShapeId`] only in `World::add_shape` (and numbers its shapes its
+/// own way: once a world holds rigid bodies, plain spheres' radii get shapes too), so the binding
+/// keeps those it was given.
+struct WorldState {
+    world: World,
+    shapes: Vec<ShapeId>,
+}
+
+impl WorldState {
+    fn new(world: World) -> WorldState {
+        WorldState { world, shapes: Vec::new() }
+    }
+
+    /// The core's id of the shape Python calls `number`; `name` names the argument in messages.
+    fn shape_id(&self, number: i128, name: &str) -> PyResult<ShapeId> {
+        let found = usize::try_from(number).ok().and_then(|k| self.shapes.get(k));
+        found.copied().ok_or_else(|| {
+            let ids = match self.shapes.len() {
+                0 => "this world has none yet".to_string(),
+                n => format!("0 to {}", n - 1),
+            };
+            PyValueError::new_err(format!("{name} must be a shape id from add_shape ({ids}), got {number}"))
+        })
+    }
+
+    /// [`WorldState::shape_id`] of a shape a moving body can take: not level geometry.
+    fn moving_shape_id(&self, number: i128, name: &str) -> PyResult<ShapeId> {
+        let id = self.shape_id(number, name)?;
+        if self.world.shape(id).map_err(value_error)?.is_static_only() {
+            return Err(PyValueError::new_err(format!(
+                "{name} = {number} is level geometry (a triangle mesh or a half-space): add it with add_static"
+            )));
+        }
+        Ok(id)
+    }
+
+    /// The Python id of `body`'s shape; -1 for a body added as a plain sphere.
+    fn shape_number(&self, body: &Body) -> i64 {
+        match body.shape {
+            BodyShape::Sphere { .. } => -1,
+            BodyShape::Shape(id) => self.shapes.binary_search(&id).map_or(-1, |k| k as i64),
+        }
+    }
+
+    /// The geometry of `body`'s shape; `None` for a plain sphere.
+    fn geometry(&self, body: &Body) -> Option<&ShapeGeometry> {
+        match body.shape {
+            BodyShape::Sphere { .. } => None,
+            BodyShape::Shape(id) => self.world.shape(id).ok(),
+        }
+    }
+
+    /// A sphere's radius; another shape's bounding radius (about its centre of mass); infinite
+    /// for level geometry, which no sphere bounds.
+    fn radius(&self, body: &Body) -> f64 {
+        match (body.shape, self.geometry(body)) {
+            (BodyShape::Sphere { radius }, _) => radius,
+            (_, geometry) => geometry.and_then(|g| g.bounding_radius()).unwrap_or(f64::INFINITY),
+        }
+    }
+
+    /// Where `body`'s centre of mass is: its shape's origin moved by the shape's offset from it
+    /// (see `vadop::shape`'s frames).
+    fn centre_of_mass(&self, body: &Body) -> DVec3 {
+        match self.geometry(body) {
+            None => body.position,
+            Some(g) => {
+                let offset = g.body_from_shape();
+                let principal = body.orientation * offset.rotation.inverse();
+                body.position - principal * offset.translation
+            }
+        }
+    }
 }
 
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (positions, velocities, radii, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, friction = 0.0, contact_duration = 1e-5, threads = None, contact_ends = false))]
+    #[pyo3(signature = (positions = None, velocities = None, radii = None, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, friction = 0.0, contact_duration = 1e-5, threads = None, contact_ends = false))]
     #[allow(clippy::too_many_arguments)]
     fn new(
-        positions: &Bound<'_, PyAny>,
-        velocities: &Bound<'_, PyAny>,
-        radii: &Bound<'_, PyAny>,
+        positions: Option<&Bound<'_, PyAny>>,
+        velocities: Option<&Bound<'_, PyAny>>,
+        radii: Option<&Bound<'_, PyAny>>,
         masses: Option<&Bound<'_, PyAny>>,
         r#box: &Bound<'_, PyAny>,
         method: &str,
@@ -474,11 +583,28 @@ impl PyWorld {
         let bounds = bounds(r#box)?;
         let config =
             config(method, mode, pool_axes, phi, restitution, friction, contact_duration, threads, contact_ends)?;
-        let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
+        let spheres = match (positions, velocities, radii) {
+            (Some(p), Some(v), Some(r)) => spheres(p, v, r, masses, &bounds)?,
+            (None, None, None) if masses.is_none() => Vec::new(),
+            given => {
+                let names = ["positions", "velocities", "radii"];
+                let present = [given.0.is_some(), given.1.is_some(), given.2.is_some()];
+                let missing: Vec<&str> = names.iter().zip(present).filter(|(_, p)| !p).map(|(n, _)| *n).collect();
+                let missing = match missing.split_last() {
+                    Some((last, [])) => last.to_string(),
+                    Some((last, rest)) => format!("{} and {last}", rest.join(", ")),
+                    None => unreachable!("all three given is the first arm"),
+                };
+                return Err(PyTypeError::new_err(format!(
+                    "World() missing {missing}: spheres need positions, velocities and radii (give none of them \
+                     for a world with no spheres yet)"
+                )));
+            }
+        };
         check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
         world.add_spheres(&spheres).map_err(value_error)?;
-        Ok(PyWorld { world: Mutex::new(world) })
+        Ok(PyWorld { state: Mutex::new(WorldState::new(world)) })
     }
 
     /// Adds bodies (all or none) and returns their ids as an int64 array; the arguments are
@@ -498,15 +624,199 @@ impl PyWorld {
         radii: &Bound<'py, PyAny>,
         masses: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let bounds = self.lock(py)?.bounds();
+        let bounds = self.lock(py)?.world.bounds();
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
-        let added = self.lock(py)?.add_spheres(&spheres).map_err(value_error)?;
+        let added = self.lock(py)?.world.add_spheres(&spheres).map_err(value_error)?;
         Ok(Array1::from_iter(added.into_iter().map(handle_id)).into_pyarray(py))
     }
 
-    /// Removes bodies by id (an int, or an int64 array, list or tuple of ints), all or none.
-    /// Their ids are stale from then on: a body added later may take the slot, under a new id.
+    /// Adds a shape that bodies can then take and returns its id (0, 1, 2 ... in the order
+    /// shapes are added); ``kind`` and its parameters, all sizes in the shape's own frame:
+    ///
+    /// - ``"sphere"``: ``radius``;
+    /// - ``"cuboid"``: ``half_extents`` (3,);
+    /// - ``"capsule"``, ``"cylinder"``, ``"cone"``: ``half_height`` and ``radius``, along the
+    ///   shape's y axis (a cone's apex at ``+half_height``);
+    /// - ``"convex_hull"``: ``points`` float64 (n, 3), at least 4 not all in one plane;
+    /// - ``"trimesh"``: ``vertices`` float64 (n, 3) and ``triangles`` int64 (m, 3) indices into
+    ///   them: level geometry (a surface, static bodies only);
+    /// - ``"halfspace"``: ``normal`` (3,), pointing out of the solid half-space behind the plane
+    ///   through the shape's origin: level geometry.
+    ///
+    /// An unknown kind raises ``ValueError``; a missing or unexpected parameter, or one of the
+    /// wrong type, ``TypeError`` naming it; a bad value (a size <= 0, a flat hull, a triangle
+    /// index past the vertices) ``ValueError`` saying what is wrong. Runs without the GIL (a
+    /// hull or a large mesh takes a while to build).
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World(box=10.0)
+    /// >>> w.add_shape("cuboid", half_extents=[1.0, 0.5, 0.25]), w.add_shape("capsule", half_height=1.0, radius=0.2)
+    /// (0, 1)
+    /// >>> w.add_shape("capsule", half_height=1.0)
+    /// Traceback (most recent call last):
+    /// ...
+    /// TypeError: add_shape('capsule') missing keyword argument 'radius'; a 'capsule' takes half_height, radius
+    #[pyo3(signature = (kind, **params))]
+    fn add_shape(&self, py: Python<'_>, kind: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<usize> {
+        let shape = shapes::parse(kind, params)?;
+        let mut state = self.lock(py)?;
+        let world = &mut state.world;
+        let id = py.allow_threads(|| world.add_shape(shape)).map_err(value_error)?;
+        state.shapes.push(id);
+        Ok(state.shapes.len() - 1)
+    }
+
+    /// The shapes added so far, in id order, each as the keyword arguments of ``add_shape`` that
+    /// make it: ``kind`` and its parameters (vectors and points as float64 arrays, triangles as
+    /// int64), so ``add_shape(**shape)`` makes it again.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World(box=10.0)
+    /// >>> _ = w.add_shape("cone", half_height=1.0, radius=0.5)
+    /// >>> w.shapes()
+    /// [{'kind': 'cone', 'half_height': 1.0, 'radius': 0.5}]
+    fn shapes<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let state = self.lock(py)?;
+        state
+            .shapes
+            .iter()
+            .map(|&id| shapes::describe(py, state.world.shape(id).map_err(value_error)?.shape()))
+            .collect()
+    }
+
+    /// The surface of shape ``shape`` as triangles, for drawing: ``(vertices, triangles)``,
+    /// float64 (v, 3) points in the shape's own frame and int64 (t, 3) indices into them,
+    /// counter-clockwise seen from outside. Exact for cuboids, convex hulls and meshes; round
+    /// surfaces have 24 segments around. A half-space, unbounded, raises ``ValueError``.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World(box=10.0)
+    /// >>> vertices, triangles = w.shape_surface(w.add_shape("cuboid", half_extents=[1.0, 2, 3]))
+    /// >>> vertices.max(axis=0).tolist(), triangles.shape
+    /// ([1.0, 2.0, 3.0], (12, 3))
+    #[allow(clippy::type_complexity)]
+    fn shape_surface<'py>(
+        &self,
+        py: Python<'py>,
+        shape: IntArg,
+    ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
+        let state = self.lock(py)?;
+        let number = shape_number(&shape, "shape")?;
+        let geometry = state.world.shape(state.shape_id(number, "shape")?).map_err(value_error)?;
+        let Some((vertices, triangles)) = shapes::surface(geometry) else {
+            return Err(PyValueError::new_err(format!(
+                "shape {number} is a half-space: it is unbounded and has no surface to draw"
+            )));
+        };
+        Ok((vectors_array(py, &vertices), shapes::triangles_array(py, &triangles)))
+    }
+
+    /// Adds moving rigid bodies of the world's shapes (all or none) and returns their ids, int64.
+    ///
+    /// ``shapes`` is one shape id for every body or an int64 (n,) array of them; ``positions``
+    /// float64 (n, 3) place each shape's own origin (for a cone or a hull, not its centre of
+    /// mass); ``velocities`` float64 (n, 3) are those of the centres of mass (default 0);
+    /// ``orientations`` float64 (n, 4) quaternions (x, y, z, w) rotating the shape's frame to the
+    /// world's, any non-zero length (default: the identity); ``angular_velocities`` float64
+    /// (n, 3) in world axes, radians per second (default 0); ``masses`` float64 (n,) (default
+    /// 1), the inertia following from the shape. Lists and tuples work as elsewhere. Level
+    /// geometry (a mesh, a half-space) goes to ``add_static`` instead; the discrete method takes
+    /// spheres only. Runs without the GIL.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[2.0, 5, 5]], [[0.0, 0, 0]], [0.5], box=10.0, mode="detect")
+    /// >>> brick = w.add_shape("cuboid", half_extents=[0.5, 0.25, 0.25])
+    /// >>> w.add_bodies(brick, [[5.0, 5, 5], [8, 5, 5]], velocities=[[-10.0, 0, 0], [0, 0, 0]],
+    /// ...              angular_velocities=[[0.0, 0, 3], [0, 0, 0]]).tolist()
+    /// [1, 2]
+    /// >>> w.shape_ids.tolist(), w.radii.round(3).tolist()   # a plain sphere has shape -1
+    /// ([-1, 0, 0], [0.5, 0.612, 0.612])
+    /// >>> c = w.step(0.3)                                  # the spinning brick reaches the ball
+    /// >>> c.i.tolist(), c.j.tolist()
+    /// ([0], [1])
+    #[pyo3(signature = (shapes, positions, velocities = None, orientations = None, angular_velocities = None, masses = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_bodies<'py>(
+        &self,
+        py: Python<'py>,
+        shapes: &Bound<'py, PyAny>,
+        positions: &Bound<'py, PyAny>,
+        velocities: Option<&Bound<'py, PyAny>>,
+        orientations: Option<&Bound<'py, PyAny>>,
+        angular_velocities: Option<&Bound<'py, PyAny>>,
+        masses: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let positions = vectors(positions, "positions", None)?;
+        let n = positions.len();
+        let shapes = ShapeNumbers::of(shapes, n)?;
+        let vectors_or_zero = |obj: Option<&Bound<'py, PyAny>>, name: &str| match obj {
+            Some(obj) => vectors(obj, name, Some(n)),
+            None => Ok(vec![DVec3::ZERO; n]),
+        };
+        let velocities = vectors_or_zero(velocities, "velocities")?;
+        let angular_velocities = vectors_or_zero(angular_velocities, "angular_velocities")?;
+        let orientations = match orientations {
+            Some(obj) => quaternions(obj, "orientations", Some(n))?,
+            None => vec![DQuat::IDENTITY; n],
+        };
+        let masses = match masses {
+            Some(obj) => positive_values(obj, "masses", n)?,
+            None => vec![1.0; n],
+        };
+        check_world_memory(n)?;
+        let mut state = self.lock(py)?;
+        let shapes = shapes.ids(&state, n)?;
+        let bodies: Vec<Body> = (0..n)
+            .map(|k| Body {
+                shape: BodyShape::Shape(shapes[k]),
+                position: positions[k],
+                orientation: orientations[k],
+                velocity: velocities[k],
+                angular_velocity: angular_velocities[k],
+                mass: masses[k],
+            })
+            .collect();
+        let world = &mut state.world;
+        let added = py.allow_threads(|| world.add_bodies(&bodies)).map_err(value_error)?;
+        Ok(Array1::from_iter(added.into_iter().map(handle_id)).into_pyarray(py))
+    }
+
+    /// Adds a static body and returns its id: level geometry (a triangle mesh, a half-space) or
+    /// any shape fixed in place, at ``position`` (float64 (3,), the shape's origin) turned by
+    /// ``orientation`` (float64 (4,), x, y, z, w; default: the identity). It never moves, has
+    /// infinite mass and may reach beyond the box; moving bodies bounce off it, in detect mode too.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 5]], [[0.0, 0, -4]], [0.5], box=10.0)
+    /// >>> floor = w.add_static(w.add_shape("halfspace", normal=[0.0, 0, 1]), [0.0, 0, 2])
+    /// >>> c = w.step(1.0)                       # the ball's bottom reaches z = 2 at t = 2.5 / 4
+    /// >>> c.j.tolist() == [floor], round(float(c.time[0]), 6), w.velocities.tolist()
+    /// (True, 0.625, [[0.0, 0.0, 4.0], [0.0, 0.0, 0.0]])
+    /// >>> w.static.tolist(), w.masses.tolist()
+    /// ([False, True], [1.0, inf])
+    #[pyo3(signature = (shape, position, orientation = None))]
+    fn add_static(
+        &self,
+        py: Python<'_>,
+        shape: IntArg,
+        position: &Bound<'_, PyAny>,
+        orientation: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<i64> {
+        let number = shape_number(&shape, "shape")?;
+        let position = DVec3::from_array(finite_row(position, "position")?);
+        let orientation = match orientation {
+            Some(obj) => DQuat::from_array(finite_row(obj, "orientation")?),
+            None => DQuat::IDENTITY,
+        };
+        let mut state = self.lock(py)?;
+        let id = state.shape_id(number, "shape")?;
+        state.world.add_static(id, position, orientation).map(handle_id).map_err(value_error)
+    }
+
+    /// Removes bodies of any shape by id (an int, or an int64 array, list or tuple of ints), all
+    /// or none. Their ids are stale from then on: a body added later may take the slot, under a
+    /// new id.
     ///
     /// >>> import vadop
     /// >>> w = vadop.scene(10)
@@ -521,15 +831,16 @@ impl PyWorld {
     /// ValueError: ids must name live bodies, got 0: that body was removed; its slot now holds 4294967296
     fn remove(&self, py: Python<'_>, ids: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = ids_of(ids, "ids")?;
-        let mut world = self.lock(py)?;
-        for handle in live_handles(&world, &ids, "ids")? {
-            world.remove_sphere(handle).map_err(value_error)?;
+        let mut state = self.lock(py)?;
+        for handle in live_handles(&state.world, &ids, "ids")? {
+            state.world.remove_body(handle).map_err(value_error)?;
         }
         Ok(())
     }
 
-    /// Sets the velocities of bodies ``ids`` (an int, or k ids as for ``remove``) to the rows of
-    /// ``velocities`` (float64 (k, 3), or lists), all or none.
+    /// Sets the velocities of moving bodies ``ids`` (an int, or k ids as for ``remove``) to the
+    /// rows of ``velocities`` (float64 (k, 3), or lists), all or none; they go on spinning as
+    /// they did.
     ///
     /// >>> import vadop
     /// >>> w = vadop.scene(10)
@@ -539,9 +850,34 @@ impl PyWorld {
     fn set_velocities(&self, py: Python<'_>, ids: &Bound<'_, PyAny>, velocities: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = ids_of(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
-        let mut world = self.lock(py)?;
-        let handles = live_handles(&world, &ids, "ids")?;
-        world.set_velocities(&handles, &velocities).map_err(value_error)
+        let mut state = self.lock(py)?;
+        let handles = moving_handles(&state.world, &ids, "ids")?;
+        state.world.set_velocities(&handles, &velocities).map_err(value_error)
+    }
+
+    /// Sets the velocities and angular velocities (world axes, radians per second) of moving
+    /// bodies ``ids`` (as for ``set_velocities``) to the rows of ``velocities`` and
+    /// ``angular_velocities`` (float64 (k, 3) each), all or none. A sphere spins too: friction
+    /// acts on its spin.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 5]], [[0.0, 0, 0]], [0.5], box=10.0)
+    /// >>> w.set_motions(0, [[1.0, 0, 0]], [[0.0, 0, 2.0]])
+    /// >>> w.velocities.tolist(), w.angular_velocities.tolist()
+    /// ([[1.0, 0.0, 0.0]], [[0.0, 0.0, 2.0]])
+    fn set_motions(
+        &self,
+        py: Python<'_>,
+        ids: &Bound<'_, PyAny>,
+        velocities: &Bound<'_, PyAny>,
+        angular_velocities: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let ids = ids_of(ids, "ids")?;
+        let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
+        let angular_velocities = vectors(angular_velocities, "angular_velocities", Some(ids.len()))?;
+        let mut state = self.lock(py)?;
+        let handles = moving_handles(&state.world, &ids, "ids")?;
+        state.world.set_motions(&handles, &velocities, &angular_velocities).map_err(value_error)
     }
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
@@ -557,8 +893,8 @@ impl PyWorld {
     fn step(&self, py: Python<'_>, dt: f64) -> PyResult<Contacts> {
         py.check_signals()?;
         let contacts = py.allow_threads(|| {
-            let mut world = self.world.lock().map_err(|_| poisoned())?;
-            world.step(dt).map(|c| c.to_vec()).map_err(value_error)
+            let mut state = self.state.lock().map_err(|_| poisoned())?;
+            state.world.step(dt).map(|c| c.to_vec()).map_err(value_error)
         })?;
         Ok(Contacts::new(py, &contacts))
     }
@@ -576,7 +912,7 @@ impl PyWorld {
     /// >>> [round(float(t), 6) for t in w.contact_ends().time], w.touching().tolist()
     /// ([2.333333], [])
     fn contact_ends(&self, py: Python<'_>) -> PyResult<Contacts> {
-        let ends = self.lock(py)?.contact_ends().to_vec();
+        let ends = self.lock(py)?.world.contact_ends().to_vec();
         Ok(Contacts::new(py, &ends))
     }
 
@@ -584,7 +920,7 @@ impl PyWorld {
     /// contact started and has not ended. Empty unless the world was made with
     /// ``contact_ends=True``.
     fn touching<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
-        let pairs = self.lock(py)?.touching();
+        let pairs = self.lock(py)?.world.touching();
         let flat: Vec<i64> = pairs.iter().flat_map(|&(a, b)| [handle_id(a), handle_id(b)]).collect();
         Ok(Array2::from_shape_vec((pairs.len(), 2), flat).expect("2 ids per row").into_pyarray(py))
     }
@@ -592,86 +928,113 @@ impl PyWorld {
     /// Ids of the live bodies, int64, ascending by slot (the row order of every array read back).
     #[getter]
     fn ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let ids: Vec<i64> = self.lock(py)?.spheres().map(|(handle, _)| handle_id(handle)).collect();
-        Ok(Array1::from_vec(ids).into_pyarray(py))
+        Ok(Array1::from_vec(self.per_body(py, |_, handle, _| handle_id(handle))?).into_pyarray(py))
     }
 
-    /// Centres now, float64 (n, 3).
+    /// Positions now, float64 (n, 3): a sphere's centre, another shape's own origin (for a cone
+    /// or a convex hull, not its centre of mass).
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let positions: Vec<DVec3> = self.lock(py)?.spheres().map(|(_, s)| s.position).collect();
-        Ok(vectors_array(py, &positions))
+        Ok(vectors_array(py, &self.per_body(py, |_, _, body| body.position)?))
     }
 
-    /// Velocities now, float64 (n, 3).
+    /// Velocities of the centres of mass now, float64 (n, 3).
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let velocities: Vec<DVec3> = self.lock(py)?.spheres().map(|(_, s)| s.velocity).collect();
-        Ok(vectors_array(py, &velocities))
+        Ok(vectors_array(py, &self.per_body(py, |_, _, body| body.velocity)?))
     }
 
-    /// Radii, float64 (n,).
+    /// Radii, float64 (n,): a sphere's radius (a plain sphere's, or a ``"sphere"`` shape's);
+    /// for another shape its bounding radius, that of the smallest sphere about its centre of
+    /// mass that holds it (all the broad phase sees of a shape); ``inf`` for level geometry
+    /// (meshes, half-spaces), which no sphere bounds.
     #[getter]
     fn radii<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let radii: Vec<f64> = self.lock(py)?.spheres().map(|(_, s)| s.radius).collect();
-        Ok(Array1::from_vec(radii).into_pyarray(py))
+        Ok(Array1::from_vec(self.per_body(py, |state, _, body| state.radius(body))?).into_pyarray(py))
     }
 
-    /// Masses, float64 (n,).
+    /// Masses, float64 (n,): ``inf`` for static bodies.
     #[getter]
     fn masses<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let masses: Vec<f64> = self.lock(py)?.spheres().map(|(_, s)| s.mass).collect();
-        Ok(Array1::from_vec(masses).into_pyarray(py))
+        Ok(Array1::from_vec(self.per_body(py, |_, _, body| body.mass)?).into_pyarray(py))
+    }
+
+    /// Orientations now, float64 (n, 4): unit quaternions (x, y, z, w) rotating each shape's own
+    /// frame to the world's (a quaternion and its negative are the same rotation).
+    #[getter]
+    fn orientations<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let rows = self.per_body(py, |_, _, body| body.orientation.to_array())?;
+        Ok(Array2::from_shape_vec((rows.len(), 4), rows.concat()).expect("4 values per row").into_pyarray(py))
+    }
+
+    /// Angular velocities now, float64 (n, 3), world axes, radians per second (a free body
+    /// keeps its angular momentum, so an asymmetric one's angular velocity changes as it tumbles).
+    #[getter]
+    fn angular_velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        Ok(vectors_array(py, &self.per_body(py, |_, _, body| body.angular_velocity)?))
+    }
+
+    /// Shape ids, int64 (n,): the ``add_shape`` id of each body's shape, -1 for a body added as a
+    /// plain sphere (``World(...)``, ``add``).
+    #[getter]
+    fn shape_ids<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        Ok(Array1::from_vec(self.per_body(py, |state, _, body| state.shape_number(body))?).into_pyarray(py))
+    }
+
+    /// Which bodies are static (``add_static``), bool (n,).
+    #[getter(r#static)]
+    fn is_static<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<bool>>> {
+        Ok(Array1::from_vec(self.per_body(py, |_, _, body| !body.mass.is_finite())?).into_pyarray(py))
     }
 
     /// The box as float64 [[min x, y, z], [max x, y, z]].
     #[getter(r#box)]
     fn get_box<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let b = self.lock(py)?.bounds();
+        let b = self.lock(py)?.world.bounds();
         Ok(vectors_array(py, &[b.min, b.max]))
     }
 
     /// Simulation time now.
     #[getter]
     fn time(&self, py: Python<'_>) -> PyResult<f64> {
-        Ok(self.lock(py)?.time())
+        Ok(self.lock(py)?.world.time())
     }
 
     /// The method's name: 'vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or 'grid'.
     #[getter]
     fn method(&self, py: Python<'_>) -> PyResult<&'static str> {
-        Ok(self.lock(py)?.config().method.name())
+        Ok(self.lock(py)?.world.config().method.name())
     }
 
     /// 'simulate' or 'detect'.
     #[getter]
     fn mode(&self, py: Python<'_>) -> PyResult<&'static str> {
-        Ok(mode_name(self.lock(py)?.config().mode))
+        Ok(mode_name(self.lock(py)?.world.config().mode))
     }
 
     /// Number of axes in the pool.
     #[getter]
     fn pool_axes(&self, py: Python<'_>) -> PyResult<usize> {
-        Ok(self.lock(py)?.pool().len())
+        Ok(self.lock(py)?.world.pool().len())
     }
 
     /// The alignment angle phi in use, in radians.
     #[getter]
     fn phi(&self, py: Python<'_>) -> PyResult<f64> {
-        let world = self.lock(py)?;
+        let world = &self.lock(py)?.world;
         Ok(world.config().phi.unwrap_or(world.pool().covering_radius()))
     }
 
     /// Coefficient of restitution.
     #[getter]
     fn restitution(&self, py: Python<'_>) -> PyResult<f64> {
-        Ok(self.lock(py)?.config().restitution)
+        Ok(self.lock(py)?.world.config().restitution)
     }
 
     /// The pool's axes as unit vectors, float64 (pool_axes, 3).
     #[getter]
     fn axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let pool = self.lock(py)?.pool().clone();
+        let pool = self.lock(py)?.world.pool().clone();
         Ok(vectors_array(py, pool.axes()))
     }
 
@@ -688,7 +1051,7 @@ impl PyWorld {
     /// >>> s["contacts"] >= s["pair_contacts"], s["total_seconds"] > 0
     /// (True, True)
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = *self.lock(py)?.stats();
+        let s = *self.lock(py)?.world.stats();
         let d = PyDict::new(py);
         d.set_item("update_seconds", s.update_seconds)?;
         d.set_item("sort_seconds", s.sort_seconds)?;
@@ -710,13 +1073,13 @@ impl PyWorld {
         Ok(d)
     }
 
-    /// Total kinetic energy.
+    /// Total kinetic energy of the moving bodies: of their centres' motion and of their spins.
     ///
     /// >>> import vadop
     /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).kinetic_energy()
     /// 25.0
     fn kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
-        Ok(self.lock(py)?.kinetic_energy())
+        Ok(self.lock(py)?.world.kinetic_energy())
     }
 
     /// Total linear momentum, float64 (3,).
@@ -725,15 +1088,29 @@ impl PyWorld {
     /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).momentum().tolist()
     /// [6.0, 8.0, 0.0]
     fn momentum<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let momentum = self.lock(py)?.momentum();
+        let momentum = self.lock(py)?.world.momentum();
         Ok(Array1::from_vec(momentum.to_array().to_vec()).into_pyarray(py))
     }
 
-    /// The VADOP volumes the next frame of length ``dt`` will use, one row per (body, axis):
-    /// ``(body, axis, lo, hi)``: int64 body ids, int64 indices into ``axes``, and the float64
-    /// interval each body's swept sphere covers on that axis. The broad phase is built by the
-    /// first step, so this needs method 'vadop' and at least one step; bodies added since the
-    /// last step have no rows yet.
+    /// Total angular momentum about the origin, float64 (3,): of the centres' motion and of the
+    /// spins.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 5]], [[1.0, 0, 0]], [0.5], box=10.0)
+    /// >>> w.set_motions(0, [[1.0, 0, 0]], [[0.0, 0, 2.0]])
+    /// >>> w.angular_momentum().round(12).tolist()   # r x m v + (2/5) m r^2 w
+    /// [0.0, 5.0, -4.8]
+    fn angular_momentum<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let angular_momentum = self.lock(py)?.world.angular_momentum();
+        Ok(Array1::from_vec(angular_momentum.to_array().to_vec()).into_pyarray(py))
+    }
+
+    /// The VADOP volumes the next frame of length ``dt`` will use, one row per (moving body,
+    /// axis): ``(body, axis, lo, hi)``: int64 body ids, int64 indices into ``axes``, and the
+    /// float64 interval each body's swept bounding sphere (about its centre of mass, of radius
+    /// ``radii``) covers on that axis. The broad phase is built by the first step, so this needs
+    /// method 'vadop' and at least one step; bodies added since the last step have no rows yet,
+    /// nor have static bodies, which the broad phase never holds.
     ///
     /// >>> import vadop
     /// >>> w = vadop.scene(100, 0.1, 1.0, method="vadop")
@@ -755,7 +1132,8 @@ impl PyWorld {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(value_error(VadopError::BadTimeStep(dt)));
         }
-        let world = self.lock(py)?;
+        let state = self.lock(py)?;
+        let world = &state.world;
         let Some(sap) = world.sweep_prune() else {
             return Err(PyValueError::new_err(format!(
                 "volumes exist only for method 'vadop' after the first step (method {:?}, time {})",
@@ -764,16 +1142,17 @@ impl PyWorld {
             )));
         };
         let (mut body, mut axis, mut lo, mut hi) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for (handle, s) in world.spheres() {
+        for (handle, b) in world.bodies().filter(|(_, b)| b.mass.is_finite()) {
+            let (centre, radius) = (state.centre_of_mass(&b), state.radius(&b));
             for &a in sap.axes_of(handle.index()) {
-                let iv = interval(sap.pool().axis(a), s.position, s.velocity, s.radius, dt);
+                let iv = interval(sap.pool().axis(a), centre, b.velocity, radius, dt);
                 body.push(handle_id(handle));
                 axis.push(i64::from(a));
                 lo.push(iv.lo);
                 hi.push(iv.hi);
             }
         }
-        drop(world);
+        drop(state);
         Ok((
             Array1::from_vec(body).into_pyarray(py),
             Array1::from_vec(axis).into_pyarray(py),
@@ -783,11 +1162,12 @@ impl PyWorld {
     }
 
     fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
-        Ok(self.lock(py)?.len())
+        Ok(self.lock(py)?.world.len())
     }
 
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
-        let world = self.lock(py)?;
+        let state = self.lock(py)?;
+        let world = &state.world;
         let config = world.config();
         Ok(format!(
             "<World: {} bodies, method {}, mode {}, time {}>",
@@ -800,13 +1180,19 @@ impl PyWorld {
 }
 
 impl PyWorld {
+    /// `value` of every live body, in slot order.
+    fn per_body<T>(&self, py: Python<'_>, value: impl Fn(&WorldState, BodyHandle, &Body) -> T) -> PyResult<Vec<T>> {
+        let state = self.lock(py)?;
+        Ok(state.world.bodies().map(|(handle, body)| value(&state, handle, &body)).collect())
+    }
+
     /// The world, once no other thread is using it. A step holds it without the GIL, so the wait
     /// happens without the GIL too, or that step could never hand it back.
-    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, World>> {
+    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, WorldState>> {
         loop {
-            match self.world.try_lock() {
-                Ok(world) => return Ok(world),
-                Err(TryLockError::WouldBlock) => py.allow_threads(|| drop(self.world.lock())),
+            match self.state.try_lock() {
+                Ok(state) => return Ok(state),
+                Err(TryLockError::WouldBlock) => py.allow_threads(|| drop(self.state.lock())),
                 Err(TryLockError::Poisoned(_)) => return Err(poisoned()),
             }
         }
@@ -841,7 +1227,7 @@ fn live_handles(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<BodyHan
         .map(|&id| {
             let not_live = |why: String| PyValueError::new_err(format!("{name} must name live bodies, got {id}{why}"));
             let handle = u64::try_from(id).map(BodyHandle::from_bits).map_err(|_| not_live(String::new()))?;
-            match world.sphere(handle) {
+            match world.body(handle) {
                 Ok(_) if seen.insert(handle) => Ok(handle),
                 Ok(_) => Err(PyValueError::new_err(format!("{name} must not repeat an id, got {id} twice"))),
                 Err(VadopError::StaleHandle { current, .. }) => Err(not_live(match current {
@@ -852,6 +1238,69 @@ fn live_handles(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<BodyHan
             }
         })
         .collect()
+}
+
+/// [`live_handles`] of bodies that move: a static body's id is an error naming it.
+fn moving_handles(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<BodyHandle>> {
+    let handles = live_handles(world, ids, name)?;
+    for (&id, &handle) in ids.iter().zip(&handles) {
+        if world.body(handle).is_ok_and(|body| !body.mass.is_finite()) {
+            return Err(PyValueError::new_err(format!("{name} must name moving bodies, got {id}: a static body")));
+        }
+    }
+    Ok(handles)
+}
+
+/// A shape id given as an int, before `WorldState::shape_id` checks that it names a shape.
+fn shape_number(arg: &IntArg, name: &str) -> PyResult<i128> {
+    match arg {
+        IntArg::Int(number) => Ok(*number),
+        IntArg::Huge(text) => {
+            Err(PyValueError::new_err(format!("{name} must be a shape id from add_shape, got {text}")))
+        }
+        IntArg::NotInt(type_name) => {
+            Err(PyTypeError::new_err(format!("{name} must be a shape id (an int) from add_shape, got {type_name}")))
+        }
+    }
+}
+
+/// The shapes of `add_bodies`: one for every body, or one per body.
+enum ShapeNumbers {
+    OneForAll(i128),
+    PerBody(Vec<i128>),
+}
+
+impl ShapeNumbers {
+    /// `shapes` as given: an int, or an int64 array (or a list or tuple of ints) of shape (n,).
+    fn of(shapes: &Bound<'_, PyAny>, n: usize) -> PyResult<ShapeNumbers> {
+        let sequence = shapes.is_instance_of::<PyUntypedArray>()
+            || shapes.is_instance_of::<PyList>()
+            || shapes.is_instance_of::<PyTuple>();
+        if !sequence {
+            match shapes.extract::<IntArg>()? {
+                // Not an int: the array check below names what was expected.
+                IntArg::NotInt(_) => {}
+                number => return Ok(ShapeNumbers::OneForAll(shape_number(&number, "shapes")?)),
+            }
+        }
+        let py = shapes.py();
+        let array = checked_array(shapes, "shapes", numpy::dtype::<i64>(py), &[Some(n)])
+            .map_err(|e| also_accepts(py, e, "an int"))?;
+        let array = array.downcast::<PyArray1<i64>>()?.readonly();
+        Ok(ShapeNumbers::PerBody(array.as_array().iter().map(|&k| i128::from(k)).collect()))
+    }
+
+    /// The core's ids of the `n` bodies' shapes, each one a moving body can take.
+    fn ids(&self, state: &WorldState, n: usize) -> PyResult<Vec<ShapeId>> {
+        match self {
+            ShapeNumbers::OneForAll(number) => Ok(vec![state.moving_shape_id(*number, "shapes")?; n]),
+            ShapeNumbers::PerBody(numbers) => numbers
+                .iter()
+                .enumerate()
+                .map(|(k, &number)| state.moving_shape_id(number, &format!("shapes[{k}]")))
+                .collect(),
+        }
+    }
 }
 
 /// The paper's scene as a world: ``bodies`` spheres of radius ``radius`` at ``packing_fraction``
@@ -894,7 +1343,7 @@ fn scene(
     check_world_memory(bodies)?;
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
-    Ok(PyWorld { world: Mutex::new(world) })
+    Ok(PyWorld { state: Mutex::new(WorldState::new(world)) })
 }
 
 /// Detect mode on given paths: bodies start at ``positions`` with ``velocities`` and move in

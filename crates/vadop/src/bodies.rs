@@ -17,7 +17,7 @@ use crate::free_rotation::FreeRotation;
 use crate::handle::BodyHandle;
 use crate::narrow_phase::Motion;
 use crate::proxy::prefetch;
-use crate::response::RigidSide;
+use crate::response::{Impacted, RigidSide};
 use crate::shape::ShapeGeometry;
 use crate::shape_contact::{RigidMotion, Spin};
 use glam::{DMat3, DQuat, DVec3};
@@ -94,9 +94,11 @@ pub struct Rigid {
     active: bool,
 }
 
-/// The spin of a body that does not turn.
+/// The spin of a body that does not turn, made once.
 fn steady() -> FreeRotation {
-    FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::ZERO)
+    static STEADY: std::sync::LazyLock<FreeRotation> =
+        std::sync::LazyLock::new(|| FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::ZERO));
+    *STEADY
 }
 
 /// Principal moments of a body of `geometry` (a solid ball of `radius` without one) and `mass`;
@@ -247,7 +249,13 @@ impl Bodies {
     /// True when body `i` is a sphere (of its state's radius), plain or added as a shape.
     #[inline]
     pub fn is_sphere(&self, i: usize) -> bool {
-        self.geometry(i).is_none_or(|g| matches!(g.shape(), crate::shape::Shape::Sphere { .. }))
+        !self.rigid.active || self.geometry(i).is_none_or(|g| matches!(g.shape(), crate::shape::Shape::Sphere { .. }))
+    }
+
+    /// True when bodies `i` and `j` are both spheres: a world of spheres answers with one load.
+    #[inline]
+    pub fn are_spheres(&self, i: usize, j: usize) -> bool {
+        !self.rigid.active || (self.is_sphere(i) && self.is_sphere(j))
     }
 
     /// True for a static body.
@@ -265,13 +273,31 @@ impl Bodies {
     /// Orientation of body `i` (its principal axes to world) at absolute time `t`.
     #[inline]
     pub fn orientation_at(&self, i: usize, t: f64) -> DQuat {
-        self.spin(i).orientation_at(t - self.state[i].motion.since)
+        match self.rigid.spin.get(i) {
+            Some(spin) => spin.orientation_at(t - self.state[i].motion.since),
+            None => DQuat::IDENTITY,
+        }
     }
 
     /// Angular velocity of body `i` (world frame) at absolute time `t`.
     #[inline]
     pub fn angular_velocity_at(&self, i: usize, t: f64) -> DVec3 {
-        self.spin(i).angular_velocity_at(t - self.state[i].motion.since)
+        match self.rigid.spin.get(i) {
+            Some(spin) => spin.angular_velocity_at(t - self.state[i].motion.since),
+            None => DVec3::ZERO,
+        }
+    }
+
+    /// Kinetic energy of body `i`'s spin (none in a world of spheres).
+    #[inline]
+    pub fn spin_energy(&self, i: usize) -> f64 {
+        self.rigid.spin.get(i).map_or(0.0, FreeRotation::kinetic_energy)
+    }
+
+    /// Angular momentum of body `i`'s spin about its centre of mass, world frame.
+    #[inline]
+    pub fn spin_momentum(&self, i: usize) -> DVec3 {
+        self.rigid.spin.get(i).map_or(DVec3::ZERO, FreeRotation::angular_momentum)
     }
 
     /// Body `i`'s motion for the shape narrow phase.
@@ -289,17 +315,22 @@ impl Bodies {
 
     /// Body `i` at time `t` as a side of a contact at `point` (what the impulse needs).
     pub fn rigid_side(&self, i: usize, t: f64, point: DVec3) -> RigidSide {
+        self.impacted(i, t).side(point)
+    }
+
+    /// Body `i` at time `t` as an impact sees it: immovable when static.
+    pub fn impacted(&self, i: usize, t: f64) -> Impacted {
         if self.is_fixed(i) {
-            return RigidSide::FIXED;
+            return Impacted::FIXED;
         }
         let rotation = DMat3::from_quat(self.orientation_at(i, t));
         let inverse = DMat3::from_diagonal(self.principal_inertia(i).recip());
-        RigidSide {
+        Impacted {
             velocity: self.velocity(i),
             angular_velocity: self.angular_velocity_at(i, t),
             inverse_mass: self.inverse_mass(i),
             inverse_inertia: rotation * inverse * rotation.transpose(),
-            arm: point - self.position_at(i, t),
+            centre: self.position_at(i, t),
         }
     }
 

@@ -19,6 +19,11 @@ use crate::shape_contact::{contact_tolerance, wall_contact_geometry};
 use crate::window::Window;
 use crate::world::BoxBounds;
 use glam::DVec3;
+use parry3d_f64::math::Pose;
+use parry3d_f64::query::{
+    ContactManifold, ContactManifoldsWorkspace, DefaultQueryDispatcher, PersistentQueryDispatcher,
+};
+use parry3d_f64::shape::{HalfSpace, Shape as ParryShape};
 
 /// When something happens, and whether the search stalled there instead of deciding.
 pub(crate) type Found = Option<(f64, bool)>;
@@ -43,7 +48,7 @@ pub(crate) fn pair_start(
     (b, state_b): (usize, &BodyState),
     window: Window,
 ) -> Found {
-    if bodies.is_sphere(a) && bodies.is_sphere(b) {
+    if bodies.are_spheres(a, b) {
         let time = pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
         return window.contains(time).then_some((time, false));
     }
@@ -54,7 +59,7 @@ pub(crate) fn pair_start(
 
 /// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part.
 pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
-    if bodies.is_sphere(a) && bodies.is_sphere(b) {
+    if bodies.are_spheres(a, b) {
         let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
         return window.contains(time).then_some((time, false));
     }
@@ -73,7 +78,8 @@ pub(crate) fn wall_start(
     bounds: &BoxBounds,
     window: Window,
 ) -> Option<std::result::Result<(f64, Wall), f64>> {
-    let found = match bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) {
+    let shape = if bodies.is_sphere(i) { None } else { bodies.geometry(i) };
+    let found = match shape {
         None => Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max)?),
         Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), bounds.min, bounds.max, window) {
             Ok(found) => Ok(found?),
@@ -90,7 +96,7 @@ pub(crate) fn wall_start(
 /// Where bodies `i` and `j` touch at `t`, and the unit normal from `i` towards `j`.
 #[inline]
 pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVec3, DVec3) {
-    if !(bodies.is_sphere(i) && bodies.is_sphere(j)) {
+    if !bodies.are_spheres(i, j) {
         if let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) {
             let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
             if let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) {
@@ -120,7 +126,7 @@ pub(crate) fn wall_geometry(bodies: &Bodies, i: usize, wall: Wall, bounds: &BoxB
 /// True when bodies `i` and `j` touch at `t` and are not moving apart at the contact: the jam
 /// rule's test for who belongs to a jammed cluster.
 pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> bool {
-    if bodies.is_sphere(i) && bodies.is_sphere(j) {
+    if bodies.are_spheres(i, j) {
         let reach = (bodies.radius(i) + bodies.radius(j)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
         let scale = unit_scale(reach);
         let offset = (bodies.position_at(j, t) - bodies.position_at(i, t)) * scale;
@@ -138,7 +144,7 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
 /// How deep bodies `i` and `j` interpenetrate at `t` beyond the contact tolerance (touching is
 /// allowed), for the start-of-run check of simulate mode.
 pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option<f64> {
-    if bodies.is_sphere(i) && bodies.is_sphere(j) {
+    if bodies.are_spheres(i, j) {
         let reach = bodies.radius(i) + bodies.radius(j);
         // Scaled so the square neither underflows nor overflows at any scale.
         let scale = unit_scale(reach);
@@ -151,4 +157,125 @@ pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
     let contact = contact_geometry((ga, &ma), (gb, &mb), t)?;
     (-contact.distance > contact_tolerance(ga, gb)).then_some(-contact.distance)
+}
+
+/// Scratch of the contact manifolds an impact is resolved over, kept by the pipeline so a contact
+/// allocates nothing in steady state. Emptied before every use: what parry keeps between calls
+/// would make one contact's points depend on the contacts before it.
+#[derive(Default)]
+pub(crate) struct ManifoldScratch {
+    manifolds: Vec<ContactManifold<(), ()>>,
+    workspace: Option<ContactManifoldsWorkspace>,
+    /// The contact points found, with their normals.
+    pub(crate) points: Vec<(DVec3, DVec3)>,
+}
+
+impl std::fmt::Debug for ManifoldScratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ManifoldScratch").field("points", &self.points).finish_non_exhaustive()
+    }
+}
+
+impl ManifoldScratch {
+    /// Fills `points` with where the shapes `first` at `pose_first` and `second` at
+    /// `pose_second` touch, within `reach`, each with the unit normal from the first towards the
+    /// second; `fallback` when their features give none.
+    fn touch(
+        &mut self,
+        (first, pose_first): (&dyn ParryShape, Pose),
+        (second, pose_second): (&dyn ParryShape, Pose),
+        reach: f64,
+        fallback: (DVec3, DVec3),
+    ) {
+        self.points.clear();
+        self.manifolds.clear();
+        self.workspace = None;
+        let relative = pose_first.inv_mul(&pose_second);
+        let found = DefaultQueryDispatcher.contact_manifolds(
+            &relative,
+            first,
+            second,
+            reach,
+            &mut self.manifolds,
+            &mut self.workspace,
+        );
+        if found.is_ok() {
+            for manifold in &self.manifolds {
+                let part = pose_first * manifold.subshape_pos1().copied().unwrap_or(Pose::identity());
+                let normal = part.rotation * manifold.local_n1;
+                for contact in manifold.points.iter().filter(|c| c.dist <= reach) {
+                    let on_first = part * contact.local_p1;
+                    // Halfway between the two surfaces.
+                    self.points.push((on_first + normal * (0.5 * contact.dist), normal));
+                }
+            }
+        }
+        if self.points.is_empty() {
+            self.points.push(fallback);
+        }
+    }
+}
+
+/// Every point where bodies `i` and `j` touch at `t` (a face or an edge touches at several),
+/// each with the unit normal from `i` towards `j`, into `scratch.points`; two spheres, or shapes
+/// whose features give none, touch at `fallback` (the contact's own point and normal).
+pub(crate) fn pair_points(
+    bodies: &Bodies,
+    i: usize,
+    j: usize,
+    t: f64,
+    fallback: (DVec3, DVec3),
+    scratch: &mut ManifoldScratch,
+) {
+    let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) else {
+        scratch.points.clear();
+        scratch.points.push(fallback);
+        return;
+    };
+    if bodies.are_spheres(i, j) {
+        scratch.points.clear();
+        scratch.points.push(fallback);
+        return;
+    }
+    let pose = |g: &crate::shape::ShapeGeometry, k: usize| {
+        g.pose_of_shape(bodies.position_at(k, t), bodies.orientation_at(k, t))
+    };
+    let reach = 2.0 * contact_tolerance(gi, gj);
+    scratch.touch((gi.parry_shape().as_ref(), pose(gi, i)), (gj.parry_shape().as_ref(), pose(gj, j)), reach, fallback);
+}
+
+/// Every point where body `i` touches `wall` of `bounds` at `t`, each with the unit normal from
+/// the wall into the box, into `scratch.points`; `fallback` (the contact's own point, the normal
+/// into the box) when the body's features give none.
+pub(crate) fn wall_points(
+    bodies: &Bodies,
+    i: usize,
+    wall: Wall,
+    bounds: &BoxBounds,
+    t: f64,
+    fallback: (DVec3, DVec3),
+    scratch: &mut ManifoldScratch,
+) {
+    let Some(g) = bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) else {
+        scratch.points.clear();
+        scratch.points.push(fallback);
+        return;
+    };
+    // The wall as a half-space whose solid is outside the box: its normal points in.
+    let inward = -wall.outward_normal();
+    let on_wall = if wall.is_max() { bounds.max } else { bounds.min };
+    let plane = HalfSpace::new(inward);
+    let pose_plane = Pose::from_translation(on_wall);
+    let pose_body = g.pose_of_shape(bodies.position_at(i, t), bodies.orientation_at(i, t));
+    let reach = 2.0 * crate::shape_contact::SHAPE_CONTACT_TOLERANCE * bodies.radius(i);
+    scratch.touch((&plane, pose_plane), (g.parry_shape().as_ref(), pose_body), reach, fallback);
+}
+
+/// How far bodies `i` and `j` may dip into each other between two impacts of a contact that goes
+/// on: their contact tolerance (a sphere pair's, relative to the sum of the radii).
+pub(crate) fn clearance(bodies: &Bodies, i: usize, j: usize) -> f64 {
+    match (bodies.geometry(i), bodies.geometry(j)) {
+        (Some(gi), Some(gj)) if !bodies.are_spheres(i, j) => contact_tolerance(gi, gj),
+        _ => CONTACT_TOLERANCE * (bodies.radius(i) + bodies.radius(j)),
+    }
 }

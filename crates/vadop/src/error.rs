@@ -4,6 +4,7 @@
 //! leaves the world exactly as it was. Messages name the offending value and what was expected.
 
 use crate::handle::BodyHandle;
+use crate::scene::SceneEntry;
 use thiserror::Error;
 
 /// Everything that can go wrong when building or stepping a world.
@@ -23,6 +24,26 @@ pub enum VadopError {
     /// batch.
     #[error("body {index}: {source}")]
     InBody { index: usize, source: Box<VadopError> },
+    /// A static body of a scene was rejected; `index` is its place among the scene's static
+    /// bodies.
+    #[error("static body {index}: {source}")]
+    InStaticBody { index: usize, source: Box<VadopError> },
+    /// A shape of a scene's table was rejected; `index` is its place in the table.
+    #[error("shape {index} ({name:?}): {source}")]
+    InSceneShape { index: usize, name: String, source: Box<VadopError> },
+    /// A scene's body named a shape that its table does not hold.
+    #[error("no shape named {0:?} in the scene's shapes (names are case-sensitive)")]
+    UnknownShapeName(String),
+    /// A scene's table gave a name to two shapes; `first` is the first one's place.
+    #[error("the name is taken by shape {first}: give every shape a name of its own")]
+    DuplicateShapeName { first: usize },
+    /// A scene's moving body took level geometry.
+    #[error("shape {0:?} is level geometry (a triangle mesh or a half-space): only a static body can take it")]
+    MovingLevelGeometry(String),
+    /// [`VadopError::Overlap`] in a world built from a scene, with the bodies named as the scene's
+    /// entries (see [`crate::scene::SceneLayout::name_entries`]).
+    #[error("{a} and {b} overlap by {depth:.3e} at the start of a simulate-mode run; collisions can only be resolved between separate bodies")]
+    SceneOverlap { a: SceneEntry, b: SceneEntry, depth: f64 },
     /// A mass was zero, negative or not finite.
     #[error("mass must be a finite number > 0, got {0}")]
     BadMass(f64),

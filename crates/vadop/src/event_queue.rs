@@ -68,13 +68,14 @@ pub struct Event {
 
 impl Event {
     fn order(&self, other: &Self) -> Ordering {
-        self.time
-            .total_cmp(&other.time)
-            .then(self.body.cmp(&other.body))
-            .then(self.partner.key().cmp(&other.partner.key()))
-            // Stamps last: the order is total, so repeats of one prediction are adjacent.
-            .then(self.body_stamp.cmp(&other.body_stamp))
-            .then(self.partner_stamp.cmp(&other.partner_stamp))
+        // Lazily: times almost never tie, and the rest is only worked out when they do.
+        self.time.total_cmp(&other.time).then_with(|| {
+            self.body
+                .cmp(&other.body)
+                .then_with(|| self.partner.key().cmp(&other.partner.key()))
+                // Stamps last: the order is total, so repeats of one prediction are adjacent.
+                .then_with(|| (self.body_stamp, self.partner_stamp).cmp(&(other.body_stamp, other.partner_stamp)))
+        })
     }
 }
 

@@ -1,4 +1,4 @@
-//! # vadop — exact continuous collision detection of many fast-moving spheres
+//! # vadop — exact continuous collision detection of many fast-moving bodies
 //!
 //! Discrete checks at frame instants miss contacts that happen between frames. vadop finds every
 //! contact inside the frame, in time order, with its exact time and place, using
@@ -20,7 +20,9 @@
 //! [`pseudo_dynamic`] (the frame-instant baseline), [`overlap`] (start-of-run validation) and
 //! [`scene`] (the paper's scene and the scene file format). Non-spherical bodies: [`shape`] (what
 //! a body looks like and the geometry derived from it) and [`shape_contact`] (their narrow phase,
-//! by conservative advancement, beside the spheres' closed forms in [`narrow_phase`]).
+//! by conservative advancement, beside the spheres' closed forms in [`narrow_phase`]; a private
+//! `contacts` module picks one for a pair of bodies, and `static_geometry` bounds static bodies
+//! once).
 //!
 //! ```
 //! use vadop::{scene::PaperScene, scene::FRAMES_PER_SECOND, Method, Mode, WorldConfig};

@@ -26,7 +26,7 @@ use crate::event_queue::{Event, EventQueue, Partner};
 use crate::narrow_phase::{Wall, CONTACT_TOLERANCE};
 use crate::parallel::Workers;
 use crate::proxy::{sampled_quantile, Proxies, ProxyTable, Reported};
-use crate::response::{pair_impulse, rigid_impulse, wall_bounce, RigidSide};
+use crate::response::{pair_impulse, resolve_impact, wall_bounce, Impacted};
 use crate::static_geometry::StaticGeometry;
 use crate::touching::Touching;
 use crate::window::Window;
@@ -101,6 +101,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     pub(crate) touching: Touching,
     /// The static bodies, bounded once.
     statics: StaticGeometry,
+    /// Scratch of the contact points an impact of rigid bodies is resolved over.
+    manifold: contacts::ManifoldScratch,
     /// The current window (empty before the first).
     window: Window,
     /// Proxies refreshed since the window started.
@@ -132,6 +134,7 @@ impl<B: BroadPhase> Pipeline<B> {
             rules: ContactRules::default(),
             touching: Touching::default(),
             statics: StaticGeometry::default(),
+            manifold: contacts::ManifoldScratch::default(),
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
@@ -347,7 +350,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let plain = bodies.is_sphere(i) && bodies.is_sphere(j) && physics.friction == 0.0;
+        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0;
         // Static level geometry turns bodies back in detect mode too, as the walls do.
         let responds = physics.mode == Mode::Simulate || bodies.is_fixed(i) || bodies.is_fixed(j);
         let mut impulse = 0.0;
@@ -376,18 +379,29 @@ impl<B: BroadPhase> Pipeline<B> {
                     }
                 }
                 Rule::Impulse { restitution, changed } => {
-                    let (side_i, side_j) = (bodies.rigid_side(i, t, point), bodies.rigid_side(j, t, point));
-                    let push = rigid_impulse(&side_i, &side_j, normal, restitution, physics.friction);
-                    impulse = push.dot(normal);
-                    if push != DVec3::ZERO {
-                        out.stats.tc_contacts += changed as u64;
-                        for (k, side, push) in [(i, side_i, -push), (j, side_j, push)] {
-                            if !bodies.is_fixed(k) {
-                                let (velocity, angular_velocity) = side.after(push);
-                                bodies.set_motion_at(k, t, velocity, angular_velocity);
+                    contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
+                    let [mut body_i, mut body_j] = [bodies.impacted(i, t), bodies.impacted(j, t)];
+                    let clearance = contacts::clearance(bodies, i, j);
+                    let points = &self.manifold.points;
+                    match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {
+                        Some(total) if total > 0.0 => {
+                            impulse = total;
+                            out.stats.tc_contacts += changed as u64;
+                            for (k, body) in [(i, body_i), (j, body_j)] {
+                                if !bodies.is_fixed(k) {
+                                    bodies.set_motion_at(k, t, body.velocity, body.angular_velocity);
+                                }
                             }
+                            self.retest_pair(a, b, bodies, physics, t, out.stats);
                         }
-                        self.retest_pair(a, b, bodies, physics, t, out.stats);
+                        // Nothing to push, yet the search found them touching as they turn into
+                        // each other (it would find the same touch again while one sinks into
+                        // the other), or points still approach however the impulses go: a
+                        // jammed contact.
+                        Some(_) | None => {
+                            out.stats.jam_contacts += 1;
+                            self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
+                        }
                     }
                 }
             }
@@ -495,15 +509,25 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             Rule::Impulse { restitution, changed } => {
                 // The wall is an immovable body on the far side of the contact.
-                let side = bodies.rigid_side(i, t, point);
-                let push = rigid_impulse(&RigidSide::FIXED, &side, -normal, restitution, physics.friction);
-                if push != DVec3::ZERO {
-                    out.stats.tc_contacts += changed as u64;
-                    let (velocity, angular_velocity) = side.after(push);
-                    bodies.set_motion_at(i, t, velocity, angular_velocity);
-                    self.retest(a, None, bodies, physics, t, out.stats);
+                contacts::wall_points(bodies, i, wall, &physics.bounds, t, (point, -normal), &mut self.manifold);
+                let (mut wall_side, mut body) = (Impacted::FIXED, bodies.impacted(i, t));
+                let clearance = crate::shape_contact::SHAPE_CONTACT_TOLERANCE * bodies.radius(i);
+                let points = &self.manifold.points;
+                match resolve_impact(&mut wall_side, &mut body, points, restitution, physics.friction, clearance) {
+                    Some(total) if total > 0.0 => {
+                        out.stats.tc_contacts += changed as u64;
+                        bodies.set_motion_at(i, t, body.velocity, body.angular_velocity);
+                        self.retest(a, None, bodies, physics, t, out.stats);
+                        total
+                    }
+                    // As between bodies: nothing to push while the search finds it touching,
+                    // or no impulse that settles it: jammed against the wall.
+                    Some(_) | None => {
+                        out.stats.jam_contacts += 1;
+                        self.freeze_cluster(bodies, physics, &[a], t, out.stats);
+                        0.0
+                    }
                 }
-                push.length()
             }
         };
         out.contacts.push(Contact {

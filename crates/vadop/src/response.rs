@@ -79,7 +79,7 @@ impl RigidSide {
     /// The side's share of the collision matrix: how the contact point's velocity answers an
     /// impulse, `w I - [r]x I^-1 [r]x`.
     #[inline]
-    fn response(&self) -> DMat3 {
+    pub fn response(&self) -> DMat3 {
         let arm = skew(self.arm);
         DMat3::from_diagonal(DVec3::splat(self.inverse_mass)) - arm * self.inverse_inertia * arm
     }
@@ -175,6 +175,269 @@ pub fn rigid_impulse(a: &RigidSide, b: &RigidSide, normal: DVec3, restitution: f
     } else {
         frictionless
     }
+}
+
+/// A rigid body's motion as an impact changes it, about its centre of mass.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Impacted {
+    pub velocity: DVec3,
+    pub angular_velocity: DVec3,
+    /// 0 for an immovable body.
+    pub inverse_mass: f64,
+    /// World axes, at the impact; zero for an immovable body.
+    pub inverse_inertia: DMat3,
+    pub centre: DVec3,
+}
+
+impl Impacted {
+    /// An immovable body (a wall, level geometry).
+    pub const FIXED: Impacted = Impacted {
+        velocity: DVec3::ZERO,
+        angular_velocity: DVec3::ZERO,
+        inverse_mass: 0.0,
+        inverse_inertia: DMat3::ZERO,
+        centre: DVec3::ZERO,
+    };
+
+    /// The acceleration of the body's material point at `point` as it turns freely (the body
+    /// keeps its angular momentum, so its angular velocity changes unless it spins about a
+    /// principal axis): `dw/dt x r + w x (w x r)`.
+    #[inline]
+    pub fn point_acceleration(&self, point: DVec3) -> DVec3 {
+        if self.inverse_mass == 0.0 {
+            return DVec3::ZERO;
+        }
+        let (w, arm) = (self.angular_velocity, point - self.centre);
+        let momentum = self.inverse_inertia.inverse() * w;
+        let turning = self.inverse_inertia * momentum.cross(w);
+        turning.cross(arm) + w.cross(w.cross(arm))
+    }
+
+    /// The body as one side of a contact at `point`.
+    #[inline]
+    pub fn side(&self, point: DVec3) -> RigidSide {
+        RigidSide {
+            velocity: self.velocity,
+            angular_velocity: self.angular_velocity,
+            inverse_mass: self.inverse_mass,
+            inverse_inertia: self.inverse_inertia,
+            arm: point - self.centre,
+        }
+    }
+}
+
+/// Sweeps over an impact's points at most this many times before it counts as unsettled.
+pub const IMPACT_SWEEPS: usize = 256;
+
+/// Resolves an impact of `a` and `b` touching at several `points` at once (a face or an edge on a
+/// face), each with its unit normal from `a` to `b`, and returns the total normal impulse on `b`.
+///
+/// One point is [`rigid_impulse`]. Several are solved together, as simultaneous contacts:
+/// accumulated impulses at each point, never pulling (projected Gauss-Seidel), until every point
+/// leaves at least `restitution` times the speed it arrived with (Newton's law at each point) and
+/// those that push leave at exactly that speed, with Coulomb friction at each point bounded by
+/// `friction` times its normal impulse. A body landing flat stops flat (restitution 0) or leaves
+/// as it came (restitution 1, which then keeps the energy exactly: every pushing point's normal
+/// velocity is reversed). Should the iteration not settle within [`IMPACT_SWEEPS`] sweeps, or
+/// end with more energy than it started with, it falls back to impulses point after point (each
+/// one keeps or takes energy); `None` when points still approach after that too: a jammed
+/// contact, for the caller's jam rule, with `a` and `b` as far as they got.
+///
+/// Turning bodies: a point left with no normal speed may still dip into the other body a moment
+/// later, because the bodies turn (a box landing on an edge pivots about it). With restitution
+/// below 1 such a point leaves with the least speed that keeps the dip within `clearance` (a
+/// microcollision: `sqrt(2 a clearance)` for a normal acceleration `a` into the other body), so
+/// the contact goes on as a train of small impacts, each taking energy, instead of a body sinking
+/// through another. That speed adds at most the mass times `a clearance` of energy, far less than
+/// the restitution takes; elastic impacts (restitution 1) never leave a point at rest, and get
+/// no such speed.
+///
+/// ```
+/// use glam::{DMat3, DVec3};
+/// use vadop::response::{resolve_impact, Impacted};
+/// // A unit cube (mass 1) falling flat at 1 onto the floor: its four bottom corners touch.
+/// let cube = Impacted {
+///     velocity: DVec3::new(0.0, 0.0, -1.0),
+///     angular_velocity: DVec3::ZERO,
+///     inverse_mass: 1.0,
+///     inverse_inertia: DMat3::from_diagonal(DVec3::splat(6.0)),
+///     centre: DVec3::new(0.0, 0.0, 0.5),
+/// };
+/// let corners = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)];
+/// let points: Vec<(DVec3, DVec3)> = corners.iter().map(|&(x, y)| (DVec3::new(x, y, 0.0), DVec3::Z)).collect();
+/// // Perfectly inelastic: it stops flat, without spinning.
+/// let (mut floor, mut stopped) = (Impacted::FIXED, cube);
+/// let impulse = resolve_impact(&mut floor, &mut stopped, &points, 0.0, 0.0, 1e-6).unwrap();
+/// assert!((impulse - 1.0).abs() < 1e-9 && stopped.velocity.length() < 1e-9);
+/// assert!(stopped.angular_velocity.length() < 1e-9);
+/// // Elastic: it leaves straight up at the speed it came.
+/// let (mut floor, mut bounced) = (Impacted::FIXED, cube);
+/// resolve_impact(&mut floor, &mut bounced, &points, 1.0, 0.0, 1e-6).unwrap();
+/// assert!((bounced.velocity - DVec3::Z).length() < 1e-9 && bounced.angular_velocity.length() < 1e-9);
+/// ```
+pub fn resolve_impact(
+    a: &mut Impacted,
+    b: &mut Impacted,
+    points: &[(DVec3, DVec3)],
+    restitution: f64,
+    friction: f64,
+    clearance: f64,
+) -> Option<f64> {
+    let mut total = first_order(a, b, points, restitution, friction)?;
+    if restitution < 1.0 && clearance > 0.0 {
+        // The least leaving speed of each point that keeps its dip within the clearance.
+        let dip_speed = |a: &Impacted, b: &Impacted, point: DVec3, normal: DVec3| {
+            let dip = (b.point_acceleration(point) - a.point_acceleration(point)).dot(normal);
+            if dip < 0.0 {
+                (-2.0 * dip * clearance).sqrt()
+            } else {
+                0.0
+            }
+        };
+        let leaving = |a: &Impacted, b: &Impacted, point: DVec3, normal: DVec3| {
+            (b.side(point).point_velocity() - a.side(point).point_velocity()).dot(normal)
+        };
+        if points.iter().any(|&(p, n)| leaving(a, b, p, n) < dip_speed(a, b, p, n)) {
+            total += simultaneous(a, b, points, |a, b, p, n| dip_speed(a, b, p, n), friction)?;
+        }
+    }
+    Some(total)
+}
+
+/// [`resolve_impact`] to first order: Newton's law at every point.
+fn first_order(
+    a: &mut Impacted,
+    b: &mut Impacted,
+    points: &[(DVec3, DVec3)],
+    restitution: f64,
+    friction: f64,
+) -> Option<f64> {
+    if let [(point, normal)] = *points {
+        let (side_a, side_b) = (a.side(point), b.side(point));
+        let push = rigid_impulse(&side_a, &side_b, normal, restitution, friction);
+        (a.velocity, a.angular_velocity) = side_a.after(-push);
+        (b.velocity, b.angular_velocity) = side_b.after(push);
+        return Some(push.dot(normal));
+    }
+    let (start_a, start_b) = (*a, *b);
+    let arrival = |a: &Impacted, b: &Impacted, point: DVec3, normal: DVec3| {
+        -restitution * (b.side(point).point_velocity() - a.side(point).point_velocity()).dot(normal).min(0.0)
+    };
+    if let Some(total) = simultaneous(a, b, points, arrival, friction) {
+        if energy(a) + energy(b) <= (energy(&start_a) + energy(&start_b)) * (1.0 + 1e-12) {
+            return Some(total);
+        }
+    }
+    (*a, *b) = (start_a, start_b);
+    one_after_another(a, b, points, restitution, friction)
+}
+
+/// Kinetic energy of an impacted body (an immovable one has none that can change).
+fn energy(body: &Impacted) -> f64 {
+    if body.inverse_mass == 0.0 {
+        return 0.0;
+    }
+    let inertia = body.inverse_inertia.inverse();
+    0.5 * body.velocity.length_squared() / body.inverse_mass
+        + 0.5 * body.angular_velocity.dot(inertia * body.angular_velocity)
+}
+
+/// The impact's points solved together by projected Gauss-Seidel on accumulated impulses: each
+/// point leaves with at least the normal speed `target` gives for the velocities at the start
+/// (exactly that speed where it pushes); `None` when it does not settle within the sweeps.
+fn simultaneous(
+    a: &mut Impacted,
+    b: &mut Impacted,
+    points: &[(DVec3, DVec3)],
+    target: impl Fn(&Impacted, &Impacted, DVec3, DVec3) -> f64,
+    friction: f64,
+) -> Option<f64> {
+    // A handful of points: their bookkeeping fits the stack.
+    const MOST: usize = 16;
+    if points.len() > MOST {
+        return None;
+    }
+    let normal_velocity = |a: &Impacted, b: &Impacted, point: DVec3, normal: DVec3| {
+        (b.side(point).point_velocity() - a.side(point).point_velocity()).dot(normal)
+    };
+    let mut wanted_speed = [0.0; MOST];
+    let mut pushed = [0.0; MOST];
+    let mut rubbed = [DVec3::ZERO; MOST];
+    for (k, &(point, normal)) in points.iter().enumerate() {
+        wanted_speed[k] = target(a, b, point, normal);
+    }
+    let scale = points
+        .iter()
+        .zip(wanted_speed)
+        .map(|(&(p, n), speed)| normal_velocity(a, b, p, n).abs().max(speed))
+        .fold(f64::MIN_POSITIVE, f64::max);
+    for _ in 0..IMPACT_SWEEPS {
+        let mut change: f64 = 0.0;
+        for (k, &(point, normal)) in points.iter().enumerate() {
+            let (side_a, side_b) = (a.side(point), b.side(point));
+            let matrix = side_a.response() + side_b.response();
+            let weight = normal.dot(matrix * normal);
+            if !(weight > 0.0) {
+                continue;
+            }
+            let wanted = (wanted_speed[k] - normal_velocity(a, b, point, normal)) / weight;
+            let now = (pushed[k] + wanted).max(0.0);
+            let mut push = (now - pushed[k]) * normal;
+            pushed[k] = now;
+            if friction > 0.0 {
+                let relative = side_b.point_velocity() - side_a.point_velocity() + matrix * push;
+                let slip = relative - relative.dot(normal) * normal;
+                // The tangential impulse that would stop the slip, within the cone of this point's
+                // accumulated normal impulse.
+                let stop = -slip
+                    / (slip.dot(matrix * slip) / slip.length_squared().max(f64::MIN_POSITIVE)).max(f64::MIN_POSITIVE);
+                let mut total = rubbed[k] + if slip.length_squared() > 0.0 { stop } else { DVec3::ZERO };
+                let bound = friction * pushed[k];
+                if total.length() > bound {
+                    total *= bound / total.length();
+                }
+                push += total - rubbed[k];
+                rubbed[k] = total;
+            }
+            (a.velocity, a.angular_velocity) = side_a.after(-push);
+            (b.velocity, b.angular_velocity) = side_b.after(push);
+            change = change.max(push.length() * weight);
+        }
+        if change <= 1e-14 * scale {
+            let settled = points.iter().all(|&(p, n)| normal_velocity(a, b, p, n) >= -1e-12 * scale);
+            return settled.then(|| pushed[..points.len()].iter().sum());
+        }
+    }
+    None
+}
+
+/// Impulses point after point, as [`rigid_impulse`] gives them for the velocities left by the
+/// ones before, until no point approaches; `None` when points still approach after the sweeps.
+fn one_after_another(
+    a: &mut Impacted,
+    b: &mut Impacted,
+    points: &[(DVec3, DVec3)],
+    restitution: f64,
+    friction: f64,
+) -> Option<f64> {
+    let mut total = 0.0;
+    for _ in 0..IMPACT_SWEEPS {
+        let mut pushed = false;
+        for &(point, normal) in points {
+            let (side_a, side_b) = (a.side(point), b.side(point));
+            let push = rigid_impulse(&side_a, &side_b, normal, restitution, friction);
+            if push != DVec3::ZERO {
+                (a.velocity, a.angular_velocity) = side_a.after(-push);
+                (b.velocity, b.angular_velocity) = side_b.after(push);
+                total += push.dot(normal);
+                pushed = true;
+            }
+        }
+        if !pushed {
+            return Some(total);
+        }
+    }
+    None
 }
 
 #[cfg(test)]

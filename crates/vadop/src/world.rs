@@ -602,7 +602,7 @@ impl World {
     /// Total kinetic energy: of the centres' motion and of the spins.
     pub fn kinetic_energy(&self) -> f64 {
         let b = &self.bodies;
-        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity(i).length_squared() + b.spin(i).kinetic_energy()).sum()
+        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity(i).length_squared() + b.spin_energy(i)).sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {

@@ -76,7 +76,7 @@ fn many_bodies_touching_at_the_start() {
         let cell = DVec3::new((k % 7) as f64, ((k / 7) % 7) as f64, (k / 49) as f64);
         spheres.push(sphere(DVec3::splat(1.0) + 2.0 * cell, random_direction(&mut rng) * 3.0, 1.0));
     }
-    let scene = Scene { bounds: BoxBounds::cube(14.5).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::cube(14.5).unwrap(), spheres);
     for config in both_modes() {
         let contacts = run_against_oracle(&scene, config, 0.05, 10);
         assert!(contacts > 500, "{config:?}: {contacts}");
@@ -94,7 +94,7 @@ fn elastic_bodies_jammed_against_the_walls_end_every_frame() {
             sphere(DVec3::splat(1.0) + 2.0 * cell, random_direction(&mut rng), 1.0)
         })
         .collect();
-    let scene = Scene { bounds: BoxBounds::cube(6.0).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::cube(6.0).unwrap(), spheres);
     let started = Instant::now();
     let config = WorldConfig { pool_axes: Some(7), ..WorldConfig::default() };
     let mut vadop = scene.world(config).unwrap();
@@ -123,7 +123,7 @@ fn bodies_in_line_at_the_same_speed() {
             spheres.push(sphere(position, DVec3::new(40.0, 0.0, 0.0), 1.0));
         }
     }
-    let scene = Scene { bounds: BoxBounds::new(DVec3::ZERO, DVec3::new(80.0, 44.0, 20.0)).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::new(DVec3::ZERO, DVec3::new(80.0, 44.0, 20.0)).unwrap(), spheres);
     for config in both_modes() {
         let contacts = run_against_oracle(&scene, config, 1.0 / 30.0, 60);
         assert!(contacts > 200, "{config:?}: {contacts}");
@@ -141,7 +141,7 @@ fn head_on_at_a_thousand_diameters_per_frame() {
         spheres.push(sphere(DVec3::new(10.0, y, 10.0), DVec3::new(speed, 0.0, 0.0), 1.0));
         spheres.push(sphere(DVec3::new(1990.0, y + lateral, 10.0), DVec3::new(-speed, 0.0, 0.0), 1.0));
     }
-    let scene = Scene { bounds: BoxBounds::new(DVec3::ZERO, DVec3::new(2000.0, 155.0, 20.0)).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::new(DVec3::ZERO, DVec3::new(2000.0, 155.0, 20.0)).unwrap(), spheres);
     for config in both_modes() {
         let contacts = run_against_oracle(&scene, config, dt, 4);
         let pairs = |c: &usize| *c;
@@ -169,7 +169,7 @@ fn radii_from_a_thousandth_to_a_thousand() {
             spheres.push(sphere(position, random_direction(&mut rng) * rng.random_range(0.0..30_000.0), radius));
         }
     }
-    let scene = Scene { bounds: BoxBounds::cube(side).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::cube(side).unwrap(), spheres);
     for config in both_modes() {
         let contacts = run_against_oracle(&scene, config, 1.0 / 30.0, 30);
         assert!(contacts > 100, "{config:?}: {contacts}");
@@ -199,7 +199,7 @@ fn a_million_units_from_the_origin_with_grazing_passes() {
             spheres.push(g);
         }
     }
-    let scene = Scene { bounds, spheres };
+    let scene = Scene::new(bounds, spheres);
     for config in both_modes() {
         let contacts = run_against_oracle(&scene, config, 1.0 / 30.0, 30);
         assert!(contacts > 100, "{config:?}: {contacts}");
@@ -255,7 +255,7 @@ fn inelastic_collapse_between_walls_ends_every_frame() {
         sphere(DVec3::new(3.0, 2.0, 2.0), DVec3::ZERO, 1.0),
         sphere(DVec3::new(5.0, 2.0, 2.0), DVec3::new(-5.0, 0.0, 0.0), 1.0),
     ];
-    let scene = Scene { bounds, spheres };
+    let scene = Scene::new(bounds, spheres);
     let config = WorldConfig { restitution: 0.5, ..WorldConfig::default() };
     let started = Instant::now();
     let mut vadop = scene.world(config).unwrap();
@@ -284,7 +284,7 @@ fn inelastic_collapse_of_a_free_column_conserves_momentum() {
             Sphere { position: DVec3::new(x, 100.0, 100.0), velocity, radius: 1.0, mass: 1.0 + (k % 4) as f64 }
         })
         .collect();
-    let scene = Scene { bounds, spheres };
+    let scene = Scene::new(bounds, spheres);
     let mut world = scene.world(WorldConfig { restitution: 0.5, ..WorldConfig::default() }).unwrap();
     let momentum = world.momentum();
     let energy = world.kinetic_energy();

@@ -259,7 +259,7 @@ fn boundary_scene(rng: &mut ChaCha8Rng, dt: f64, frames: usize) -> Scene {
     if spheres.is_empty() {
         spheres.push(Sphere { position: DVec3::splat(10.0), velocity: DVec3::X, radius: 1.0, mass: 1.0 });
     }
-    Scene { bounds, spheres }
+    Scene::new(bounds, spheres)
 }
 
 const METHODS: [Method; 4] = [Method::Brute, Method::Grid, Method::Vadop, Method::SweptAabb];
@@ -273,7 +273,7 @@ fn the_reported_frame_boundary_duplicate() {
         radius: 0.5,
         mass: 1.0,
     };
-    let scene = Scene { bounds: BoxBounds::cube(10.0).unwrap(), spheres: vec![sphere(2.0, 1.5), sphere(8.0, -1.5)] };
+    let scene = Scene::new(BoxBounds::cube(10.0).unwrap(), vec![sphere(2.0, 1.5), sphere(8.0, -1.5)]);
     for method in METHODS {
         // One pair contact; the walls are out of reach.
         assert_eq!(check(&scene, 1.0 / 6.0, 12, method), 1, "{method:?}");
@@ -319,7 +319,7 @@ fn random_small_scenes_match_exact_arithmetic() {
                 }
             })
             .collect();
-        let scene = Scene { bounds, spheres };
+        let scene = Scene::new(bounds, spheres);
         let dt = rng.random_range(0.01..0.2);
         for method in METHODS {
             reported += check(&scene, dt, 10, method);

@@ -152,7 +152,7 @@ fn grazing_and_head_on_pairs() {
         spheres.push(sphere(60.0, y + 2.0 + miss, 300.0));
         spheres.push(sphere(100.0, y, 0.0));
     }
-    let scene = Scene { bounds, spheres };
+    let scene = Scene::new(bounds, spheres);
     for mode in [Mode::Detect, Mode::Simulate] {
         for method in [Method::Vadop, Method::SweptAabb, Method::SweptKdop, Method::Grid] {
             let contacts = assert_same_contacts(&scene, method, mode, Some(13), 6);

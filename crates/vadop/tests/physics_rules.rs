@@ -19,7 +19,7 @@ fn lattice(k: usize, box_side: f64, velocity: DVec3) -> Scene {
             Sphere { position: DVec3::ONE + 2.0 * cell, velocity, radius: 1.0, mass: 1.0 }
         })
         .collect();
-    Scene { bounds: BoxBounds::cube(box_side).unwrap(), spheres }
+    Scene::new(BoxBounds::cube(box_side).unwrap(), spheres)
 }
 
 /// A body of mass 1e6 pushes one of mass 1 against a wall: pi * sqrt(1e6) = 3141 contacts, about
@@ -30,7 +30,7 @@ fn an_elastic_mass_ratio_of_a_million_keeps_its_energy() {
         Sphere { position: DVec3::new(3.0, 5.0, 5.0), velocity: DVec3::new(-1.0, 0.0, 0.0), radius: 1.0, mass: 1e6 },
         Sphere { position: DVec3::new(1.5, 5.0, 5.0), velocity: DVec3::ZERO, radius: 0.5, mass: 1.0 },
     ];
-    let scene = Scene { bounds: BoxBounds::cube(10.0).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::cube(10.0).unwrap(), spheres);
     for method in [Method::Auto, Method::Vadop, Method::Brute] {
         let mut world = scene.world(WorldConfig { method, ..WorldConfig::default() }).unwrap();
         let heavy = world.spheres().next().unwrap().0;
@@ -111,7 +111,7 @@ fn the_tc_model_ends_inelastic_collapse_and_is_counted() {
             }
         })
         .collect();
-    let scene = Scene { bounds: BoxBounds::cube(200.0).unwrap(), spheres };
+    let scene = Scene::new(BoxBounds::cube(200.0).unwrap(), spheres);
     let config = WorldConfig { restitution: 0.2, contact_duration: 1e-3, ..WorldConfig::default() };
     let mut world = scene.world(config).unwrap();
     let momentum = world.momentum();
@@ -162,13 +162,19 @@ fn frames_of_any_length_give_the_same_contacts() {
 #[test]
 fn scenes_scaled_to_both_ends_of_the_range_give_the_same_contacts() {
     let unit = PaperScene { bodies: 150, packing_fraction: 0.3, max_speed: 3.0, radius: 0.5, seed: 8 }.build().unwrap();
-    let scaled = |s: f64| Scene {
-        bounds: BoxBounds::new(unit.bounds.min * s, unit.bounds.max * s).unwrap(),
-        spheres: unit
-            .spheres
-            .iter()
-            .map(|b| Sphere { position: b.position * s, velocity: b.velocity * s, radius: b.radius * s, mass: b.mass })
-            .collect(),
+    let scaled = |s: f64| {
+        Scene::new(
+            BoxBounds::new(unit.bounds.min * s, unit.bounds.max * s).unwrap(),
+            unit.spheres
+                .iter()
+                .map(|b| Sphere {
+                    position: b.position * s,
+                    velocity: b.velocity * s,
+                    radius: b.radius * s,
+                    mass: b.mass,
+                })
+                .collect(),
+        )
     };
     for method in [Method::Auto, Method::Vadop, Method::Brute] {
         for mode in [Mode::Detect, Mode::Simulate] {

@@ -300,3 +300,59 @@ fn a_world_of_shapes_resumes_bit_exactly() {
         assert_eq!(resumed.bodies().collect::<Vec<_>>(), straight.bodies().collect::<Vec<_>>());
     }
 }
+
+/// Gravity as the engine's users add it (a downward kick of the velocity every frame): a brick
+/// landing flat, on an edge or on a corner, on the floor, a static plane or a static slab, pivots
+/// and comes to rest on what it lands on and never sinks into it, whatever its restitution and
+/// friction.
+#[test]
+fn a_brick_kicked_down_every_frame_rests_on_what_it_lands_on() {
+    let half = DVec3::new(0.5, 0.3, 0.2);
+    for (restitution, friction) in [(0.0, 0.0), (0.6, 0.4), (0.0, 0.5), (1.0, 0.0)] {
+        for floor in ["wall", "plane", "static slab"] {
+            for tilt in [0.0, 0.2, 0.7] {
+                let config = WorldConfig { mode: Mode::Simulate, restitution, friction, ..WorldConfig::default() };
+                let mut world = World::new(BoxBounds::cube(10.0).unwrap(), config).unwrap();
+                let top = match floor {
+                    "wall" => 0.0,
+                    "plane" => {
+                        let plane = world.add_shape(Shape::HalfSpace { normal: DVec3::Z }).unwrap();
+                        world.add_static(plane, DVec3::new(0.0, 0.0, 1.0), DQuat::IDENTITY).unwrap();
+                        1.0
+                    }
+                    _ => {
+                        let slab = world.add_shape(Shape::Cuboid { half_extents: DVec3::new(4.0, 4.0, 0.5) }).unwrap();
+                        world.add_static(slab, DVec3::new(5.0, 5.0, 1.0), DQuat::from_rotation_z(0.3)).unwrap();
+                        1.5
+                    }
+                };
+                let brick = world.add_shape(Shape::Cuboid { half_extents: half }).unwrap();
+                let body = world
+                    .add_body(Body {
+                        shape: BodyShape::Shape(brick),
+                        position: DVec3::new(5.0, 5.0, 3.0),
+                        orientation: DQuat::from_rotation_x(tilt) * DQuat::from_rotation_y(0.7 * tilt),
+                        velocity: DVec3::ZERO,
+                        angular_velocity: DVec3::ZERO,
+                        mass: 1.0,
+                    })
+                    .unwrap();
+                for frame in 0..120 {
+                    let v = world.body(body).unwrap().velocity;
+                    world.set_velocity(body, v - DVec3::new(0.0, 0.0, 9.81 / 30.0)).unwrap();
+                    world.step(1.0 / 30.0).unwrap();
+                    let b = world.body(body).unwrap();
+                    let corners = (0..8).map(|k| {
+                        let corner = DVec3::new([-1.0, 1.0][k & 1], [-1.0, 1.0][(k >> 1) & 1], [-1.0, 1.0][k >> 2]);
+                        (b.position + b.orientation * (corner * half)).z
+                    });
+                    let lowest = corners.fold(f64::INFINITY, f64::min);
+                    assert!(
+                        lowest > top - 1e-5,
+                        "e {restitution}, mu {friction}, {floor}, tilt {tilt}: frame {frame}: a corner sank to {lowest}"
+                    );
+                }
+            }
+        }
+    }
+}

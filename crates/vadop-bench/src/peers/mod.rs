@@ -1,7 +1,8 @@
 //! `vadop-bench peers`: vadop side by side with Bullet, FCL and rapier/parry on identical paths.
 //!
-//! The paper scene runs in detect mode (bodies pass through each other and bounce only off the
-//! walls), so the paths do not depend on who detects the contacts. A child steps the scene once
+//! Two scenes, each with its own section, CSV and plot: the paper's spheres, and mixed spinning
+//! shapes (`--scene shapes`, [`shapes`]). Both run in detect mode (bodies pass through each
+//! other), so the paths do not depend on who detects the contacts. A child steps the scene once
 //! and exports the paths and the reference contact set ([`trajectory`]): found by brute force up
 //! to `--brute-max` bodies and above that by the default method (which the core test suite proves
 //! bit-identical to brute force). Every pipeline, vadop's own included, then runs in its own
@@ -12,6 +13,7 @@
 //! checks that Debian's libbullet-dev and libfcl-dev are present, scripts/install-peers.sh
 //! installs them), the runs, and the table, CSV and plot it writes.
 
+pub mod shapes;
 pub mod trajectory;
 
 use crate::common::{write_file, Common, Grid};
@@ -19,28 +21,72 @@ use crate::markdown::{self, Markers, RunInfo};
 use crate::plots::{self, Panel, Series, Stroke};
 use crate::runner::Runner;
 use crate::CliResult;
-use clap::Args;
+use clap::{Args, ValueEnum};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use trajectory::PACKING;
 
-const MARKERS: Markers = Markers { name: "peers" };
 /// The pipeline every other is compared with: the product's default.
 const BASELINE: &str = "vadop-auto";
 
+/// The scene the pipelines detect contacts in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Scene {
+    /// The paper's: equal spheres bouncing off the walls of a cube
+    Spheres,
+    /// Mixed shapes (spheres, cuboids, capsules, cylinders, cones, convex hulls) spinning about a
+    /// principal axis, in a box whose walls none reaches
+    Shapes,
+}
+
+impl Scene {
+    fn name(self) -> &'static str {
+        match self {
+            Scene::Spheres => "spheres",
+            Scene::Shapes => "shapes",
+        }
+    }
+
+    /// The markers of its section in the markdown file.
+    fn markers(self) -> Markers {
+        match self {
+            Scene::Spheres => Markers { name: "peers" },
+            Scene::Shapes => Markers { name: "peers-shapes" },
+        }
+    }
+
+    /// The stem of its CSV and plot in results/peers/.
+    fn file_stem(self) -> &'static str {
+        match self {
+            Scene::Spheres => "peers",
+            Scene::Shapes => "shapes",
+        }
+    }
+
+    /// Why `pipeline` cannot run on this scene, if it cannot.
+    fn refusal(self, pipeline: &str) -> Option<&'static str> {
+        (self == Scene::Shapes && pipeline == "vadop-discrete")
+            .then_some("vadop's discrete method handles spheres only")
+    }
+}
+
 #[derive(Debug, Args)]
-#[command(after_help = "Defaults: --bodies 1000,2000,10000,100000,1000000 (with --quick: 1000,2000); --frames 30 up \
-to 10^4 bodies, 10 up to 10^5, 3 above (with --quick: 10); --timeout 120 (with --quick: 60).")]
+#[command(after_help = "Defaults: --bodies 1000,2000,10000,100000,1000000 (shapes: 1000,2000,10000,100000; with \
+--quick: 1000,2000, shapes 500,1000); --frames 30 up to 10^4 bodies, 10 up to 10^5, 3 above (with --quick: 10); --timeout 120 (with \
+--quick: 60).")]
 pub struct PeersArgs {
     #[command(flatten)]
     grid: Grid,
+    /// The scene: its own section in the markdown file, and its own CSV and plot
+    #[arg(long, value_enum, default_value_t = Scene::Spheres)]
+    scene: Scene,
     /// Largest n whose reference contacts come from brute force (above it: from the default
     /// method, which the core test suite proves identical to brute force); vadop-brute runs only
     /// up to it too
     #[arg(long, value_name = "N", default_value_t = 2000)]
     brute_max: usize,
-    /// Pipelines to run, comma-separated [default: all]
+    /// Pipelines to run, comma-separated [default: all that run on the scene]
     #[arg(long, value_name = "LIST", value_delimiter = ',')]
     pipelines: Option<Vec<String>>,
     /// Run nothing: redraw the table and the plot from the CSV of an earlier run (for example
@@ -111,23 +157,28 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
     let common = &args.common;
     let quick = common.quick;
     let runner = Runner::new(common, common.timeout(if quick { 60.0 } else { 120.0 })?)?;
+    let scene = args.scene;
     let (markdown_path, results) = (common.markdown(), common.results()?.join("peers"));
     crate::common::create_dir(&results)?;
-    markdown::check(&markdown_path, MARKERS)?;
+    markdown::check(&markdown_path, scene.markers())?;
     let info = RunInfo::start(runner.cpu());
+    let outputs =
+        Outputs { scene, markdown: &markdown_path, results: &results, brute_max: args.brute_max, info: &info };
     if let Some(csv) = &args.render {
         let rows = read_csv(csv)?;
-        let section = write_outputs(&markdown_path, &results, &rows, args.brute_max, &info, true)?;
+        let section = outputs.write(&rows, true)?;
         return crate::common::print(&format!(
             "{section}\nwrote {} and {}\n",
             markdown_path.display(),
             results.display()
         ));
     }
-    let bodies = args.grid.bodies.clone().unwrap_or(if quick {
-        vec![1000, 2000]
-    } else {
-        vec![1000, 2000, 10_000, 100_000, 1_000_000]
+    let bodies = args.grid.bodies.clone().unwrap_or(match (quick, scene) {
+        (true, Scene::Spheres) => vec![1000, 2000],
+        // vadop-brute and the brute-force reference cost more per pair of shapes than of spheres.
+        (true, Scene::Shapes) => vec![500, 1000],
+        (false, Scene::Spheres) => vec![1000, 2000, 10_000, 100_000, 1_000_000],
+        (false, Scene::Shapes) => vec![1000, 2000, 10_000, 100_000],
     });
     let brute_max = args.brute_max;
     let frames_for = |n: usize| {
@@ -142,13 +193,19 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
         })
     };
     let pipelines: Vec<_> = match &args.pipelines {
-        None => PIPELINES.to_vec(),
+        None => PIPELINES.iter().filter(|p| scene.refusal(p.0).is_none()).copied().collect(),
         Some(names) => names
             .iter()
-            .map(|name| PIPELINES.iter().find(|p| p.0 == name).copied().ok_or(format!("unknown pipeline {name}")))
+            .map(|name| {
+                let pipeline = PIPELINES.iter().find(|p| p.0 == name).ok_or(format!("unknown pipeline {name}"))?;
+                match scene.refusal(name) {
+                    Some(why) => Err(format!("{name} cannot run on the {} scene: {why}", scene.name())),
+                    None => Ok(*pipeline),
+                }
+            })
             .collect::<CliResult<_>>()?,
     };
-    let programs = build_peers(&repository_root()?)?;
+    let programs = build_peers(&pipelines)?;
     let scratch = runner.scratch_file("peers");
     crate::common::create_dir(&scratch)?;
     let (trajectory, reference_file, contacts) =
@@ -162,9 +219,15 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
         for &speed in &args.grid.speeds {
             let frames = frames_for(n);
             let common_args = |job: &str, out: &Path| -> Vec<String> {
-                let values =
-                    [job.to_string(), n.to_string(), speed.to_string(), frames.to_string(), out.display().to_string()];
-                ["--job", "--bodies", "--speed", "--frames", "--out"]
+                let values = [
+                    job.to_string(),
+                    scene.name().to_string(),
+                    n.to_string(),
+                    speed.to_string(),
+                    frames.to_string(),
+                    out.display().to_string(),
+                ];
+                ["--job", "--scene", "--bodies", "--speed", "--frames", "--out"]
                     .iter()
                     .zip(values)
                     .flat_map(|(f, v)| [f.to_string(), v])
@@ -223,36 +286,41 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
                 let _ = std::fs::remove_file(file);
             }
             // Written after every cell, so a benchmark stopped early still leaves its rows.
-            write_outputs(&markdown_path, &results, &rows, brute_max, &info, false)?;
+            outputs.write(&rows, false)?;
         }
     }
     progress.finish();
-    let section = write_outputs(&markdown_path, &results, &rows, brute_max, &info, true)?;
+    let section = outputs.write(&rows, true)?;
     crate::common::print(&format!("{section}\nwrote {} and {}\n", markdown_path.display(), results.display()))
 }
 
-/// Writes the CSV, the markdown section and (when `plot`) the PNG; returns the section.
-fn write_outputs(
-    markdown_path: &Path,
-    results: &Path,
-    rows: &[Row],
+/// Where a run's table, CSV and plot go, and what their text says about the run.
+struct Outputs<'a> {
+    scene: Scene,
+    markdown: &'a Path,
+    results: &'a Path,
     brute_max: usize,
-    info: &RunInfo,
-    plot: bool,
-) -> CliResult<String> {
-    write_csv(&results.join("peers.csv"), rows)?;
-    let png = results.join("peers.png");
-    let plotted = plot
-        && match write_plot(rows, &png) {
-            Ok(()) => true,
-            Err(e) => {
-                eprintln!("no plot: {e}");
-                false
-            }
-        };
-    let section = markdown_section(rows, brute_max, info, plotted.then(|| markdown::link(markdown_path, &png)));
-    markdown::write_section(markdown_path, MARKERS, &section)?;
-    Ok(section)
+    info: &'a RunInfo,
+}
+
+impl Outputs<'_> {
+    /// Writes the CSV, the markdown section and (when `plot`) the PNG; returns the section.
+    fn write(&self, rows: &[Row], plot: bool) -> CliResult<String> {
+        let stem = self.scene.file_stem();
+        write_csv(&self.results.join(format!("{stem}.csv")), rows)?;
+        let png = self.results.join(format!("{stem}.png"));
+        let plotted = plot
+            && match write_plot(self.scene, rows, &png) {
+                Ok(()) => true,
+                Err(e) => {
+                    eprintln!("no plot: {e}");
+                    false
+                }
+            };
+        let section = markdown_section(self, rows, plotted.then(|| markdown::link(self.markdown, &png)));
+        markdown::write_section(self.markdown, self.scene.markers(), &section)?;
+        Ok(section)
+    }
 }
 
 /// The directory holding `bench/peers`, searched upwards from the current directory.
@@ -281,10 +349,39 @@ impl Programs {
     }
 }
 
-/// Checks that the peers' libraries and tools are present, then builds the C++ and rapier peers
-/// (both builds do nothing when up to date). Installing system packages is left to
-/// scripts/install-peers.sh, run as root: this program only says what is missing.
-fn build_peers(root: &Path) -> CliResult<Programs> {
+/// Checks that the libraries and tools of the peers among `pipelines` are present, then builds
+/// the C++ and rapier peers they need (both builds do nothing when up to date), so vadop's own
+/// pipelines run without them. Installing system packages is left to scripts/install-peers.sh,
+/// run as root: this program only says what is missing.
+fn build_peers(pipelines: &[(&str, bool, Program)]) -> CliResult<Programs> {
+    let needs = |wanted: fn(&Program) -> bool| pipelines.iter().any(|p| wanted(&p.2));
+    let peers = |p: &Program| !matches!(p, Program::Vadop(_));
+    // vadop's own pipelines run anywhere: the repository is looked for only when a peer runs.
+    let root = if needs(peers) { repository_root()? } else { PathBuf::new() };
+    let cpp = root.join("bench/peers/cpp");
+    let rapier = root.join("bench/peers/rapier");
+    let programs = Programs {
+        bullet: cpp.join("build/peer-bullet"),
+        fcl: cpp.join("build/peer-fcl"),
+        rapier: rapier.join("target/release/vadop-peer-rapier"),
+    };
+    if needs(|p| matches!(p, Program::Bullet | Program::Fcl)) {
+        check_libraries(&root)?;
+        eprintln!("building the Bullet and FCL peers (make -C {})", cpp.display());
+        checked(Command::new("make").arg("-s").arg("-C").arg(&cpp), "make")?;
+    }
+    if needs(|p| matches!(p, Program::Rapier)) {
+        eprintln!("building the rapier/parry peer (cargo build --release in {})", rapier.display());
+        checked(
+            Command::new("cargo").args(["build", "--release", "-q", "--manifest-path"]).arg(rapier.join("Cargo.toml")),
+            "cargo build of bench/peers/rapier",
+        )?;
+    }
+    Ok(programs)
+}
+
+/// Fails, saying what to run, when a library or tool of the C++ peers is missing.
+fn check_libraries(root: &Path) -> CliResult<()> {
     let runs = |program: &str| Command::new(program).arg("--version").output().is_ok();
     // Each requirement by the Debian package that brings it.
     let present = [
@@ -301,20 +398,7 @@ fn build_peers(root: &Path) -> CliResult<Programs> {
             root.join("scripts/install-peers.sh").display()
         ));
     }
-    let cpp = root.join("bench/peers/cpp");
-    eprintln!("building the Bullet and FCL peers (make -C {})", cpp.display());
-    checked(Command::new("make").arg("-s").arg("-C").arg(&cpp), "make")?;
-    let rapier = root.join("bench/peers/rapier");
-    eprintln!("building the rapier/parry peer (cargo build --release in {})", rapier.display());
-    checked(
-        Command::new("cargo").args(["build", "--release", "-q", "--manifest-path"]).arg(rapier.join("Cargo.toml")),
-        "cargo build of bench/peers/rapier",
-    )?;
-    Ok(Programs {
-        bullet: cpp.join("build/peer-bullet"),
-        fcl: cpp.join("build/peer-fcl"),
-        rapier: rapier.join("target/release/vadop-peer-rapier"),
-    })
+    Ok(())
 }
 
 fn checked(command: &mut Command, what: &str) -> CliResult<()> {
@@ -452,7 +536,7 @@ fn ratio(rows: &[Row], row: &Row) -> Option<f64> {
 
 /// Mean ms/frame against n, one panel per speed, one line per pipeline: continuous solid,
 /// discrete dashed, each pipeline in the same colour in every panel.
-fn write_plot(rows: &[Row], png: &Path) -> CliResult<()> {
+fn write_plot(scene: Scene, rows: &[Row], png: &Path) -> CliResult<()> {
     let mut speeds: Vec<f64> = rows.iter().map(|r| r.speed).collect();
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
@@ -476,7 +560,11 @@ fn write_plot(rows: &[Row], png: &Path) -> CliResult<()> {
                 .collect(),
         })
         .collect();
-    plots::line_panels(png, Some("Peers: detection time per frame on identical paths"), &panels)
+    let title = match scene {
+        Scene::Spheres => "Peers: detection time per frame on identical paths",
+        Scene::Shapes => "Peers, mixed spinning shapes: detection time per frame on identical paths",
+    };
+    plots::line_panels(png, Some(title), &panels)
 }
 
 /// A fixed colour per pipeline: vadop's in reds, Bullet's in blues, FCL's in greens, rapier's
@@ -502,15 +590,26 @@ fn colour(pipeline: &str) -> &'static str {
     }
 }
 
-fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option<String>) -> String {
+fn markdown_section(outputs: &Outputs, rows: &[Row], plot: Option<String>) -> String {
+    let (info, brute_max) = (outputs.info, outputs.brute_max);
     let mut md = String::new();
     let _ = writeln!(md, "{}", info.header());
     if let Some(csv) = info.command().split_whitespace().skip_while(|a| *a != "--render").nth(1) {
         let _ = writeln!(md, "Rows measured by `vadop-bench peers` into `{csv}`, drawn again by the command above.\n");
     }
+    let scene = match outputs.scene {
+        Scene::Spheres => format!("Paper scene, packing fraction {PACKING}, seed 1"),
+        Scene::Shapes => format!(
+            "Mixed-shape scene: spheres, cuboids, capsules, cylinders, cones and a convex hull in equal shares, each at \
+             most one unit across, packing fraction {PACKING} in the middle of a box whose walls no body reaches in the \
+             run, random orientations, spins of up to {} radian per frame about a principal axis (a steady spin: \
+             vadop's torque-free rotation and the peers' constant angular velocity are the same motion), seed 1",
+            shapes::MAX_SPIN
+        ),
+    };
     let _ = writeln!(
         md,
-        "Paper scene, packing fraction {PACKING}, seed 1, detect mode: every pipeline reads the same exported paths. \
+        "{scene}, detect mode: every pipeline reads the same exported paths. \
          A contact is a (frame, i, j) pair that begins touching during the frame; the reference comes from vadop's \
          brute force for n <= {brute_max} and from the default method (auto) above. ms/frame is the mean over frames \
          of the detection work (reading the file excluded): vadop's broad phases rebuild once per window of several \
@@ -518,6 +617,18 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
          start. Peak MiB is the run's VmHWM; × auto is the time divided by vadop-auto's (the default method) on the \
          same row group (above 1: slower than the default).\n"
     );
+    if outputs.scene == Scene::Shapes {
+        let _ = writeln!(
+            md,
+            "Each library decides touching within its own tolerance, so grazing pairs may differ: vadop within 1e-6 of \
+             the pair's bounding radii (1e-9 for two spheres); parry's nonlinear cast (double precision) at its GJK \
+             convergence threshold; Bullet's btContinuousConvexCollision within 0.001 length units, in single precision; \
+             FCL's conservative advancement within 1e-4 of the frame in time. A pair that overlaps at the frame \
+             start, separates and touches again within the frame is a contact for vadop, while the peers' casts stop \
+             at the first time of impact, the frame start: they miss it. Every library has all six shapes; \
+             vadop-discrete does not run (vadop's discrete method handles spheres only).\n"
+        );
+    }
     let _ = writeln!(
         md,
         "| n | speed | pipeline | kind | frames | mean ms/frame | found | missed | false | peak MiB | × auto |"
@@ -565,9 +676,12 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
                     .map(|m| format!("{} ({:.3} ms)", r.pipeline, m.mean_ms))
             })
             .collect();
-        let fastest_discrete = peers(false)
-            .filter_map(|r| r.outcome.as_ref().ok().map(|m| (r.pipeline, m.mean_ms)))
-            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let fastest = |rows: &mut dyn Iterator<Item = &&Row>| {
+            rows.filter_map(|r| r.outcome.as_ref().ok().map(|m| (r.pipeline, m.mean_ms)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+        };
+        let fastest_discrete = fastest(&mut peers(false));
+        let fastest_exact = fastest(&mut peers(true).filter(|r| r.exact()));
         let exact = if auto.missed == 0 && auto.false_contacts == 0 { "exact" } else { "NOT exact" };
         let versus_continuous = if faster_continuous.is_empty() {
             "faster than every continuous peer that finished".to_string()
@@ -582,9 +696,13 @@ fn markdown_section(rows: &[Row], brute_max: usize, info: &RunInfo, plot: Option
             Some((name, ms)) => format!("not slower than the fastest discrete peer, {name} ({ms:.3} ms)"),
             None => "no discrete peer finished".to_string(),
         };
+        let versus_exact = match fastest_exact {
+            Some((name, ms)) => format!("{:.2}x the fastest exact peer's time, {name} ({ms:.3} ms)", auto.mean_ms / ms),
+            None => "no peer was exact".to_string(),
+        };
         let _ = writeln!(
             md,
-            "- n={n}, speed {speed}: auto {:.3} ms, {exact}; {versus_continuous}; {versus_discrete}.",
+            "- n={n}, speed {speed}: auto {:.3} ms, {exact}; {versus_continuous}; {versus_discrete}; {versus_exact}.",
             auto.mean_ms
         );
     }

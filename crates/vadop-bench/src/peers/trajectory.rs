@@ -1,10 +1,12 @@
-//! The files the peers share with vadop, and the child jobs that write them. The trajectory file
-//! holds the paper scene's detect-mode paths: per frame, every body's start position and
+//! The files the peers share with vadop, and the child jobs that write them. The sphere scene's
+//! trajectory file holds the paper scene's detect-mode paths: per frame, every body's start position and
 //! velocity, its end position and its wall bounces (time and position), so a path is a polyline
 //! (the reader is `bench/peers/cpp/trajectory.h`; keep them in step). A contacts file holds
 //! (frame, i, j) u32 triples: pairs that begin touching during the frame. Every pipeline prints
-//! one JSON line, `{"frame_ms": [...], "peak_kib": K}`.
+//! one JSON line, `{"frame_ms": [...], "peak_kib": K}`. The mixed-shape scene and its file are
+//! [`super::shapes`]'s.
 
+use super::{shapes, Scene};
 use crate::common::io_error;
 use crate::markdown::peak_memory_mib;
 use crate::CliResult;
@@ -12,7 +14,7 @@ use std::io::{BufWriter, Write as _};
 use std::path::Path;
 use std::time::Instant;
 use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
-use vadop::{Method, Mode, Touched, World, WorldConfig};
+use vadop::{Contact, Method, Mode, Touched, World, WorldConfig};
 
 pub const PACKING: f64 = 0.05;
 const MAGIC: &[u8; 8] = b"VADOPTR1";
@@ -25,21 +27,20 @@ fn detect_world(n: usize, speed: f64, method: Method) -> CliResult<(vadop::scene
     Ok((scene, world))
 }
 
-/// The child job of one of vadop's own pipelines: steps the scene with `method`, writes its
+/// The child job of one of vadop's own pipelines: steps `scene` with `method`, writes its
 /// contacts to `out` and prints the per-frame times and the peak memory.
-pub fn time_method(n: usize, speed: f64, frames: u64, method: Method, out: &Path) -> CliResult<()> {
-    let (_, mut world) = detect_world(n, speed, method)?;
+pub fn time_method(scene: Scene, n: usize, speed: f64, frames: u64, method: Method, out: &Path) -> CliResult<()> {
+    let mut world = match scene {
+        Scene::Spheres => detect_world(n, speed, method)?.1,
+        Scene::Shapes => shapes::world(n, speed, frames, method)?.0,
+    };
     let mut contacts = Vec::new();
     let mut frame_ms = Vec::new();
     for frame in 0..frames {
         let started = Instant::now();
         let step = world.step(1.0 / FRAMES_PER_SECOND).map_err(|e| e.to_string())?;
         frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
-        for c in step {
-            if let Touched::Body(j) = c.touched {
-                contacts.push([frame as u32, c.body.min(j).index(), c.body.max(j).index()]);
-            }
-        }
+        contacts.extend(pair_contacts(frame, step));
     }
     write_contacts(out, &contacts)?;
     let peak_kib = peak_memory_mib().map_or(-1, |m| (m * 1024.0) as i64);
@@ -72,14 +73,13 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
         }
         let t0 = world.time();
         let mut bounces = Vec::new();
-        for c in world.step(dt).map_err(|e| e.to_string())? {
-            match c.touched {
-                Touched::Body(j) => contacts.push([frame as u32, c.body.min(j).index(), c.body.max(j).index()]),
-                // The contact point sits one radius out along the normal from the centre.
-                Touched::Wall(_) => {
-                    let i = c.body.index();
-                    bounces.push((u64::from(i), c.time - t0, c.point - c.normal * start[i as usize].radius))
-                }
+        let step = world.step(dt).map_err(|e| e.to_string())?;
+        contacts.extend(pair_contacts(frame, step));
+        for c in step {
+            // The contact point sits one radius out along the normal from the centre.
+            if let Touched::Wall(_) = c.touched {
+                let i = c.body.index();
+                bounces.push((u64::from(i), c.time - t0, c.point - c.normal * start[i as usize].radius))
             }
         }
         for (_, s) in world.spheres() {
@@ -99,6 +99,14 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
     write_contacts(&dir.join("reference.bin"), &contacts)
 }
 
+/// A frame's contacts between two bodies as (frame, i, j) with i < j.
+pub fn pair_contacts(frame: u64, step: &[Contact]) -> impl Iterator<Item = [u32; 3]> + '_ {
+    step.iter().filter_map(move |c| match c.touched {
+        Touched::Body(j) => Some([frame as u32, c.body.min(j).index(), c.body.max(j).index()]),
+        Touched::Wall(_) => None,
+    })
+}
+
 /// Reads (frame, i, j) u32 triples, sorted and without duplicates.
 pub fn read_contacts(path: &Path) -> Result<Vec<[u32; 3]>, String> {
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
@@ -110,7 +118,7 @@ pub fn read_contacts(path: &Path) -> Result<Vec<[u32; 3]>, String> {
     Ok(triples)
 }
 
-fn write_contacts(path: &Path, contacts: &[[u32; 3]]) -> CliResult<()> {
+pub fn write_contacts(path: &Path, contacts: &[[u32; 3]]) -> CliResult<()> {
     let bytes: Vec<u8> = contacts.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
     std::fs::write(path, bytes).map_err(|e| io_error(path, e))
 }

@@ -13,12 +13,13 @@ use crate::shape::{Shape, ShapeGeometry};
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 
-/// Names one of a world's shapes, as [`World::add_shape`] gave it.
+/// Names one of a world's shapes, as [`World::add_shape`] gave it: 0, 1, 2 ... in the order they
+/// were added.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
 pub struct ShapeId(pub(crate) u32);
 
 impl ShapeId {
-    /// The shape's index among the world's shapes (in the order they were added).
+    /// The shape's place among the world's shapes, in the order they were added.
     pub fn index(self) -> u32 {
         self.0
     }
@@ -84,9 +85,13 @@ impl World {
         let geometry = shape.geometry()?;
         let shapes = &mut self.bodies.rigid.shapes;
         shapes.push(geometry);
-        let id = (shapes.len() - 1) as u32;
-        self.user_shapes.push(id);
-        Ok(ShapeId(id))
+        self.user_shapes.push((shapes.len() - 1) as u32);
+        Ok(ShapeId((self.user_shapes.len() - 1) as u32))
+    }
+
+    /// The shapes added so far, in the order they were added.
+    pub fn shapes(&self) -> impl Iterator<Item = (ShapeId, &ShapeGeometry)> + '_ {
+        self.user_shapes.iter().enumerate().map(|(k, &s)| (ShapeId(k as u32), &self.bodies.rigid.shapes[s as usize]))
     }
 
     /// The geometry of shape `id`: its volume, inertia, bounding radius and parry shape.
@@ -158,13 +163,41 @@ impl World {
         Ok(())
     }
 
+    /// Sets the velocities and angular velocities of the moving bodies `handles` (between
+    /// frames), all or none.
+    pub fn set_motions(
+        &mut self,
+        handles: &[BodyHandle],
+        velocities: &[DVec3],
+        angular_velocities: &[DVec3],
+    ) -> Result<()> {
+        for other in [velocities.len(), angular_velocities.len()] {
+            if other != handles.len() {
+                return Err(VadopError::LengthMismatch { handles: handles.len(), velocities: other });
+            }
+        }
+        for (index, ((&handle, &velocity), &angular_velocity)) in
+            handles.iter().zip(velocities).zip(angular_velocities).enumerate()
+        {
+            let checked = self
+                .moving_slot(handle)
+                .and_then(|_| check_vector("velocity", velocity))
+                .and_then(|()| check_vector("angular velocity", angular_velocity));
+            checked.map_err(|e| VadopError::InBody { index, source: Box::new(e) })?;
+        }
+        for ((&handle, &velocity), &angular_velocity) in handles.iter().zip(velocities).zip(angular_velocities) {
+            self.set_motion(handle, velocity, angular_velocity)?;
+        }
+        Ok(())
+    }
+
     /// Total angular momentum about the origin: of the centres' motion and of the spins.
     pub fn angular_momentum(&self) -> DVec3 {
         let t = self.time;
         self.moving_ids()
             .map(|i| {
                 let p = self.bodies.position_at(i, t).cross(self.bodies.mass[i] * self.bodies.velocity(i));
-                p + self.bodies.spin(i).angular_momentum()
+                p + self.bodies.spin_momentum(i)
             })
             .sum()
     }
@@ -174,12 +207,11 @@ impl World {
         self.bodies.alive_ids().map(|i| i as usize).filter(|&i| !self.bodies.is_fixed(i))
     }
 
-    /// A shape the user added (not one the store made for a plain sphere).
+    /// A shape the user added, and its index in the store's table (which also holds the shapes
+    /// the store made for plain spheres).
     fn user_geometry(&self, id: ShapeId) -> Result<&ShapeGeometry> {
-        if self.user_shapes.binary_search(&id.0).is_err() {
-            return Err(VadopError::NoSuchShape(id.0));
-        }
-        Ok(&self.bodies.rigid.shapes[id.0 as usize])
+        let slot = *self.user_shapes.get(id.0 as usize).ok_or(VadopError::NoSuchShape(id.0))?;
+        Ok(&self.bodies.rigid.shapes[slot as usize])
     }
 
     /// The store's form of `body`, validated: the centre of mass and principal axes from the
@@ -220,7 +252,7 @@ impl World {
                 if geometry.is_static_only() && !fixed {
                     return Err(VadopError::StaticOnlyShape(id.0));
                 }
-                (Some(geometry), Some(id.0))
+                (Some(geometry), Some(self.user_shapes[id.0 as usize]))
             }
         };
         let (position, principal, radius) = match geometry {
@@ -274,12 +306,14 @@ impl World {
     fn body_at(&self, i: usize) -> Body {
         let (b, t) = (&self.bodies, self.time);
         let (centre, principal) = (b.position_at(i, t), b.orientation_at(i, t));
-        let shape = b.rigid.shape.get(i).copied().filter(|s| self.user_shapes.binary_search(s).is_ok());
-        let (shape, position, orientation) = match shape {
+        // A store shape the user added (the table's indices of user shapes ascend), or a plain
+        // sphere's.
+        let user = b.rigid.shape.get(i).and_then(|&s| Some((s, self.user_shapes.binary_search(&s).ok()?)));
+        let (shape, position, orientation) = match user {
             None => (BodyShape::Sphere { radius: b.radius(i) }, centre, principal),
-            Some(id) => {
-                let pose = b.rigid.shapes[id as usize].pose_of_shape(centre, principal);
-                (BodyShape::Shape(ShapeId(id)), pose.translation, pose.rotation)
+            Some((slot, id)) => {
+                let pose = b.rigid.shapes[slot as usize].pose_of_shape(centre, principal);
+                (BodyShape::Shape(ShapeId(id as u32)), pose.translation, pose.rotation)
             }
         };
         Body {
