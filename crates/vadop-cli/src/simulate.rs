@@ -305,6 +305,8 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         Some(method) => Some(scene.world(WorldConfig { method, ..config }).map_err(describe)?),
         None => None,
     };
+    // The scene is kept only to be saved, and dropped once saved, before stepping: at a million
+    // bodies it is worth giving back.
     let save = files.save_scene.is_some().then_some(scene);
     run_world(world, reference_world, save, Origin { source, frames_done: 0, layout: Some(layout) }, files, args)
 }
@@ -527,8 +529,6 @@ fn run_world(
     let mut outputs = Outputs::open(args, origin.frames_done)?;
     if let (Some(path), Some(scene)) = (&files.save_scene, scene) {
         scene.save(path).map_err(describe)?;
-        // The scene is no longer needed; at a million bodies it is worth giving back before
-        // stepping.
     }
     let info = RunInfo {
         scene: SceneInfo::of(&world, origin.source, args.dt)?,

@@ -480,28 +480,26 @@ impl Contacts {
 /// waits, without holding the GIL, until that step is done.
 #[pyclass(name = "World", module = "vadop._vadop", frozen)]
 struct PyWorld {
-    state: Mutex<WorldState>,
+    state: Mutex<World>,
 }
 
-/// A world and the shapes added to it from Python, in order: a shape's Python id is its index in
-/// `shapes`. The core makes a [`ShapeId`] only in `World::add_shape` (and numbers its shapes its
-/// own way: once a world holds rigid bodies, plain spheres' radii get shapes too), so the binding
-/// keeps those it was given.
-struct WorldState {
-    world: World,
-    shapes: Vec<ShapeId>,
+/// Python's shape ids are the core's [`ShapeId`] indices: dense, 0, 1, 2 ... in the order
+/// `add_shape` made them.
+trait PyShapeIds {
+    fn shape_id(&self, number: i128, name: &str) -> PyResult<ShapeId>;
+    fn moving_shape_id(&self, number: i128, name: &str) -> PyResult<ShapeId>;
+    fn shape_number(&self, body: &Body) -> i64;
+    fn geometry(&self, body: &Body) -> Option<&ShapeGeometry>;
+    fn radius(&self, body: &Body) -> f64;
+    fn centre_of_mass(&self, body: &Body) -> DVec3;
 }
 
-impl WorldState {
-    fn new(world: World) -> WorldState {
-        WorldState { world, shapes: Vec::new() }
-    }
-
+impl PyShapeIds for World {
     /// The core's id of the shape Python calls `number`; `name` names the argument in messages.
     fn shape_id(&self, number: i128, name: &str) -> PyResult<ShapeId> {
-        let found = usize::try_from(number).ok().and_then(|k| self.shapes.get(k));
-        found.copied().ok_or_else(|| {
-            let ids = match self.shapes.len() {
+        let found = usize::try_from(number).ok().and_then(|k| self.shapes().nth(k));
+        found.map(|(id, _)| id).ok_or_else(|| {
+            let ids = match self.shapes().count() {
                 0 => "this world has none yet".to_string(),
                 n => format!("0 to {}", n - 1),
             };
@@ -509,10 +507,10 @@ impl WorldState {
         })
     }
 
-    /// [`WorldState::shape_id`] of a shape a moving body can take: not level geometry.
+    /// [`PyShapeIds::shape_id`] of a shape a moving body can take: not level geometry.
     fn moving_shape_id(&self, number: i128, name: &str) -> PyResult<ShapeId> {
         let id = self.shape_id(number, name)?;
-        if self.world.shape(id).map_err(value_error)?.is_static_only() {
+        if self.shape(id).map_err(value_error)?.is_static_only() {
             return Err(PyValueError::new_err(format!(
                 "{name} = {number} is level geometry (a triangle mesh or a half-space): add it with add_static"
             )));
@@ -524,7 +522,7 @@ impl WorldState {
     fn shape_number(&self, body: &Body) -> i64 {
         match body.shape {
             BodyShape::Sphere { .. } => -1,
-            BodyShape::Shape(id) => self.shapes.binary_search(&id).map_or(-1, |k| k as i64),
+            BodyShape::Shape(id) => i64::from(id.index()),
         }
     }
 
@@ -532,7 +530,7 @@ impl WorldState {
     fn geometry(&self, body: &Body) -> Option<&ShapeGeometry> {
         match body.shape {
             BodyShape::Sphere { .. } => None,
-            BodyShape::Shape(id) => self.world.shape(id).ok(),
+            BodyShape::Shape(id) => self.shape(id).ok(),
         }
     }
 
@@ -604,7 +602,7 @@ impl PyWorld {
         check_world_memory(spheres.len())?;
         let mut world = World::new(bounds, config).map_err(value_error)?;
         world.add_spheres(&spheres).map_err(value_error)?;
-        Ok(PyWorld { state: Mutex::new(WorldState::new(world)) })
+        Ok(PyWorld { state: Mutex::new(world) })
     }
 
     /// Adds bodies (all or none) and returns their ids as an int64 array; the arguments are
@@ -624,10 +622,10 @@ impl PyWorld {
         radii: &Bound<'py, PyAny>,
         masses: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
-        let bounds = self.lock(py)?.world.bounds();
+        let bounds = self.lock(py)?.bounds();
         let spheres = spheres(positions, velocities, radii, masses, &bounds)?;
         check_world_memory(spheres.len())?;
-        let added = self.lock(py)?.world.add_spheres(&spheres).map_err(value_error)?;
+        let added = self.lock(py)?.add_spheres(&spheres).map_err(value_error)?;
         Ok(Array1::from_iter(added.into_iter().map(handle_id)).into_pyarray(py))
     }
 
@@ -661,10 +659,9 @@ impl PyWorld {
     fn add_shape(&self, py: Python<'_>, kind: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<usize> {
         let shape = shapes::parse(kind, params)?;
         let mut state = self.lock(py)?;
-        let world = &mut state.world;
+        let world = &mut *state;
         let id = py.allow_threads(|| world.add_shape(shape)).map_err(value_error)?;
-        state.shapes.push(id);
-        Ok(state.shapes.len() - 1)
+        Ok(id.index() as usize)
     }
 
     /// The shapes added so far, in id order, each as the keyword arguments of ``add_shape`` that
@@ -678,11 +675,7 @@ impl PyWorld {
     /// [{'kind': 'cone', 'half_height': 1.0, 'radius': 0.5}]
     fn shapes<'py>(&self, py: Python<'py>) -> PyResult<Vec<Bound<'py, PyDict>>> {
         let state = self.lock(py)?;
-        state
-            .shapes
-            .iter()
-            .map(|&id| shapes::describe(py, state.world.shape(id).map_err(value_error)?.shape()))
-            .collect()
+        state.shapes().map(|(_, geometry)| shapes::describe(py, geometry.shape())).collect()
     }
 
     /// The surface of shape ``shape`` as triangles, for drawing: ``(vertices, triangles)``,
@@ -703,7 +696,7 @@ impl PyWorld {
     ) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>)> {
         let state = self.lock(py)?;
         let number = shape_number(&shape, "shape")?;
-        let geometry = state.world.shape(state.shape_id(number, "shape")?).map_err(value_error)?;
+        let geometry = state.shape(state.shape_id(number, "shape")?).map_err(value_error)?;
         let Some((vertices, triangles)) = shapes::surface(geometry) else {
             return Err(PyValueError::new_err(format!(
                 "shape {number} is a half-space: it is unbounded and has no surface to draw"
@@ -777,7 +770,7 @@ impl PyWorld {
                 mass: masses[k],
             })
             .collect();
-        let world = &mut state.world;
+        let world = &mut *state;
         let added = py.allow_threads(|| world.add_bodies(&bodies)).map_err(value_error)?;
         Ok(Array1::from_iter(added.into_iter().map(handle_id)).into_pyarray(py))
     }
@@ -811,7 +804,7 @@ impl PyWorld {
         };
         let mut state = self.lock(py)?;
         let id = state.shape_id(number, "shape")?;
-        state.world.add_static(id, position, orientation).map(handle_id).map_err(value_error)
+        state.add_static(id, position, orientation).map(handle_id).map_err(value_error)
     }
 
     /// Removes bodies of any shape by id (an int, or an int64 array, list or tuple of ints), all
@@ -832,8 +825,8 @@ impl PyWorld {
     fn remove(&self, py: Python<'_>, ids: &Bound<'_, PyAny>) -> PyResult<()> {
         let ids = ids_of(ids, "ids")?;
         let mut state = self.lock(py)?;
-        for handle in live_handles(&state.world, &ids, "ids")? {
-            state.world.remove_body(handle).map_err(value_error)?;
+        for handle in live_handles(&state, &ids, "ids")? {
+            state.remove_body(handle).map_err(value_error)?;
         }
         Ok(())
     }
@@ -851,8 +844,8 @@ impl PyWorld {
         let ids = ids_of(ids, "ids")?;
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
         let mut state = self.lock(py)?;
-        let handles = moving_handles(&state.world, &ids, "ids")?;
-        state.world.set_velocities(&handles, &velocities).map_err(value_error)
+        let handles = moving_handles(&state, &ids, "ids")?;
+        state.set_velocities(&handles, &velocities).map_err(value_error)
     }
 
     /// Sets the velocities and angular velocities (world axes, radians per second) of moving
@@ -876,8 +869,8 @@ impl PyWorld {
         let velocities = vectors(velocities, "velocities", Some(ids.len()))?;
         let angular_velocities = vectors(angular_velocities, "angular_velocities", Some(ids.len()))?;
         let mut state = self.lock(py)?;
-        let handles = moving_handles(&state.world, &ids, "ids")?;
-        state.world.set_motions(&handles, &velocities, &angular_velocities).map_err(value_error)
+        let handles = moving_handles(&state, &ids, "ids")?;
+        state.set_motions(&handles, &velocities, &angular_velocities).map_err(value_error)
     }
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
@@ -894,7 +887,7 @@ impl PyWorld {
         py.check_signals()?;
         let contacts = py.allow_threads(|| {
             let mut state = self.state.lock().map_err(|_| poisoned())?;
-            state.world.step(dt).map(|c| c.to_vec()).map_err(value_error)
+            state.step(dt).map(|c| c.to_vec()).map_err(value_error)
         })?;
         Ok(Contacts::new(py, &contacts))
     }
@@ -912,7 +905,7 @@ impl PyWorld {
     /// >>> [round(float(t), 6) for t in w.contact_ends().time], w.touching().tolist()
     /// ([2.333333], [])
     fn contact_ends(&self, py: Python<'_>) -> PyResult<Contacts> {
-        let ends = self.lock(py)?.world.contact_ends().to_vec();
+        let ends = self.lock(py)?.contact_ends().to_vec();
         Ok(Contacts::new(py, &ends))
     }
 
@@ -920,7 +913,7 @@ impl PyWorld {
     /// contact started and has not ended. Empty unless the world was made with
     /// ``contact_ends=True``.
     fn touching<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
-        let pairs = self.lock(py)?.world.touching();
+        let pairs = self.lock(py)?.touching();
         let flat: Vec<i64> = pairs.iter().flat_map(|&(a, b)| [handle_id(a), handle_id(b)]).collect();
         Ok(Array2::from_shape_vec((pairs.len(), 2), flat).expect("2 ids per row").into_pyarray(py))
     }
@@ -990,51 +983,51 @@ impl PyWorld {
     /// The box as float64 [[min x, y, z], [max x, y, z]].
     #[getter(r#box)]
     fn get_box<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let b = self.lock(py)?.world.bounds();
+        let b = self.lock(py)?.bounds();
         Ok(vectors_array(py, &[b.min, b.max]))
     }
 
     /// Simulation time now.
     #[getter]
     fn time(&self, py: Python<'_>) -> PyResult<f64> {
-        Ok(self.lock(py)?.world.time())
+        Ok(self.lock(py)?.time())
     }
 
     /// The method's name: 'vadop', 'brute', 'discrete', 'swept-aabb', 'swept-kdop' or 'grid'.
     #[getter]
     fn method(&self, py: Python<'_>) -> PyResult<&'static str> {
-        Ok(self.lock(py)?.world.config().method.name())
+        Ok(self.lock(py)?.config().method.name())
     }
 
     /// 'simulate' or 'detect'.
     #[getter]
     fn mode(&self, py: Python<'_>) -> PyResult<&'static str> {
-        Ok(mode_name(self.lock(py)?.world.config().mode))
+        Ok(mode_name(self.lock(py)?.config().mode))
     }
 
     /// Number of axes in the pool.
     #[getter]
     fn pool_axes(&self, py: Python<'_>) -> PyResult<usize> {
-        Ok(self.lock(py)?.world.pool().len())
+        Ok(self.lock(py)?.pool().len())
     }
 
     /// The alignment angle phi in use, in radians.
     #[getter]
     fn phi(&self, py: Python<'_>) -> PyResult<f64> {
-        let world = &self.lock(py)?.world;
+        let world = &*self.lock(py)?;
         Ok(world.config().phi.unwrap_or(world.pool().covering_radius()))
     }
 
     /// Coefficient of restitution.
     #[getter]
     fn restitution(&self, py: Python<'_>) -> PyResult<f64> {
-        Ok(self.lock(py)?.world.config().restitution)
+        Ok(self.lock(py)?.config().restitution)
     }
 
     /// The pool's axes as unit vectors, float64 (pool_axes, 3).
     #[getter]
     fn axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let pool = self.lock(py)?.world.pool().clone();
+        let pool = self.lock(py)?.pool().clone();
         Ok(vectors_array(py, pool.axes()))
     }
 
@@ -1051,7 +1044,7 @@ impl PyWorld {
     /// >>> s["contacts"] >= s["pair_contacts"], s["total_seconds"] > 0
     /// (True, True)
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = *self.lock(py)?.world.stats();
+        let s = *self.lock(py)?.stats();
         let d = PyDict::new(py);
         d.set_item("update_seconds", s.update_seconds)?;
         d.set_item("sort_seconds", s.sort_seconds)?;
@@ -1079,7 +1072,7 @@ impl PyWorld {
     /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).kinetic_energy()
     /// 25.0
     fn kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
-        Ok(self.lock(py)?.world.kinetic_energy())
+        Ok(self.lock(py)?.kinetic_energy())
     }
 
     /// Total linear momentum, float64 (3,).
@@ -1088,7 +1081,7 @@ impl PyWorld {
     /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).momentum().tolist()
     /// [6.0, 8.0, 0.0]
     fn momentum<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let momentum = self.lock(py)?.world.momentum();
+        let momentum = self.lock(py)?.momentum();
         Ok(Array1::from_vec(momentum.to_array().to_vec()).into_pyarray(py))
     }
 
@@ -1101,7 +1094,7 @@ impl PyWorld {
     /// >>> w.angular_momentum().round(12).tolist()   # r x m v + (2/5) m r^2 w
     /// [0.0, 5.0, -4.8]
     fn angular_momentum<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let angular_momentum = self.lock(py)?.world.angular_momentum();
+        let angular_momentum = self.lock(py)?.angular_momentum();
         Ok(Array1::from_vec(angular_momentum.to_array().to_vec()).into_pyarray(py))
     }
 
@@ -1133,7 +1126,7 @@ impl PyWorld {
             return Err(value_error(VadopError::BadTimeStep(dt)));
         }
         let state = self.lock(py)?;
-        let world = &state.world;
+        let world = &*state;
         let Some(sap) = world.sweep_prune() else {
             return Err(PyValueError::new_err(format!(
                 "volumes exist only for method 'vadop' after the first step (method {:?}, time {})",
@@ -1162,12 +1155,12 @@ impl PyWorld {
     }
 
     fn __len__(&self, py: Python<'_>) -> PyResult<usize> {
-        Ok(self.lock(py)?.world.len())
+        Ok(self.lock(py)?.len())
     }
 
     fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
         let state = self.lock(py)?;
-        let world = &state.world;
+        let world = &*state;
         let config = world.config();
         Ok(format!(
             "<World: {} bodies, method {}, mode {}, time {}>",
@@ -1181,14 +1174,14 @@ impl PyWorld {
 
 impl PyWorld {
     /// `value` of every live body, in slot order.
-    fn per_body<T>(&self, py: Python<'_>, value: impl Fn(&WorldState, BodyHandle, &Body) -> T) -> PyResult<Vec<T>> {
+    fn per_body<T>(&self, py: Python<'_>, value: impl Fn(&World, BodyHandle, &Body) -> T) -> PyResult<Vec<T>> {
         let state = self.lock(py)?;
-        Ok(state.world.bodies().map(|(handle, body)| value(&state, handle, &body)).collect())
+        Ok(state.bodies().map(|(handle, body)| value(&state, handle, &body)).collect())
     }
 
     /// The world, once no other thread is using it. A step holds it without the GIL, so the wait
     /// happens without the GIL too, or that step could never hand it back.
-    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, WorldState>> {
+    fn lock(&self, py: Python<'_>) -> PyResult<MutexGuard<'_, World>> {
         loop {
             match self.state.try_lock() {
                 Ok(state) => return Ok(state),
@@ -1251,7 +1244,7 @@ fn moving_handles(world: &World, ids: &[i128], name: &str) -> PyResult<Vec<BodyH
     Ok(handles)
 }
 
-/// A shape id given as an int, before `WorldState::shape_id` checks that it names a shape.
+/// A shape id given as an int, before `PyShapeIds::shape_id` checks that it names a shape.
 fn shape_number(arg: &IntArg, name: &str) -> PyResult<i128> {
     match arg {
         IntArg::Int(number) => Ok(*number),
@@ -1291,7 +1284,7 @@ impl ShapeNumbers {
     }
 
     /// The core's ids of the `n` bodies' shapes, each one a moving body can take.
-    fn ids(&self, state: &WorldState, n: usize) -> PyResult<Vec<ShapeId>> {
+    fn ids(&self, state: &World, n: usize) -> PyResult<Vec<ShapeId>> {
         match self {
             ShapeNumbers::OneForAll(number) => Ok(vec![state.moving_shape_id(*number, "shapes")?; n]),
             ShapeNumbers::PerBody(numbers) => numbers
@@ -1343,7 +1336,7 @@ fn scene(
     check_world_memory(bodies)?;
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
-    Ok(PyWorld { state: Mutex::new(WorldState::new(world)) })
+    Ok(PyWorld { state: Mutex::new(world) })
 }
 
 /// Detect mode on given paths: bodies start at ``positions`` with ``velocities`` and move in

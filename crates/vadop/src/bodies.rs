@@ -220,7 +220,7 @@ impl Bodies {
         1.0 / self.mass[i]
     }
 
-    /// Radius of sphere `i`.
+    /// Radius of sphere `i`; of another shape, its bounding radius about its centre of mass.
     #[inline]
     pub fn radius(&self, i: usize) -> f64 {
         self.state[i].radius
@@ -363,10 +363,14 @@ impl Bodies {
     }
 
     /// Moves body `i` to time `t` with new linear and angular velocities, voiding its
-    /// predictions: its spin starts again from its orientation at `t`.
+    /// predictions: its spin starts again from its orientation at `t`. The first spin in a world
+    /// of plain spheres (friction turns them) makes the store keep spins from then on.
     pub(crate) fn set_motion_at(&mut self, i: usize, t: f64, velocity: DVec3, angular_velocity: DVec3) {
         let orientation = self.orientation_at(i, t);
         self.move_to(i, t, velocity);
+        if angular_velocity != DVec3::ZERO {
+            self.make_rigid();
+        }
         if self.has_rigid() {
             self.start_spin(i, orientation, angular_velocity);
         }

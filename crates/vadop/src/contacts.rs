@@ -227,16 +227,11 @@ pub(crate) fn pair_points(
     fallback: (DVec3, DVec3),
     scratch: &mut ManifoldScratch,
 ) {
-    let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) else {
+    let (Some(gi), Some(gj), false) = (bodies.geometry(i), bodies.geometry(j), bodies.are_spheres(i, j)) else {
         scratch.points.clear();
         scratch.points.push(fallback);
         return;
     };
-    if bodies.are_spheres(i, j) {
-        scratch.points.clear();
-        scratch.points.push(fallback);
-        return;
-    }
     let pose = |g: &crate::shape::ShapeGeometry, k: usize| {
         g.pose_of_shape(bodies.position_at(k, t), bodies.orientation_at(k, t))
     };

@@ -2,7 +2,8 @@
 //!
 //! It owns the min-heap and the rule that makes its order total and deterministic: earlier time
 //! first, then the lower body id, then the partner (contacts with bodies, then ends of contacts,
-//! then walls, then renewals, lower ids first). Events
+//! then stalled searches, then walls and stalled wall searches, then renewals, lower ids first;
+//! see `Partner::key`). Events
 //! carry the velocity stamps their bodies had when they were predicted; an event whose stamps no
 //! longer match is void and is dropped when it reaches the top, so invalidating a body's contacts
 //! costs O(1). A prediction made twice (a pair found through two pieces of a path, or re-tested

@@ -42,7 +42,7 @@
 //!   separatrix, and both sides agree up to the time the slower one turns back.
 //! - Landen's descent stops at modulus k ≤ 2^-28, where sn, cn differ from sin, cos by under
 //!   k²/4 ≈ 1e-17; at most 14 levels, enough for m' down to the smallest normal numbers.
-//! - The mean precession rate takes 8 trapezoidal nodes per half period for m ≤ 1/2 and 16 up to
+//! - The mean precession rate takes 8 trapezoidal nodes over [0, K] (half a period of dn) for m ≤ 1/2 and 16 up to
 //!   m = 0.99: the error is of order q^(2 nodes) for the nome q (≤ 0.043 and ≤ 0.27), below
 //!   1e-19. Above 0.99 the complete integral's few ulps are less than the motion's own
 //!   sensitivity to its inputs, which grows like 1/(1 - m).
@@ -82,7 +82,7 @@ const MAX_DUPLICATIONS: usize = 64;
 /// sensitivity of the motion itself to rounding of its inputs, which grows like 1/(1 - m).
 const TRAPEZOID_MAX_PARAMETER: f64 = 0.99;
 
-/// Trapezoidal nodes per half period for the mean precession rate: the error is of order
+/// Trapezoidal nodes over [0, K] (half a period of dn) for the mean precession rate: the error is of order
 /// q^(2 nodes), q being the nome (q ≤ e^-π ≈ 0.043 for m ≤ 1/2, q ≤ 0.27 for m ≤ 0.99), far
 /// below rounding either way.
 fn trapezoid_nodes(m: f64) -> usize {
@@ -794,7 +794,8 @@ mod tests {
     #[test]
     fn mean_rate_matches_quadrature_on_both_routes() {
         // I = (1, 2, 3), L = (l1, 0, 1) in working coordinates: m = d12 l1² / d23. Both sides of
-        // the switch at m = 1/2 (trapezoid below, complete integral above) against a brute mean.
+        // m = 1/2 (8 nodes below, 16 above) and of the switch at m = 0.99 (trapezoid below,
+        // complete integral above) against a brute mean.
         let (d12, d23, d13) = (0.5f64, 1.0 / 6.0, 2.0 / 3.0);
         for m in [1e-9, 0.3, 0.5 - 1e-12, 0.5 + 1e-12, 0.7, 0.99 - 1e-12, 0.99 + 1e-12, 0.999] {
             let l1 = (m * d23 / d12).sqrt();

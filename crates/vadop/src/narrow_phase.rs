@@ -174,7 +174,9 @@ pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64>
 
 /// Time `tau` after the reference instant at which two touching or overlapping spheres separate:
 /// the later root of |offset + tau v| = R, where their centres move apart through the distance R
-/// again. `None` when they never do (no relative motion), and 0 when they are already apart.
+/// again: 0 when they are apart and moving apart; for a pair apart but approaching, when it leaves
+/// after passing through (the time of closest approach for a pair that misses). `None` when
+/// there is no relative motion.
 ///
 /// ```
 /// use glam::DVec3;

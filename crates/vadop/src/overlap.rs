@@ -25,12 +25,10 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(
             found = Some(pair);
         }
     };
-    for &a in new_bodies {
-        for &s in statics.iter().filter(|&&s| s != a) {
-            if !(bodies.is_fixed(a as usize)) {
-                if let Some(depth) = penetration(bodies, a as usize, s as usize, time) {
-                    note(a, s, depth);
-                }
+    for &a in new_bodies.iter().filter(|&&a| !bodies.is_fixed(a as usize)) {
+        for &s in &statics {
+            if let Some(depth) = penetration(bodies, a as usize, s as usize, time) {
+                note(a, s, depth);
             }
         }
     }

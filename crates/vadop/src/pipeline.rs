@@ -6,9 +6,11 @@
 //! covers; it is chosen from the bodies' speeds, not from the caller's frames, so a window may
 //! span many short frames or a long frame many windows, and the cost of a frame does not depend
 //! on its length beyond the contacts in it. At a window's start every proxy is refreshed, the
-//! broad phase reports its candidate pairs and every pair and wall contact inside the window is
-//! predicted into the queue. The loop then pops contacts in time order up to the frame's end:
-//! a contact is reported, resolved (simulate mode), and every body whose velocity changed gets a
+//! broad phase reports its candidate pairs and every pair contact (and, with contact ends on, the
+//! end of every pair in contact), every contact with static level geometry and every wall
+//! contact inside the window is predicted into the queue. The loop then pops events in time
+//! order up to the frame's end: a contact is reported and resolved (in simulate mode; against
+//! walls and static bodies in detect mode too), and every body whose velocity changed gets a
 //! fresh proxy and is re-tested against its candidate partners for the rest of the window. Events
 //! left in the queue at a frame's end stay valid for the next frame.
 //!
@@ -350,16 +352,24 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0;
+        let fixed = (bodies.is_fixed(i), bodies.is_fixed(j));
+        // Two moving spheres without friction: the closed-form impulse along the line of centres.
+        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
         // Static level geometry turns bodies back in detect mode too, as the walls do.
-        let responds = physics.mode == Mode::Simulate || bodies.is_fixed(i) || bodies.is_fixed(j);
+        let responds = physics.mode == Mode::Simulate || fixed != (false, false);
         let mut impulse = 0.0;
         if responds {
             let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
-            match self.rules.pair(a, b, t, physics.restitution, duration) {
+            // Level geometry keeps no contact history, as a wall keeps none: the TC model and the
+            // jam count are about the moving body's own contacts.
+            let rule = match fixed {
+                (true, _) => self.rules.wall(b, t, physics.restitution, duration),
+                (_, true) => self.rules.wall(a, t, physics.restitution, duration),
+                _ => self.rules.pair(a, b, t, physics.restitution, duration),
+            };
+            match rule {
                 Rule::Jam => {
                     let before = bodies.velocity(i);
-                    out.stats.jam_contacts += 1;
                     self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
                     impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
                 }
@@ -399,7 +409,6 @@ impl<B: BroadPhase> Pipeline<B> {
                         // the other), or points still approach however the impulses go: a
                         // jammed contact.
                         Some(_) | None => {
-                            out.stats.jam_contacts += 1;
                             self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
                         }
                     }
@@ -408,11 +417,7 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         // Spinning shapes may touch again on the same motions (spheres never do): with nothing
         // changed, the pair's next contact is predicted now, as a later window would find it.
-        if impulse == 0.0
-            && !(bodies.is_sphere(i) && bodies.is_sphere(j))
-            && bodies.stamp[i] == stamps.0
-            && bodies.stamp[j] == stamps.1
-        {
+        if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
             let (state_a, state_b) = (bodies.state[i], bodies.state[j]);
             let later = self.window.from(t.next_up());
             if let Some((time, stalled)) = contacts::pair_start(bodies, (i, &state_a), (j, &state_b), later) {
@@ -444,7 +449,6 @@ impl<B: BroadPhase> Pipeline<B> {
     /// so the next search begins there. Every method stalls at the same instant: canonical.
     fn stalled(&mut self, bodies: &mut Bodies, physics: &Physics, stuck: &[u32], t: f64, out: &mut Output) {
         if physics.mode == Mode::Simulate {
-            out.stats.jam_contacts += 1;
             self.freeze_cluster(bodies, physics, stuck, t, out.stats);
             return;
         }
@@ -495,7 +499,6 @@ impl<B: BroadPhase> Pipeline<B> {
         let impulse = match self.rules.wall(a, t, physics.restitution, duration) {
             Rule::Jam => {
                 let before = bodies.velocity(i);
-                out.stats.jam_contacts += 1;
                 self.freeze_cluster(bodies, physics, &[a], t, out.stats);
                 bodies.mass[i] * (before - bodies.velocity(i)).length()
             }
@@ -523,7 +526,6 @@ impl<B: BroadPhase> Pipeline<B> {
                     // As between bodies: nothing to push while the search finds it touching,
                     // or no impulse that settles it: jammed against the wall.
                     Some(_) | None => {
-                        out.stats.jam_contacts += 1;
                         self.freeze_cluster(bodies, physics, &[a], t, out.stats);
                         0.0
                     }
@@ -540,9 +542,10 @@ impl<B: BroadPhase> Pipeline<B> {
         });
     }
 
-    /// The jam rule (see [`crate::collapse`]): every body touching `seeds` at `t`, directly or
-    /// through each other, without separating, moves on with the cluster's centre-of-mass
-    /// velocity less any component into a wall a member touches.
+    /// The jam rule (see [`crate::collapse`]), counted as one jammed contact: every body touching
+    /// `seeds` at `t`, directly or through each other, without separating, moves on with the
+    /// cluster's centre-of-mass velocity less any component into a wall a member touches (a
+    /// cluster pressed against static geometry stops, and its spins stop).
     fn freeze_cluster(
         &mut self,
         bodies: &mut Bodies,
@@ -551,6 +554,7 @@ impl<B: BroadPhase> Pipeline<B> {
         t: f64,
         stats: &mut FrameStats,
     ) {
+        stats.jam_contacts += 1;
         let mut cluster = std::mem::take(&mut self.cluster);
         let mut near = std::mem::take(&mut self.near);
         cluster.clear();

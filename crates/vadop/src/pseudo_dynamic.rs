@@ -176,35 +176,35 @@ impl PseudoDynamic {
                 continue;
             }
             out.stats.pair_contacts += 1;
-            out.contacts.push(Contact {
-                time: t1,
-                body: bodies.handle(i),
-                touched: Touched::Body(bodies.handle(j)),
-                point: self.centre[i] + normal * bodies.radius(i),
-                normal,
-                impulse,
-            });
+            out.contacts.push(self.contact(bodies, (i, j), normal, t1, impulse));
         }
         if physics.report_ends {
-            // Pairs overlapping at the last instant and not at this one parted in between; a
-            // removed body's pairs are gone, not apart.
+            // Pairs overlapping at the last instant and not at this one parted in between (a
+            // removed body's pairs left `current` with it, so they are gone, not apart).
             for &(a, b) in &self.previous {
                 let (i, j) = (a as usize, b as usize);
-                if !(bodies.alive[i] && bodies.alive[j]) || self.current.binary_search(&(a, b)).is_ok() {
+                debug_assert!(bodies.alive[i] && bodies.alive[j]);
+                if self.current.binary_search(&(a, b)).is_ok() {
                     continue;
                 }
                 let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
                 out.stats.contact_ends += 1;
-                out.ends.push(Contact {
-                    time: t1,
-                    body: bodies.handle(i),
-                    touched: Touched::Body(bodies.handle(j)),
-                    point: self.centre[i] + normal * bodies.radius(i),
-                    normal,
-                    impulse: 0.0,
-                });
+                out.ends.push(self.contact(bodies, (i, j), normal, t1, 0.0));
             }
         }
         out.stats.response_seconds += start.elapsed().as_secs_f64();
+    }
+
+    /// The contact (or contact end) of bodies `i` and `j` at `time`, at `i`'s surface along
+    /// `normal` from its centre at this instant.
+    fn contact(&self, bodies: &Bodies, (i, j): (usize, usize), normal: DVec3, time: f64, impulse: f64) -> Contact {
+        Contact {
+            time,
+            body: bodies.handle(i),
+            touched: Touched::Body(bodies.handle(j)),
+            point: self.centre[i] + normal * bodies.radius(i),
+            normal,
+            impulse,
+        }
     }
 }

@@ -34,7 +34,8 @@
 //! // A body at the origin: its apex is 1.5 above the centre of mass.
 //! let pose = cone.pose_of_shape(DVec3::ZERO, DQuat::IDENTITY);
 //! assert!((pose * DVec3::new(0.0, 1.0, 0.0) - DVec3::new(0.0, 1.5, 0.0)).length() < 1e-12);
-//! assert_eq!(cone.bounding_radius(), Some(cone.bounding_radius().unwrap()));
+//! // Its bounding sphere about the centre of mass reaches the apex.
+//! assert!((cone.bounding_radius().unwrap() - 1.5).abs() < 1e-9);
 //! ```
 
 use crate::error::{check_length, check_vector, Result, VadopError};
@@ -93,7 +94,6 @@ pub struct ShapeGeometry {
     body_from_shape: Pose,
     bounding_radius: Option<f64>,
     rotation_radius: f64,
-    local_aabb: Option<(DVec3, DVec3)>,
 }
 
 /// Relative margin added to computed bounding radii so that rounding never leaves a point of the
@@ -191,7 +191,7 @@ impl Shape {
             Shape::HalfSpace { normal } => {
                 check_vector("half-space normal", *normal)?;
                 let n = direction(*normal).ok_or(VadopError::ZeroNormal(normal.to_array()))?;
-                Ok(self.fixed(SharedShape::halfspace(n), None))
+                Ok(self.fixed(SharedShape::halfspace(n)))
             }
         }
     }
@@ -208,13 +208,12 @@ impl Shape {
             body_from_shape: Pose::from_parts(props.local_com, props.principal_inertia_local_frame).inverse(),
             bounding_radius: Some(bound * (1.0 + RADIUS_MARGIN)),
             rotation_radius: rotation_radius * (1.0 + RADIUS_MARGIN),
-            local_aabb: None,
             parry,
         }
     }
 
     /// The geometry of a static-only shape.
-    fn fixed(&self, parry: SharedShape, local_aabb: Option<(DVec3, DVec3)>) -> ShapeGeometry {
+    fn fixed(&self, parry: SharedShape) -> ShapeGeometry {
         ShapeGeometry {
             shape: self.clone(),
             parry,
@@ -223,7 +222,6 @@ impl Shape {
             body_from_shape: Pose::IDENTITY,
             bounding_radius: None,
             rotation_radius: 0.0,
-            local_aabb,
         }
     }
 
@@ -277,8 +275,7 @@ impl Shape {
         }
         let mesh = TriMesh::new(vertices.to_vec(), triangles.to_vec())
             .map_err(|_| VadopError::EmptyMesh { vertices: vertices.len(), triangles: triangles.len() })?;
-        let aabb = mesh.local_aabb();
-        Ok(self.fixed(SharedShape::new(mesh), Some((aabb.mins, aabb.maxs))))
+        Ok(self.fixed(SharedShape::new(mesh)))
     }
 }
 
@@ -403,7 +400,8 @@ impl ShapeGeometry {
     /// The axis-aligned box `(min, max)` of a triangle mesh in its own frame; `None` for other
     /// shapes (a half-space is unbounded, a solid has its bounding radius).
     pub fn local_aabb(&self) -> Option<(DVec3, DVec3)> {
-        self.local_aabb
+        let aabb = self.parry.as_trimesh()?.local_aabb();
+        Some((aabb.mins, aabb.maxs))
     }
 }
 

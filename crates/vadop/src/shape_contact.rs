@@ -35,7 +35,8 @@
 //! w being a body's angular speed bound and r how far its core (below) reaches from the centre of
 //! mass: its bounding radius, a capsule's half height, 0 for a sphere, whose surface does not move
 //! when it turns. So the distance stays above `tol/2` until `t + (d - tol/2) / mu`, and the
-//! search steps there; the steps are at least `(tol/2) / mu` long. Against a triangle mesh, whose nearest triangle may change, `mu` uses
+//! search steps there, less the margins below: on bounds tightened to decide, the steps are at
+//! least `(tol/4) / mu` long (`(5/24) tol / mu` on a warm start's). Against a triangle mesh, whose nearest triangle may change, `mu` uses
 //! `|v_a - v_b|` instead of the projection; against a half-space or a wall, n is the fixed plane
 //! normal and the separation along it is the exact signed distance.
 //!
@@ -1670,7 +1671,7 @@ fn wall_searcher<'a, S: Spin>(
 
 /// The first time in `window` at which a (spinning) shape inside the box `[min, max]` begins to
 /// touch one of its six walls while moving into it, with the wall; canonical from `since`, with
-/// the tolerance `CONTACT_TOLERANCE * r` (r the bounding radius) and the rules of the module
+/// the tolerance `SHAPE_CONTACT_TOLERANCE * r` (r the bounding radius) and the rules of the module
 /// documentation. A body touching a wall at `since` touches it then only if it goes on into the
 /// wall, however deep it already is. Ties go to the lowest wall ([`Wall::ALL`] order).
 /// Static-only shapes have no walls: `None`.

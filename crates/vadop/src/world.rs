@@ -214,7 +214,8 @@ pub struct Contact {
     pub point: DVec3,
     /// Unit normal from `body` towards what it touched.
     pub normal: DVec3,
-    /// Magnitude of the impulse applied along the normal (0 when not resolved, as in detect mode).
+    /// Magnitude of the impulse applied along the normal (0 when not resolved: detect mode
+    /// resolves only contacts with walls and static bodies; 0 for a contact's end).
     pub impulse: f64,
 }
 
@@ -306,7 +307,7 @@ mod snapshot;
 
 pub use rigid::{Body, BodyShape, ShapeId};
 
-/// A world of spheres in a box.
+/// A world of bodies in a box: spheres, rigid bodies of any shape and static level geometry.
 ///
 /// ```
 /// use glam::DVec3;
@@ -570,7 +571,8 @@ impl World {
     }
     /// The pairs of bodies in contact now (lower index first, ascending): those whose contact
     /// started and has not ended. Bodies added overlapping are not in contact until they first
-    /// touch. Empty unless [`WorldConfig::contact_ends`] is on.
+    /// touch. Empty unless [`WorldConfig::contact_ends`] is on, except with [`Method::Discrete`],
+    /// whose frame-instant check always knows the pairs overlapping at the frame's end.
     pub fn touching(&self) -> Vec<(BodyHandle, BodyHandle)> {
         let pairs = match &self.engine {
             Engine::Discrete(pd) => pd.overlapping().to_vec(),
@@ -580,7 +582,8 @@ impl World {
         pairs.into_iter().map(|(a, b)| (handle(a), handle(b))).collect()
     }
     /// The pairs in contact at any instant of the last frame: those touching now and those whose
-    /// contact ended during it, ascending. Empty unless [`WorldConfig::contact_ends`] is on.
+    /// contact ended during it, ascending. Empty unless [`WorldConfig::contact_ends`] is on
+    /// (with [`Method::Discrete`], as [`World::touching`]).
     pub fn touching_in_frame(&self) -> Vec<(BodyHandle, BodyHandle)> {
         let mut pairs = self.touching();
         pairs.extend(self.ends.iter().filter_map(|c| match c.touched {

@@ -18,6 +18,11 @@ fn paper(bodies: usize, max_speed: f64, seed: u64) -> Scene {
     PaperScene { bodies, packing_fraction: 0.1, max_speed, radius: 0.5, seed }.build().unwrap()
 }
 
+/// A ball of diameter 1 on the line y = z = 5 at `x`, moving along x at `vx`.
+fn ball(x: f64, vx: f64) -> Sphere {
+    Sphere { position: DVec3::new(x, 5.0, 5.0), velocity: DVec3::new(vx, 0.0, 0.0), radius: 0.5, mass: 1.0 }
+}
+
 fn pair(c: &Contact) -> Option<(BodyHandle, BodyHandle)> {
     match c.touched {
         Touched::Body(other) => Some((c.body, other)),
@@ -108,12 +113,6 @@ proptest! {
 #[test]
 fn a_head_on_pair_starts_and_ends_at_the_exact_times() {
     let mut world = World::new(BoxBounds::cube(10.0).unwrap(), config(Method::Auto)).unwrap();
-    let ball = |x: f64, vx: f64| Sphere {
-        position: DVec3::new(x, 5.0, 5.0),
-        velocity: DVec3::new(vx, 0.0, 0.0),
-        radius: 0.5,
-        mass: 1.0,
-    };
     let (a, b) = (world.add_sphere(ball(2.0, 1.5)).unwrap(), world.add_sphere(ball(8.0, -1.5)).unwrap());
     let starts = world.step(2.0).unwrap().to_vec();
     assert_eq!((starts[0].time, starts[0].body, starts[0].touched), (5.0 / 3.0, a, Touched::Body(b)));
@@ -132,12 +131,6 @@ fn a_touching_body_that_bounces_off_a_wall_ends_its_contact_from_its_new_path() 
     // a runs into b, which rests near the wall; while they overlap, a bounces off the wall and
     // comes back out of b the way it came: the end is re-predicted from a's new path.
     let mut world = World::new(BoxBounds::cube(10.0).unwrap(), config(Method::Auto)).unwrap();
-    let ball = |x: f64, vx: f64| Sphere {
-        position: DVec3::new(x, 5.0, 5.0),
-        velocity: DVec3::new(vx, 0.0, 0.0),
-        radius: 0.5,
-        mass: 1.0,
-    };
     let (a, b) = (world.add_sphere(ball(6.0, 2.0)).unwrap(), world.add_sphere(ball(9.0, 0.0)).unwrap());
     // a is 1 from b at x = 8 (t = 1), at the wall at x = 9.5 (t = 1.75), and 1 from b again at
     // x = 8 on the way back (t = 2.5). Without the bounce it would have parted at x = 10, t = 2.
@@ -173,12 +166,6 @@ fn touching_pairs_survive_a_save_and_resume_bit_exactly() {
 #[test]
 fn a_removed_body_leaves_no_end_and_no_touching_pair() {
     let mut world = World::new(BoxBounds::cube(10.0).unwrap(), config(Method::Auto)).unwrap();
-    let ball = |x: f64, vx: f64| Sphere {
-        position: DVec3::new(x, 5.0, 5.0),
-        velocity: DVec3::new(vx, 0.0, 0.0),
-        radius: 0.5,
-        mass: 1.0,
-    };
     let (a, b) = (world.add_sphere(ball(2.0, 1.5)).unwrap(), world.add_sphere(ball(8.0, -1.5)).unwrap());
     world.step(2.0).unwrap();
     assert_eq!(world.touching(), [(a, b)]);
@@ -194,12 +181,6 @@ fn a_removed_body_leaves_no_end_and_no_touching_pair() {
 #[test]
 fn the_discrete_method_ends_a_contact_when_the_overlap_is_gone() {
     let mut world = World::new(BoxBounds::cube(10.0).unwrap(), config(Method::Discrete)).unwrap();
-    let ball = |x: f64, vx: f64| Sphere {
-        position: DVec3::new(x, 5.0, 5.0),
-        velocity: DVec3::new(vx, 0.0, 0.0),
-        radius: 0.5,
-        mass: 1.0,
-    };
     let (a, b) = (world.add_sphere(ball(2.0, 1.5)).unwrap(), world.add_sphere(ball(8.0, -1.5)).unwrap());
     // Overlapping at t = 2 (centres 0 apart), apart at t = 3.
     assert_eq!(world.step(2.0).unwrap().iter().filter_map(pair).collect::<Vec<_>>(), [(a, b)]);

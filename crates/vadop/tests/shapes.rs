@@ -356,3 +356,74 @@ fn a_brick_kicked_down_every_frame_rests_on_what_it_lands_on() {
         }
     }
 }
+
+/// A sphere of diameter 1 and mass 1.
+fn ball(position: DVec3, velocity: DVec3) -> vadop::Sphere {
+    vadop::Sphere { position, velocity, radius: 0.5, mass: 1.0 }
+}
+
+/// Two plain spheres hit a static sphere from either side, a quarter of a frame apart: each
+/// bounces straight back, and the static sphere neither moves nor voids the second one's
+/// contact by being hit first.
+#[test]
+fn spheres_bounce_off_a_static_sphere_one_after_another() {
+    let config = WorldConfig { mode: Mode::Simulate, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(20.0).unwrap(), config).unwrap();
+    let centre = DVec3::splat(10.0);
+    let post = world.add_shape(Shape::Sphere { radius: 1.0 }).unwrap();
+    let post = world.add_static(post, centre, DQuat::IDENTITY).unwrap();
+    let a = world.add_sphere(ball(centre - DVec3::X * 4.0, DVec3::X * 10.0)).unwrap();
+    let b = world.add_sphere(ball(centre + DVec3::X * 4.0, -DVec3::X * 5.0)).unwrap();
+    let contacts = world.step(1.0).unwrap().to_vec();
+    // The lower id names the contact; a static sphere is a shape, its times within the tolerance.
+    let hits: Vec<_> = contacts.iter().map(|c| (c.body, c.touched)).collect();
+    assert_eq!(hits, [(post, Touched::Body(a)), (post, Touched::Body(b))]);
+    assert!((contacts[0].time - 0.25).abs() < 1e-6 && (contacts[1].time - 0.5).abs() < 1e-6, "{contacts:?}");
+    for (body, velocity) in [(a, -DVec3::X * 10.0), (b, DVec3::X * 5.0)] {
+        let v = world.body(body).unwrap().velocity;
+        assert!((v - velocity).length() < 1e-9, "{body:?}: {v}");
+    }
+    let post = world.body(post).unwrap();
+    assert_eq!((post.position, post.velocity), (centre, DVec3::ZERO));
+}
+
+/// Contacts with level geometry count in the moving body's history only, as wall contacts do:
+/// a floor touched by many bodies is no body that collides again and again, so a body landing on
+/// it just after another one lands elsewhere keeps its restitution (the TC model applies to the
+/// body's own repeated contacts).
+#[test]
+fn landing_on_a_floor_just_after_another_body_keeps_the_restitution() {
+    let config =
+        WorldConfig { mode: Mode::Simulate, restitution: 0.5, contact_duration: 1e-2, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(20.0).unwrap(), config).unwrap();
+    let slab = world.add_shape(Shape::Cuboid { half_extents: DVec3::new(9.0, 0.5, 9.0) }).unwrap();
+    world.add_static(slab, DVec3::new(10.0, 1.0, 10.0), DQuat::IDENTITY).unwrap();
+    // The floor's top is at y = 1.5: a lands at 0.1, b 0.005 later, well apart.
+    let a = world.add_sphere(ball(DVec3::new(5.0, 3.0, 5.0), DVec3::new(0.0, -10.0, 0.0))).unwrap();
+    let b = world.add_sphere(ball(DVec3::new(15.0, 3.05, 15.0), DVec3::new(0.0, -10.0, 0.0))).unwrap();
+    let contacts = world.step(0.2).unwrap().to_vec();
+    assert_eq!(contacts.len(), 2, "{contacts:?}");
+    assert_eq!(world.stats().tc_contacts, 0);
+    for body in [a, b] {
+        let v = world.body(body).unwrap().velocity;
+        assert!((v - DVec3::new(0.0, 5.0, 0.0)).length() < 1e-9, "{v}");
+    }
+}
+
+/// With friction, an oblique impact of two plain spheres sets them spinning, and the spins count
+/// in the angular momentum, which the impact keeps.
+#[test]
+fn friction_spins_plain_spheres_up() {
+    let config = WorldConfig { mode: Mode::Simulate, friction: 0.5, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(20.0).unwrap(), config).unwrap();
+    let a = world.add_sphere(ball(DVec3::new(8.0, 10.0, 10.0), DVec3::new(2.0, 0.0, 0.0))).unwrap();
+    let b = world.add_sphere(ball(DVec3::new(12.0, 10.6, 10.0), DVec3::new(-2.0, 0.0, 0.0))).unwrap();
+    let before = world.angular_momentum();
+    assert_eq!(world.step(1.0).unwrap().len(), 1);
+    for body in [a, b] {
+        let spin = world.body(body).unwrap().angular_velocity;
+        assert!(spin.z.abs() > 0.1, "body {body:?} spins at {spin}");
+    }
+    let after = world.angular_momentum();
+    assert!((after - before).length() <= 1e-9 * before.length(), "{before} -> {after}");
+}
