@@ -6,7 +6,8 @@
 //! [`crate::shape_contact`], from the body store's motions, shapes and spins. A search that cannot
 //! decide (see [`crate::shape_contact`]'s termination guard) is answered as *stalled* at the time
 //! it stopped, before which no contact starts: the pipeline then starts the pair's motions afresh
-//! from that instant (or, in simulate mode, applies the jam rule), so a contact is never dropped.
+//! from that instant (or, in simulate mode when they touch there, applies the jam rule), so a
+//! contact is never dropped.
 //! It never schedules, responds or changes a body.
 
 use crate::bodies::{Bodies, BodyState};
@@ -14,8 +15,9 @@ use crate::error::{Result, VadopError};
 use crate::narrow_phase::{
     direction, pair_contact_time, pair_separation_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE,
 };
-use crate::shape_contact::{contact_end_time, contact_geometry, shape_contact_time, shape_wall_time};
-use crate::shape_contact::{contact_tolerance, wall_contact_geometry};
+use crate::shape_contact::{contact_end_time, contact_geometry, contact_in_progress_end_time};
+use crate::shape_contact::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
+use crate::shape_contact::{shape_contact_after, shape_contact_time, shape_wall_time};
 use crate::window::Window;
 use crate::world::BoxBounds;
 use glam::DVec3;
@@ -57,16 +59,32 @@ pub(crate) fn pair_start(
     settled(shape_contact_time((ga, &ma), (gb, &mb), window), window)
 }
 
-/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part.
-pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
+/// The canonical time in `window` at which bodies `a` and `b` (`a` the lower id), which started
+/// to touch at `start`, touch again on the same motions (spinning shapes may; spheres never do).
+pub(crate) fn pair_start_after(bodies: &Bodies, a: usize, b: usize, start: f64, window: Window) -> Found {
+    if bodies.are_spheres(a, b) {
+        return None;
+    }
+    let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
+    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    settled(shape_contact_after((ga, &ma), (gb, &mb), start, window), window)
+}
+
+/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part:
+/// from the start of their contact when the caller holds it, else from the contact in progress
+/// at the window's start (the shape search then replays the pair's earlier contacts).
+pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, start: Option<f64>, window: Window) -> Found {
     if bodies.are_spheres(a, b) {
         let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    // They touch at the window's start, so it lies inside the contact in progress.
-    settled(contact_end_time((ga, &ma), (gb, &mb), window.start, window.end), window)
+    let end = match start {
+        Some(start) => contact_end_time((ga, &ma), (gb, &mb), start, window.end),
+        None => contact_in_progress_end_time((ga, &ma), (gb, &mb), window.start, window.end),
+    };
+    settled(end, window)
 }
 
 /// Body `i`'s first contact with a wall of `bounds` in `window`: the time and the wall, or
@@ -139,6 +157,20 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
     let (side_i, side_j) = (bodies.rigid_side(i, t, contact.point), bodies.rigid_side(j, t, contact.point));
     let separating = (side_j.point_velocity() - side_i.point_velocity()).dot(contact.normal) > 0.0;
     contact.distance <= 2.0 * contact_tolerance(gi, gj) && !separating
+}
+
+/// True when body `i` is within twice the contact tolerance of a wall of `bounds` at `t`: the
+/// jam rule's test for a search against the walls that could not decide.
+pub(crate) fn touches_a_wall(bodies: &Bodies, i: usize, bounds: &BoxBounds, t: f64) -> bool {
+    let Some(g) = bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) else {
+        let (p, r) = (bodies.position_at(i, t), bodies.radius(i));
+        let slack = 2.0 * CONTACT_TOLERANCE * r;
+        return (p - r - bounds.min).min_element() <= slack || (bounds.max - p - r).min_element() <= slack;
+    };
+    let (motion, tol) = (bodies.rigid_motion(i), SHAPE_CONTACT_TOLERANCE * g.size());
+    Wall::ALL.into_iter().any(|wall| {
+        wall_contact_geometry(g, &motion, wall, bounds.min, bounds.max, t).is_some_and(|c| c.distance <= 2.0 * tol)
+    })
 }
 
 /// How deep bodies `i` and `j` interpenetrate at `t` beyond the contact tolerance (touching is

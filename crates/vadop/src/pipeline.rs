@@ -285,7 +285,7 @@ impl<B: BroadPhase> Pipeline<B> {
         });
         if physics.report_ends {
             for (a, b) in self.touching.pairs() {
-                predicted.extend(predict_end(bodies, a, b, window));
+                predicted.extend(predict_end(bodies, a, b, None, window));
             }
         }
         self.queue.set_bulk(predicted, &self.workers);
@@ -418,9 +418,8 @@ impl<B: BroadPhase> Pipeline<B> {
         // Spinning shapes may touch again on the same motions (spheres never do): with nothing
         // changed, the pair's next contact is predicted now, as a later window would find it.
         if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
-            let (state_a, state_b) = (bodies.state[i], bodies.state[j]);
             let later = self.window.from(t.next_up());
-            if let Some((time, stalled)) = contacts::pair_start(bodies, (i, &state_a), (j, &state_b), later) {
+            if let Some((time, stalled)) = contacts::pair_start_after(bodies, i, j, t, later) {
                 let partner = if stalled { Partner::Stalled(b) } else { Partner::Body(b) };
                 self.queue.push(Event { time, body: a, partner, body_stamp: stamps.0, partner_stamp: stamps.1 });
             }
@@ -428,7 +427,7 @@ impl<B: BroadPhase> Pipeline<B> {
         out.stats.pair_contacts += 1;
         if physics.report_ends && !responds {
             self.touching.insert(a, b);
-            if let Some(event) = predict_end(bodies, a, b, self.window.from(t)) {
+            if let Some(event) = predict_end(bodies, a, b, Some(t), self.window.from(t)) {
                 self.queue.push(event);
             }
         }
@@ -443,14 +442,25 @@ impl<B: BroadPhase> Pipeline<B> {
     }
 
     /// A search that could not decide stopped at `t` with `stuck` (one body and a wall, or two
-    /// bodies) a hair apart: resting or sliding in contact while turning. In simulate mode the
-    /// jam rule freezes them (no spin, the cluster's velocity); in detect mode, where bodies keep
-    /// their paths, their motions start afresh from `t` (the same paths, a new reference instant),
-    /// so the next search begins there. Every method stalls at the same instant: canonical.
+    /// bodies): a long skim a hair apart, a fast spinner's long approach, or resting or sliding
+    /// in contact while turning. Unless they are touching, or the search stalled at the instant
+    /// their motions began (nothing gained by going on), their motions start afresh from `t`
+    /// (the same paths, a new reference instant and a fresh search budget), so the next search
+    /// begins there; bodies apart are never jammed. In simulate mode the jam rule freezes the
+    /// others (no spin, the cluster's velocity); in detect mode, where bodies keep their paths,
+    /// they start afresh all the same. Every method stalls at the same instant: canonical.
     fn stalled(&mut self, bodies: &mut Bodies, physics: &Physics, stuck: &[u32], t: f64, out: &mut Output) {
         if physics.mode == Mode::Simulate {
-            self.freeze_cluster(bodies, physics, stuck, t, out.stats);
-            return;
+            let progressed =
+                stuck.iter().all(|&k| bodies.is_fixed(k as usize) || t > bodies.state[k as usize].motion.since);
+            let touching = match *stuck {
+                [a, b] => contacts::pressed_together(bodies, a as usize, b as usize, t),
+                _ => contacts::touches_a_wall(bodies, stuck[0] as usize, &physics.bounds, t),
+            };
+            if touching || !progressed {
+                self.freeze_cluster(bodies, physics, stuck, t, out.stats);
+                return;
+            }
         }
         for &k in stuck {
             let i = k as usize;
@@ -651,7 +661,7 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         if physics.report_ends {
             for other in self.touching.partners(body) {
-                if let Some(event) = predict_end(bodies, body, other, window) {
+                if let Some(event) = predict_end(bodies, body, other, None, window) {
                     queue.push(event);
                 }
             }
@@ -660,12 +670,13 @@ impl<B: BroadPhase> Pipeline<B> {
 }
 
 /// The end of the contact of touching bodies `a` and `b` if its canonical time lies in `window`,
-/// stamped with their current stamps: a velocity change of either voids it.
+/// stamped with their current stamps: a velocity change of either voids it. `start` is the
+/// contact's start when the caller has just found it.
 #[inline]
-fn predict_end(bodies: &Bodies, a: u32, b: u32, window: Window) -> Option<Event> {
+fn predict_end(bodies: &Bodies, a: u32, b: u32, start: Option<f64>, window: Window) -> Option<Event> {
     let (a, b) = (a.min(b), a.max(b));
     let (i, j) = (a as usize, b as usize);
-    let (time, stalled) = contacts::pair_end(bodies, i, j, window)?;
+    let (time, stalled) = contacts::pair_end(bodies, i, j, start, window)?;
     Some(Event {
         time,
         body: a,

@@ -40,6 +40,11 @@
 //! `|v_a - v_b|` instead of the projection; against a half-space or a wall, n is the fixed plane
 //! normal and the separation along it is the exact signed distance.
 //!
+//! A spinning solid never leaves its bounding sphere, so far from contact a fast spinner is also
+//! stepped on its sphere's separation from the other shape (or from the other's sphere, a plane
+//! or a wall), which its spin cannot shrink: the longer of the two steps is taken, and the
+//! approach costs what the straight motion needs, whatever the spin.
+//!
 //! Where spins dominate `mu` the steps are short and the bodies turn little between two probes:
 //! each probe of two solids (or of a solid and each mesh triangle the last probe measured) first
 //! tries the last one's axis, turned with either shape (a face normal turns with its face), and
@@ -98,22 +103,29 @@
 //! Every search starts from the reference instant `max(a.since, b.since)` (the wall search from
 //! `since`), or from where the bounding volumes first come within reach, and every iterate is a
 //! function of the two motions and of the time since the reference only (each probe starts from
-//! what the one before found, and every search replays the chain from its start), never of the
-//! window asked about: every caller, window or method gets the same time to the bit. A search
-//! stops once past the window's end; a later window recomputes the same iterates. The pair is
+//! what the one before found), never of the window asked about: every caller, window or method
+//! gets the same time to the bit. A search stops once past the window's end; a later window
+//! recomputes the same iterates. The chain starts afresh at every contact start and end it finds
+//! (a cold probe, a fresh budget, the time since the reference derived from the absolute time),
+//! so what follows a contact start depends on that start alone: a caller holding it resumes the
+//! chain there ([`shape_contact_after`], [`contact_end_time`]) without replaying the contacts
+//! before it, and a spinner that touches a body thousands of times on one motion costs what its
+//! contacts need, not the square of their number. The pair is
 //! ordered: the world passes it in a fixed order (lower body id first), as (a, b) and (b, a) may
 //! differ in the last bits.
 //!
 //! # Termination guard
 //!
-//! A search that has not decided after [`MAX_ITERATIONS`] distance evaluations from the
-//! reference (a pair resting or sliding in contact while turning, or skimming along a hair apart
-//! for a long time), whose step falls below the resolution of time, or whose distance bounds are
-//! too loose to step, returns [`VadopError::ContactSearchStalled`] with the time up to which no
-//! contact starts: it never silently drops a contact.
+//! A search that has not decided after [`MAX_ITERATIONS`] distance evaluations since the chain
+//! last started afresh (a pair resting or sliding in contact while turning, skimming along a hair
+//! apart for a long time, or a fast spinner's long approach), whose step falls below the
+//! resolution of time, or whose distance bounds are too loose to step, returns
+//! [`VadopError::ContactSearchStalled`] with the time up to which no contact starts: it never
+//! silently drops a contact. The world then starts the bodies' motions afresh from that time and
+//! searches on, unless they touch there (simulate mode then applies the jam rule).
 
 use crate::error::{Result, VadopError};
-use crate::narrow_phase::{sphere_separation_time, sphere_sphere_time, unit_scale, Wall};
+use crate::narrow_phase::{direction, sphere_separation_time, sphere_sphere_time, unit_scale, Wall};
 use crate::shape::ShapeGeometry;
 use crate::window::Window;
 use glam::{DQuat, DVec3};
@@ -208,8 +220,8 @@ pub struct ContactPoint {
     pub distance: f64,
 }
 
-/// A contact search's answer together with the number of distance evaluations it took from the
-/// reference (what [`MAX_ITERATIONS`] caps).
+/// A contact search's answer together with the number of distance evaluations it took (what
+/// [`MAX_ITERATIONS`] caps between two restarts of its chain).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Search<T> {
     /// What the search found, if anything.
@@ -218,8 +230,11 @@ pub struct Search<T> {
     pub iterations: u32,
 }
 
-/// Cap on the distance evaluations of one search, from the reference on; see the module doc.
-pub const MAX_ITERATIONS: u32 = 200_000;
+/// Cap on the distance evaluations of one search between two restarts of its chain (the
+/// reference, a contact start or end); see the module doc. Low enough that a resting contact that
+/// stalls costs little before the jam rule takes it; a search out of budget in free space loses
+/// nothing, the world goes on from where it stopped.
+pub const MAX_ITERATIONS: u32 = 10_000;
 
 /// Relative tolerance on the distance within which two shapes count as touching, times the sum
 /// of their bounding radii.
@@ -519,6 +534,28 @@ struct Probe {
     shrink: f64,
     /// The signed distance grows at most this fast.
     grow: f64,
+    /// A looser lower bound that turning cannot shrink, from the bounding sphere of a spinning
+    /// body, and how fast it shrinks: `(-inf, 0)` when there is none. Far from contact it steps a
+    /// fast spinner by its straight motion, where `lower` would step it by its spin.
+    far: (f64, f64),
+}
+
+/// No spin-free bound.
+const NO_FAR: (f64, f64) = (f64::NEG_INFINITY, 0.0);
+
+impl Probe {
+    /// The longest step that keeps the distance above `guard` on either lower bound (infinite
+    /// when one never shrinks), or `None` when neither bound is above `guard`.
+    fn approach_step(&self, guard: f64) -> Option<f64> {
+        let step = |(lower, shrink): (f64, f64)| {
+            let room = lower - guard;
+            (room > 0.0).then(|| if shrink > 0.0 { room / shrink } else { f64::INFINITY })
+        };
+        match (step((self.lower, self.shrink)), step(self.far)) {
+            (Some(near), Some(far)) => Some(near.max(far)),
+            (near, far) => near.or(far),
+        }
+    }
 }
 
 /// The signed distance of one pair (or of a body and a wall) as a function of the time since the
@@ -528,6 +565,8 @@ trait Gauge {
     /// The times within which the distance may be at most `within`, from the bodies' bounding
     /// volumes alone: `None` when it never is.
     fn reach(&self, within: f64) -> Option<Reach>;
+    /// Drops what the last probes found (their warm start): the chain starts afresh.
+    fn forget(&self) {}
 }
 
 /// The times since the reference `[enter, leave]` outside which a pair is certainly farther apart
@@ -939,6 +978,35 @@ impl Warm {
 }
 
 impl ConvexPair<'_> {
+    /// The best spin-free bound along the line of centres: a spinning body stays in its bounding
+    /// sphere, so its sphere against the other shape (or both spheres) is a lower bound that only
+    /// the straight motion and the other's spin shrink.
+    fn far(&self, tau: f64, (a, pose_a): (&Scaled, &Pose), (b, pose_b): (&Scaled, &Pose), slack: f64) -> (f64, f64) {
+        // The centres of mass: a's at the origin of the frame.
+        let centre = self.offset + self.velocity * tau;
+        let Some(n) = direction(centre).filter(|_| self.spin > 0.0) else { return NO_FAR };
+        let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
+        let (spin_a, spin_b) = (self.a.spin_rate() * self.scale, self.b.spin_rate() * self.scale);
+        let closing = (-self.velocity.dot(n)).max(0.0);
+        let centres = n.dot(centre);
+        let near_b = n.dot(b.support_point(pose_b, -n));
+        let near_a = n.dot(a.support_point(pose_a, n));
+        let guard = guard(self.tol);
+        [
+            (centres - radius_a - radius_b, closing),
+            (near_b - radius_a, closing + spin_b),
+            (centres - radius_b - near_a, closing + spin_a),
+        ]
+        .map(|(lower, shrink)| (lower - slack, shrink))
+        .into_iter()
+        .filter(|&(lower, _)| lower > guard)
+        .max_by(|x, y| {
+            let step = |(lower, shrink): (f64, f64)| (lower - guard) / shrink;
+            step(*x).total_cmp(&step(*y))
+        })
+        .unwrap_or(NO_FAR)
+    }
+
     fn poses(&self, tau: f64) -> (Pose, Pose) {
         let centre = self.offset + self.velocity * tau;
         (
@@ -964,6 +1032,7 @@ impl Gauge for ConvexPair<'_> {
             upper: bounds.upper,
             shrink: (-self.velocity.dot(bounds.axis)).max(0.0) + self.spin,
             grow: self.velocity.length() + self.spin,
+            far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
         }
     }
 
@@ -971,6 +1040,10 @@ impl Gauge for ConvexPair<'_> {
     fn reach(&self, within: f64) -> Option<Reach> {
         let limit = self.size + within + SLACK * (self.offset.length() + self.size);
         Reach::sphere(self.offset, self.velocity, limit)
+    }
+
+    fn forget(&self) {
+        self.warm.set(None);
     }
 }
 
@@ -1004,11 +1077,14 @@ impl Gauge for PlanePair<'_> {
     fn probe(&self, tau: f64, _depth: bool) -> Probe {
         let (n, _, distance, slack) = self.state(tau);
         let approach = self.velocity.dot(n);
+        // The body's bounding sphere above the plane, which does not turn.
+        let height = n.dot(self.offset + self.velocity * tau) - self.size;
         Probe {
             lower: distance - slack,
             upper: distance + slack,
             shrink: (-approach).max(0.0) + self.spin,
             grow: approach.max(0.0) + self.spin,
+            far: (height - slack, (-approach).max(0.0)),
         }
     }
 
@@ -1128,7 +1204,7 @@ impl Gauge for MeshPair<'_> {
             Some(b) => (b.lower, b.upper),
             None => (f64::INFINITY, f64::INFINITY),
         };
-        Probe { lower, upper, shrink: rate, grow: rate }
+        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR }
     }
 
     /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
@@ -1147,6 +1223,10 @@ impl Gauge for MeshPair<'_> {
             reach = reach.meet(Reach::below(-c, -v, grown - low[axis])?)?;
         }
         Some(reach)
+    }
+
+    fn forget(&self) {
+        self.warm.borrow_mut().clear();
     }
 }
 
@@ -1173,6 +1253,13 @@ impl Gauge for PairGauge<'_> {
             PairGauge::Mesh(g, _) => g.reach(within),
         }
     }
+    fn forget(&self) {
+        match self {
+            PairGauge::Convex(g) => g.forget(),
+            PairGauge::Plane(g, _) => g.forget(),
+            PairGauge::Mesh(g, _) => g.forget(),
+        }
+    }
 }
 
 /// The iteration of one search: the reference, the scaled tolerance, the step count, and the
@@ -1182,6 +1269,8 @@ struct Searcher<G> {
     reference: f64,
     tol: f64,
     iterations: u32,
+    /// `iterations` when the chain last started afresh: [`MAX_ITERATIONS`] caps each piece.
+    restarted: u32,
     reach: Option<Reach>,
 }
 
@@ -1200,7 +1289,18 @@ enum AtReference {
 impl<G: Gauge> Searcher<G> {
     fn new(gauge: G, reference: f64, tol: f64) -> Self {
         let reach = gauge.reach(2.0 * tol);
-        Searcher { gauge, reference, tol, iterations: 0, reach }
+        Searcher { gauge, reference, tol, iterations: 0, restarted: 0, reach }
+    }
+
+    /// Starts the chain afresh at absolute `time`, a contact start or end it found (or a time the
+    /// caller knows to be one): a cold probe, a fresh iteration budget, and the time since the
+    /// reference derived from the absolute time alone. What follows is then a function of the
+    /// motions and `time` only, so a caller that holds a contact's start resumes the chain there
+    /// without replaying the contacts before it, to the bit.
+    fn restart_at(&mut self, time: f64) -> f64 {
+        self.gauge.forget();
+        self.restarted = self.iterations;
+        (time - self.reference).max(0.0)
     }
 
     /// From this time since the reference on the pair stays more than `2 tol` apart.
@@ -1213,7 +1313,7 @@ impl<G: Gauge> Searcher<G> {
     }
 
     fn probe(&mut self, tau: f64, depth: bool) -> Result<Probe> {
-        if self.iterations >= MAX_ITERATIONS {
+        if self.iterations - self.restarted >= MAX_ITERATIONS {
             return Err(self.stall(tau, "the iteration cap was reached (resting or sliding contact while turning?)"));
         }
         self.iterations += 1;
@@ -1260,15 +1360,14 @@ impl<G: Gauge> Searcher<G> {
             if p.upper <= self.touch() {
                 return Ok(Some(tau));
             }
-            let room = p.lower - self.guard();
-            if !(room > 0.0) {
+            let Some(step) = p.approach_step(self.guard()) else {
                 return Err(self.stall(tau, "the distance bounds were too loose to step"));
-            }
-            if !(p.shrink > 0.0) {
+            };
+            if step == f64::INFINITY {
                 // The separation along a fixed axis never shrinks: no contact ever.
                 return Ok(None);
             }
-            match self.advance(tau, room / p.shrink)? {
+            match self.advance(tau, step)? {
                 Some(next) => tau = next,
                 None => return Ok(None),
             }
@@ -1346,39 +1445,92 @@ impl<G: Gauge> Searcher<G> {
         let mut tau = reach.enter;
         let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
         if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
-            let end = match self.classify(p0, deep_is_contact)? {
+            let next = match self.classify(p0, deep_is_contact)? {
                 AtReference::Approaching if self.reference >= window.start => return Ok(Some(0.0)),
-                AtReference::Approaching | AtReference::Inside => self.contact_end(0.0, window.end)?,
-                AtReference::Ended(end) => Some(end),
+                AtReference::Approaching | AtReference::Inside => self.after_contact(self.reference, window.end)?,
+                AtReference::Ended(end) => Some(self.restart_at(self.reference + end)),
                 AtReference::Resting => None,
             };
-            match end {
-                Some(end) => tau = end,
+            match next {
+                Some(next) => tau = next,
                 None => return Ok(None),
             }
         }
+        self.start_from(tau, window)
+    }
+
+    /// The first contact start in `window` from `tau`, where the pair does not touch.
+    fn start_from(&mut self, mut tau: f64, window: Window) -> Result<Option<f64>> {
         loop {
             let Some(start) = self.next_start(tau, window.end)? else { return Ok(None) };
             if self.reference + start >= window.start {
                 return Ok(Some(start));
             }
-            match self.contact_end(start, window.end)? {
-                Some(end) => tau = end,
+            match self.after_contact(self.reference + start, window.end)? {
+                Some(next) => tau = next,
                 None => return Ok(None),
             }
         }
     }
 
-    /// The end of the contact that starts at absolute time `start`, before `until`. `start` is
-    /// normally a canonical start (found by replaying the contacts from the reference); any other
-    /// time is taken as the start of a contact in progress.
-    fn end_of(&mut self, start: f64, until: f64, deep_is_contact: bool) -> Result<Option<f64>> {
-        let at = Window::new(start, start.next_up());
-        let tau = match self.first_start_in(at, deep_is_contact)? {
-            Some(tau) if self.reference + tau == start => tau,
-            _ => (start - self.reference).max(0.0),
-        };
+    /// Where the chain goes on after the contact that starts at absolute time `start`: the time
+    /// since the reference at which it has ended, restarted there; `None` if not before `until`.
+    fn after_contact(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
+        let tau = self.restart_at(start);
+        Ok(match self.contact_end(tau, until)? {
+            Some(end) => Some(self.restart_at(self.reference + end)),
+            None => None,
+        })
+    }
+
+    /// The first contact start in `window` after the contact that starts at absolute time
+    /// `start`, which the caller holds from this chain: no replay of the contacts before it.
+    fn first_start_after(&mut self, start: f64, window: Window) -> Result<Option<f64>> {
+        match self.after_contact(start, window.end)? {
+            Some(tau) => self.start_from(tau, window),
+            None => Ok(None),
+        }
+    }
+
+    /// The end of the contact that starts at absolute time `start` (a canonical start the caller
+    /// holds), before `until`.
+    fn end_of(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
+        let tau = self.restart_at(start);
         self.contact_end(tau, until)
+    }
+
+    /// The end, before `until`, of the contact in progress at absolute time `at`, found by
+    /// replaying the chain from the reference: the same for every `at` inside one contact. A pair
+    /// the chain does not find in contact at `at` is taken to be in a contact from `at` on.
+    fn end_of_contact_at(&mut self, at: f64, until: f64, deep_is_contact: bool) -> Result<Option<f64>> {
+        let Some(reach) = self.reach else { return self.end_of(at, until) };
+        let mut tau = reach.enter;
+        let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
+        if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
+            let end = match self.classify(p0, deep_is_contact)? {
+                AtReference::Approaching | AtReference::Inside => {
+                    let tau = self.restart_at(self.reference);
+                    self.contact_end(tau, until)?
+                }
+                AtReference::Ended(end) => Some(end),
+                AtReference::Resting => None,
+            };
+            match end {
+                Some(end) if self.reference + end > at => return Ok(Some(end)),
+                Some(end) => tau = self.restart_at(self.reference + end),
+                None => return Ok(None),
+            }
+        }
+        let before = at.next_up();
+        while let Some(start) = self.next_start(tau, before)? {
+            let start = self.restart_at(self.reference + start);
+            match self.contact_end(start, until)? {
+                Some(end) if self.reference + end > at => return Ok(Some(end)),
+                Some(end) => tau = self.restart_at(self.reference + end),
+                None => return Ok(None),
+            }
+        }
+        self.end_of(at, until)
     }
 }
 
@@ -1495,9 +1647,11 @@ pub fn shape_contact_time<S: Spin, T: Spin>(
 
 /// The time, before `until`, at which the contact that started at `start` ends (the signed
 /// distance is above the tolerance again), for detect mode where bodies pass through each other.
-/// Canonical: the contacts are replayed from the reference, so every caller gets the same time.
-/// `None` when it has not ended before `until`. A `start` that is not a canonical contact start
-/// is taken as a time inside a contact in progress.
+/// `start` is a canonical contact start (from [`shape_contact_time`] on the same motions): the
+/// chain restarts at every contact start and end it finds, so the end follows from `start` alone,
+/// the same for every caller, without replaying earlier contacts. `None` when it has not ended
+/// before `until`. Any other `start` is taken as the start of a contact in progress; for a time
+/// inside a contact whose start the caller does not hold, see [`contact_in_progress_end_time`].
 ///
 /// ```
 /// use glam::{DQuat, DVec3};
@@ -1521,8 +1675,7 @@ pub fn contact_end_time<S: Spin, T: Spin>(
     Ok(contact_end_search(a, b, start, until)?.found)
 }
 
-/// [`contact_end_time`] with the number of distance evaluations it took (the replay from the
-/// reference included).
+/// [`contact_end_time`] with the number of distance evaluations it took.
 pub fn contact_end_search<S: Spin, T: Spin>(
     a: (&ShapeGeometry, &RigidMotion<S>),
     b: (&ShapeGeometry, &RigidMotion<T>),
@@ -1530,8 +1683,72 @@ pub fn contact_end_search<S: Spin, T: Spin>(
     until: f64,
 ) -> Result<Search<f64>> {
     let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(Search { found: None, iterations: 0 }) };
-    let found = searcher.end_of(start, until, true)?.map(|tau| searcher.reference + tau);
+    let found = searcher.end_of(start, until)?.map(|tau| searcher.reference + tau);
     Ok(Search { found, iterations: searcher.iterations })
+}
+
+/// The end, before `until`, of the contact two shapes are in at time `at`, whose start the
+/// caller does not hold: the contacts are replayed from the reference to the one in progress at
+/// `at`, so every `at` inside one contact gives the end of [`contact_end_time`] from its start,
+/// to the bit. A pair that is not in contact at `at` on its motions is taken to be in one from
+/// `at` on.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::shape_contact::{contact_end_time, contact_in_progress_end_time, shape_contact_time, RigidMotion};
+/// use vadop::Window;
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+/// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
+/// let b = RigidMotion { velocity: DVec3::new(-1.0, 0.0, 0.0), ..RigidMotion::fixed(DVec3::new(3.0, 0.0, 0.0), DQuat::IDENTITY, 0.0) };
+/// let start = shape_contact_time((&cube, &a), (&cube, &b), Window::new(0.0, 10.0)).unwrap().unwrap();
+/// let end = contact_end_time((&cube, &a), (&cube, &b), start, 10.0).unwrap();
+/// for at in [2.5, 3.0, 3.9] {
+///     assert_eq!(contact_in_progress_end_time((&cube, &a), (&cube, &b), at, 10.0).unwrap(), end);
+/// }
+/// ```
+pub fn contact_in_progress_end_time<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    at: f64,
+    until: f64,
+) -> Result<Option<f64>> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(None) };
+    Ok(searcher.end_of_contact_at(at, until, true)?.map(|tau| searcher.reference + tau))
+}
+
+/// The first time in `window` at which two shapes begin to touch again after the contact that
+/// started at `start` (a canonical start the caller holds, from [`shape_contact_time`] on the same
+/// motions): what [`shape_contact_time`] finds in a window after `start`, to the bit, without
+/// replaying the contacts before `start`. Spinning shapes may touch many times on one motion.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::free_rotation::FreeRotation;
+/// use vadop::shape_contact::{shape_contact_after, shape_contact_time, RigidMotion};
+/// use vadop::Window;
+/// let plank = Shape::Cuboid { half_extents: DVec3::new(1.0, 0.1, 0.1) }.geometry().unwrap();
+/// let ball = Shape::Sphere { radius: 0.2 }.geometry().unwrap();
+/// // A plank spinning about z beside a ball: its end sweeps past the ball twice a turn.
+/// let spin = FreeRotation::new(plank.principal_inertia_unit(), DQuat::IDENTITY, DVec3::new(0.0, 0.0, 6.0));
+/// let spinning = RigidMotion { position: DVec3::ZERO, since: 0.0, velocity: DVec3::ZERO, spin };
+/// let ball_motion = RigidMotion::fixed(DVec3::new(0.0, 1.1, 0.0), DQuat::IDENTITY, 0.0);
+/// let window = Window::new(0.0, 5.0);
+/// let first = shape_contact_time((&plank, &spinning), (&ball, &ball_motion), window).unwrap().unwrap();
+/// let later = Window::new(first.next_up(), 5.0);
+/// let second = shape_contact_after((&plank, &spinning), (&ball, &ball_motion), first, later).unwrap();
+/// assert_eq!(second, shape_contact_time((&plank, &spinning), (&ball, &ball_motion), later).unwrap());
+/// assert!(second.unwrap() > first);
+/// ```
+pub fn shape_contact_after<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    start: f64,
+    window: Window,
+) -> Result<Option<f64>> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(None) };
+    Ok(searcher.first_start_after(start, window)?.map(|tau| searcher.reference + tau))
 }
 
 /// Where two shapes touch at `time` (normally a contact time), in world coordinates: the normal
@@ -1628,11 +1845,14 @@ impl WallGauge<'_> {
 impl Gauge for WallGauge<'_> {
     fn probe(&self, tau: f64, _depth: bool) -> Probe {
         let (distance, _, slack) = self.distance(tau);
+        // The body's bounding sphere from the wall.
+        let sphere = self.gap - self.speed * tau - self.size;
         Probe {
             lower: distance - slack,
             upper: distance + slack,
             shrink: self.speed.max(0.0) + self.spin,
             grow: (-self.speed).max(0.0) + self.spin,
+            far: (sphere - slack, self.speed.max(0.0)),
         }
     }
 

@@ -20,8 +20,9 @@ use std::time::Instant;
 use vadop::narrow_phase::{pair_contact_time, Motion};
 use vadop::shape::{Shape, ShapeGeometry};
 use vadop::shape_contact::{
-    contact_end_search, contact_end_time, contact_geometry, contact_tolerance, shape_contact_search,
-    shape_contact_time, shape_wall_search, shape_wall_time, wall_contact_geometry, RigidMotion, Spin,
+    contact_end_search, contact_end_time, contact_geometry, contact_in_progress_end_time, contact_tolerance,
+    shape_contact_after, shape_contact_search, shape_contact_time, shape_wall_search, shape_wall_time,
+    wall_contact_geometry, RigidMotion, Spin,
 };
 use vadop::{Wall, Window};
 
@@ -395,6 +396,45 @@ fn thin_plates_are_never_tunnelled() {
             assert!(moving.is_some(), "{what}: moving plate tunnelled");
         }
     }
+}
+
+/// A plank spinning at 3e4 rad/s through a cube in detect mode touches it again and again on one
+/// motion. Each contact resumed from the one before (`shape_contact_after`, `contact_end_time`
+/// from its start) is the contact a fresh search finds from the reference, to the bit, and costs
+/// the same number of distance evaluations whichever contact it is: a frame costs what its
+/// contacts need, not the square of their number (it did: every search replayed the contacts
+/// before it). An end asked from any time inside a contact is that contact's end.
+#[test]
+fn contacts_of_a_fast_spinner_resume_bit_exactly_at_a_flat_cost() {
+    let plank = Shape::Cuboid { half_extents: DVec3::new(0.5, 0.2, 0.1) }.geometry().unwrap();
+    let omega = DVec3::new(1.0, 0.3, 0.1).normalize() * 3e4;
+    let a = body(plank.clone(), DVec3::ZERO, DVec3::new(6.0, 0.0, 0.0), DQuat::IDENTITY, omega);
+    let b = body(plank, DVec3::new(1.3, 0.0, 0.0), DVec3::new(-6.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
+    let until = 1.0 / 30.0;
+    let mut start = shape_contact_time(pair(&a), pair(&b), Window::new(0.0, until)).unwrap().expect("they meet");
+    let mut costs = Vec::new();
+    while costs.len() < 40 {
+        let end = contact_end_search(pair(&a), pair(&b), start, until).unwrap();
+        let Some(end_time) = end.found else { break };
+        for f in [0.1, 0.5, 0.9] {
+            let at = start + f * (end_time - start);
+            let again = contact_in_progress_end_time(pair(&a), pair(&b), at, until).unwrap();
+            assert_eq!(again.map(f64::to_bits), Some(end_time.to_bits()), "end asked at {at}");
+        }
+        let later = Window::new(start.next_up(), until);
+        let Some(next) = shape_contact_after(pair(&a), pair(&b), start, later).unwrap() else { break };
+        let fresh = shape_contact_search(pair(&a), pair(&b), later).unwrap();
+        assert_eq!(fresh.found.map(f64::to_bits), Some(next.to_bits()), "contact {} after {start}", costs.len());
+        let between = Window::new(end_time, until);
+        assert_eq!(shape_contact_time(pair(&a), pair(&b), between).unwrap(), Some(next));
+        costs.push(end.iterations);
+        start = next;
+    }
+    assert!(costs.len() >= 20, "only {} contacts", costs.len());
+    let (first, last) = (&costs[..5], &costs[costs.len() - 5..]);
+    let mean = |c: &[u32]| c.iter().sum::<u32>() as f64 / c.len() as f64;
+    eprintln!("ends' evaluations: first {first:?}, last {last:?}");
+    assert!(mean(last) <= 3.0 * mean(first) + 50.0, "cost grows with the contacts before: {costs:?}");
 }
 
 /// (b) A long box spinning at 2000 rad per frame sweeps past a small cube: its end passes in a
