@@ -236,6 +236,11 @@ pub struct Search<T> {
 /// nothing, the world goes on from where it stopped.
 pub const MAX_ITERATIONS: u32 = 10_000;
 
+/// Cap on the distance evaluations that decide whether a pair touching at the reference goes
+/// deeper or parts: one that does neither for this long rests or slides in contact, which the
+/// world hands to the jam rule (a pair that merely grazes decides in a few dozen).
+pub const RESTING_BUDGET: u32 = 500;
+
 /// Relative tolerance on the distance within which two shapes count as touching, times the sum
 /// of their bounding radii.
 ///
@@ -1411,6 +1416,7 @@ impl<G: Gauge> Searcher<G> {
         }
         let floor = p0.upper.min(0.0) - self.tol;
         let (mut tau, mut p) = (0.0, p0);
+        let budget = self.iterations + RESTING_BUDGET;
         loop {
             if p.lower <= floor {
                 return Ok(AtReference::Approaching);
@@ -1429,6 +1435,9 @@ impl<G: Gauge> Searcher<G> {
                 Some(next) if next >= self.leave() => return Ok(AtReference::Ended(self.leave())),
                 Some(next) => tau = next,
                 None => return Ok(AtReference::Resting),
+            }
+            if self.iterations >= budget {
+                return Err(self.stall(tau, "resting or sliding in contact: neither deeper nor apart"));
             }
             p = self.probe(tau, true)?;
         }
