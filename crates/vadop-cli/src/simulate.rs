@@ -305,8 +305,8 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         Some(method) => Some(scene.world(WorldConfig { method, ..config }).map_err(describe)?),
         None => None,
     };
-    // The scene is kept only to be saved, and dropped once saved, before stepping: at a million
-    // bodies it is worth giving back.
+    // The scene is kept only to be saved, once the first frame has stepped (so that a run the
+    // core refuses replaces no file), and dropped then: at a million bodies it is worth giving back.
     let save = files.save_scene.is_some().then_some(scene);
     run_world(world, reference_world, save, Origin { source, frames_done: 0, layout: Some(layout) }, files, args)
 }
@@ -386,6 +386,12 @@ fn resume(path: &Path, files: Files, args: &SimulateArgs) -> CliResult<()> {
     if matches!(args.reference, Some(ReferenceArg::Brute | ReferenceArg::Vadop)) {
         return Err("--resume cannot be combined with --reference: the reference's state was not saved".to_string());
     }
+    // A saved state is a regular file (--save-state writes nothing else), and the core reads it
+    // whole: a device or FIFO could deliver without end, and a file too large is refused unread.
+    if std::fs::metadata(path).is_ok_and(|meta| !meta.is_file()) {
+        return Err(format!("--resume {}: not a regular file, so not a state saved by --save-state", path.display()));
+    }
+    memory::check_input(path).map_err(|e| format!("--resume {}: {e}", path.display()))?;
     let world = World::load(path).map_err(describe)?;
     if !(args.dt.is_finite() && args.dt > 0.0) {
         return Err(describe(VadopError::BadTimeStep(args.dt)));
@@ -516,7 +522,9 @@ struct Origin {
 }
 
 /// Steps `world` (and `reference_world` alongside) from frame `origin.frames_done` on, streaming
-/// the outputs, then reports. `scene` is what --save-scene writes, when given.
+/// the outputs, then reports. `scene` is what --save-scene writes, when given. Nothing is written
+/// before the first frame has stepped: the core checks the time step, the speeds and the
+/// overlaps at the first step, and a run it refuses must leave existing files as they were.
 fn run_world(
     mut world: World,
     reference_world: Option<World>,
@@ -526,10 +534,14 @@ fn run_world(
     args: &SimulateArgs,
 ) -> CliResult<()> {
     let config = world.config();
-    let mut outputs = Outputs::open(args, origin.frames_done)?;
-    if let (Some(path), Some(scene)) = (&files.save_scene, scene) {
-        scene.save(path).map_err(describe)?;
-    }
+    let mut scene = scene;
+    let mut open = || -> CliResult<Outputs> {
+        let outputs = Outputs::open(args, origin.frames_done)?;
+        if let (Some(path), Some(scene)) = (&files.save_scene, scene.take()) {
+            scene.save(path).map_err(describe)?;
+        }
+        Ok(outputs)
+    };
     let info = RunInfo {
         scene: SceneInfo::of(&world, origin.source, args.dt)?,
         method: match config.method {
@@ -549,23 +561,23 @@ fn run_world(
     let start = Motion::of(&world);
     let frames = origin.frames_done + 1..=origin.frames_done + args.frames;
     let save_state = files.save_state.as_deref();
-    let mut outcome = step_frames(&mut world, reference_world, args, frames, save_state, &mut outputs, origin.layout);
+    let mut outputs = None;
+    let mut outcome =
+        step_frames(&mut world, reference_world, args, frames, save_state, (&mut outputs, &mut open), origin.layout);
+    let Outputs { csv, json, contacts } = outputs.unwrap_or_default();
     // A failed flush loses contacts or rows, not frames: it is reported like a failed frame.
-    for finished in
-        [outputs.contacts.map(ContactWriter::finish), outputs.csv.map(FramesCsv::finish)].into_iter().flatten()
-    {
+    for finished in [contacts.map(ContactWriter::finish), csv.map(FramesCsv::finish)].into_iter().flatten() {
         if let Err(e) = finished {
             outcome.failure.get_or_insert(e);
         }
     }
     let pool = Some(world.pool()).filter(|_| matches!(world.method(), Method::Vadop | Method::SweptKdop)).map(|pool| {
         let rho = pool.covering_radius();
-        let body_frames = outcome.frames.frames.max(1) as f64 * info.scene.bodies as f64;
         PoolInfo {
             axes: pool.len(),
             covering_radius_deg: rho.to_degrees(),
             phi_deg: world.config().phi.unwrap_or(rho).to_degrees(),
-            axes_per_body: outcome.frames.list_entries as f64 / body_frames,
+            axes_per_body: outcome.frames.axes_per_body(info.scene.bodies),
         }
     });
     let conservation = (config.mode == Mode::Simulate).then(|| {
@@ -577,14 +589,16 @@ fn run_world(
     if !args.quiet && outcome.frames.frames > 0 {
         report::print(&summary.to_string())?;
     }
-    let written = outputs.json.map_or(Ok(()), |json| json.finish(&summary));
+    let written = json.map_or(Ok(()), |json| json.finish(&summary));
     match outcome.failure {
         Some(message) => Err(message),
         None => written,
     }
 }
 
-/// Output files, created before the run so that a bad path fails before any work is done.
+/// Output files, created once the first frame has stepped (a bad directory fails before any work
+/// is done, in `Files::check`).
+#[derive(Default)]
 struct Outputs {
     csv: Option<FramesCsv>,
     json: Option<JsonReport>,
@@ -750,15 +764,16 @@ struct Outcome {
 }
 
 /// Steps `world` (and `reference` alongside) through `frames`, or until a frame fails, writing
-/// each frame's contacts and row as it completes. `layout` names a scene's entries in the errors
-/// of the first step, which checks the scene as a whole.
+/// each frame's contacts and row as it completes, into the outputs `open` makes once the first
+/// frame has stepped. `layout` names a scene's entries in the errors of the first step, which
+/// checks the scene as a whole.
 fn step_frames(
     world: &mut World,
     mut reference: Option<World>,
     args: &SimulateArgs,
     frames: std::ops::RangeInclusive<u64>,
     save_state: Option<&Path>,
-    outputs: &mut Outputs,
+    (outputs, open): (&mut Option<Outputs>, &mut dyn FnMut() -> CliResult<Outputs>),
     layout: Option<SceneLayout>,
 ) -> Outcome {
     let simulate = world.config().mode == Mode::Simulate;
@@ -772,6 +787,8 @@ fn step_frames(
     let bar = report::progress_bar(args.frames, "frames");
     let started = Instant::now();
     let mut may_reveal = !args.quiet;
+    // Contacts with these are told apart from those between moving bodies.
+    let statics: Vec<BodyHandle> = world.bodies().filter(|(_, b)| !b.mass.is_finite()).map(|(h, _)| h).collect();
     for frame in frames {
         let start = Instant::now();
         match world.step(args.dt) {
@@ -791,6 +808,16 @@ fn step_frames(
             }
         };
         let wall_seconds = start.elapsed().as_secs_f64();
+        let outputs = match outputs {
+            Some(outputs) => outputs,
+            None => match open() {
+                Ok(opened) => outputs.insert(opened),
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            },
+        };
         let contacts = world.contacts();
         if let Some(out) = &mut outputs.contacts {
             if let Err(e) = out.frame(frame, contacts, world.contact_ends()) {
@@ -827,7 +854,12 @@ fn step_frames(
                 break;
             }
         }
-        let row = FrameRow::new(frame, world.time(), world.stats(), wall_seconds);
+        let is_static = |h: &BodyHandle| statics.binary_search(h).is_ok();
+        let static_contacts = contacts
+            .iter()
+            .filter(|c| matches!(c.touched, Touched::Body(other) if is_static(&other) || is_static(&c.body)))
+            .count() as u64;
+        let row = FrameRow::new(frame, world.time(), world.stats(), static_contacts, wall_seconds);
         totals.add(&row);
         if let Err(e) = outputs.row(&row) {
             failure = Some(e);
