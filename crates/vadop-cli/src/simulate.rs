@@ -33,17 +33,70 @@ const DEFAULT_REFERENCE_MAX_SHAPE_BODIES: usize = 300;
 /// Runs shorter than this finish before a progress bar would help.
 const PROGRESS_DELAY: Duration = Duration::from_secs(2);
 
-#[derive(Debug, Args)]
-#[command(after_help = "\
+/// What `simulate --help` and `-h` end with: the rules on files and memory.
+macro_rules! file_notes {
+    () => {
+        "\
 Output files: --csv, --json and --contacts are written as the run goes, into whatever their path
 names (a FIFO or /dev/stdout too). --save-scene and --save-state replace their file through a
 rename, so that a killed run never leaves half a file; they refuse anything but a regular file (a
 device, FIFO, socket or directory would be replaced by it). A symbolic link is followed: the file
 it points to is replaced and the link stays. No two outputs may name one file, and none may
 overwrite --scene or --resume, except --save-state, which saves over the state it resumed from.
+Nothing is written before the first frame has stepped: a run the engine refuses (a bad --dt, an
+absurd speed, bodies overlapping at the start) leaves existing files as they were.
 
 Memory: a run that needs more memory than is available (free memory, cgroup limit, ulimit -v) is
-refused before it starts; the estimate is about 640 bytes per body, twice with a reference method.")]
+refused before it starts; the estimate is about 640 bytes per body, twice with a reference method.
+A --scene or --resume file larger than half the memory available is refused before it is read, and
+a scene streamed from a FIFO or device once it has delivered that much; --resume reads regular
+files only."
+    };
+}
+
+#[derive(Debug, Args)]
+#[command(
+    after_help = concat!(file_notes!(), "\n\nThe summary's lines and the CSV's columns: see --help (or README.md, \"Reading the summary\")."),
+    after_long_help = concat!(file_notes!(), "\n\n", "\
+Reading the summary (README.md, \"Reading the summary\", says more):
+  scene       the bodies, the box, packing (fraction of the box the moving bodies fill), the
+              fastest body in its own diameters per frame (a shape's: its bounding sphere's)
+  method      the method as run: auto (the default) is the fastest, today the grid;
+              --method vadop runs the paper's velocity-aligned sweep and prune
+  pool        vadop and swept-kdop: m axes, covering radius rho, alignment angle phi, and the
+              axes each body is bounded on (mean over the frames that start a window)
+  frames      frames completed of those asked for, and the time simulated
+  contacts    every contact: between two moving bodies (body pairs), with static bodies, with
+              walls; per frame and per wall-clock second
+  accuracy    against a reference method stepped alongside (brute by default for small
+              scenes): contacts it found that the run did not (missed) and the reverse (extra);
+              exact in detect mode, where every method follows the same paths
+  ms/frame    median, mean and p95 of c_total (the four stages, timed inside the step) and of
+              the whole step call. A broad-phase window spans several frames and the frame
+              that starts one pays for it, so with few frames the mean can be several times
+              the median: the mean is the throughput, the median a frame inside a window
+  cost split  mean ms per frame of c_update (volumes over the window), c_sort (keeping the
+              axis lists sorted, or binning), c_test (candidates and their predictions) and
+              c_response (impulses, rebuilds, re-tests)
+  per frame   windows started; endpoint swaps (insertion-sort moves of the axis lists; grid:
+              entries binned); candidate pairs; narrow tests (exact contact times, re-tests
+              included); re-tests (bodies predicted again after a velocity change);
+              invalidations (predictions voided by a velocity change before their time)
+  rules       contacts made elastic by the TC model, or resolved by the jam rule
+  memory      largest broad-phase footprint, peak resident memory of the whole process
+  energy      simulate mode: relative kinetic-energy drift of an elastic frictionless run (0 up
+              to rounding), or the change a lossy one was asked for; the momentum change beside
+              the bodies' sum of |m v| at the start (walls and static bodies exchange momentum
+              with the bodies, so the total is not kept)
+  stopped     the error that ended the run early; what ran before it is still reported
+
+CSV columns (--csv; --json holds the same rows): frame, time (end of the frame), contacts,
+pair_contacts (two moving bodies), ms (c_total), update_ms, sort_ms, test_ms, response_ms,
+endpoint_swaps, list_entries (broad-phase entries after the frame's last window start; 0 in a
+frame that starts none), candidate_pairs, narrow_tests, invalidations, wall_ms (the whole step
+call), broad_phase_bytes, windows, retests, tc_contacts, jam_contacts, contact_ends,
+static_contacts (with static bodies; the rest of the contacts are with walls).")
+)]
 pub struct SimulateArgs {
     /// Scene file (JSON: {"bounds": {"min": [x,y,z], "max": [x,y,z]}, "spheres": [{"position",
     /// "velocity", "radius", "mass"}, ...], and for other shapes "shapes": [{"name", "shape"}, ...],
@@ -111,7 +164,8 @@ pub struct SimulateArgs {
     /// follows identical paths; simulate: bodies also collide with each other
     #[arg(long, value_enum, default_value_t = ModeArg::Simulate, help_heading = "Run")]
     mode: ModeArg,
-    /// Where candidate pairs come from: vadop (continuous, velocity-aligned volumes), brute
+    /// Where candidate pairs come from: auto (the fastest, today grid), vadop (the paper's method:
+    /// continuous, velocity-aligned volumes), brute
     /// (continuous, every pair), discrete (overlap checks at frame instants only), or the
     /// continuous baselines swept-aabb (classic sweep and prune over swept boxes), swept-kdop (all
     /// pool axes for every body) and grid (uniform grid over swept boxes)
@@ -145,8 +199,9 @@ pub struct SimulateArgs {
     /// --contacts, counted in the summary), as started and stopped events
     #[arg(long, help_heading = "World")]
     contact_ends: bool,
-    /// Threads a step shares its work among [default: every core]; the results are bit-identical
-    /// whatever the number
+    /// Threads a step shares its work among [default: every core]; no more threads than cores are
+    /// used (more would only wait for each other), and the results are bit-identical whatever the
+    /// number
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(usize), help_heading = "World")]
     threads: Option<usize>,
     /// Frame length in seconds
@@ -169,7 +224,8 @@ pub struct SimulateArgs {
     /// and the new frames' rows appended
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     contacts: Option<PathBuf>,
-    /// Save the scene, before stepping, as a scene file (a regular file; links are followed)
+    /// Save the scene as it was before stepping, as a scene file, once the first frame has stepped
+    /// (a regular file; links are followed)
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     save_scene: Option<PathBuf>,
     /// Save the whole world after every frame (atomically: a run killed mid-way loses at most

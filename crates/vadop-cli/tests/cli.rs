@@ -314,7 +314,8 @@ fn contacts_with_static_bodies_are_counted_apart_and_in_the_singular() {
     let summary = stdout(&output);
     assert!(summary.contains("contacts    2 (1 body pair, 1 with static bodies, 0 with walls)"), "{summary}");
     assert!(summary.contains("rules       0 contacts made elastic"), "{summary}");
-    assert!(summary.contains("method      auto (grid) (the default; --method vadop is the paper's)"), "{summary}");
+    assert!(summary.contains("method      auto (grid), simulate mode"), "{summary}");
+    assert!(summary.contains("the default, the fastest method here; --method vadop runs the paper's"), "{summary}");
     let text = std::fs::read_to_string(&csv).expect("csv written");
     let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
     let first: Vec<&str> = text.lines().nth(1).unwrap().split(',').collect();
@@ -367,5 +368,32 @@ fn the_summarys_means_and_energy_line_say_what_they_measure() {
     assert!(summary.contains("of the bodies' sum of |m v| at the start"), "{summary}");
     let elastic = run("1");
     assert!(elastic.contains("kinetic energy relative drift") && !elastic.contains("loss"), "{elastic}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// `--help` explains every summary line and every CSV column (README.md's "Reading the summary"
+/// too), and the tool says it handles shapes, not spheres only.
+#[test]
+fn help_explains_every_summary_line_and_csv_column() {
+    let help = stdout(&vadop(&["simulate", "--help"]));
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).expect("README");
+    let section = &readme[readme.find("## Reading the summary").expect("the README section")..];
+    let section = &section[..section[3..].find("\n## ").expect("a next section")];
+    let dir = scratch("help");
+    let csv = dir.join("f.csv");
+    let output = vadop(&["simulate", "--bodies", "20", "--frames", "1", "--csv", csv.to_str().unwrap()]);
+    let summary = stdout(&output);
+    for line in summary.lines().filter(|l| !l.starts_with(' ')) {
+        let label = line.split("  ").next().unwrap();
+        assert!(help.contains(&format!("\n  {label} ")), "--help does not explain {label:?}");
+        assert!(section.contains(&format!("- `{label}`")), "README does not explain {label:?}");
+    }
+    let text = std::fs::read_to_string(&csv).expect("csv written");
+    for column in text.lines().next().unwrap().split(',') {
+        assert!(help.contains(column), "--help does not name the CSV column {column}");
+        assert!(section.contains(&format!("`{column}`")), "README does not name the CSV column {column}");
+    }
+    let about = stdout(&vadop(&["--help"]));
+    assert!(about.contains("spheres and spinning rigid shapes") && about.contains("--method vadop"), "{about}");
     std::fs::remove_dir_all(dir).ok();
 }
