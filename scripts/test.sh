@@ -55,14 +55,15 @@ step "installing the Python test tools into .venv (pip)" \
   .venv/bin/python -m pip install -q --disable-pip-version-check maturin numpy pytest hypothesis matplotlib mypy pdoc
 
 # The extension is rebuilt and reinstalled only when what goes into it changed: the engine and
-# binding crates, the package's Python files, the build settings. The stamp is written only
+# binding crates, the package's Python files, the build settings (README.md, the package's long
+# description, is left out: the tests read it from the tree). The stamp is written only
 # after an install succeeded, and lives in .venv, so a new environment always installs.
 extension_inputs() {
   {
     find crates/vadop/src crates/vadop-py/src python/vadop -type f \
       -not -path '*/__pycache__/*' -not -name '*.so' -print0 | sort -z | xargs -0 sha256sum
     sha256sum crates/vadop/Cargo.toml crates/vadop-py/Cargo.toml pyproject.toml Cargo.toml Cargo.lock \
-      rust-toolchain.toml README.md
+      rust-toolchain.toml
   } | sha256sum | cut -d' ' -f1
 }
 stamp=.venv/vadop-extension.sha256
