@@ -185,7 +185,7 @@ fn counted(count: usize, kind: &str) -> String {
 }
 
 /// `count` things, singular or plural: "1 contact", "0 contacts".
-fn number(count: u64, one: &str, many: &str) -> String {
+pub fn number(count: u64, one: &str, many: &str) -> String {
     format!("{count} {}", if count == 1 { one } else { many })
 }
 
@@ -745,8 +745,11 @@ impl fmt::Display for Summary {
                 };
                 writeln!(
                     f,
-                    "accuracy    vs {}: {} missed, {} extra of {} reference pair contacts ({label})",
-                    a.reference, a.missed, a.extra, a.reference_pairs
+                    "accuracy    vs {}: {} missed, {} extra of {} ({label})",
+                    a.reference,
+                    a.missed,
+                    a.extra,
+                    number(a.reference_pairs, "reference pair contact", "reference pair contacts")
                 )?
             }
             None => writeln!(f, "accuracy    not checked (no reference method)")?,
