@@ -1,6 +1,7 @@
 //! Memory a world needs and memory this process may still take, so that a caller can refuse a
 //! request that cannot fit with a clear error, before allocating it, instead of being aborted by
-//! the allocator (or killed by the kernel) halfway through building or stepping it.
+//! the allocator (or killed by the kernel) halfway through building or stepping it; and input
+//! files read within that room ([`read_json`]), so that none is read until the memory runs out.
 //!
 //! The estimate is measured, not derived from the data structures, because the broad phase's
 //! size depends on the method, the speeds and the density. Peak resident memory per body of
@@ -98,7 +99,7 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Strin
     let limit = input_limit().unwrap_or(u64::MAX);
     let mut input = std::io::BufReader::new(file.take(limit.saturating_add(1)));
     let parsed = if regular {
-        // Whole, then parsed: several times faster than parsing as it is read.
+        // Whole, then parsed: faster than parsing as it is read (serde_json's own advice).
         let mut text = String::new();
         input
             .read_to_string(&mut text)

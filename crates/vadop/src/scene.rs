@@ -40,7 +40,8 @@
 //!   has infinite mass and may reach beyond the box.
 //!
 //! An unknown key, anywhere (a misspelt `static_body` at the top, a `radus` in a sphere entry, a
-//! third corner in `bounds`), is refused with its name, line and column rather than ignored. [`Scene::world`] validates everything else and names the offending entry: `shape 2
+//! third corner in `bounds`), is refused with its name, line and column rather than ignored.
+//! [`Scene::world`] validates everything else and names the offending entry: `shape 2
 //! ("floor")`, `sphere 7`, `body 3`, `static body 0`. A world built from a scene holds its spheres,
 //! then its bodies, then its static bodies, in file order, in slots 0, 1, 2, ...: [`SceneLayout`]
 //! names the entry behind a handle, so that the overlap a simulate-mode world finds at its first
@@ -447,13 +448,12 @@ impl ShapesScene {
         let volume: f64 = kinds.iter().map(|&kind| volumes[kind]).sum();
         let side = (volume / self.packing_fraction).cbrt();
         let crowd = Crowd { count: self.bodies, packing_fraction: self.packing_fraction, side, radius: CROWD_RADIUS };
-        let spin_unit = FRAMES_PER_SECOND;
         // A sphere's orientation and spin are drawn too, and left unused: every body draws the same
         // numbers, so a body's motion does not depend on the kinds drawn before it.
         let placed = crowd.place(&mut rng, "bodies", |rng, k, position| {
             let orientation = random_rotation(rng);
             let velocity = up_to(rng, self.max_speed) * diameters[kinds[k]] * FRAMES_PER_SECOND;
-            let angular_velocity = up_to(rng, self.max_spin) * spin_unit;
+            let angular_velocity = up_to(rng, self.max_spin) * FRAMES_PER_SECOND;
             (kinds[k], position, orientation, velocity, angular_velocity)
         })?;
         let mut scene = Scene::new(BoxBounds::cube(side)?, Vec::new());
@@ -568,7 +568,6 @@ pub struct Scene {
     pub static_bodies: Vec<StaticBody>,
 }
 
-/// A shape of a scene's table, with the name bodies give it.
 /// A scene file's box, read as [`BoxBounds`] is but refusing unknown keys: a misspelt key would
 /// otherwise be ignored without a word.
 #[derive(serde::Deserialize)]
@@ -595,6 +594,7 @@ fn strict_spheres<'de, D: serde::Deserializer<'de>>(entries: D) -> std::result::
     Ok(entries.into_iter().map(|Entry(sphere)| sphere).collect())
 }
 
+/// A shape of a scene's table, with the name bodies give it.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NamedShape {
