@@ -6,10 +6,12 @@ while friction turns sliding into spin. The engine applies no gravity (bodies mo
 lines between contacts), so the debris is thrown down instead of dropped. Prints the bounces of
 each frame and the kinetic energy, which only ever falls.
 
-    python examples/python/debris_on_mesh.py [--debris 60] [--frames 60] [--out debris_on_mesh.html]
+    python examples/python/debris_on_mesh.py [--debris 60] [--frames 60] [--out PAGE.html]
 """
 
 import argparse
+import tempfile
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -66,7 +68,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--debris", type=int, default=60)
     parser.add_argument("--frames", type=int, default=60)
-    parser.add_argument("--out", default="debris_on_mesh.html", help="viewer page to write")
+    # Into the system's temporary directory unless told: never into the working tree.
+    default = Path(tempfile.gettempdir()) / "vadop-examples" / "debris_on_mesh.html"
+    parser.add_argument("--out", type=Path, default=default, help=f"viewer page to write (default {default})")
     args = parser.parse_args()
 
     world, ground = debris_world(args.debris)
@@ -90,6 +94,7 @@ def main() -> None:
     lowest = float(world.positions[~world.static, 2].min())
     print(f"lowest debris at z = {lowest:.2f} (the terrain lies between z = 1.2 and 2.8)")
     # record() steps a world of its own: the same one again, from the start.
+    args.out.parent.mkdir(parents=True, exist_ok=True)
     page = write_html(record(debris_world(args.debris)[0], frames=args.frames, dt=DT), args.out)
     print(f"wrote {page}: open it in a browser")
 

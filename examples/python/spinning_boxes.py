@@ -7,10 +7,12 @@ about no principal axis) and their exact rotation is followed between frames, so
 starts at the instant a swinging corner meets the bullet, however far both move in a frame. The
 run is also written as a viewer page.
 
-    python examples/python/spinning_boxes.py [--boxes 300] [--bullets 3] [--frames 20] [--out spinning_boxes.html]
+    python examples/python/spinning_boxes.py [--boxes 300] [--bullets 3] [--frames 20] [--out PAGE.html]
 """
 
 import argparse
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import numpy.typing as npt
@@ -51,7 +53,9 @@ def main() -> None:
     parser.add_argument("--boxes", type=int, default=300)
     parser.add_argument("--bullets", type=int, default=3)
     parser.add_argument("--frames", type=int, default=20)
-    parser.add_argument("--out", default="spinning_boxes.html", help="viewer page to write")
+    # Into the system's temporary directory unless told: never into the working tree.
+    default = Path(tempfile.gettempdir()) / "vadop-examples" / "spinning_boxes.html"
+    parser.add_argument("--out", type=Path, default=default, help=f"viewer page to write (default {default})")
     args = parser.parse_args()
 
     world, bullets = crowd(args.boxes, args.bullets, args.frames)
@@ -77,6 +81,7 @@ def main() -> None:
             print(f"  box {box}: contact starts at {start:.5f} s, ends at {end:.5f} s ({(end - start) * 1e3:.2f} ms inside)")
     print(f"{len(inside)} contacts still going on at {world.time:.3f} s")
     # record() steps a world of its own: the same one again, from the start.
+    args.out.parent.mkdir(parents=True, exist_ok=True)
     page = write_html(record(crowd(args.boxes, args.bullets, args.frames)[0], frames=args.frames, dt=DT), args.out)
     print(f"wrote {page}: open it in a browser")
 

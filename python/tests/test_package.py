@@ -69,12 +69,16 @@ def test_example_scripts_run(script: str, args: list[str], expected: str, tmp_pa
                                           "spinning_boxes.py", "debris_on_mesh.py"}
     page = tmp_path / "run.html"
     args = [arg.replace("{page}", str(page)) for arg in args]
+    work = tmp_path / "work"
+    work.mkdir()
     result = subprocess.run([sys.executable, str(ROOT / "examples" / "python" / script), *args],
-                            capture_output=True, text=True, timeout=300)
+                            capture_output=True, text=True, timeout=300, cwd=work)
     assert result.returncode == 0, result.stderr
     assert expected in result.stdout
-    # The examples that write a viewer page write it where they are told.
+    # The examples that write a viewer page write it where they are told, and never into the
+    # working directory (pages once piled up in the clone, unignored).
     assert page.exists() == ("--out" in args)
+    assert list(work.iterdir()) == []
 
 
 def test_version_matches_pyproject_and_the_installed_metadata() -> None:

@@ -17,8 +17,9 @@ use std::process::ExitCode;
 /// Every failure is a message for the user; the CLI never needs to inspect an error's kind.
 pub type CliResult<T> = Result<T, String>;
 
-/// Exact continuous collision detection of many fast-moving spheres with velocity-aligned
-/// discrete oriented polytopes (VADOPs).
+/// Exact continuous collision detection of many fast-moving bodies, spheres and spinning rigid
+/// shapes, with velocity-aligned discrete oriented polytopes (VADOPs). The default method is the
+/// fastest (today a grid); `--method vadop` runs the paper's.
 #[derive(Debug, Parser)]
 #[command(name = "vadop", version, propagate_version = true)]
 struct Cli {
@@ -28,8 +29,9 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run the paper's scene (or a scene file) and report contacts, accuracy against a reference
-    /// method, the cost split per frame and memory.
+    /// Run the paper's scene (or a crowd of shapes, or a scene file) and report contacts, accuracy
+    /// against a reference method, the cost split per frame and memory (README.md, "Reading the
+    /// summary", explains every line).
     // Boxed: its many options would make every command as large as it.
     Simulate(Box<simulate::SimulateArgs>),
     /// Tabulate axis pools: covering radius against the Fejes Tóth bound, build time, band size.

@@ -26,7 +26,11 @@ pub struct FrameRow {
     pub frame: u64,
     pub time: f64,
     pub contacts: u64,
+    /// Contacts between two moving bodies.
     pub pair_contacts: u64,
+    /// Contacts of a moving body with a static body (contacts with walls are the rest).
+    #[serde(default)]
+    pub static_contacts: u64,
     /// c_total in milliseconds.
     pub ms: f64,
     pub update_ms: f64,
@@ -54,14 +58,17 @@ pub struct FrameRow {
 impl FrameRow {
     const CSV_HEADER: &'static str = "frame,time,contacts,pair_contacts,ms,update_ms,sort_ms,test_ms,response_ms,\
         endpoint_swaps,list_entries,candidate_pairs,narrow_tests,invalidations,wall_ms,broad_phase_bytes,\
-        windows,retests,tc_contacts,jam_contacts,contact_ends";
+        windows,retests,tc_contacts,jam_contacts,contact_ends,static_contacts";
 
-    pub fn new(frame: u64, time: f64, stats: &FrameStats, wall_seconds: f64) -> FrameRow {
+    /// A frame's row; `static_contacts` of its body contacts were with static bodies.
+    pub fn new(frame: u64, time: f64, stats: &FrameStats, static_contacts: u64, wall_seconds: f64) -> FrameRow {
         FrameRow {
             frame,
             time,
             contacts: stats.contacts,
-            pair_contacts: stats.pair_contacts,
+            // The core counts every contact between two bodies, static ones included.
+            pair_contacts: stats.pair_contacts.saturating_sub(static_contacts),
+            static_contacts,
             ms: stats.total_seconds() * 1e3,
             update_ms: stats.update_seconds * 1e3,
             sort_ms: stats.sort_seconds * 1e3,
@@ -85,7 +92,7 @@ impl FrameRow {
     /// The row in the order of `CSV_HEADER`.
     fn csv_line(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.time,
             self.contacts,
@@ -106,7 +113,8 @@ impl FrameRow {
             self.retests,
             self.tc_contacts,
             self.jam_contacts,
-            self.contact_ends
+            self.contact_ends,
+            self.static_contacts
         )
     }
 }
@@ -173,7 +181,12 @@ fn kind_of(shape: &Shape) -> usize {
 /// `count` bodies of `kind`, as a reader says it: "1 cone", "3 convex hulls".
 fn counted(count: usize, kind: &str) -> String {
     let plural = KINDS.iter().find(|(one, _)| *one == kind).map_or(kind, |(_, many)| many);
-    format!("{count} {}", if count == 1 { kind } else { plural })
+    number(count as u64, kind, plural)
+}
+
+/// `count` things, singular or plural: "1 contact", "0 contacts".
+pub fn number(count: u64, one: &str, many: &str) -> String {
+    format!("{count} {}", if count == 1 { one } else { many })
 }
 
 impl SceneInfo {
@@ -245,7 +258,8 @@ pub struct PoolInfo {
     pub axes: usize,
     pub covering_radius_deg: f64,
     pub phi_deg: f64,
-    /// Mean over frames of list entries / bodies: how many axes each body is bounded on.
+    /// Mean of list entries / bodies over the frames that start a window (the lists are built
+    /// there): how many axes each body is bounded on.
     pub axes_per_body: f64,
 }
 
@@ -270,14 +284,19 @@ pub struct Accuracy {
 pub struct Motion {
     kinetic: f64,
     momentum: DVec3,
+    /// Sum of |m v| over the moving bodies: the scale of a change of momentum.
+    momentum_sum: f64,
     angular_momentum: DVec3,
 }
 
 impl Motion {
     pub fn of(world: &World) -> Motion {
+        let momentum_sum =
+            world.bodies().filter(|(_, b)| b.mass.is_finite()).map(|(_, b)| b.mass * b.velocity.length()).sum();
         Motion {
             kinetic: world.kinetic_energy(),
             momentum: world.momentum(),
+            momentum_sum,
             angular_momentum: world.angular_momentum(),
         }
     }
@@ -295,6 +314,10 @@ pub struct Conservation {
     pub momentum_end: [f64; 3],
     /// |end - start|.
     pub momentum_change: f64,
+    /// Sum of |m v| over the moving bodies at the start, the scale of `momentum_change`: the
+    /// walls and static bodies exchange momentum with the bodies, up to twice this per crossing.
+    #[serde(default)]
+    pub momentum_sum: f64,
     /// Angular momentum about the origin, of the centres' motion and of the spins: reported when
     /// bodies spin or may be set spinning (shapes, static bodies, friction), absent otherwise.
     #[serde(default)]
@@ -317,6 +340,7 @@ impl Conservation {
             momentum_start: start.momentum.to_array(),
             momentum_end: end.momentum.to_array(),
             momentum_change: (end.momentum - start.momentum).length(),
+            momentum_sum: start.momentum_sum,
             angular_momentum_start: angular(start.angular_momentum),
             angular_momentum_end: angular(end.angular_momentum),
             angular_momentum_change: spins.then(|| (end.angular_momentum - start.angular_momentum).length()),
@@ -433,7 +457,11 @@ pub struct FrameTotals {
     pub frames: u64,
     pub contacts: u64,
     pub pair_contacts: u64,
-    pub list_entries: u64,
+    static_contacts: u64,
+    /// Frames that started a broad-phase window, and their list entries: the lists are built
+    /// there, and other frames report none.
+    window_frames: u64,
+    window_list_entries: u64,
     endpoint_swaps: u64,
     candidate_pairs: u64,
     narrow_tests: u64,
@@ -457,7 +485,11 @@ impl FrameTotals {
         self.frames += 1;
         self.contacts += row.contacts;
         self.pair_contacts += row.pair_contacts;
-        self.list_entries += row.list_entries;
+        self.static_contacts += row.static_contacts;
+        if row.windows > 0 {
+            self.window_frames += 1;
+            self.window_list_entries += row.list_entries;
+        }
         self.endpoint_swaps += row.endpoint_swaps;
         self.candidate_pairs += row.candidate_pairs;
         self.narrow_tests += row.narrow_tests;
@@ -476,6 +508,17 @@ impl FrameTotals {
         self.wall_ms.add(row.wall_ms);
     }
 
+    /// Axes each of `bodies` is bounded on: list entries per body, over the frames that start a
+    /// window; 0 for none.
+    pub fn axes_per_body(&self, bodies: usize) -> f64 {
+        let body_frames = self.window_frames as f64 * bodies as f64;
+        if body_frames > 0.0 {
+            self.window_list_entries as f64 / body_frames
+        } else {
+            0.0
+        }
+    }
+
     /// The per-frame mean of a total, 0 for no frames.
     fn mean(&self, total: f64) -> f64 {
         if self.frames == 0 {
@@ -490,7 +533,11 @@ impl FrameTotals {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ContactTotals {
     pub total: u64,
+    /// Between two moving bodies.
     pub pairs: u64,
+    /// Of a moving body with a static body.
+    #[serde(default)]
+    pub statics: u64,
     pub walls: u64,
     /// Contacts between bodies that ended (with --contact-ends).
     #[serde(default)]
@@ -562,7 +609,7 @@ impl Summary {
         conservation: Option<Conservation>,
         error: Option<String>,
     ) -> Summary {
-        let (total, pairs) = (frames.contacts, frames.pair_contacts);
+        let (total, pairs, statics) = (frames.contacts, frames.pair_contacts, frames.static_contacts);
         let wall_seconds = frames.wall_ms.sum / 1e3;
         Summary {
             frames_completed: frames.frames,
@@ -571,7 +618,8 @@ impl Summary {
             contacts: ContactTotals {
                 total,
                 pairs,
-                walls: total - pairs,
+                statics,
+                walls: total - pairs - statics,
                 ends: frames.contact_ends,
                 per_wall_second: if wall_seconds > 0.0 { total as f64 / wall_seconds } else { 0.0 },
             },
@@ -618,8 +666,11 @@ impl fmt::Display for Summary {
             let fixed: usize = scene.static_bodies.iter().map(|k| k.count).sum();
             let fixed = match fixed {
                 0 => String::new(),
-                1 => format!(" and 1 static body ({})", listed(&scene.static_bodies)),
-                n => format!(" and {n} static bodies ({})", listed(&scene.static_bodies)),
+                n => format!(
+                    " and {} ({})",
+                    number(n as u64, "static body", "static bodies"),
+                    listed(&scene.static_bodies)
+                ),
             };
             writeln!(f, "            {bodies} ({}){fixed}", listed(&scene.kinds))?;
             writeln!(
@@ -643,10 +694,14 @@ impl fmt::Display for Summary {
             seconds(run.dt),
             run.restitution
         )?;
+        // The default is the fastest method, not the paper's: say how to run that one.
+        if run.method.starts_with("auto") {
+            writeln!(f, "            the default, the fastest method here; --method vadop runs the paper's VADOP sweep and prune")?;
+        }
         match &self.pool {
             Some(p) => writeln!(
                 f,
-                "pool        m = {} axes, rho = {:.4} deg, phi = {:.4} deg, {:.2} axes per body",
+                "pool        m = {} axes, rho = {:.4} deg, phi = {:.4} deg, {:.2} axes per body (mean over the frames that start a window)",
                 p.axes, p.covering_radius_deg, p.phi_deg, p.axes_per_body
             )?,
             None => writeln!(f, "pool        none ({} uses no axis pool)", run.method)?,
@@ -657,15 +712,24 @@ impl fmt::Display for Summary {
             self.frames_completed, run.frames_requested, self.simulated_seconds
         )?;
         let c = &self.contacts;
+        let statics = if c.statics > 0 || !scene.static_bodies.is_empty() {
+            format!(", {} with static bodies", c.statics)
+        } else {
+            String::new()
+        };
         writeln!(
             f,
-            "contacts    {} ({} body pairs, {} walls), {:.1} per frame, {:.0} per wall-clock second{}",
+            "contacts    {} ({}{statics}, {} with walls), {:.1} per frame, {:.0} per wall-clock second{}",
             c.total,
-            c.pairs,
+            number(c.pairs, "body pair", "body pairs"),
             c.walls,
             self.per_frame.contacts,
             c.per_wall_second,
-            if c.ends > 0 { format!("; {} contacts between bodies ended", c.ends) } else { String::new() }
+            if c.ends > 0 {
+                format!("; {} between bodies ended", number(c.ends, "contact", "contacts"))
+            } else {
+                String::new()
+            }
         )?;
         match &self.accuracy {
             Some(a) => {
@@ -681,8 +745,11 @@ impl fmt::Display for Summary {
                 };
                 writeln!(
                     f,
-                    "accuracy    vs {}: {} missed, {} extra of {} reference pair contacts ({label})",
-                    a.reference, a.missed, a.extra, a.reference_pairs
+                    "accuracy    vs {}: {} missed, {} extra of {} ({label})",
+                    a.reference,
+                    a.missed,
+                    a.extra,
+                    number(a.reference_pairs, "reference pair contact", "reference pair contacts")
                 )?
             }
             None => writeln!(f, "accuracy    not checked (no reference method)")?,
@@ -714,8 +781,8 @@ impl fmt::Display for Summary {
         let r = &self.rules;
         writeln!(
             f,
-            "rules       {} contacts made elastic by the TC model, {} resolved by the jam rule{}",
-            r.tc_contacts,
+            "rules       {} made elastic by the TC model, {} resolved by the jam rule{}",
+            number(r.tc_contacts, "contact", "contacts"),
             r.jam_contacts,
             if r.tc_contacts + r.jam_contacts == 0 { " (the physics was never changed)" } else { "" }
         )?;
@@ -726,10 +793,6 @@ impl fmt::Display for Summary {
         };
         writeln!(f, "memory      broad phase {}, peak {peak}", format_bytes(self.broad_phase_bytes))?;
         if let Some(c) = &self.conservation {
-            let drift = match c.kinetic_relative_drift {
-                Some(drift) => format!("{drift:+.3e}"),
-                None => "n/a (nothing moves)".to_string(),
-            };
             // Spins are in the totals whenever bodies spin; say so when they do.
             let (spin, angular, exchanged) = match c.angular_momentum_change {
                 Some(change) => (
@@ -739,10 +802,38 @@ impl fmt::Display for Summary {
                 ),
                 None => ("", String::new(), ""),
             };
+            // Only an elastic, frictionless run should keep its energy: elsewhere the change is
+            // the loss the run was asked for.
+            let mut losses = Vec::new();
+            if run.restitution < 1.0 {
+                losses.push(format!("restitution {}", run.restitution));
+            }
+            if run.friction > 0.0 {
+                losses.push(format!("friction {}", run.friction));
+            }
+            let energy = match c.kinetic_relative_drift {
+                None => "kinetic energy n/a (nothing moves)".to_string(),
+                Some(drift) if losses.is_empty() => {
+                    format!(
+                        "kinetic energy{spin} relative drift {drift:+.3e} (elastic and frictionless: 0 up to rounding)"
+                    )
+                }
+                Some(change) => {
+                    format!(
+                        "kinetic energy{spin} relative change {change:+.3e} (a loss by design: {})",
+                        losses.join(", ")
+                    )
+                }
+            };
+            let scale = if c.momentum_sum > 0.0 {
+                format!(" ({:.3e} of the bodies' sum of |m v| at the start)", c.momentum_change / c.momentum_sum)
+            } else {
+                String::new()
+            };
             let statics = if scene.static_bodies.is_empty() { "" } else { " and static bodies" };
             writeln!(
                 f,
-                "energy      kinetic-energy relative drift {drift}{spin}; momentum change {:.3e}{angular} (walls{statics} exchange momentum{exchanged} with the bodies)",
+                "energy      {energy}; momentum change {:.3e}{scale}{angular} (walls{statics} exchange momentum{exchanged} with the bodies)",
                 c.momentum_change
             )?;
         }

@@ -33,17 +33,70 @@ const DEFAULT_REFERENCE_MAX_SHAPE_BODIES: usize = 300;
 /// Runs shorter than this finish before a progress bar would help.
 const PROGRESS_DELAY: Duration = Duration::from_secs(2);
 
-#[derive(Debug, Args)]
-#[command(after_help = "\
+/// What `simulate --help` and `-h` end with: the rules on files and memory.
+macro_rules! file_notes {
+    () => {
+        "\
 Output files: --csv, --json and --contacts are written as the run goes, into whatever their path
 names (a FIFO or /dev/stdout too). --save-scene and --save-state replace their file through a
 rename, so that a killed run never leaves half a file; they refuse anything but a regular file (a
 device, FIFO, socket or directory would be replaced by it). A symbolic link is followed: the file
 it points to is replaced and the link stays. No two outputs may name one file, and none may
 overwrite --scene or --resume, except --save-state, which saves over the state it resumed from.
+Nothing is written before the first frame has stepped: a run the engine refuses (a bad --dt, an
+absurd speed, bodies overlapping at the start) leaves existing files as they were.
 
 Memory: a run that needs more memory than is available (free memory, cgroup limit, ulimit -v) is
-refused before it starts; the estimate is about 640 bytes per body, twice with a reference method.")]
+refused before it starts; the estimate is about 640 bytes per body, twice with a reference method.
+A --scene or --resume file larger than half the memory available is refused before it is read, and
+a scene streamed from a FIFO or device once it has delivered that much; --resume reads regular
+files only."
+    };
+}
+
+#[derive(Debug, Args)]
+#[command(
+    after_help = concat!(file_notes!(), "\n\nThe summary's lines and the CSV's columns: see --help (or README.md, \"Reading the summary\")."),
+    after_long_help = concat!(file_notes!(), "\n\n", "\
+Reading the summary (README.md, \"Reading the summary\", says more):
+  scene       the bodies, the box, packing (fraction of the box the moving bodies fill), the
+              fastest body in its own diameters per frame (a shape's: its bounding sphere's)
+  method      the method as run: auto (the default) is the fastest, today the grid;
+              --method vadop runs the paper's velocity-aligned sweep and prune
+  pool        vadop and swept-kdop: m axes, covering radius rho, alignment angle phi, and the
+              axes each body is bounded on (mean over the frames that start a window)
+  frames      frames completed of those asked for, and the time simulated
+  contacts    every contact: between two moving bodies (body pairs), with static bodies, with
+              walls; per frame and per wall-clock second
+  accuracy    against a reference method stepped alongside (brute by default for small
+              scenes): contacts it found that the run did not (missed) and the reverse (extra);
+              exact in detect mode, where every method follows the same paths
+  ms/frame    median, mean and p95 of c_total (the four stages, timed inside the step) and of
+              the whole step call. A broad-phase window spans several frames and the frame
+              that starts one pays for it, so with few frames the mean can be several times
+              the median: the mean is the throughput, the median a frame inside a window
+  cost split  mean ms per frame of c_update (volumes over the window), c_sort (keeping the
+              axis lists sorted, or binning), c_test (candidates and their predictions) and
+              c_response (impulses, rebuilds, re-tests)
+  per frame   windows started; endpoint swaps (insertion-sort moves of the axis lists; grid:
+              entries binned); candidate pairs; narrow tests (exact contact times, re-tests
+              included); re-tests (bodies predicted again after a velocity change);
+              invalidations (predictions voided by a velocity change before their time)
+  rules       contacts made elastic by the TC model, or resolved by the jam rule
+  memory      largest broad-phase footprint, peak resident memory of the whole process
+  energy      simulate mode: relative kinetic-energy drift of an elastic frictionless run (0 up
+              to rounding), or the change a lossy one was asked for; the momentum change beside
+              the bodies' sum of |m v| at the start (walls and static bodies exchange momentum
+              with the bodies, so the total is not kept)
+  stopped     the error that ended the run early; what ran before it is still reported
+
+CSV columns (--csv; --json holds the same rows): frame, time (end of the frame), contacts,
+pair_contacts (two moving bodies), ms (c_total), update_ms, sort_ms, test_ms, response_ms,
+endpoint_swaps, list_entries (broad-phase entries after the frame's last window start; 0 in a
+frame that starts none), candidate_pairs, narrow_tests, invalidations, wall_ms (the whole step
+call), broad_phase_bytes, windows, retests, tc_contacts, jam_contacts, contact_ends,
+static_contacts (with static bodies; the rest of the contacts are with walls).")
+)]
 pub struct SimulateArgs {
     /// Scene file (JSON: {"bounds": {"min": [x,y,z], "max": [x,y,z]}, "spheres": [{"position",
     /// "velocity", "radius", "mass"}, ...], and for other shapes "shapes": [{"name", "shape"}, ...],
@@ -111,7 +164,8 @@ pub struct SimulateArgs {
     /// follows identical paths; simulate: bodies also collide with each other
     #[arg(long, value_enum, default_value_t = ModeArg::Simulate, help_heading = "Run")]
     mode: ModeArg,
-    /// Where candidate pairs come from: vadop (continuous, velocity-aligned volumes), brute
+    /// Where candidate pairs come from: auto (the fastest, today grid), vadop (the paper's method:
+    /// continuous, velocity-aligned volumes), brute
     /// (continuous, every pair), discrete (overlap checks at frame instants only), or the
     /// continuous baselines swept-aabb (classic sweep and prune over swept boxes), swept-kdop (all
     /// pool axes for every body) and grid (uniform grid over swept boxes)
@@ -145,8 +199,9 @@ pub struct SimulateArgs {
     /// --contacts, counted in the summary), as started and stopped events
     #[arg(long, help_heading = "World")]
     contact_ends: bool,
-    /// Threads a step shares its work among [default: every core]; the results are bit-identical
-    /// whatever the number
+    /// Threads a step shares its work among [default: every core]; no more threads than cores are
+    /// used (more would only wait for each other), and the results are bit-identical whatever the
+    /// number
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(usize), help_heading = "World")]
     threads: Option<usize>,
     /// Frame length in seconds
@@ -169,7 +224,8 @@ pub struct SimulateArgs {
     /// and the new frames' rows appended
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     contacts: Option<PathBuf>,
-    /// Save the scene, before stepping, as a scene file (a regular file; links are followed)
+    /// Save the scene as it was before stepping, as a scene file, once the first frame has stepped
+    /// (a regular file; links are followed)
     #[arg(long, value_name = "FILE", help_heading = "Output")]
     save_scene: Option<PathBuf>,
     /// Save the whole world after every frame (atomically: a run killed mid-way loses at most
@@ -305,8 +361,8 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         Some(method) => Some(scene.world(WorldConfig { method, ..config }).map_err(describe)?),
         None => None,
     };
-    // The scene is kept only to be saved, and dropped once saved, before stepping: at a million
-    // bodies it is worth giving back.
+    // The scene is kept only to be saved, once the first frame has stepped (so that a run the
+    // core refuses replaces no file), and dropped then: at a million bodies it is worth giving back.
     let save = files.save_scene.is_some().then_some(scene);
     run_world(world, reference_world, save, Origin { source, frames_done: 0, layout: Some(layout) }, files, args)
 }
@@ -386,6 +442,12 @@ fn resume(path: &Path, files: Files, args: &SimulateArgs) -> CliResult<()> {
     if matches!(args.reference, Some(ReferenceArg::Brute | ReferenceArg::Vadop)) {
         return Err("--resume cannot be combined with --reference: the reference's state was not saved".to_string());
     }
+    // A saved state is a regular file (--save-state writes nothing else), and the core reads it
+    // whole: a device or FIFO could deliver without end, and a file too large is refused unread.
+    if std::fs::metadata(path).is_ok_and(|meta| !meta.is_file()) {
+        return Err(format!("--resume {}: not a regular file, so not a state saved by --save-state", path.display()));
+    }
+    memory::check_input(path).map_err(|e| format!("--resume {}: {e}", path.display()))?;
     let world = World::load(path).map_err(describe)?;
     if !(args.dt.is_finite() && args.dt > 0.0) {
         return Err(describe(VadopError::BadTimeStep(args.dt)));
@@ -516,7 +578,9 @@ struct Origin {
 }
 
 /// Steps `world` (and `reference_world` alongside) from frame `origin.frames_done` on, streaming
-/// the outputs, then reports. `scene` is what --save-scene writes, when given.
+/// the outputs, then reports. `scene` is what --save-scene writes, when given. Nothing is written
+/// before the first frame has stepped: the core checks the time step, the speeds and the
+/// overlaps at the first step, and a run it refuses must leave existing files as they were.
 fn run_world(
     mut world: World,
     reference_world: Option<World>,
@@ -526,10 +590,14 @@ fn run_world(
     args: &SimulateArgs,
 ) -> CliResult<()> {
     let config = world.config();
-    let mut outputs = Outputs::open(args, origin.frames_done)?;
-    if let (Some(path), Some(scene)) = (&files.save_scene, scene) {
-        scene.save(path).map_err(describe)?;
-    }
+    let mut scene = scene;
+    let mut open = || -> CliResult<Outputs> {
+        let outputs = Outputs::open(args, origin.frames_done)?;
+        if let (Some(path), Some(scene)) = (&files.save_scene, scene.take()) {
+            scene.save(path).map_err(describe)?;
+        }
+        Ok(outputs)
+    };
     let info = RunInfo {
         scene: SceneInfo::of(&world, origin.source, args.dt)?,
         method: match config.method {
@@ -549,23 +617,23 @@ fn run_world(
     let start = Motion::of(&world);
     let frames = origin.frames_done + 1..=origin.frames_done + args.frames;
     let save_state = files.save_state.as_deref();
-    let mut outcome = step_frames(&mut world, reference_world, args, frames, save_state, &mut outputs, origin.layout);
+    let mut outputs = None;
+    let mut outcome =
+        step_frames(&mut world, reference_world, args, frames, save_state, (&mut outputs, &mut open), origin.layout);
+    let Outputs { csv, json, contacts } = outputs.unwrap_or_default();
     // A failed flush loses contacts or rows, not frames: it is reported like a failed frame.
-    for finished in
-        [outputs.contacts.map(ContactWriter::finish), outputs.csv.map(FramesCsv::finish)].into_iter().flatten()
-    {
+    for finished in [contacts.map(ContactWriter::finish), csv.map(FramesCsv::finish)].into_iter().flatten() {
         if let Err(e) = finished {
             outcome.failure.get_or_insert(e);
         }
     }
     let pool = Some(world.pool()).filter(|_| matches!(world.method(), Method::Vadop | Method::SweptKdop)).map(|pool| {
         let rho = pool.covering_radius();
-        let body_frames = outcome.frames.frames.max(1) as f64 * info.scene.bodies as f64;
         PoolInfo {
             axes: pool.len(),
             covering_radius_deg: rho.to_degrees(),
             phi_deg: world.config().phi.unwrap_or(rho).to_degrees(),
-            axes_per_body: outcome.frames.list_entries as f64 / body_frames,
+            axes_per_body: outcome.frames.axes_per_body(info.scene.bodies),
         }
     });
     let conservation = (config.mode == Mode::Simulate).then(|| {
@@ -577,14 +645,16 @@ fn run_world(
     if !args.quiet && outcome.frames.frames > 0 {
         report::print(&summary.to_string())?;
     }
-    let written = outputs.json.map_or(Ok(()), |json| json.finish(&summary));
+    let written = json.map_or(Ok(()), |json| json.finish(&summary));
     match outcome.failure {
         Some(message) => Err(message),
         None => written,
     }
 }
 
-/// Output files, created before the run so that a bad path fails before any work is done.
+/// Output files, created once the first frame has stepped (a bad directory fails before any work
+/// is done, in `Files::check`).
+#[derive(Default)]
 struct Outputs {
     csv: Option<FramesCsv>,
     json: Option<JsonReport>,
@@ -750,15 +820,16 @@ struct Outcome {
 }
 
 /// Steps `world` (and `reference` alongside) through `frames`, or until a frame fails, writing
-/// each frame's contacts and row as it completes. `layout` names a scene's entries in the errors
-/// of the first step, which checks the scene as a whole.
+/// each frame's contacts and row as it completes, into the outputs `open` makes once the first
+/// frame has stepped. `layout` names a scene's entries in the errors of the first step, which
+/// checks the scene as a whole.
 fn step_frames(
     world: &mut World,
     mut reference: Option<World>,
     args: &SimulateArgs,
     frames: std::ops::RangeInclusive<u64>,
     save_state: Option<&Path>,
-    outputs: &mut Outputs,
+    (outputs, open): (&mut Option<Outputs>, &mut dyn FnMut() -> CliResult<Outputs>),
     layout: Option<SceneLayout>,
 ) -> Outcome {
     let simulate = world.config().mode == Mode::Simulate;
@@ -772,6 +843,8 @@ fn step_frames(
     let bar = report::progress_bar(args.frames, "frames");
     let started = Instant::now();
     let mut may_reveal = !args.quiet;
+    // Contacts with these are told apart from those between moving bodies.
+    let statics: Vec<BodyHandle> = world.bodies().filter(|(_, b)| !b.mass.is_finite()).map(|(h, _)| h).collect();
     for frame in frames {
         let start = Instant::now();
         match world.step(args.dt) {
@@ -791,6 +864,16 @@ fn step_frames(
             }
         };
         let wall_seconds = start.elapsed().as_secs_f64();
+        let outputs = match outputs {
+            Some(outputs) => outputs,
+            None => match open() {
+                Ok(opened) => outputs.insert(opened),
+                Err(e) => {
+                    failure = Some(e);
+                    break;
+                }
+            },
+        };
         let contacts = world.contacts();
         if let Some(out) = &mut outputs.contacts {
             if let Err(e) = out.frame(frame, contacts, world.contact_ends()) {
@@ -827,7 +910,12 @@ fn step_frames(
                 break;
             }
         }
-        let row = FrameRow::new(frame, world.time(), world.stats(), wall_seconds);
+        let is_static = |h: &BodyHandle| statics.binary_search(h).is_ok();
+        let static_contacts = contacts
+            .iter()
+            .filter(|c| matches!(c.touched, Touched::Body(other) if is_static(&other) || is_static(&c.body)))
+            .count() as u64;
+        let row = FrameRow::new(frame, world.time(), world.stats(), static_contacts, wall_seconds);
         totals.add(&row);
         if let Err(e) = outputs.row(&row) {
             failure = Some(e);

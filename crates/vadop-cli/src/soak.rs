@@ -98,9 +98,9 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
          run         {frames} frames, {contacts} contacts ({pair_contacts} body-body), {seconds:.1} s, {:.0} contacts/s\n\
          energy      worst relative drift {:.2e} (limit {MAX_ENERGY_DRIFT:.0e})\n\
          momentum    worst error against wall impulses {:.2e} of the total (limit {MAX_MOMENTUM_ERROR:.0e})\n\
-         escapes     {} bodies outside the box at a frame end\n\
+         escapes     {} outside the box at a frame end\n\
          overlap     worst {:.2e} of the radii sum at a frame end (limit {MAX_OVERLAP:.0e})\n\
-         rules       {merges} contacts changed by the jam or TC rule (an elastic gas needs none)\n\
+         rules       {} changed by the jam or TC rule (an elastic gas needs none)\n\
          result      {}\n",
         args.bodies,
         args.packing,
@@ -109,8 +109,9 @@ pub fn run(args: &SoakArgs) -> CliResult<()> {
         contacts as f64 / seconds.max(1e-9),
         worst.energy_drift,
         worst.momentum_error,
-        worst.escapes,
+        report::number(worst.escapes, "body", "bodies"),
         worst.overlap,
+        report::number(merges, "contact", "contacts"),
         if passed { "pass" } else { "FAIL" },
     );
     report::print(&text)?;

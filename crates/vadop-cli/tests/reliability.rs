@@ -295,3 +295,89 @@ fn bad_reliability_options_are_errors() {
     assert!(rest.contains("20 frames, 0 contacts"), "{rest}");
     std::fs::remove_dir_all(d).ok();
 }
+
+/// A run the core refuses at its first step (a bad time step, an absurd speed, bodies
+/// overlapping at the start) leaves every existing output as it was: they once kept only a
+/// header.
+#[test]
+fn a_refused_run_leaves_existing_outputs_as_they_were() {
+    let d = dir("refused");
+    let scene = |name: &str, spheres: &str| {
+        let path = d.join(name);
+        let bounds = r#"{"min": [0, 0, 0], "max": [10, 10, 10]}"#;
+        std::fs::write(&path, format!(r#"{{"bounds": {bounds}, "spheres": [{spheres}]}}"#)).unwrap();
+        text(&path)
+    };
+    let ball =
+        |x: f64, v: f64| format!(r#"{{"position": [{x}, 5, 5], "velocity": [{v}, 0, 0], "radius": 0.5, "mass": 1}}"#);
+    let absurd = scene("absurd.json", &ball(5.0, 1e12));
+    let overlap = scene("overlap.json", &format!("{}, {}", ball(5.0, 0.0), ball(5.5, 0.0)));
+    let cases: [(Vec<&str>, &str); 3] = [
+        (vec!["--bodies", "20", "--dt", "-1"], "time step"),
+        (vec!["--scene", &absurd], "box lengths in one frame"),
+        (vec!["--scene", &overlap], "overlap"),
+    ];
+    let outputs = ["--csv", "--json", "--contacts", "--save-scene"];
+    for (run, expected) in &cases {
+        let mut args = vec!["simulate", "--frames", "2"];
+        args.extend(run);
+        let paths: Vec<String> = outputs.iter().map(|flag| text(&d.join(format!("{}.out", &flag[2..])))).collect();
+        for (flag, path) in outputs.iter().zip(&paths) {
+            std::fs::write(path, format!("kept {flag}\n")).unwrap();
+            args.extend([*flag, path.as_str()]);
+        }
+        assert_error(vadop(&args), expected);
+        for (flag, path) in outputs.iter().zip(&paths) {
+            assert_eq!(bytes(Path::new(path)), format!("kept {flag}\n").as_bytes(), "{run:?} {flag}");
+        }
+    }
+    std::fs::remove_dir_all(d).ok();
+}
+
+/// Inputs are read within the memory left: a device that never ends is refused at once, a file
+/// larger than the memory left before it is read, and a state only from a regular file.
+#[cfg(unix)]
+#[test]
+fn endless_or_huge_inputs_are_refused_before_they_fill_memory() {
+    let started = Instant::now();
+    assert_error(vadop(&["simulate", "--scene", "/dev/zero"]), "/dev/zero: expected value at line 1 column 1");
+    assert_error(vadop(&["simulate", "--resume", "/dev/zero"]), "--resume /dev/zero: not a regular file");
+    assert!(started.elapsed() < Duration::from_secs(10), "{:?}", started.elapsed());
+    // A sparse file of 64 GiB takes no disk, and far more memory than 1 GiB of address space.
+    let d = dir("huge");
+    let huge = d.join("huge.json");
+    std::fs::File::create(&huge).unwrap().set_len(64 << 30).unwrap();
+    for flag in ["--scene", "--resume"] {
+        let output = vadop_within(1 << 20, &["simulate", flag, &text(&huge)]);
+        assert_error(output, "a file of 64.0 GiB needs about 128.0 GiB of memory, but only");
+    }
+    std::fs::remove_dir_all(d).ok();
+}
+
+/// More threads than cores are not used: 100000 once ran for minutes, 1000 took 15 s for what
+/// takes 0.04 s, and the contacts are the same whatever the count.
+#[test]
+fn thread_counts_beyond_the_cores_cost_nothing() {
+    let d = dir("threads");
+    let run = |threads: &str| {
+        let contacts = d.join(format!("contacts-{threads}.csv"));
+        let started = Instant::now();
+        ok(vadop(&[
+            "simulate",
+            "--bodies",
+            "200",
+            "--frames",
+            "2",
+            "--threads",
+            threads,
+            "--quiet",
+            "--contacts",
+            &text(&contacts),
+        ]));
+        (started.elapsed(), bytes(&contacts))
+    };
+    let (took, contacts) = run("100000");
+    assert!(took < Duration::from_secs(10), "{took:?}");
+    assert_eq!(contacts, run("1").1);
+    std::fs::remove_dir_all(d).ok();
+}

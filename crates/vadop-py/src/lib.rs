@@ -335,10 +335,6 @@ fn parse_mode(mode: &str) -> PyResult<Mode> {
     }
 }
 
-/// Most threads a world may be given: far more than any machine's cores, few enough that asking
-/// for them cannot exhaust the system.
-const MAX_THREADS: i128 = 1024;
-
 #[allow(clippy::too_many_arguments)]
 fn config(
     method: &str,
@@ -352,7 +348,8 @@ fn config(
     contact_ends: bool,
 ) -> PyResult<WorldConfig> {
     let pool_axes = pool_axes.map(|m| m.in_range("pool_axes", 3, MAX_AXES as i128).map(|m| m as usize)).transpose()?;
-    let threads = threads.map(|n| n.in_range("threads", 1, MAX_THREADS).map(|n| n as usize)).transpose()?;
+    // Any count that fits: the core uses no more threads than there are cores.
+    let threads = threads.map(|n| n.in_range("threads", 1, usize::MAX as i128).map(|n| n as usize)).transpose()?;
     Ok(WorldConfig {
         method: parse_method(method)?,
         mode: parse_mode(mode)?,
@@ -450,8 +447,8 @@ impl Contacts {
 /// ``friction`` (the Coulomb coefficient of every impact, >= 0; 0: frictionless) and
 /// ``contact_duration`` (seconds; with restitution below 1, a contact within this time of a
 /// body's previous one is elastic — the TC model that ends inelastic collapse) and ``threads``
-/// (how many threads a step shares its work among, 1 to 1024; None: every core; results are
-/// bit-identical whatever the number) and ``contact_ends`` (detect mode only: also report when
+/// (how many threads a step shares its work among, at least 1, and no more than the cores are
+/// used; None: every core; results are bit-identical whatever the number) and ``contact_ends`` (detect mode only: also report when
 /// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
 /// ``touching()`` — started and stopped events).
 ///

@@ -3,7 +3,7 @@
 //! thin the box and however fast the bullet (a hundred of its diameters per frame).
 //!
 //! ```sh
-//! cargo run --release -p vadop --example bullets_through_boxes
+//! cargo run --release --example bullets_through_boxes
 //! ```
 
 use glam::{DQuat, DVec3};

@@ -4,7 +4,7 @@
 //! through the terrain, however fast it falls.
 //!
 //! ```sh
-//! cargo run --release -p vadop --example debris_on_mesh
+//! cargo run --release --example debris_on_mesh
 //! ```
 
 use glam::{DQuat, DVec3};

@@ -71,6 +71,15 @@ pub mod world;
 
 pub use bodies::Sphere;
 pub use error::{Result, VadopError};
+/// The vector and quaternion types of the API (`DVec3`, `DQuat`), re-exported so that a user
+/// needs no glam dependency of their own, nor to match its version:
+///
+/// ```
+/// use vadop::glam::DVec3;
+/// let ball = vadop::Sphere { position: DVec3::splat(5.0), velocity: DVec3::X, radius: 0.5, mass: 1.0 };
+/// assert_eq!(ball.position.x, 5.0);
+/// ```
+pub use glam;
 pub use handle::BodyHandle;
 pub use narrow_phase::Wall;
 pub use window::Window;

@@ -1,6 +1,7 @@
 //! Memory a world needs and memory this process may still take, so that a caller can refuse a
 //! request that cannot fit with a clear error, before allocating it, instead of being aborted by
-//! the allocator (or killed by the kernel) halfway through building or stepping it.
+//! the allocator (or killed by the kernel) halfway through building or stepping it; and input
+//! files read within that room ([`read_json`]), so that none is read until the memory runs out.
 //!
 //! The estimate is measured, not derived from the data structures, because the broad phase's
 //! size depends on the method, the speeds and the density. Peak resident memory per body of
@@ -57,6 +58,65 @@ pub fn check(needed: u64) -> Result<(), Shortfall> {
         Some(available) if needed > available => Err(Shortfall { needed, available }),
         _ => Ok(()),
     }
+}
+
+/// The most bytes of an input file worth reading: its text and what it is parsed into (about as
+/// much again) must both fit in the memory left. `None` where that is unknown.
+fn input_limit() -> Option<u64> {
+    available_bytes().map(|available| available / 2)
+}
+
+/// Refuses, before any of it is read, a regular file at `path` too large for the memory left (see
+/// [`read_json`]). Anything else passes: a device or FIFO reports no size.
+pub fn check_input(path: &Path) -> Result<(), String> {
+    let size = std::fs::metadata(path).ok().filter(|meta| meta.is_file()).map_or(0, |meta| meta.len());
+    match input_limit() {
+        Some(limit) if size > limit => Err(format!(
+            "a file of {} {}",
+            format_bytes(size),
+            Shortfall { needed: size.saturating_mul(2), available: limit.saturating_mul(2) }
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Parses the JSON file at `path`, refusing one too large for the memory left instead of reading
+/// until the system runs out: a regular file is checked by its size before it is read
+/// ([`check_input`]); anything else (a FIFO, or a device such as `/dev/zero`, whose size reads
+/// as 0) is parsed as it streams in, so that what is not JSON fails at its first byte, and
+/// refused once it has delivered more than half the memory left. Where the memory left is
+/// unknown, nothing is refused.
+///
+/// ```
+/// let error = vadop::memory::read_json::<serde_json::Value>("/dev/zero".as_ref()).unwrap_err();
+/// assert!(error.starts_with("expected value at line 1 column 1"), "{error}");
+/// ```
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, String> {
+    use std::io::Read;
+    check_input(path)?;
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let regular = file.metadata().is_ok_and(|meta| meta.is_file());
+    let limit = input_limit().unwrap_or(u64::MAX);
+    let mut input = std::io::BufReader::new(file.take(limit.saturating_add(1)));
+    let parsed = if regular {
+        // Whole, then parsed: faster than parsing as it is read (serde_json's own advice).
+        let mut text = String::new();
+        input
+            .read_to_string(&mut text)
+            .map_err(|e| e.to_string())
+            .and_then(|_| serde_json::from_str(&text).map_err(|e| e.to_string()))
+    } else {
+        serde_json::from_reader(&mut input).map_err(|e| e.to_string())
+    };
+    // The bound reached: a stream (or a file that grew since it was checked) too long to hold.
+    if input.get_ref().limit() == 0 {
+        return Err(format!(
+            "more than {} of input: its text and what it is parsed into need more than the {} of memory available (free memory, cgroup limit and ulimit -v)",
+            format_bytes(limit),
+            format_bytes(limit.saturating_mul(2))
+        ));
+    }
+    parsed
 }
 
 /// Bytes in the largest binary unit that keeps the number at or above 1: "512 B", "1.5 KiB".

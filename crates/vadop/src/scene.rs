@@ -39,8 +39,9 @@
 //!   [x, y, z], "orientation": [x, y, z, w]}` (`orientation` optional). A static body never moves,
 //!   has infinite mass and may reach beyond the box.
 //!
-//! A misspelt field of a shape, body or static body entry is refused rather than left at its
-//! default. [`Scene::world`] validates everything else and names the offending entry: `shape 2
+//! An unknown key, anywhere (a misspelt `static_body` at the top, a `radus` in a sphere entry, a
+//! third corner in `bounds`), is refused with its name, line and column rather than ignored.
+//! [`Scene::world`] validates everything else and names the offending entry: `shape 2
 //! ("floor")`, `sphere 7`, `body 3`, `static body 0`. A world built from a scene holds its spheres,
 //! then its bodies, then its static bodies, in file order, in slots 0, 1, 2, ...: [`SceneLayout`]
 //! names the entry behind a handle, so that the overlap a simulate-mode world finds at its first
@@ -407,7 +408,8 @@ pub struct ShapesScene {
     /// bounding balls take nearly three times more room, so beyond about 0.2 they do not fit
     /// apart.
     pub packing_fraction: f64,
-    /// Speeds are uniform in [0, this] diameters per frame.
+    /// Speeds are uniform in [0, this] diameters per frame, each body's own diameter (its
+    /// bounding sphere's), so that no body covers more of its own size per frame than this.
     pub max_speed: f64,
     /// Spins are uniform in [0, this] radians per frame.
     pub max_spin: f64,
@@ -430,22 +432,28 @@ impl ShapesScene {
         check_rate("max spin", self.max_spin)?;
         let mut shapes: Vec<NamedShape> =
             crowd_shapes().into_iter().map(|(name, shape)| NamedShape::new(name, shape)).collect();
-        // Kind 0 is the sphere, kind k > 0 the shape shapes[k - 1].
-        let volumes: Vec<f64> = std::iter::once(Ok(ball_volume(CROWD_RADIUS)))
-            .chain(shapes.iter().map(|s| s.shape.geometry().map(|g| g.volume())))
-            .collect::<Result<_>>()?;
+        // Kind 0 is the sphere, kind k > 0 the shape shapes[k - 1]: its volume and its diameter,
+        // its bounding sphere's, the unit of its speed (the summary's and the docs' too).
+        let (volumes, diameters): (Vec<f64>, Vec<f64>) =
+            std::iter::once(Ok((ball_volume(CROWD_RADIUS), 2.0 * CROWD_RADIUS)))
+                .chain(shapes.iter().map(|s| {
+                    let geometry = s.shape.geometry()?;
+                    Ok((geometry.volume(), 2.0 * geometry.bounding_radius().unwrap_or(CROWD_RADIUS)))
+                }))
+                .collect::<Result<Vec<_>>>()?
+                .into_iter()
+                .unzip();
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let kinds: Vec<usize> = (0..self.bodies).map(|_| rng.random_range(0..volumes.len())).collect();
         let volume: f64 = kinds.iter().map(|&kind| volumes[kind]).sum();
         let side = (volume / self.packing_fraction).cbrt();
         let crowd = Crowd { count: self.bodies, packing_fraction: self.packing_fraction, side, radius: CROWD_RADIUS };
-        let (speed_unit, spin_unit) = (2.0 * CROWD_RADIUS * FRAMES_PER_SECOND, FRAMES_PER_SECOND);
         // A sphere's orientation and spin are drawn too, and left unused: every body draws the same
         // numbers, so a body's motion does not depend on the kinds drawn before it.
         let placed = crowd.place(&mut rng, "bodies", |rng, k, position| {
             let orientation = random_rotation(rng);
-            let velocity = up_to(rng, self.max_speed) * speed_unit;
-            let angular_velocity = up_to(rng, self.max_spin) * spin_unit;
+            let velocity = up_to(rng, self.max_speed) * diameters[kinds[k]] * FRAMES_PER_SECOND;
+            let angular_velocity = up_to(rng, self.max_spin) * FRAMES_PER_SECOND;
             (kinds[k], position, orientation, velocity, angular_velocity)
         })?;
         let mut scene = Scene::new(BoxBounds::cube(side)?, Vec::new());
@@ -541,10 +549,12 @@ fn floor_mesh(side: f64, rng: &mut ChaCha8Rng) -> Shape {
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Scene {
+    #[serde(deserialize_with = "StrictBounds::deserialize")]
     pub bounds: BoxBounds,
     /// Moving spheres.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "strict_spheres")]
     pub spheres: Vec<Sphere>,
     /// The shapes that bodies and static bodies take, by name. Written only when not empty, so a
     /// sphere-only scene is written as it always was.
@@ -556,6 +566,32 @@ pub struct Scene {
     /// Static bodies of the named shapes.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub static_bodies: Vec<StaticBody>,
+}
+
+/// A scene file's box, read as [`BoxBounds`] is but refusing unknown keys: a misspelt key would
+/// otherwise be ignored without a word.
+#[derive(serde::Deserialize)]
+#[serde(remote = "BoxBounds", deny_unknown_fields)]
+struct StrictBounds {
+    min: DVec3,
+    max: DVec3,
+}
+
+/// A scene file's sphere entry, read as [`Sphere`] is but refusing unknown keys.
+#[derive(serde::Deserialize)]
+#[serde(remote = "Sphere", deny_unknown_fields)]
+struct StrictSphere {
+    position: DVec3,
+    velocity: DVec3,
+    radius: f64,
+    mass: f64,
+}
+
+fn strict_spheres<'de, D: serde::Deserializer<'de>>(entries: D) -> std::result::Result<Vec<Sphere>, D::Error> {
+    #[derive(serde::Deserialize)]
+    struct Entry(#[serde(with = "StrictSphere")] Sphere);
+    let entries: Vec<Entry> = serde::Deserialize::deserialize(entries)?;
+    Ok(entries.into_iter().map(|Entry(sphere)| sphere).collect())
 }
 
 /// A shape of a scene's table, with the name bodies give it.
@@ -802,12 +838,11 @@ impl Scene {
     }
 
     /// Reads a scene file. Only its syntax and its box are checked here; [`Scene::world`]
-    /// validates the rest.
+    /// validates the rest. A file too large for the memory left is refused before it is read,
+    /// and a stream (a FIFO, a device) once it has delivered too much ([`crate::memory::read_json`]).
     pub fn load(path: &std::path::Path) -> Result<Scene> {
-        let io =
-            |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
-        let text = std::fs::read_to_string(path).map_err(|e| io(&e))?;
-        let scene: Scene = serde_json::from_str(&text).map_err(|e| io(&e))?;
+        let scene: Scene = crate::memory::read_json(path)
+            .map_err(|message| VadopError::Io { path: path.display().to_string(), message })?;
         BoxBounds::new(scene.bounds.min, scene.bounds.max)?;
         Ok(scene)
     }

@@ -161,6 +161,62 @@ fn left_out_orientations_and_spins_are_none_and_misspelt_fields_are_refused() {
     }
 }
 
+/// An unknown key anywhere in a file is refused with its name, not ignored: at the top (a
+/// misspelt `static_bodies` once ran with no floor), in a sphere entry and in the box.
+#[test]
+fn unknown_keys_are_refused_everywhere() {
+    let text = r#"{"bounds": {"min": [0, 0, 0], "max": [10, 10, 10]},
+        "spheres": [{"position": [2, 5, 5], "velocity": [1, 0, 0], "radius": 0.5, "mass": 1}],
+        "shapes": [{"name": "ground", "shape": {"HalfSpace": {"normal": [0, 1, 0]}}}],
+        "static_bodies": [{"shape": "ground", "position": [0, 1, 0]}]}"#;
+    serde_json::from_str::<Scene>(text).unwrap().world(WorldConfig::default()).unwrap();
+    for (original, changed, key) in [
+        (r#""static_bodies":"#, r#""static_body":"#, "static_body"),
+        (r#""radius":"#, r#""radus":"#, "radus"),
+        (r#""mass": 1"#, r#""mass": 1, "colour": 3"#, "colour"),
+        (r#""max":"#, r#""mx":"#, "mx"),
+        (r#""max": [10, 10, 10]"#, r#""max": [10, 10, 10], "centre": [5, 5, 5]"#, "centre"),
+    ] {
+        let changed = text.replacen(original, changed, 1);
+        let path = scratch(key);
+        std::fs::write(&path, changed).unwrap();
+        let message = Scene::load(&path).unwrap_err().to_string();
+        std::fs::remove_file(&path).unwrap();
+        assert!(message.contains(&format!("unknown field `{key}`")) && message.contains(" line "), "{message}");
+    }
+}
+
+/// A device that never ends is no scene: it is refused at its first byte, not read until memory
+/// runs out (`/dev/zero` once took 23.8 GB).
+#[test]
+fn endless_inputs_are_refused_without_reading_them_whole() {
+    let started = std::time::Instant::now();
+    let message = Scene::load("/dev/zero".as_ref()).unwrap_err().to_string();
+    assert!(message.starts_with("/dev/zero: expected value at line 1 column 1"), "{message}");
+    assert!(started.elapsed().as_secs_f64() < 5.0);
+}
+
+/// A generated crowd's speeds are in each body's own diameters (its bounding sphere's), as the
+/// CLI's summary measures them: none beyond the maximum asked (a cone once ran at 0.5796 for
+/// 0.5), and the fastest near it.
+#[test]
+fn shape_crowds_keep_their_speed_bound_in_each_bodys_diameters() {
+    use vadop::scene::{ShapesScene, FRAMES_PER_SECOND};
+    for seed in 1..=3 {
+        let scene = ShapesScene { seed, floor: seed == 2, ..ShapesScene::new(400, 0.05, 0.5) }.build().unwrap();
+        let world = scene.world(detect()).unwrap();
+        let mut fastest = 0.0f64;
+        for (_, body) in world.bodies().filter(|(_, b)| b.mass.is_finite()) {
+            let radius = match body.shape {
+                BodyShape::Sphere { radius } => radius,
+                BodyShape::Shape(id) => world.shape(id).unwrap().bounding_radius().unwrap(),
+            };
+            fastest = fastest.max(body.velocity.length() / FRAMES_PER_SECOND / (2.0 * radius));
+        }
+        assert!(fastest <= 0.5 * (1.0 + 1e-12) && fastest > 0.45, "seed {seed}: {fastest}");
+    }
+}
+
 /// Every mistake a scene can hold, as a change to a valid scene and the start of the message
 /// that must name it.
 #[test]
