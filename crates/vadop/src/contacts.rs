@@ -57,16 +57,18 @@ pub(crate) fn pair_start(
     settled(shape_contact_time((ga, &ma), (gb, &mb), window), window)
 }
 
-/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part.
-pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
+/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id), in
+/// contact since `since`, part.
+pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: Window) -> Found {
     if bodies.are_spheres(a, b) {
         let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    // They touch at the window's start, so it lies inside the contact in progress.
-    settled(contact_end_time((ga, &ma), (gb, &mb), window.start, window.end), window)
+    // Searched from the contact's start, not the window's: the search's steps depend on where it
+    // starts, and windows differ between runs (a resumed one starts its first at the saved time).
+    settled(contact_end_time((ga, &ma), (gb, &mb), since, window.end), window)
 }
 
 /// Body `i`'s first contact with a wall of `bounds` in `window`: the time and the wall, or

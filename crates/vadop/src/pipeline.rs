@@ -284,8 +284,8 @@ impl<B: BroadPhase> Pipeline<B> {
             }
         });
         if physics.report_ends {
-            for (a, b) in self.touching.pairs() {
-                predicted.extend(predict_end(bodies, a, b, window));
+            for (a, b, since) in self.touching.contacts() {
+                predicted.extend(predict_end(bodies, a, b, since, window));
             }
         }
         self.queue.set_bulk(predicted, &self.workers);
@@ -427,8 +427,8 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         out.stats.pair_contacts += 1;
         if physics.report_ends && !responds {
-            self.touching.insert(a, b);
-            if let Some(event) = predict_end(bodies, a, b, self.window.from(t)) {
+            self.touching.insert(a, b, t);
+            if let Some(event) = predict_end(bodies, a, b, t, self.window.from(t)) {
                 self.queue.push(event);
             }
         }
@@ -650,8 +650,8 @@ impl<B: BroadPhase> Pipeline<B> {
             queue.push(renewal(bodies, &self.proxies, body));
         }
         if physics.report_ends {
-            for other in self.touching.partners(body) {
-                if let Some(event) = predict_end(bodies, body, other, window) {
+            for (other, since) in self.touching.contacts_of(body) {
+                if let Some(event) = predict_end(bodies, body, other, since, window) {
                     queue.push(event);
                 }
             }
@@ -659,13 +659,13 @@ impl<B: BroadPhase> Pipeline<B> {
     }
 }
 
-/// The end of the contact of touching bodies `a` and `b` if its canonical time lies in `window`,
-/// stamped with their current stamps: a velocity change of either voids it.
+/// The end of the contact of bodies `a` and `b`, touching since `since`, if its canonical time
+/// lies in `window`, stamped with their current stamps: a velocity change of either voids it.
 #[inline]
-fn predict_end(bodies: &Bodies, a: u32, b: u32, window: Window) -> Option<Event> {
+fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: Window) -> Option<Event> {
     let (a, b) = (a.min(b), a.max(b));
     let (i, j) = (a as usize, b as usize);
-    let (time, stalled) = contacts::pair_end(bodies, i, j, window)?;
+    let (time, stalled) = contacts::pair_end(bodies, i, j, since, window)?;
     Some(Event {
         time,
         body: a,
