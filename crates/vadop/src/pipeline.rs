@@ -202,7 +202,8 @@ impl<B: BroadPhase> Pipeline<B> {
             let start = Instant::now();
             self.process_events(bodies, physics, until, out);
             out.stats.response_seconds += start.elapsed().as_secs_f64();
-            if t1 <= self.window.end {
+            // An interrupted step is undone by the world: the rest of it need not run.
+            if t1 <= self.window.end || crate::interrupt::raised() {
                 break;
             }
             now = self.window.end;
@@ -297,7 +298,7 @@ impl<B: BroadPhase> Pipeline<B> {
     /// Pops and handles contacts with a time before `until`; may end the window early.
     fn process_events(&mut self, bodies: &mut Bodies, physics: &Physics, until: f64, out: &mut Output) {
         while let Some(time) = self.queue.peek_time() {
-            if !(time < until) {
+            if !(time < until) || crate::interrupt::raised() {
                 break;
             }
             let event = self.queue.pop().expect("peeked");

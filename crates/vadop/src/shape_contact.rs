@@ -1216,6 +1216,10 @@ impl<G: Gauge> Searcher<G> {
         if self.iterations >= MAX_ITERATIONS {
             return Err(self.stall(tau, "the iteration cap was reached (resting or sliding contact while turning?)"));
         }
+        if self.iterations % crate::interrupt::POLL_INTERVAL == 0 && crate::interrupt::raised() {
+            // Void: the world undoes the step.
+            return Err(self.stall(tau, "the step was interrupted"));
+        }
         self.iterations += 1;
         Ok(self.gauge.probe(tau, depth))
     }

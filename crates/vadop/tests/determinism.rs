@@ -370,3 +370,61 @@ fn contact_ends_of_shapes_resume_bit_exactly() {
     }
     assert_eq!(state_bits(&resumed), state_bits(&straight));
 }
+
+/// A step interrupted from another thread stops soon and leaves the world as it was: stepping on
+/// gives the bits of a run never interrupted, for spheres in simulate mode and for shapes in
+/// detect mode with contact ends, on one thread and on a pool.
+#[test]
+fn an_interrupted_step_is_undone() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use std::time::{Duration, Instant};
+    let spheres = PaperScene { bodies: 3000, packing_fraction: 0.3, max_speed: 3.0, radius: 0.5, seed: 5 }.build();
+    let shapes = vadop::scene::ShapesScene::new(600, 0.05, 0.5).build();
+    let cases = [
+        (spheres.unwrap(), WorldConfig { restitution: 0.9, threads: Some(1), ..WorldConfig::default() }),
+        (
+            shapes.unwrap(),
+            WorldConfig { mode: Mode::Detect, contact_ends: true, threads: Some(2), ..WorldConfig::default() },
+        ),
+    ];
+    for (scene, config) in cases {
+        let frames = |world: &mut World, count: usize| -> Vec<(Vec<String>, Vec<String>)> {
+            (0..count)
+                .map(|_| {
+                    let starts = contact_bits(world.step(DT).unwrap());
+                    (starts, contact_bits(world.contact_ends()))
+                })
+                .collect()
+        };
+        let mut straight = scene.world(config).unwrap();
+        let expected = frames(&mut straight, 6);
+        let mut world = scene.world(config).unwrap();
+        let stop = Arc::new(AtomicBool::new(false));
+        world.set_interrupt(Some(stop.clone()));
+        let mut found = frames(&mut world, 3);
+        let all = |w: &World| (state_bits(w), format!("{:?}", w.bodies().collect::<Vec<_>>()));
+        let before = all(&world);
+        let raiser = {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(200));
+                stop.store(true, Ordering::Relaxed);
+                Instant::now()
+            })
+        };
+        // Hundreds of frames in one step: many seconds, unless interrupted.
+        let err = world.step(300.0 * DT).map(|c| c.len()).unwrap_err();
+        let returned = Instant::now();
+        let raised = raiser.join().unwrap();
+        assert_eq!(err, VadopError::Interrupted, "{config:?}");
+        assert!(returned.duration_since(raised) < Duration::from_millis(500), "{config:?}: too slow to stop");
+        assert_eq!(all(&world), before, "{config:?}: the interrupted step changed the world");
+        assert!(world.contacts().is_empty() && world.contact_ends().is_empty());
+        assert_eq!(world.step(DT).map(|_| ()), Err(VadopError::Interrupted), "raised: every step is refused");
+        stop.store(false, Ordering::Relaxed);
+        found.extend(frames(&mut world, 3));
+        assert_eq!(found, expected, "{config:?}: the run after the interrupted step differs");
+        assert_eq!(all(&world), all(&straight));
+    }
+}

@@ -313,19 +313,18 @@ impl World {
         }
         world.live = slots - dead;
         world.free_slots = snapshot.free_slots;
-        // Enter the bodies that had been stepped into a fresh engine now, so the next step
-        // checks only the bodies added since the last one, exactly as the saved world would.
-        world.unplaced = world.bodies.alive_ids().filter(|id| waiting.binary_search(id).is_err()).collect();
         // The pseudo-dynamic method finds overlaps only after they happen: its worlds may hold some.
         if world.config.mode == Mode::Simulate && world.config.method != super::Method::Discrete {
-            if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.unplaced, time) {
+            if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.stepped(&waiting), time) {
                 let (a, b) = (world.bodies.handle(a as usize), world.bodies.handle(b as usize));
                 return Err(bad(format!(
                     "bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies"
                 )));
             }
         }
-        world.place_new_bodies();
+        // Enter the bodies that had been stepped into a fresh engine now, so the next step
+        // checks only the bodies added since the last one, exactly as the saved world would.
+        world.enter_stepped(snapshot.unplaced);
         if let Some(rules) = world.rules_mut() {
             rules.resize(slots);
             for (i, slot) in snapshot.slots.iter().enumerate() {
@@ -340,7 +339,6 @@ impl World {
                 }
             }, ()),
         }
-        world.unplaced = snapshot.unplaced;
         Ok(world)
     }
 }
