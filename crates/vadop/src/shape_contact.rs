@@ -1216,7 +1216,7 @@ impl<G: Gauge> Searcher<G> {
         if self.iterations >= MAX_ITERATIONS {
             return Err(self.stall(tau, "the iteration cap was reached (resting or sliding contact while turning?)"));
         }
-        if self.iterations % crate::interrupt::POLL_INTERVAL == 0 && crate::interrupt::raised() {
+        if self.iterations.is_multiple_of(crate::interrupt::POLL_INTERVAL) && crate::interrupt::raised() {
             // Void: the world undoes the step.
             return Err(self.stall(tau, "the step was interrupted"));
         }

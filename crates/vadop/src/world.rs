@@ -721,6 +721,7 @@ impl World {
         self.bodies.undo(before.speed_bound);
         self.contacts.clear();
         self.ends.clear();
+        self.stats = FrameStats::default();
         self.enter_stepped(before.waiting);
         let BeforeStep { rules, touching, .. } = before;
         with_pipeline!(&mut self.engine, p => {

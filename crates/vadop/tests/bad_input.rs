@@ -300,10 +300,10 @@ fn huge_and_tiny_orientations_normalise_exactly() {
     let ordinary = |mut q: DQuat| {
         let largest = |q: DQuat| q.to_array().into_iter().fold(0.0, |m: f64, c| m.max(c.abs()));
         while largest(q) > 1e100 {
-            q = q * 2f64.powi(-500);
+            q *= 2f64.powi(-500);
         }
         while largest(q) < 1e-100 {
-            q = q * 2f64.powi(500);
+            q *= 2f64.powi(500);
         }
         q
     };
