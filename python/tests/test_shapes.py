@@ -131,6 +131,24 @@ def test_bodies_round_trip_through_the_arrays() -> None:
     np.testing.assert_allclose(np.linalg.norm(world.orientations, axis=1), 1.0, atol=1e-12)
 
 
+def test_huge_and_tiny_orientations_are_rotations() -> None:
+    # Regression: a squared length above ~1e308 overflowed ([0, 0, 0, 1e155] became [0, 0, 0, 0],
+    # the cube a point) and one below ~1e-308 underflowed (refused as zero).
+    orientations = [[0.0, 0, 0, 1e155], [0.0, 0, 0, 1e300], [0.0, 0, 3e-300, 4e-300], [0.0, 0, 5e-324, 0]]
+    world = vadop.World(box=10.0, mode="detect")
+    cube = world.add_shape("cuboid", half_extents=[0.5, 0.5, 0.5])
+    world.add_bodies(cube, [[2.0, 2, 5], [2, 5, 5], [2, 8, 5], [8, 5, 5]], orientations=orientations)
+    same_rotation(world.orientations, np.array([[0.0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0.6, 0.8], [0, 0, 1, 0]]))
+    # The cube turned by the huge quaternion collides as a cube: faces 0.5 from its centre.
+    hit = vadop.World(box=10.0, mode="detect")
+    cube = hit.add_shape("cuboid", half_extents=[0.5, 0.5, 0.5])
+    hit.add_bodies(cube, [[2.0, 5, 5], [5, 5, 5]], [[1.0, 0, 0], [0, 0, 0]], [[0.0, 0, 0, 1e155]] * 2)
+    assert hit.step(3.0).time.tolist() == pytest.approx([2.0], abs=1e-5)
+    for bad in ([0.0, 0, 0, 0], [0.0, 0, 0, np.inf], [np.nan, 0, 0, 1]):
+        with pytest.raises(ValueError, match="orientation"):
+            world.add_bodies(cube, [[5.0, 2, 5]], orientations=[bad])
+
+
 def test_a_cones_position_is_its_shape_origin_not_its_centre_of_mass() -> None:
     world = vadop.World(box=10.0, mode="detect")
     cone = world.add_shape("cone", half_height=1.0, radius=0.5)

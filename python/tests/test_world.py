@@ -4,7 +4,7 @@ import os
 import signal
 import threading
 import time
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 import pytest
@@ -215,6 +215,52 @@ def test_ctrl_c_interrupts_a_long_detect() -> None:
         found = vadop.detect(*one, box=10.0, dt=1e-3, frames=10**8)
     timer.join()
     assert found is None
+
+
+def interrupted_within(step: Any, after: float) -> Optional[float]:
+    """Seconds from a SIGINT sent ``after`` seconds into ``step()`` to its KeyboardInterrupt;
+    None when the step ended first (the signal is then not sent)."""
+    timer = threading.Timer(after, os.kill, (os.getpid(), signal.SIGINT))
+    start = time.monotonic()
+    timer.start()
+    try:
+        step()
+    except KeyboardInterrupt:
+        timer.join()
+        return time.monotonic() - start - after
+    timer.cancel()
+    return None
+
+
+def test_ctrl_c_interrupts_one_long_step_and_undoes_it() -> None:
+    # Hundreds of frames of a dense gas in one step: many seconds, unless interrupted.
+    world, alone = vadop.scene(3000, 0.3, 3.0), vadop.scene(3000, 0.3, 3.0)
+    world.step(1 / 30)
+    alone.step(1 / 30)
+    positions, velocities = world.positions, world.velocities
+    late = interrupted_within(lambda: world.step(300 / 30), 0.3)
+    assert late is not None and late < 1.0
+    # As it was before the step, and stepping on gives what an uninterrupted world gives.
+    assert world.time == alone.time
+    np.testing.assert_array_equal(world.positions, positions)
+    np.testing.assert_array_equal(world.velocities, velocities)
+    for _ in range(3):
+        assert world.step(1 / 30).time.tolist() == alone.step(1 / 30).time.tolist()
+    np.testing.assert_array_equal(world.positions, alone.positions)
+
+
+def test_ctrl_c_interrupts_a_long_shape_search() -> None:
+    # A fast-spinning rod passing another: one step, one pair, a long narrow-phase search.
+    world = vadop.World(box=10.0, mode="detect")
+    rod = world.add_shape("cuboid", half_extents=[0.5, 0.2, 0.1])
+    world.add_bodies(rod, [[2.0, 5, 5], [3.3, 5, 5]], [[6.0, 0, 0], [-6, 0, 0]],
+                     angular_velocities=[[3e5, 1e5, 3e4], [0, 0, 0]])
+    started = time.monotonic()
+    late = interrupted_within(lambda: world.step(1.0), 0.5)
+    if late is None:
+        pytest.skip(f"the step took {time.monotonic() - started:.2f} s: too short to interrupt")
+    assert late < 1.5
+    assert world.time == 0.0
 
 
 def test_two_threads_stepping_one_world_take_turns() -> None:

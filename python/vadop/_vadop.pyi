@@ -130,8 +130,9 @@ class World:
     def step(self, dt: float) -> Contacts:
         """Advances the world by dt; the frame's contacts in time order.
 
-        Runs without the GIL. A Ctrl-C pressed before it starts raises KeyboardInterrupt and
-        leaves the world as it was; another thread's call on this world waits for the step.
+        Runs without the GIL. A Ctrl-C, before it starts or while it runs (within 50 ms, however
+        long the step), raises KeyboardInterrupt and leaves the world as it was before the step;
+        another thread's call on this world waits for the step.
         """
     def contact_ends(self) -> Contacts:
         """The contacts between bodies that ended in the last frame, in time order (impulse 0).
@@ -216,6 +217,6 @@ def detect(
 ) -> Contacts:
     """Every contact over `frames` frames of `dt` on straight paths, in time order.
 
-    Runs without the GIL; Ctrl-C raises KeyboardInterrupt within 50 ms (or a frame, if longer).
+    Runs without the GIL; Ctrl-C raises KeyboardInterrupt within 50 ms, inside a long frame too.
     MemoryError when the contacts found so far outgrow the memory left.
     """

@@ -65,6 +65,24 @@ fn resumed_runs_match_one_uninterrupted_run() {
     std::fs::remove_dir_all(d).ok();
 }
 
+/// Shapes in detect mode with contact ends: the resumed run's contacts file, ends included, is
+/// byte for byte one run's (the ends once differed by about 1e-9 s, their search starting where
+/// the resumed run's first window began).
+#[test]
+fn resumed_contact_ends_of_shapes_match_one_run() {
+    let d = dir("resume-ends");
+    let (state, whole, contacts) = (d.join("state.json"), d.join("whole.csv"), d.join("contacts.csv"));
+    let scene = ["--kind", "shapes", "--bodies", "300", "--mode", "detect", "--contact-ends", "--quiet"];
+    let run = |extra: &[&str]| ok(vadop(&[&["simulate"], &scene[..], extra].concat()));
+    run(&["--frames", "12", "--contacts", &text(&whole)]);
+    run(&["--frames", "5", "--save-state", &text(&state), "--contacts", &text(&contacts)]);
+    ok(vadop(&["simulate", "--resume", &text(&state), "--frames", "7", "--quiet", "--contacts", &text(&contacts)]));
+    let ends = String::from_utf8(bytes(&whole)).unwrap().lines().filter(|l| l.contains(",body-end,")).count();
+    assert!(ends > 100, "only {ends} contact ends");
+    assert_eq!(bytes(&whole), bytes(&contacts), "the contacts differ");
+    std::fs::remove_dir_all(d).ok();
+}
+
 #[test]
 fn a_killed_run_leaves_a_state_and_contacts_that_agree_and_resume() {
     let d = dir("killed");

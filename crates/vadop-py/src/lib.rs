@@ -17,7 +17,8 @@ use numpy::{PyArray1, PyArray2, PyArrayDescr, PyUntypedArray};
 use pyo3::exceptions::{PyMemoryError, PyOverflowError, PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use std::sync::{Mutex, MutexGuard, TryLockError};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{mpsc, Arc, Mutex, MutexGuard, TryLockError};
 use std::time::{Duration, Instant};
 use vadop::axis_pool::MAX_AXES;
 use vadop::bounding_volume::interval;
@@ -35,6 +36,8 @@ const WALLS: [&str; 6] = ["min_x", "max_x", "min_y", "max_y", "min_z", "max_z"];
 
 /// How long a call steps without the GIL before it looks at signals (Ctrl-C).
 const SIGNAL_CHECK: Duration = Duration::from_millis(50);
+/// How long a step's caller waits for it without sleeping.
+const BUSY_WAIT: Duration = Duration::from_micros(200);
 
 fn value_error(e: VadopError) -> PyErr {
     PyValueError::new_err(e.to_string())
@@ -871,9 +874,10 @@ impl PyWorld {
     }
 
     /// Advances the world by ``dt`` and returns the frame's contacts in time order. Runs without
-    /// the GIL; a Ctrl-C pressed before it starts raises ``KeyboardInterrupt`` and leaves the
-    /// world as it was. Steps are serialised: another thread's call on this world waits
-    /// (without the GIL) until the step is done.
+    /// the GIL; a Ctrl-C, before it starts or while it runs (within 50 ms, however long the
+    /// step), raises ``KeyboardInterrupt`` and leaves the world as it was before the step. Steps
+    /// are serialised: another thread's call on this world waits (without the GIL) until the
+    /// step is done.
     ///
     /// >>> import vadop
     /// >>> w = vadop.scene(500, 0.1, 2.0)
@@ -884,7 +888,7 @@ impl PyWorld {
         py.check_signals()?;
         let contacts = py.allow_threads(|| {
             let mut state = self.state.lock().map_err(|_| poisoned())?;
-            state.step(dt).map(|c| c.to_vec()).map_err(value_error)
+            interruptible(&mut state, |world| world.step(dt).map(|c| c.to_vec()).map_err(value_error))
         })?;
         Ok(Contacts::new(py, &contacts))
     }
@@ -1341,7 +1345,7 @@ fn scene(
 /// ``frames`` frames of ``dt``; returns every contact of the run in time order. ``method``
 /// chooses how they are found ('auto', 'vadop', 'grid', 'brute', 'discrete', 'swept-aabb' or
 /// 'swept-kdop'; all but 'discrete' find the same contacts). Steps without the GIL; Ctrl-C raises
-/// ``KeyboardInterrupt`` within 50 ms (or a frame, if longer). Raises ``MemoryError`` when the contacts found
+/// ``KeyboardInterrupt`` within 50 ms, inside a long frame too. Raises ``MemoryError`` when the contacts found
 /// so far outgrow the memory left: run fewer frames at a time, or step a ``World``. ``frames`` is
 /// an int >= 0; arrays as for ``World`` (lists and tuples too).
 ///
@@ -1373,22 +1377,57 @@ fn detect(
     check_world_memory(spheres.len())?;
     let mut world = World::new(bounds, config).map_err(value_error)?;
     world.add_spheres(&spheres).map_err(value_error)?;
-    let (mut all, mut done) = (Vec::new(), 0);
-    while done < frames {
-        // Steps without the GIL, looking at signals between frames every SIGNAL_CHECK.
-        py.allow_threads(|| -> PyResult<()> {
-            let start = Instant::now();
-            while done < frames && start.elapsed() < SIGNAL_CHECK {
+    let all = py.allow_threads(|| {
+        interruptible(&mut world, |world| {
+            let mut all = Vec::new();
+            for _ in 0..frames {
                 let contacts = world.step(dt).map_err(value_error)?;
                 make_room(&mut all, contacts.len())?;
                 all.extend_from_slice(contacts);
-                done += 1;
             }
-            Ok(())
-        })?;
-        py.check_signals()?;
-    }
+            Ok(all)
+        })
+    })?;
     Ok(Contacts::new(py, &all))
+}
+
+/// Runs `work` on `world` in a thread of its own while this one (the GIL released) looks at
+/// signals every [`SIGNAL_CHECK`]: a Ctrl-C raises the world's interrupt flag, which stops even
+/// one long step within milliseconds and undoes it, and the signal's exception
+/// (`KeyboardInterrupt`) is raised instead of what `work` returns.
+fn interruptible<T: Send>(world: &mut World, work: impl FnOnce(&mut World) -> PyResult<T> + Send) -> PyResult<T> {
+    let stop = Arc::new(AtomicBool::new(false));
+    world.set_interrupt(Some(stop.clone()));
+    let mut signal = None;
+    let (done, finished) = mpsc::channel::<()>();
+    let (mut result, stepped) = (None, &mut *world);
+    // A thread of rayon's global pool runs the work: waking one costs less than starting one.
+    rayon::in_place_scope(|scope| {
+        let result = &mut result;
+        scope.spawn(move |_| {
+            *result = Some(work(stepped));
+            drop(done);
+        });
+        // Most steps are short: waiting for them without sleeping saves waking up again.
+        let start = Instant::now();
+        while matches!(finished.try_recv(), Err(mpsc::TryRecvError::Empty)) && start.elapsed() < BUSY_WAIT {
+            std::thread::yield_now();
+        }
+        while let Err(mpsc::RecvTimeoutError::Timeout) = finished.recv_timeout(SIGNAL_CHECK) {
+            if signal.is_none() {
+                if let Err(e) = Python::with_gil(|py| py.check_signals()) {
+                    stop.store(true, Ordering::Relaxed);
+                    signal = Some(e);
+                }
+            }
+        }
+    });
+    let result = result.expect("the scope ran the work");
+    world.set_interrupt(None);
+    match signal {
+        Some(e) => Err(e),
+        None => result,
+    }
 }
 
 /// Room for `more` contacts in `all`, or `MemoryError` when the grown list and the arrays made

@@ -68,6 +68,17 @@ pub struct Bodies {
     pub speed_bound: f64,
     /// Shapes, spins and static bodies: empty in a world of plain spheres.
     pub rigid: Rigid,
+    /// While a step that may be interrupted runs: each motion it overwrote, oldest first, so
+    /// that [`Bodies::undo`] can take the store back to the step's start.
+    undo: Option<Vec<Overwritten>>,
+}
+
+/// A body's motion (and spin, when the store keeps spins) as a step found it.
+#[derive(Debug, Clone)]
+struct Overwritten {
+    slot: usize,
+    state: BodyState,
+    spin: Option<(FreeRotation, (DQuat, DVec3))>,
 }
 
 /// What bodies that are not plain spheres add to the store, kept only once a world holds one:
@@ -464,9 +475,40 @@ impl Bodies {
         }
     }
 
+    /// Starts keeping what stepping overwrites (see [`Bodies::undo`]).
+    pub(crate) fn keep_undo(&mut self) {
+        self.undo = Some(Vec::new());
+    }
+
+    /// Stops keeping what stepping overwrites, and forgets it.
+    pub(crate) fn drop_undo(&mut self) {
+        self.undo = None;
+    }
+
+    /// Takes every body back to its motion when [`Bodies::keep_undo`] was called, with
+    /// `speed_bound` the bound then. Stamps move on: predictions made since stay void. A spin the
+    /// store started keeping since (friction turned a sphere) is steady again.
+    pub(crate) fn undo(&mut self, speed_bound: f64) {
+        for o in self.undo.take().unwrap_or_default().into_iter().rev() {
+            self.state[o.slot] = o.state;
+            if self.has_rigid() {
+                let (spin, start) = o.spin.unwrap_or_else(|| (steady(), (DQuat::IDENTITY, DVec3::ZERO)));
+                (self.rigid.spin[o.slot], self.rigid.spin_start[o.slot]) = (spin, start);
+            }
+        }
+        self.speed_bound = speed_bound;
+    }
+
     /// Moves body `i`'s centre to time `t` with a new velocity, voiding its predictions.
     #[inline]
     fn move_to(&mut self, i: usize, t: f64, velocity: DVec3) {
+        if self.undo.is_some() {
+            let spin = self.has_rigid().then(|| (self.rigid.spin[i], self.rigid.spin_start[i]));
+            let overwritten = Overwritten { slot: i, state: self.state[i], spin };
+            if let Some(log) = &mut self.undo {
+                log.push(overwritten);
+            }
+        }
         self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
         self.stamp[i] = self.stamp[i].wrapping_add(1);
         self.speed_bound = self.speed_bound.max(speed(velocity));

@@ -70,21 +70,18 @@ pub(crate) fn pair_start_after(bodies: &Bodies, a: usize, b: usize, start: f64, 
     settled(shape_contact_after((ga, &ma), (gb, &mb), start, window), window)
 }
 
-/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id) part:
-/// from the start of their contact when the caller holds it, else from the contact in progress
-/// at the window's start (the shape search then replays the pair's earlier contacts).
-pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, start: Option<f64>, window: Window) -> Found {
+/// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id), in
+/// contact since `since`, part.
+pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: Window) -> Found {
     if bodies.are_spheres(a, b) {
         let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    let end = match start {
-        Some(start) => contact_end_time((ga, &ma), (gb, &mb), start, window.end),
-        None => contact_in_progress_end_time((ga, &ma), (gb, &mb), window.start, window.end),
-    };
-    settled(end, window)
+    // Searched from the contact's start, not the window's: the search's steps depend on where it
+    // starts, and windows differ between runs (a resumed one starts its first at the saved time).
+    settled(contact_end_time((ga, &ma), (gb, &mb), since, window.end), window)
 }
 
 /// Body `i`'s first contact with a wall of `bounds` in `window`: the time and the wall, or

@@ -107,6 +107,10 @@ pub enum VadopError {
     /// The world's time plus the time step is no longer a finite number.
     #[error("the world's time {time:e} plus the time step {dt:e} is not finite; positions at that time would be NaN")]
     TimeOverflow { time: f64, dt: f64 },
+    /// The step's interrupt flag ([`crate::World::set_interrupt`]) was raised: the world is as it
+    /// was before the step.
+    #[error("the step was interrupted; the world is as it was before it")]
+    Interrupted,
     /// The time step is below the resolution of the world's time: the clock would not move.
     #[error(
         "the time step {dt:e} is too small to advance the world's time {time:e} (below its floating-point resolution)"

@@ -53,6 +53,7 @@ pub mod error;
 pub mod event_queue;
 pub mod free_rotation;
 pub mod handle;
+mod interrupt;
 pub mod memory;
 pub mod narrow_phase;
 pub mod overlap;

@@ -21,7 +21,7 @@
 //! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
 //! scaled by a power of two gives bit-identical contact times, scaled alike.
 
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 
 /// Relative tolerance on the centre distance within which two spheres count as touching.
 pub const CONTACT_TOLERANCE: f64 = 1e-9;
@@ -89,6 +89,28 @@ pub fn unit_scale(x: f64) -> f64 {
 #[inline]
 pub fn direction(v: DVec3) -> Option<DVec3> {
     (v * unit_scale(v.abs().max_element())).try_normalize()
+}
+
+/// The rotation `q` stands for: `q` scaled to unit length, exactly scale-free as [`direction`]
+/// (a quaternion times a power of two normalises to the same bits, at 1e300 or subnormal too).
+/// `None` for the zero quaternion or a non-finite one.
+///
+/// ```
+/// use glam::DQuat;
+/// use vadop::narrow_phase::unit_quaternion;
+/// let huge = DQuat::from_xyzw(0.0, 0.0, 0.0, 1e155);
+/// assert_eq!(unit_quaternion(huge), Some(DQuat::IDENTITY));
+/// let tiny = DQuat::from_xyzw(3e-300, 0.0, 0.0, 4e-300);
+/// assert!((unit_quaternion(tiny).unwrap().x - 0.6).abs() < 1e-15);
+/// assert_eq!(unit_quaternion(DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0)), None);
+/// ```
+#[inline]
+pub fn unit_quaternion(q: DQuat) -> Option<DQuat> {
+    let largest = glam::DVec4::from(q).abs().max_element();
+    if !(q.is_finite() && largest > 0.0) {
+        return None;
+    }
+    Some((q * unit_scale(largest)).normalize())
 }
 
 /// Time `tau >= 0` after the reference instant at which two spheres first touch while

@@ -202,7 +202,8 @@ impl<B: BroadPhase> Pipeline<B> {
             let start = Instant::now();
             self.process_events(bodies, physics, until, out);
             out.stats.response_seconds += start.elapsed().as_secs_f64();
-            if t1 <= self.window.end {
+            // An interrupted step is undone by the world: the rest of it need not run.
+            if t1 <= self.window.end || crate::interrupt::raised() {
                 break;
             }
             now = self.window.end;
@@ -284,8 +285,8 @@ impl<B: BroadPhase> Pipeline<B> {
             }
         });
         if physics.report_ends {
-            for (a, b) in self.touching.pairs() {
-                predicted.extend(predict_end(bodies, a, b, None, window));
+            for (a, b, since) in self.touching.contacts() {
+                predicted.extend(predict_end(bodies, a, b, since, window));
             }
         }
         self.queue.set_bulk(predicted, &self.workers);
@@ -297,7 +298,7 @@ impl<B: BroadPhase> Pipeline<B> {
     /// Pops and handles contacts with a time before `until`; may end the window early.
     fn process_events(&mut self, bodies: &mut Bodies, physics: &Physics, until: f64, out: &mut Output) {
         while let Some(time) = self.queue.peek_time() {
-            if !(time < until) {
+            if !(time < until) || crate::interrupt::raised() {
                 break;
             }
             let event = self.queue.pop().expect("peeked");
@@ -426,8 +427,8 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         out.stats.pair_contacts += 1;
         if physics.report_ends && !responds {
-            self.touching.insert(a, b);
-            if let Some(event) = predict_end(bodies, a, b, Some(t), self.window.from(t)) {
+            self.touching.insert(a, b, t);
+            if let Some(event) = predict_end(bodies, a, b, t, self.window.from(t)) {
                 self.queue.push(event);
             }
         }
@@ -660,8 +661,8 @@ impl<B: BroadPhase> Pipeline<B> {
             queue.push(renewal(bodies, &self.proxies, body));
         }
         if physics.report_ends {
-            for other in self.touching.partners(body) {
-                if let Some(event) = predict_end(bodies, body, other, None, window) {
+            for (other, since) in self.touching.contacts_of(body) {
+                if let Some(event) = predict_end(bodies, body, other, since, window) {
                     queue.push(event);
                 }
             }
@@ -669,14 +670,13 @@ impl<B: BroadPhase> Pipeline<B> {
     }
 }
 
-/// The end of the contact of touching bodies `a` and `b` if its canonical time lies in `window`,
-/// stamped with their current stamps: a velocity change of either voids it. `start` is the
-/// contact's start when the caller has just found it.
+/// The end of the contact of bodies `a` and `b`, touching since `since`, if its canonical time
+/// lies in `window`, stamped with their current stamps: a velocity change of either voids it.
 #[inline]
-fn predict_end(bodies: &Bodies, a: u32, b: u32, start: Option<f64>, window: Window) -> Option<Event> {
+fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: Window) -> Option<Event> {
     let (a, b) = (a.min(b), a.max(b));
     let (i, j) = (a as usize, b as usize);
-    let (time, stalled) = contacts::pair_end(bodies, i, j, start, window)?;
+    let (time, stalled) = contacts::pair_end(bodies, i, j, since, window)?;
     Some(Event {
         time,
         body: a,

@@ -1321,6 +1321,10 @@ impl<G: Gauge> Searcher<G> {
         if self.iterations - self.restarted >= MAX_ITERATIONS {
             return Err(self.stall(tau, "the iteration cap was reached (resting or sliding contact while turning?)"));
         }
+        if self.iterations.is_multiple_of(crate::interrupt::POLL_INTERVAL) && crate::interrupt::raised() {
+            // Void: the world undoes the step.
+            return Err(self.stall(tau, "the step was interrupted"));
+        }
         self.iterations += 1;
         Ok(self.gauge.probe(tau, depth))
     }

@@ -3,7 +3,9 @@
 //! It owns one record per touching pair, linked into a short list per body: when a body changes
 //! velocity the pipeline finds its partners without a search, and no pair is hashed. A pair joins
 //! when its contact starts and leaves when the contact ends or a body is removed. It never decides
-//! when a contact starts or ends: the pipeline does, from the narrow phase's canonical times.
+//! when a contact starts or ends: the pipeline does, from the narrow phase's canonical times. It
+//! keeps when each contact started, because the end search starts there: from a point every run
+//! shares (a resumed one too), not from wherever the window in progress began.
 
 /// End of a body's list.
 const NONE: u32 = u32::MAX;
@@ -15,6 +17,8 @@ struct Link {
     bodies: [u32; 2],
     /// The next link in each body's list.
     next: [u32; 2],
+    /// When the contact started.
+    since: f64,
 }
 
 /// Touching pairs with a list per body.
@@ -22,11 +26,12 @@ struct Link {
 /// ```
 /// use vadop::touching::Touching;
 /// let mut touching = Touching::default();
-/// touching.insert(3, 1);
-/// touching.insert(1, 7);
+/// touching.insert(3, 1, 0.5);
+/// touching.insert(1, 7, 0.25);
 /// assert_eq!(touching.partners(1).collect::<Vec<_>>(), [7, 3]);
+/// assert_eq!(touching.contacts_of(3).collect::<Vec<_>>(), [(1, 0.5)]);
 /// assert!(touching.remove(1, 3));
-/// assert_eq!(touching.pairs(), [(1, 7)]);
+/// assert_eq!(touching.contacts(), [(1, 7, 0.25)]);
 /// ```
 #[derive(Debug, Default, Clone)]
 pub struct Touching {
@@ -38,15 +43,15 @@ pub struct Touching {
 }
 
 impl Touching {
-    /// Records that bodies `a` and `b` touch (once: a pair is inserted only when it starts
-    /// touching, and it is not touching then).
-    pub fn insert(&mut self, a: u32, b: u32) {
+    /// Records that bodies `a` and `b` touch from `since` on (once: a pair is inserted only when
+    /// it starts touching, and it is not touching then).
+    pub fn insert(&mut self, a: u32, b: u32, since: f64) {
         let bodies = [a.min(b), a.max(b)];
         let needed = bodies[1] as usize + 1;
         if self.head.len() < needed {
             self.head.resize(needed, NONE);
         }
-        let link = Link { bodies, next: bodies.map(|i| self.head[i as usize]) };
+        let link = Link { bodies, next: bodies.map(|i| self.head[i as usize]), since };
         let index = match self.free.pop() {
             Some(index) => {
                 self.links[index as usize] = link;
@@ -85,6 +90,11 @@ impl Touching {
 
     /// The bodies touching body `i`, most recent first.
     pub fn partners(&self, i: u32) -> impl Iterator<Item = u32> + '_ {
+        self.contacts_of(i).map(|(j, _)| j)
+    }
+
+    /// The bodies touching body `i` and when each contact started, most recent first.
+    pub fn contacts_of(&self, i: u32) -> impl Iterator<Item = (u32, f64)> + '_ {
         let mut current = self.head.get(i as usize).copied().unwrap_or(NONE);
         std::iter::from_fn(move || {
             if current == NONE {
@@ -93,17 +103,22 @@ impl Touching {
             let link = &self.links[current as usize];
             let side = usize::from(link.bodies[1] == i);
             current = link.next[side];
-            Some(link.bodies[1 - side])
+            Some((link.bodies[1 - side], link.since))
         })
+    }
+
+    /// Every touching pair, lower id first, in ascending order, with the start of its contact.
+    pub fn contacts(&self) -> Vec<(u32, u32, f64)> {
+        let mut contacts: Vec<(u32, u32, f64)> = (0..self.head.len() as u32)
+            .flat_map(|i| self.contacts_of(i).filter(move |&(j, _)| j > i).map(move |(j, since)| (i, j, since)))
+            .collect();
+        contacts.sort_unstable_by_key(|&(a, b, _)| (a, b));
+        contacts
     }
 
     /// Every touching pair, lower id first, in ascending order.
     pub fn pairs(&self) -> Vec<(u32, u32)> {
-        let mut pairs: Vec<(u32, u32)> = (0..self.head.len() as u32)
-            .flat_map(|i| self.partners(i).filter(move |&j| j > i).map(move |j| (i, j)))
-            .collect();
-        pairs.sort_unstable();
-        pairs
+        self.contacts().into_iter().map(|(a, b, _)| (a, b)).collect()
     }
 
     /// True when no pair touches.
@@ -176,7 +191,7 @@ mod tests {
                 expected.retain(|&(x, y)| x != a && y != a);
             } else {
                 expected.push(pair);
-                touching.insert(a, b);
+                touching.insert(a, b, 0.0);
             }
             expected.sort_unstable();
             assert_eq!(touching.pairs(), expected);

@@ -254,3 +254,89 @@ fn time_never_overflows() {
     assert_eq!(snapshot(&w), before);
     assert!(w.spheres().all(|(_, s)| s.position.is_finite()));
 }
+
+/// Regression: an orientation's squared length overflowed above ~1e154 (the cube was stored as
+/// [0, 0, 0, 0] and collided as a point, and its saved state was refused) and underflowed below
+/// ~1e-154 (refused as zero). Any finite non-zero quaternion is a rotation: a cube given one
+/// scaled by a power of two, from 2^1000 to subnormal, collides exactly as with the unit one in a
+/// brute-force run, and its world saves and resumes.
+#[test]
+fn huge_and_tiny_orientations_normalise_exactly() {
+    use glam::DQuat;
+    use vadop::shape::Shape;
+    use vadop::{Body, BodyShape};
+    let run = |method: Method, orientation: DQuat| {
+        let config = WorldConfig { method, mode: Mode::Detect, contact_ends: true, ..WorldConfig::default() };
+        let mut w = World::new(BoxBounds::cube(10.0).unwrap(), config).unwrap();
+        let cube = w.add_shape(Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
+        let body = Body {
+            shape: BodyShape::Shape(cube),
+            position: DVec3::new(2.0, 5.0, 5.0),
+            orientation,
+            velocity: DVec3::new(1.0, 0.0, 0.0),
+            angular_velocity: DVec3::ZERO,
+            mass: 1.0,
+        };
+        w.add_body(body).unwrap();
+        w.add_body(Body { position: DVec3::new(5.0, 5.0, 5.0), velocity: DVec3::ZERO, ..body }).unwrap();
+        let first = w.step(1.0).unwrap().to_vec();
+        let path = std::env::temp_dir().join(format!("vadop-bad-input-{}-{method:?}.json", std::process::id()));
+        w.save(&path).unwrap();
+        let mut resumed = World::load(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        let second = resumed.step(4.0).unwrap().to_vec();
+        let bodies: Vec<_> = resumed.bodies().map(|(_, b)| b).collect();
+        (first, second, resumed.contact_ends().to_vec(), bodies)
+    };
+    // 45 degrees about z: the cubes' edges lead, 0.71 from their centres, not 0.5 (nor 0, points).
+    let turned = DQuat::from_xyzw(0.0, 0.0, (0.125 * std::f64::consts::PI).sin(), (0.125 * std::f64::consts::PI).cos());
+    let reference = run(Method::Brute, turned);
+    assert!(reference.0.is_empty(), "{:?}", reference.0);
+    let [touch] = &reference.1[..] else { panic!("one contact expected, got {:?}", reference.1) };
+    assert!((touch.time - (3.0 - 2.0f64.sqrt())).abs() < 1e-5, "the cubes touched at {}", touch.time);
+    assert!(!reference.2.is_empty());
+    // The same quaternion scaled by an exact power of two into ordinary lengths, where squaring
+    // it neither overflows nor underflows.
+    let ordinary = |mut q: DQuat| {
+        let largest = |q: DQuat| q.to_array().into_iter().fold(0.0, |m: f64, c| m.max(c.abs()));
+        while largest(q) > 1e100 {
+            q *= 2f64.powi(-500);
+        }
+        while largest(q) < 1e-100 {
+            q *= 2f64.powi(500);
+        }
+        q
+    };
+    let odd = [
+        turned * 2f64.powi(1000),
+        turned * 2f64.powi(-1000),
+        DQuat::from_xyzw(0.0, 0.0, 0.0, 1e155),
+        DQuat::from_xyzw(0.0, 0.0, 0.0, 1e300),
+        DQuat::from_xyzw(0.0, 0.0, 0.0, f64::MAX),
+        DQuat::from_xyzw(0.0, 0.0, 0.0, 1e-300),
+        DQuat::from_xyzw(0.0, 0.0, 0.0, 5e-324),
+        DQuat::from_xyzw(0.0, 0.0, 5e-324, 1e-323),
+        DQuat::from_xyzw(1e-300, -2e-300, 3e-310, 4e-300),
+    ];
+    for q in odd {
+        let usual = ordinary(q);
+        assert_ne!(usual, q);
+        assert_eq!(run(Method::Vadop, q), run(Method::Brute, usual), "orientation {q:?}");
+    }
+    assert_eq!(run(Method::Vadop, turned * 2f64.powi(1000)), reference);
+    // Zero, NaN and infinity stay errors.
+    let mut w = World::new(BoxBounds::cube(10.0).unwrap(), WorldConfig::default()).unwrap();
+    let cube = w.add_shape(Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
+    for bad in [[0.0; 4], [0.0, 0.0, 0.0, f64::NAN], [0.0, 0.0, 0.0, f64::INFINITY], [0.0, -0.0, 0.0, -0.0]] {
+        let body = Body {
+            shape: BodyShape::Shape(cube),
+            position: DVec3::splat(5.0),
+            orientation: DQuat::from_array(bad),
+            velocity: DVec3::ZERO,
+            angular_velocity: DVec3::ZERO,
+            mass: 1.0,
+        };
+        assert!(matches!(w.add_body(body), Err(VadopError::BadOrientation(_))), "{bad:?}");
+        assert!(matches!(w.add_static(cube, DVec3::splat(5.0), body.orientation), Err(VadopError::BadOrientation(_))));
+    }
+}

@@ -9,6 +9,7 @@ use super::{Engine, Method, World};
 use crate::bodies::{RigidState, SPHERE};
 use crate::error::{check_magnitude, check_vector, Result, VadopError};
 use crate::handle::BodyHandle;
+use crate::narrow_phase::unit_quaternion;
 use crate::shape::{Shape, ShapeGeometry};
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
@@ -68,7 +69,8 @@ pub struct Body {
     pub shape: BodyShape,
     /// Where the shape's own origin is.
     pub position: DVec3,
-    /// Rotates the shape's own frame to the world's: a non-zero quaternion, normalised here.
+    /// Rotates the shape's own frame to the world's: any finite non-zero quaternion, normalised
+    /// here whatever its length (1e300 or subnormal too).
     pub orientation: DQuat,
     /// Velocity of the centre of mass.
     pub velocity: DVec3,
@@ -220,10 +222,7 @@ impl World {
         check_vector("velocity", body.velocity)?;
         check_vector("angular velocity", body.angular_velocity)?;
         let q = body.orientation;
-        if !(q.is_finite() && q.length_squared() > 0.0) {
-            return Err(VadopError::BadOrientation(q.to_array()));
-        }
-        let orientation = q.normalize();
+        let orientation = unit_quaternion(q).ok_or(VadopError::BadOrientation(q.to_array()))?;
         if !fixed {
             if !(body.mass.is_finite() && body.mass > 0.0) {
                 return Err(VadopError::BadMass(body.mass));

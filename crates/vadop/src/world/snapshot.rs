@@ -6,7 +6,8 @@
 //! (so the handles of removed bodies stay stale), the time of its last velocity change and of its
 //! last contact (the TC model depends on it), the free slots, the bodies added since the last
 //! step, and the pairs in contact (for the pseudo-dynamic method the pairs it saw overlapping,
-//! for a world that reports contact ends its touching pairs). What is not: the broad phase, the proxies and the queue, which are rebuilt. That
+//! for a world that reports contact ends its touching pairs and when each contact started, where
+//! the search for its end starts). What is not: the broad phase, the proxies and the queue, which are rebuilt. That
 //! cannot change a contact, because contact times are canonical and candidate generation only
 //! decides which pairs are tested, never what a test finds. Numbers are written in the shortest
 //! form that reads back to the same bits.
@@ -29,10 +30,13 @@ use std::path::Path;
 /// First field of every world file, so other JSON files are recognised as such.
 const FORMAT: &str = "vadop-world";
 /// Bumped on every incompatible change of the layout. Version 1 files (no contact history, every
-/// position at the saved time) and version 2 files (no generations) still load.
-const VERSION: u32 = 4;
+/// position at the saved time), version 2 files (no generations) and version 4 files (no contact
+/// starts) still load.
+const VERSION: u32 = 5;
 /// The first version that saves generations.
 const GENERATIONS: u32 = 3;
+/// The first version that saves when the touching pairs' contacts started.
+const CONTACT_STARTS: u32 = 5;
 
 #[derive(serde::Serialize, serde::Deserialize)]
 struct Snapshot {
@@ -48,6 +52,9 @@ struct Snapshot {
     /// last frame instant, or the touching pairs of a world that reports contact ends.
     #[serde(default)]
     overlapping: Vec<(u32, u32)>,
+    /// For a world that reports contact ends, when each of `overlapping` started touching.
+    #[serde(default)]
+    touching_since: Vec<f64>,
     /// The store's shapes in id order (the users', and one per plain sphere radius once the world
     /// holds rigid bodies), and which are the users'.
     #[serde(default)]
@@ -129,9 +136,13 @@ impl World {
                 }),
             })
             .collect();
-        let overlapping = match &self.engine {
-            Engine::Discrete(pd) => pd.overlapping().to_vec(),
-            engine => with_pipeline!(engine, p => p.touching.pairs(), Vec::new()),
+        let (overlapping, touching_since) = match &self.engine {
+            Engine::Discrete(pd) => (pd.overlapping().to_vec(), Vec::new()),
+            engine => with_pipeline!(
+                engine,
+                p => p.touching.contacts().into_iter().map(|(a, b, since)| ((a, b), since)).unzip(),
+                (Vec::new(), Vec::new())
+            ),
         };
         let snapshot = Snapshot {
             format: FORMAT.to_string(),
@@ -143,6 +154,7 @@ impl World {
             free_slots: self.free_slots.clone(),
             unplaced: self.unplaced.clone(),
             overlapping,
+            touching_since,
             shapes: b.rigid.shapes.iter().map(|g| g.shape().clone()).collect(),
             user_shapes: self.user_shapes.clone(),
             rigid: b.has_rigid(),
@@ -283,21 +295,36 @@ impl World {
                     .to_string(),
             ));
         }
+        // A contact in progress started at or before the saved time. Older files do not say when:
+        // its end is then searched from the saved time, as the saving run's next window did.
+        let discrete = snapshot.config.method == super::Method::Discrete;
+        let touching_since = match !discrete && snapshot.version < CONTACT_STARTS {
+            true => vec![time; snapshot.overlapping.len()],
+            false => snapshot.touching_since,
+        };
+        let starts = if discrete { 0 } else { snapshot.overlapping.len() };
+        let starts_valid =
+            touching_since.len() == starts && touching_since.iter().all(|&since| since.is_finite() && since <= time);
+        if !starts_valid {
+            return Err(bad(format!(
+                "a world that reports contact ends saves one contact start, finite and <= time {time}, per touching \
+                 pair (the discrete method none)"
+            )));
+        }
         world.live = slots - dead;
         world.free_slots = snapshot.free_slots;
-        // Enter the bodies that had been stepped into a fresh engine now, so the next step
-        // checks only the bodies added since the last one, exactly as the saved world would.
-        world.unplaced = world.bodies.alive_ids().filter(|id| waiting.binary_search(id).is_err()).collect();
         // The pseudo-dynamic method finds overlaps only after they happen: its worlds may hold some.
         if world.config.mode == Mode::Simulate && world.config.method != super::Method::Discrete {
-            if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.unplaced, time) {
+            if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.stepped(&waiting), time) {
                 let (a, b) = (world.bodies.handle(a as usize), world.bodies.handle(b as usize));
                 return Err(bad(format!(
                     "bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies"
                 )));
             }
         }
-        world.place_new_bodies();
+        // Enter the bodies that had been stepped into a fresh engine now, so the next step
+        // checks only the bodies added since the last one, exactly as the saved world would.
+        world.enter_stepped(snapshot.unplaced);
         if let Some(rules) = world.rules_mut() {
             rules.resize(slots);
             for (i, slot) in snapshot.slots.iter().enumerate() {
@@ -307,12 +334,11 @@ impl World {
         match &mut world.engine {
             Engine::Discrete(pd) => pd.set_overlapping(snapshot.overlapping),
             engine => with_pipeline!(engine, p => {
-                for (a, b) in snapshot.overlapping {
-                    p.touching.insert(a, b);
+                for ((a, b), since) in snapshot.overlapping.into_iter().zip(touching_since) {
+                    p.touching.insert(a, b, since);
                 }
             }, ()),
         }
-        world.unplaced = snapshot.unplaced;
         Ok(world)
     }
 }
