@@ -15,7 +15,7 @@ use crate::error::{Result, VadopError};
 use crate::narrow_phase::{
     direction, pair_contact_time, pair_separation_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE,
 };
-use crate::shape_contact::{contact_end_time, contact_geometry, contact_in_progress_end_time};
+use crate::shape_contact::{contact_end_time, contact_geometry};
 use crate::shape_contact::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
 use crate::shape_contact::{shape_contact_after, shape_contact_time, shape_wall_time};
 use crate::window::Window;
