@@ -193,6 +193,9 @@ fn endless_inputs_are_refused_without_reading_them_whole() {
     let started = std::time::Instant::now();
     let message = Scene::load("/dev/zero".as_ref()).unwrap_err().to_string();
     assert!(message.starts_with("/dev/zero: expected value at line 1 column 1"), "{message}");
+    // A world file too (`--resume`, Python's `World.load`).
+    let message = vadop::World::load("/dev/zero".as_ref()).unwrap_err().to_string();
+    assert!(message.starts_with("/dev/zero: expected value at line 1 column 1"), "{message}");
     assert!(started.elapsed().as_secs_f64() < 5.0);
 }
 

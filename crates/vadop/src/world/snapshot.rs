@@ -172,8 +172,9 @@ impl World {
     /// or on any state stepping could not have produced.
     pub fn load(path: &Path) -> Result<World> {
         let bad = |message: String| VadopError::Io { path: path.display().to_string(), message };
-        let text = std::fs::read_to_string(path).map_err(|e| bad(e.to_string()))?;
-        let snapshot: Snapshot = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        // Bounded by the memory left: a device or a huge file is refused, not read until the
+        // system runs out.
+        let snapshot: Snapshot = crate::memory::read_json(path).map_err(bad)?;
         if snapshot.format != FORMAT || !(1..=VERSION).contains(&snapshot.version) {
             return Err(bad(format!(
                 "not a {FORMAT} file of version 1 to {VERSION} (format {:?}, version {})",
