@@ -13,14 +13,13 @@
 //! narrow phase reads for a candidate pair, and the proxy table reads it from here rather than
 //! keeping a copy.
 
-use crate::free_rotation::FreeRotation;
 use crate::handle::BodyHandle;
-use crate::narrow_phase::Motion;
-use crate::proxy::prefetch;
-use crate::response::{Impacted, RigidSide};
+use crate::memory::prefetch;
+use crate::motion::free_rotation::FreeRotation;
+use crate::motion::Motion;
+use crate::motion::{RigidMotion, Spin};
 use crate::shape::ShapeGeometry;
-use crate::shape_contact::{RigidMotion, Spin};
-use glam::{DMat3, DQuat, DVec3};
+use glam::{DQuat, DVec3};
 
 /// One sphere as users see it.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -324,25 +323,12 @@ impl Bodies {
         inertia_of(self.geometry(i), self.mass[i], self.radius(i))
     }
 
-    /// Body `i` at time `t` as a side of a contact at `point` (what the impulse needs).
-    pub fn rigid_side(&self, i: usize, t: f64, point: DVec3) -> RigidSide {
-        self.impacted(i, t).side(point)
-    }
-
-    /// Body `i` at time `t` as an impact sees it: immovable when static.
-    pub fn impacted(&self, i: usize, t: f64) -> Impacted {
+    /// Velocity at `t` of body `i`'s material point at `point`: zero for a static body.
+    pub fn point_velocity(&self, i: usize, t: f64, point: DVec3) -> DVec3 {
         if self.is_fixed(i) {
-            return Impacted::FIXED;
+            return DVec3::ZERO;
         }
-        let rotation = DMat3::from_quat(self.orientation_at(i, t));
-        let inverse = DMat3::from_diagonal(self.principal_inertia(i).recip());
-        Impacted {
-            velocity: self.velocity(i),
-            angular_velocity: self.angular_velocity_at(i, t),
-            inverse_mass: self.inverse_mass(i),
-            inverse_inertia: rotation * inverse * rotation.transpose(),
-            centre: self.position_at(i, t),
-        }
+        self.velocity(i) + self.angular_velocity_at(i, t).cross(point - self.position_at(i, t))
     }
 
     /// Keeps the [`Rigid`] part from now on: every slot gets an entry (its sphere, steady).

@@ -4,7 +4,6 @@
 //! leaves the world exactly as it was. Messages name the offending value and what was expected.
 
 use crate::handle::BodyHandle;
-use crate::scene::SceneEntry;
 use thiserror::Error;
 
 /// Everything that can go wrong when building or stepping a world.
@@ -224,4 +223,22 @@ pub(crate) fn check_magnitude(what: &'static str, value: f64) -> Result<()> {
         return Err(VadopError::OutOfRange { what, value });
     }
     Ok(())
+}
+
+/// An entry of a scene's body lists: its list and its index there.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum SceneEntry {
+    Sphere(usize),
+    Body(usize),
+    StaticBody(usize),
+}
+
+impl std::fmt::Display for SceneEntry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SceneEntry::Sphere(i) => write!(f, "sphere {i}"),
+            SceneEntry::Body(i) => write!(f, "body {i}"),
+            SceneEntry::StaticBody(i) => write!(f, "static body {i}"),
+        }
+    }
 }

@@ -11,8 +11,8 @@
 //! the repeat is dropped, so no contact is ever reported twice. It never computes contacts or
 //! changes bodies.
 
-use crate::narrow_phase::Wall;
 use crate::parallel::Workers;
+use crate::walls::Wall;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -31,7 +31,7 @@ pub enum Partner {
     Wall(Wall),
     /// The search for the body's wall contact could not decide before this time.
     WallStalled,
-    /// No contact: the body's proxy ends here and must be renewed (see [`crate::proxy`]).
+    /// No contact: the body's proxy ends here and must be renewed (see [`crate::broad_phase::proxy`]).
     Renew,
 }
 
@@ -186,10 +186,12 @@ impl EventQueue {
         (self.heap.capacity() + self.bulk.capacity()) * std::mem::size_of::<Event>()
     }
     /// Number of queued events, void ones included.
+    #[cfg(test)]
     pub fn len(&self) -> usize {
         self.heap.len() + self.bulk.len()
     }
     /// True when no event is queued.
+    #[cfg(test)]
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }

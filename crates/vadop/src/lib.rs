@@ -42,36 +42,34 @@
 // instead of passing it, which `t >= end` would not do.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+// Vocabulary and helpers, below every stage.
+pub mod error;
+mod frame;
+pub mod handle;
+mod interrupt;
+pub mod memory;
+pub mod motion;
+pub mod numeric;
+pub(crate) mod parallel;
+mod walls;
+pub mod window;
+
+// The stages, in pipeline order.
 pub mod axis_pool;
 pub mod bodies;
 pub mod bounding_volume;
 pub mod broad_phase;
-pub mod coherent_sort;
-pub mod collapse;
-mod contacts;
-pub mod error;
-pub mod event_queue;
-pub mod free_rotation;
-pub mod handle;
-mod interrupt;
-pub mod memory;
+pub(crate) mod event_queue;
 pub mod narrow_phase;
-pub mod overlap;
-pub mod parallel;
-pub mod pipeline;
-pub mod proxy;
-pub mod pseudo_dynamic;
+pub(crate) mod pipeline;
 pub mod response;
 pub mod scene;
 pub mod shape;
-pub mod shape_contact;
-mod static_geometry;
-pub mod touching;
-pub mod window;
 pub mod world;
 
 pub use bodies::Sphere;
 pub use error::{Result, VadopError};
+pub use frame::{Contact, FrameStats, Mode, Touched};
 /// The vector and quaternion types of the API (`DVec3`, `DQuat`), re-exported so that a user
 /// needs no glam dependency of their own, nor to match its version:
 ///
@@ -82,9 +80,9 @@ pub use error::{Result, VadopError};
 /// ```
 pub use glam;
 pub use handle::BodyHandle;
-pub use narrow_phase::Wall;
+pub use walls::{BoxBounds, Wall};
 pub use window::Window;
-pub use world::{Body, BodyShape, BoxBounds, Contact, FrameStats, Method, Mode, ShapeId, Touched, World, WorldConfig};
+pub use world::{Body, BodyShape, Method, ShapeId, World, WorldConfig};
 
 /// The README's Rust examples, compiled and run with the doctests so they cannot go stale.
 #[cfg(doctest)]

@@ -5,7 +5,7 @@
 //! [`ShapeGeometry`] built from it: the parry shape that all distance and contact queries run on,
 //! the mass properties for unit density, the frame the body moves in, and the bounding radius
 //! about the centre of mass — the one number the broad phase ever sees of a shape. It never moves
-//! bodies, schedules anything or decides contacts: [`crate::shape_contact`] does the contact
+//! bodies, schedules anything or decides contacts: [`crate::narrow_phase::shapes`] does the contact
 //! arithmetic, the world does the rest.
 //!
 //! # Frames
@@ -39,7 +39,7 @@
 //! ```
 
 use crate::error::{check_length, check_vector, Result, VadopError};
-use crate::narrow_phase::{direction, unit_scale};
+use crate::numeric::{direction, unit_scale};
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::{ConvexPolyhedron, SharedShape, TriMesh};

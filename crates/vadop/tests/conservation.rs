@@ -2,7 +2,7 @@
 //! the whole run, momentum in every collision, no body leaves the box, and no pair of bodies ends
 //! a frame overlapping beyond the contact tolerance.
 
-use vadop::narrow_phase::CONTACT_TOLERANCE;
+use vadop::narrow_phase::spheres::CONTACT_TOLERANCE;
 use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
 use vadop::{Method, Mode, Touched, World, WorldConfig};
 

@@ -14,7 +14,7 @@
 use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use std::f64::consts::PI;
-use vadop::free_rotation::FreeRotation;
+use vadop::motion::free_rotation::FreeRotation;
 
 const ORDER: usize = 30;
 

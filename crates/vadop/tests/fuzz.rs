@@ -19,7 +19,7 @@ use num_traits::Signed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::{Duration, Instant};
-use vadop::narrow_phase::{sphere_sphere_time, CONTACT_TOLERANCE};
+use vadop::narrow_phase::spheres::{sphere_sphere_time, CONTACT_TOLERANCE};
 use vadop::{BodyHandle, BoxBounds, Method, Mode, Sphere, VadopError, World, WorldConfig};
 
 /// The budget: (seed, deadline, most cases).

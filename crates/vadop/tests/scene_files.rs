@@ -4,7 +4,8 @@
 //! never a panic.
 
 use glam::{DQuat, DVec3};
-use vadop::scene::{NamedShape, Scene, SceneBody, SceneEntry, StaticBody};
+use vadop::error::SceneEntry;
+use vadop::scene::{NamedShape, Scene, SceneBody, StaticBody};
 use vadop::shape::Shape;
 use vadop::{Body, BodyShape, BoxBounds, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
 

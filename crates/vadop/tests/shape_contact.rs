@@ -17,13 +17,15 @@ use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::time::Instant;
-use vadop::narrow_phase::{pair_contact_time, Motion};
-use vadop::shape::{Shape, ShapeGeometry};
-use vadop::shape_contact::{
+use vadop::motion::Motion;
+use vadop::motion::{RigidMotion, Spin};
+use vadop::narrow_phase::shapes::{
     contact_end_search, contact_end_time, contact_geometry, contact_in_progress_end_time, contact_tolerance,
     shape_contact_after, shape_contact_search, shape_contact_time, shape_wall_search, shape_wall_time,
-    wall_contact_geometry, RigidMotion, Spin,
+    wall_contact_geometry,
 };
+use vadop::narrow_phase::spheres::pair_contact_time;
+use vadop::shape::{Shape, ShapeGeometry};
 use vadop::{Wall, Window};
 
 /// Constant angular velocity `omega` (world frame) from orientation `start` (test only).
@@ -297,7 +299,7 @@ proptest! {
 /// Checks a body against the walls: reported wall contacts touch within `tol` and nothing closer
 /// than `tol/2` before the first; returns the first.
 fn check_walls(a: &Body, min: DVec3, max: DVec3, window: Window, samples: usize, what: &str) -> Option<(f64, Wall)> {
-    let tol = vadop::shape_contact::SHAPE_CONTACT_TOLERANCE * a.0.bounding_radius().unwrap();
+    let tol = vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE * a.0.bounding_radius().unwrap();
     let found = shape_wall_time(&a.0, &a.1, min, max, window).unwrap();
     let wall_distance = |t: f64, wall: Wall| {
         let c = wall_contact_geometry(&a.0, &a.1, wall, min, max, t).unwrap();
@@ -465,7 +467,7 @@ fn fast_spinning_long_box_hits_a_cube_it_sweeps_past() {
 #[test]
 fn cube_hits_a_wall_face_first() {
     let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
-    let tol = vadop::shape_contact::SHAPE_CONTACT_TOLERANCE * cube.bounding_radius().unwrap();
+    let tol = vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE * cube.bounding_radius().unwrap();
     // Centre at x = 1, speed 3 towards the plane x = 10 (normal -x): the face at 1.5 closes 8.5.
     let a = body(cube.clone(), DVec3::new(1.0, 2.0, 3.0), DVec3::new(3.0, 0.0, 0.0), DQuat::IDENTITY, DVec3::ZERO);
     let wall =

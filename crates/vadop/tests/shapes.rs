@@ -370,8 +370,8 @@ fn kicked_stack(n: usize, restitution: f64, friction: f64, jitter: f64, seed: u6
     world.add_static(plane, DVec3::new(0.0, 0.0, 1.0), DQuat::IDENTITY).unwrap();
     let cube = world.add_shape(Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
     let geometry = world.shape(cube).unwrap().clone();
-    let pair_tolerance = vadop::shape_contact::contact_tolerance(&geometry, &geometry);
-    let floor_tolerance = vadop::shape_contact::SHAPE_CONTACT_TOLERANCE * geometry.bounding_radius().unwrap();
+    let pair_tolerance = vadop::narrow_phase::shapes::contact_tolerance(&geometry, &geometry);
+    let floor_tolerance = vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE * geometry.bounding_radius().unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut bottom = 1.0;
     let mut handles = Vec::new();

@@ -6,7 +6,7 @@
 //! boxes [`CompactBox::overlaps`] accepts, in ascending order, so which path runs never changes a
 //! result. It knows nothing of bodies, cells or windows.
 
-use crate::proxy::CompactBox;
+use crate::broad_phase::proxy::CompactBox;
 use std::ops::Range;
 
 /// Boxes by coordinate, all six columns of one length.
@@ -96,7 +96,7 @@ impl BoxColumns {
     ///
     /// ```
     /// use vadop::broad_phase::box_columns::BoxColumns;
-    /// use vadop::proxy::CompactBox;
+    /// use vadop::broad_phase::proxy::CompactBox;
     /// let unit = |x: f32| CompactBox { low: [x, 0.0, 0.0], high: [x + 1.0, 1.0, 1.0] };
     /// let mut boxes = BoxColumns::default();
     /// boxes.resize(6);

@@ -4,8 +4,8 @@
 //! other broad phase's contacts with the ones found through it.
 
 use super::{BroadPhase, PrepareCounts};
+use crate::broad_phase::proxy::{Proxies, Reported};
 use crate::parallel::Workers;
-use crate::proxy::{Proxies, Reported};
 use crate::window::Window;
 
 /// All pairs.

@@ -18,8 +18,9 @@
 use super::box_columns::BoxColumns;
 use super::{BroadPhase, PrepareCounts};
 use crate::bodies::BodyState;
+use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Proxies, Reported};
+use crate::memory::prefetch;
 use crate::parallel::{split_at_points, DisjointWriter, Workers};
-use crate::proxy::{prefetch, sampled_quantile, CompactBox, Proxies, Reported};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -206,8 +207,8 @@ impl Grid {
     fn plan_pieces(&self, proxies: Proxies, i: usize) -> (u32, i32) {
         let radius = proxies.radius(i);
         let length = proxies.velocity(i).length() * proxies.window_of(i).duration();
-        let scale = 1.0 + 4.0 * crate::proxy::RELATIVE_PADDING;
-        let widening = 4.0 * crate::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element()
+        let scale = 1.0 + 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING;
+        let widening = 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element()
             + 4.0 * f32::EPSILON as f64 * (self.extent.max_element() + 2.0 * radius + length);
         // A hair shorter than the room left in a base cell, so rounding never pushes a piece up.
         let limit = (((self.base_cell - widening) / scale - 2.0 * radius) * (1.0 - 1e-6)).max(2.0 * radius);

@@ -1,6 +1,6 @@
 //! Broad phases: which pairs of bodies might touch within a window, found from the proxy table.
 //!
-//! Every broad phase implements [`BroadPhase`] over the same flat [`crate::proxy::ProxyTable`],
+//! Every broad phase implements [`BroadPhase`] over the same flat [`crate::broad_phase::proxy::ProxyTable`],
 //! read through [`Proxies`], which pairs it with the bodies' motions: at a window's start it
 //! bins or sorts every proxy and reports each candidate pair once; when a body changes velocity
 //! mid-window it enters the body's new proxy and reports that body's candidate partners, at a
@@ -17,11 +17,13 @@
 
 pub mod box_columns;
 pub mod brute_force;
+pub(crate) mod coherent_sort;
 pub mod grid;
+pub mod proxy;
 pub mod sweep_prune;
 
+use crate::broad_phase::proxy::{Proxies, Reported};
 use crate::parallel::Workers;
-use crate::proxy::{Proxies, Reported};
 use crate::window::Window;
 
 /// Counters of a broad phase's window-start work.

@@ -22,9 +22,9 @@
 use super::{BroadPhase, PrepareCounts};
 use crate::axis_pool::AxisPool;
 use crate::bounding_volume::{interval, select_axes, Interval};
-use crate::coherent_sort::coherent_sort;
+use crate::broad_phase::coherent_sort::coherent_sort;
+use crate::broad_phase::proxy::{CompactBox, Proxies, Reported};
 use crate::parallel::Workers;
-use crate::proxy::{CompactBox, Proxies, Reported};
 use crate::window::Window;
 use glam::DVec3;
 use std::sync::Arc;

@@ -5,11 +5,11 @@
 //! (the centre of mass and the principal axes, see [`crate::shape`]), and validates both before
 //! anything changes. It never decides contacts or responses.
 
-use super::{Engine, Method, World};
+use super::{Method, World};
 use crate::bodies::{RigidState, SPHERE};
 use crate::error::{check_magnitude, check_vector, Result, VadopError};
 use crate::handle::BodyHandle;
-use crate::narrow_phase::unit_quaternion;
+use crate::numeric::unit_quaternion;
 use crate::shape::{Shape, ShapeGeometry};
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
@@ -340,7 +340,9 @@ impl World {
         if !self.unplaced.contains(&slot) {
             let physics = self.physics();
             let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);
-            with_pipeline!(&mut self.engine, p => p.enter(slot, bodies, &physics, time, stats), ());
+            if let Some(engine) = &mut self.engine {
+                engine.reenter(slot, bodies, &physics, time, stats);
+            }
         }
     }
 }

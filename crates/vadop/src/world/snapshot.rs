@@ -18,7 +18,7 @@
 //! generations. A loaded world is one stepping could have produced. It never writes a file in place: a run killed mid-write leaves the
 //! previous file intact.
 
-use super::{BoxBounds, Engine, Mode, World, WorldConfig};
+use super::{BoxBounds, Mode, World, WorldConfig};
 use crate::bodies::{RigidState, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
@@ -136,14 +136,8 @@ impl World {
                 }),
             })
             .collect();
-        let (overlapping, touching_since) = match &self.engine {
-            Engine::Discrete(pd) => (pd.overlapping().to_vec(), Vec::new()),
-            engine => with_pipeline!(
-                engine,
-                p => p.touching.contacts().into_iter().map(|(a, b, since)| ((a, b), since)).unzip(),
-                (Vec::new(), Vec::new())
-            ),
-        };
+        let (overlapping, touching_since) =
+            self.engine.as_ref().map_or_else(Default::default, |engine| engine.touching_since());
         let snapshot = Snapshot {
             format: FORMAT.to_string(),
             version: VERSION,
@@ -316,7 +310,9 @@ impl World {
         world.free_slots = snapshot.free_slots;
         // The pseudo-dynamic method finds overlaps only after they happen: its worlds may hold some.
         if world.config.mode == Mode::Simulate && world.config.method != super::Method::Discrete {
-            if let Some((a, b, depth)) = crate::overlap::first_overlap(&world.bodies, &world.stepped(&waiting), time) {
+            if let Some((a, b, depth)) =
+                crate::world::overlap::first_overlap(&world.bodies, &world.stepped(&waiting), time)
+            {
                 let (a, b) = (world.bodies.handle(a as usize), world.bodies.handle(b as usize));
                 return Err(bad(format!(
                     "bodies {a} and {b} overlap by {depth:.3e}: a simulate-mode world never holds overlapping bodies"
@@ -332,13 +328,8 @@ impl World {
                 rules.last_contact[i] = slot.last_contact.unwrap_or(f64::NEG_INFINITY);
             }
         }
-        match &mut world.engine {
-            Engine::Discrete(pd) => pd.set_overlapping(snapshot.overlapping),
-            engine => with_pipeline!(engine, p => {
-                for ((a, b), since) in snapshot.overlapping.into_iter().zip(touching_since) {
-                    p.touching.insert(a, b, since);
-                }
-            }, ()),
+        if let Some(engine) = &mut world.engine {
+            engine.restore_touching(snapshot.overlapping, touching_since);
         }
         Ok(world)
     }

@@ -6,7 +6,7 @@
 use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
-use vadop::narrow_phase::CONTACT_TOLERANCE;
+use vadop::narrow_phase::spheres::CONTACT_TOLERANCE;
 use vadop::{BodyHandle, Contact, Mode, Sphere, World};
 
 /// Every field of every contact as bits: a difference in the last bit, or in the sign of a zero,

@@ -8,7 +8,7 @@
 /// Sorts `items` by `less`; returns the number of single-place moves insertion sort made.
 ///
 /// ```
-/// use vadop::coherent_sort::coherent_sort;
+/// use vadop::broad_phase::coherent_sort::coherent_sort;
 /// let mut v = vec![1.0, 3.0, 2.0, 4.0];
 /// assert_eq!(coherent_sort(&mut v, |a: &f64, b: &f64| a < b), 1);
 /// assert_eq!(v, [1.0, 2.0, 3.0, 4.0]);

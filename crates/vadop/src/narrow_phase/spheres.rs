@@ -1,5 +1,5 @@
-//! Narrow phase: the exact time of first contact of two moving spheres, or of a sphere and a wall
-//! of the box.
+//! The spheres' closed forms: the exact time of first contact of two moving spheres, or of a
+//! sphere and a wall of the box.
 //!
 //! It owns the contact arithmetic and its tolerance, and nothing else: it never sees the world,
 //! the broad phase or the queue, so every method and the brute-force oracle call the very same
@@ -21,7 +21,10 @@
 //! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
 //! scaled by a power of two gives bit-identical contact times, scaled alike.
 
-use glam::{DQuat, DVec3};
+use crate::motion::Motion;
+use crate::numeric::{exponent, power_of_two, scale_by_power_of_two, unit_scale};
+use crate::walls::Wall;
+use glam::DVec3;
 
 /// Relative tolerance on the centre distance within which two spheres count as touching.
 pub const CONTACT_TOLERANCE: f64 = 1e-9;
@@ -36,83 +39,6 @@ pub const APPROACH_TOLERANCE: f64 = 1e-12;
 /// rounding residues until they underflow.
 pub const NOISE_VELOCITY: f64 = 1e-12;
 
-/// A body's straight motion: at `since` its centre is at `position`, then it moves with `velocity`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Motion {
-    pub position: DVec3,
-    pub since: f64,
-    pub velocity: DVec3,
-}
-
-impl Motion {
-    /// Centre at time `t`.
-    #[inline]
-    pub fn at(&self, t: f64) -> DVec3 {
-        self.position + (t - self.since) * self.velocity
-    }
-}
-
-/// The exponent e with `2^e <= |x| < 2^(e+1)`, clamped to the normal range `[-1022, 1022]`.
-#[inline]
-fn exponent(x: f64) -> i32 {
-    let biased = ((x.to_bits() >> 52) & 0x7ff) as i32;
-    (biased - 1023).clamp(-1022, 1022)
-}
-
-/// `2^k` for k in the normal range.
-#[inline]
-fn power_of_two(k: i32) -> f64 {
-    f64::from_bits(((1023 + k) as u64) << 52)
-}
-
-/// `x * 2^k` for any k in `[-2044, 2044]`, exact unless the result leaves the normal range.
-#[inline]
-fn scale_by_power_of_two(x: f64, k: i32) -> f64 {
-    x * power_of_two(k / 2) * power_of_two(k - k / 2)
-}
-
-/// The exact power of two `2^-e` with `2^e <= |x| < 2^(e+1)` (clamped to the normal range), so
-/// that `x * unit_scale(x)` lies in `[1, 2)` without rounding.
-///
-/// ```
-/// use vadop::narrow_phase::unit_scale;
-/// assert_eq!(unit_scale(3.0), 0.5);
-/// assert!(unit_scale(1e-300) * 1e-300 >= 1.0);
-/// ```
-#[inline]
-pub fn unit_scale(x: f64) -> f64 {
-    power_of_two(-exponent(x))
-}
-
-/// `v` scaled to unit length, exactly scale-free: tiny and huge vectors normalise like ordinary
-/// ones. `None` for the zero vector (or a non-finite one).
-#[inline]
-pub fn direction(v: DVec3) -> Option<DVec3> {
-    (v * unit_scale(v.abs().max_element())).try_normalize()
-}
-
-/// The rotation `q` stands for: `q` scaled to unit length, exactly scale-free as [`direction`]
-/// (a quaternion times a power of two normalises to the same bits, at 1e300 or subnormal too).
-/// `None` for the zero quaternion or a non-finite one.
-///
-/// ```
-/// use glam::DQuat;
-/// use vadop::narrow_phase::unit_quaternion;
-/// let huge = DQuat::from_xyzw(0.0, 0.0, 0.0, 1e155);
-/// assert_eq!(unit_quaternion(huge), Some(DQuat::IDENTITY));
-/// let tiny = DQuat::from_xyzw(3e-300, 0.0, 0.0, 4e-300);
-/// assert!((unit_quaternion(tiny).unwrap().x - 0.6).abs() < 1e-15);
-/// assert_eq!(unit_quaternion(DQuat::from_xyzw(0.0, 0.0, 0.0, 0.0)), None);
-/// ```
-#[inline]
-pub fn unit_quaternion(q: DQuat) -> Option<DQuat> {
-    let largest = glam::DVec4::from(q).abs().max_element();
-    if !(q.is_finite() && largest > 0.0) {
-        return None;
-    }
-    Some((q * unit_scale(largest)).normalize())
-}
-
 /// Time `tau >= 0` after the reference instant at which two spheres first touch while
 /// approaching, if they ever do on their straight paths.
 ///
@@ -121,7 +47,7 @@ pub fn unit_quaternion(q: DQuat) -> Option<DQuat> {
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::sphere_sphere_time;
+/// use vadop::narrow_phase::spheres::sphere_sphere_time;
 /// // Two unit spheres 10 apart closing at speed 4 touch after (10 - 2) / 4 = 2.
 /// let tau = sphere_sphere_time(DVec3::new(10.0, 0.0, 0.0), DVec3::new(-4.0, 0.0, 0.0), 2.0);
 /// assert_eq!(tau, Some(2.0));
@@ -173,7 +99,7 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::{pair_contact_time, Motion};
+/// use vadop::narrow_phase::spheres::{pair_contact_time, Motion};
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // The gap of 5 closes at 3: one contact at 5/3, whichever frame asks.
@@ -202,7 +128,7 @@ pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64>
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::sphere_separation_time;
+/// use vadop::narrow_phase::spheres::sphere_separation_time;
 /// // Centres 1 apart, R = 2, closing at 1: they pass through and separate when 2 apart on the far side.
 /// assert_eq!(sphere_separation_time(DVec3::new(1.0, 0.0, 0.0), DVec3::new(-1.0, 0.0, 0.0), 2.0), Some(3.0));
 /// ```
@@ -232,7 +158,7 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::{pair_contact_time, pair_separation_time, Motion};
+/// use vadop::narrow_phase::spheres::{pair_contact_time, pair_separation_time, Motion};
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
@@ -247,57 +173,12 @@ pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f
     time.is_finite().then_some(time)
 }
 
-/// A side of the axis-aligned box.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
-pub enum Wall {
-    MinX,
-    MaxX,
-    MinY,
-    MaxY,
-    MinZ,
-    MaxZ,
-}
-
-impl Wall {
-    /// Every wall, in id order.
-    pub const ALL: [Wall; 6] = [Wall::MinX, Wall::MaxX, Wall::MinY, Wall::MaxY, Wall::MinZ, Wall::MaxZ];
-
-    /// The coordinate axis (0, 1, 2) this wall is orthogonal to.
-    pub fn axis(self) -> usize {
-        self as usize / 2
-    }
-    /// True for the wall at the box's maximum on its axis.
-    pub fn is_max(self) -> bool {
-        self as usize % 2 == 1
-    }
-    /// The wall on `axis` at the maximum side when `is_max`.
-    pub fn new(axis: usize, is_max: bool) -> Wall {
-        Wall::ALL[axis * 2 + is_max as usize]
-    }
-    /// Unit normal pointing out of the box.
-    pub fn outward_normal(self) -> DVec3 {
-        let mut n = DVec3::ZERO;
-        n[self.axis()] = if self.is_max() { 1.0 } else { -1.0 };
-        n
-    }
-    /// The wall's name as written in files: `min-x`, `max-x`, ...
-    pub fn name(self) -> &'static str {
-        ["min-x", "max-x", "min-y", "max-y", "min-z", "max-z"][self as usize]
-    }
-}
-
-impl std::fmt::Display for Wall {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
 /// Canonical absolute time at which a sphere of `radius` on `motion` inside the box `[min, max]`
 /// first touches a wall while moving towards it, with the wall. Ties go to the lowest axis.
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::{wall_contact_time, Motion, Wall};
+/// use vadop::narrow_phase::spheres::{wall_contact_time, Motion, Wall};
 /// let motion = Motion { position: DVec3::new(5.0, 5.0, 5.0), since: 1.0, velocity: DVec3::new(2.0, 0.0, 0.0) };
 /// assert_eq!(wall_contact_time(&motion, 1.0, DVec3::ZERO, DVec3::splat(10.0)), Some((3.0, Wall::MaxX)));
 /// ```
@@ -325,6 +206,7 @@ pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::numeric::direction;
 
     #[test]
     fn head_on_and_miss() {

@@ -24,7 +24,7 @@ struct Link {
 /// Touching pairs with a list per body.
 ///
 /// ```
-/// use vadop::touching::Touching;
+/// use vadop::pipeline::touching::Touching;
 /// let mut touching = Touching::default();
 /// touching.insert(3, 1, 0.5);
 /// touching.insert(1, 7, 0.25);
@@ -122,6 +122,7 @@ impl Touching {
     }
 
     /// True when no pair touches.
+    #[cfg(test)]
     pub fn is_empty(&self) -> bool {
         self.links.len() == self.free.len()
     }

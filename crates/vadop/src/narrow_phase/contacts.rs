@@ -2,9 +2,9 @@
 //! body and a wall) start or stop touching within a window, and where.
 //!
 //! It owns the choice of narrow phase: two spheres by the closed forms of
-//! [`crate::narrow_phase`], anything else by the conservative advancement of
-//! [`crate::shape_contact`], from the body store's motions, shapes and spins. A search that cannot
-//! decide (see [`crate::shape_contact`]'s termination guard) is answered as *stalled* at the time
+//! [`crate::narrow_phase::spheres`], anything else by the conservative advancement of
+//! [`crate::narrow_phase::shapes`], from the body store's motions, shapes and spins. A search that cannot
+//! decide (see [`crate::narrow_phase::shapes`]'s termination guard) is answered as *stalled* at the time
 //! it stopped, before which no contact starts: the pipeline then starts the pair's motions afresh
 //! from that instant (or, in simulate mode when they touch there, applies the jam rule), so a
 //! contact is never dropped.
@@ -12,14 +12,14 @@
 
 use crate::bodies::{Bodies, BodyState};
 use crate::error::{Result, VadopError};
-use crate::narrow_phase::{
-    direction, pair_contact_time, pair_separation_time, unit_scale, wall_contact_time, Wall, CONTACT_TOLERANCE,
-};
-use crate::shape_contact::{contact_end_time, contact_geometry};
-use crate::shape_contact::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
-use crate::shape_contact::{shape_contact_after, shape_contact_time, shape_wall_time};
+use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
+use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
+use crate::narrow_phase::shapes::{shape_contact_after, shape_contact_time, shape_wall_time};
+use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, wall_contact_time, CONTACT_TOLERANCE};
+use crate::numeric::{direction, unit_scale};
+use crate::walls::BoxBounds;
+use crate::walls::Wall;
 use crate::window::Window;
-use crate::world::BoxBounds;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
 use parry3d_f64::query::{
@@ -151,8 +151,8 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
     let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) else { return false };
     let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
     let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) else { return false };
-    let (side_i, side_j) = (bodies.rigid_side(i, t, contact.point), bodies.rigid_side(j, t, contact.point));
-    let separating = (side_j.point_velocity() - side_i.point_velocity()).dot(contact.normal) > 0.0;
+    let (vi, vj) = (bodies.point_velocity(i, t, contact.point), bodies.point_velocity(j, t, contact.point));
+    let separating = (vj - vi).dot(contact.normal) > 0.0;
     contact.distance <= 2.0 * contact_tolerance(gi, gj) && !separating
 }
 
@@ -291,7 +291,7 @@ pub(crate) fn wall_points(
     let plane = HalfSpace::new(inward);
     let pose_plane = Pose::from_translation(on_wall);
     let pose_body = g.pose_of_shape(bodies.position_at(i, t), bodies.orientation_at(i, t));
-    let reach = 2.0 * crate::shape_contact::SHAPE_CONTACT_TOLERANCE * bodies.radius(i);
+    let reach = 2.0 * crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE * bodies.radius(i);
     scratch.touch((&plane, pose_plane), (g.parry_shape().as_ref(), pose_body), reach, fallback);
 }
 

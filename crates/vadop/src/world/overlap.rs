@@ -8,7 +8,7 @@
 //! never changes the bodies.
 
 use crate::bodies::Bodies;
-use crate::contacts::penetration;
+use crate::narrow_phase::contacts::penetration;
 use glam::DVec3;
 
 const CELL_BITS: u32 = 21;

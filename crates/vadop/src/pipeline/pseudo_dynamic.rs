@@ -12,12 +12,13 @@
 //! instants is missed, which is exactly what the accuracy comparison measures.
 
 use crate::bodies::Bodies;
-use crate::coherent_sort::coherent_sort;
-use crate::collapse::{ContactRules, Rule};
-use crate::narrow_phase::{direction, wall_contact_time};
-use crate::pipeline::{Output, Physics};
-use crate::response::{pair_impulse, wall_bounce};
-use crate::world::{Contact, Mode, Touched};
+use crate::broad_phase::coherent_sort::coherent_sort;
+use crate::frame::{Contact, Mode, Touched};
+use crate::frame::{Output, Physics};
+use crate::narrow_phase::spheres::wall_contact_time;
+use crate::numeric::direction;
+use crate::response::impact::{bounce_off_wall, push_spheres};
+use crate::response::rules::{ContactRules, Rule};
 use glam::DVec3;
 use std::time::Instant;
 
@@ -105,7 +106,7 @@ impl PseudoDynamic {
                 out.stats.candidate_pairs += 1;
                 out.stats.narrow_tests += 1;
                 // Scaled so the squares neither underflow nor overflow at any scale.
-                let scale = crate::narrow_phase::unit_scale(reach);
+                let scale = crate::numeric::unit_scale(reach);
                 if ((pi - pj) * scale).length_squared() < (reach * scale) * (reach * scale) {
                     self.current.push(if i < j { (i, j) } else { (j, i) });
                 }
@@ -132,16 +133,18 @@ impl PseudoDynamic {
                 if !(t < t1) {
                     break;
                 }
-                let v = bodies.velocity(i);
-                let bounced = match self.rules.wall(body, t, physics.restitution, 0.0) {
+                // Frame instants have no contact times to run the TC model on: only the jam rule.
+                let impulse = match self.rules.wall(body, t, physics.restitution, 0.0) {
                     // A body alone: its cluster is itself, stopped at the wall.
                     Rule::Jam => {
                         out.stats.jam_contacts += 1;
-                        v - v.dot(wall.outward_normal()).max(0.0) * wall.outward_normal()
+                        let v = bodies.velocity(i);
+                        let stopped = v - v.dot(wall.outward_normal()).max(0.0) * wall.outward_normal();
+                        bodies.set_velocity_at(i, t, stopped);
+                        bodies.mass[i] * (v - stopped).length()
                     }
-                    Rule::Impulse { restitution, .. } => wall_bounce(v, wall.axis(), restitution),
+                    Rule::Impulse { restitution, .. } => bounce_off_wall(bodies, i, wall, t, restitution),
                 };
-                bodies.set_velocity_at(i, t, bounced);
                 let normal = wall.outward_normal();
                 let point = bodies.position_at(i, t) + normal * bodies.radius(i);
                 out.contacts.push(Contact {
@@ -150,7 +153,7 @@ impl PseudoDynamic {
                     touched: Touched::Wall(wall),
                     point,
                     normal,
-                    impulse: bodies.mass[i] * (v - bounced).length(),
+                    impulse,
                 });
             }
         }
@@ -164,14 +167,10 @@ impl PseudoDynamic {
             let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
             let mut impulse = 0.0;
             if physics.mode == Mode::Simulate {
-                let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
-                let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
-                impulse = pair_impulse(normal, vi, vj, wi, wj, physics.restitution);
+                impulse = push_spheres(bodies, (i, j), t1, normal, physics.restitution);
                 if impulse == 0.0 {
                     continue;
                 }
-                bodies.set_velocity_at(i, t1, vi - impulse * wi * normal);
-                bodies.set_velocity_at(j, t1, vj + impulse * wj * normal);
             } else if self.previous.binary_search(&(a, b)).is_ok() {
                 continue;
             }

@@ -14,25 +14,30 @@
 //! fresh proxy and is re-tested against its candidate partners for the rest of the window. Events
 //! left in the queue at a frame's end stay valid for the next frame.
 //!
-//! Exactness: contact times are canonical (see [`crate::narrow_phase`]) and each prediction is
+//! Exactness: contact times are canonical (see [`crate::narrow_phase::spheres`]) and each prediction is
 //! kept only inside the window its bounds hold for, so every contact is predicted, and reported
 //! once, in the frame whose `[start, end)` holds its time, whichever window, frame length or
 //! method finds it. It never validates input (the world does) and never reads a broad phase's
 //! internals.
 
+pub(crate) mod pseudo_dynamic;
+pub(crate) mod touching;
+
 use crate::bodies::Bodies;
+use crate::broad_phase::proxy::{sampled_quantile, Proxies, ProxyTable, Reported};
 use crate::broad_phase::BroadPhase;
-use crate::collapse::{ContactRules, Rule};
-use crate::contacts;
 use crate::event_queue::{Event, EventQueue, Partner};
-use crate::narrow_phase::{Wall, CONTACT_TOLERANCE};
+use crate::frame::{Contact, FrameStats, Mode, Touched};
+use crate::frame::{Output, Physics};
+use crate::narrow_phase::contacts;
+use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
+use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
-use crate::proxy::{sampled_quantile, Proxies, ProxyTable, Reported};
-use crate::response::{pair_impulse, resolve_impact, wall_bounce, Impacted};
-use crate::static_geometry::StaticGeometry;
-use crate::touching::Touching;
+use crate::pipeline::touching::Touching;
+use crate::response::impact::{Impacts, Resolution};
+use crate::walls::BoxBounds;
+use crate::walls::Wall;
 use crate::window::Window;
-use crate::world::{BoxBounds, Contact, FrameStats, Mode, Touched};
 use glam::DVec3;
 use std::time::Instant;
 
@@ -70,27 +75,6 @@ pub(crate) enum WindowRule {
     Adaptive,
 }
 
-/// The physics a frame is stepped with.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct Physics {
-    pub bounds: BoxBounds,
-    pub mode: Mode,
-    pub restitution: f64,
-    /// Coulomb friction coefficient of every impact.
-    pub friction: f64,
-    pub contact_duration: f64,
-    /// Detect mode only: contact ends are reported and touching pairs kept.
-    pub report_ends: bool,
-}
-
-/// What a frame produces.
-pub(crate) struct Output<'a> {
-    pub contacts: &'a mut Vec<Contact>,
-    /// The contacts that ended, in time order (when ends are reported).
-    pub ends: &'a mut Vec<Contact>,
-    pub stats: &'a mut FrameStats,
-}
-
 /// A continuous method: one broad phase in the frame pipeline.
 #[derive(Debug)]
 pub(crate) struct Pipeline<B: BroadPhase> {
@@ -98,13 +82,11 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     rule: WindowRule,
     proxies: ProxyTable,
     queue: EventQueue,
-    pub(crate) rules: ContactRules,
+    pub(crate) impacts: Impacts,
     /// The pairs in contact now, when contact ends are reported.
     pub(crate) touching: Touching,
     /// The static bodies, bounded once.
     statics: StaticGeometry,
-    /// Scratch of the contact points an impact of rigid bodies is resolved over.
-    manifold: contacts::ManifoldScratch,
     /// The current window (empty before the first).
     window: Window,
     /// Proxies refreshed since the window started.
@@ -133,10 +115,9 @@ impl<B: BroadPhase> Pipeline<B> {
             rule,
             proxies,
             queue: EventQueue::default(),
-            rules: ContactRules::default(),
+            impacts: Impacts::default(),
             touching: Touching::default(),
             statics: StaticGeometry::default(),
-            manifold: contacts::ManifoldScratch::default(),
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
@@ -159,7 +140,7 @@ impl<B: BroadPhase> Pipeline<B> {
         self.broad.memory_bytes()
             + self.proxies.memory_bytes()
             + self.queue.memory_bytes()
-            + self.rules.memory_bytes()
+            + self.impacts.rules.memory_bytes()
             + self.touching.memory_bytes()
             + self.travel.capacity() * 8
             + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
@@ -168,7 +149,7 @@ impl<B: BroadPhase> Pipeline<B> {
     /// Body `i` was added or changed velocity between frames at time `t`: it enters the window
     /// under way (if any) with its candidates predicted; otherwise the next window takes it.
     pub(crate) fn enter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
-        self.rules.resize(bodies.slots());
+        self.impacts.rules.resize(bodies.slots());
         if self.window.end > t {
             self.retest(i, None, bodies, physics, t, stats);
         } else {
@@ -179,15 +160,15 @@ impl<B: BroadPhase> Pipeline<B> {
     /// Body `i` was removed: its predictions and broad-phase entries are void.
     pub(crate) fn remove(&mut self, i: u32) {
         self.proxies.remove(i as usize);
-        self.rules.forget(i as usize);
+        self.impacts.rules.forget(i as usize);
         // Its contacts end with it, unreported: it is gone, not apart.
         self.touching.remove_body(i);
     }
 
     /// Steps from `t0` to `t1`: every contact with a time in `[t0, t1)`, in time order.
     pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
-        self.rules.resize(bodies.slots());
-        self.rules.next_step();
+        self.impacts.rules.resize(bodies.slots());
+        self.impacts.rules.next_step();
         // A static body added or removed since: every body's contacts with the level change, so
         // a new window starts now.
         if self.statics.is_stale(bodies) {
@@ -353,68 +334,22 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let fixed = (bodies.is_fixed(i), bodies.is_fixed(j));
-        // Two moving spheres without friction: the closed-form impulse along the line of centres.
-        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
-        // Static level geometry turns bodies back in detect mode too, as the walls do.
-        let responds = physics.mode == Mode::Simulate || fixed != (false, false);
+        let resolution = self.impacts.pair(bodies, physics, (a, b), t, (point, normal), out.stats);
         let mut impulse = 0.0;
-        if responds {
-            let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
-            // Level geometry keeps no contact history, as a wall keeps none: the TC model and the
-            // jam count are about the moving body's own contacts.
-            let rule = match fixed {
-                (true, _) => self.rules.wall(b, t, physics.restitution, duration),
-                (_, true) => self.rules.wall(a, t, physics.restitution, duration),
-                _ => self.rules.pair(a, b, t, physics.restitution, duration),
-            };
-            match rule {
-                Rule::Jam => {
-                    let before = bodies.velocity(i);
-                    self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
-                    impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
-                }
-                Rule::Impulse { restitution, changed } if plain => {
-                    let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
-                    let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
-                    impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
-                    // Zero impulse changes nothing; re-testing would find the same touch again.
-                    if impulse > 0.0 {
-                        out.stats.tc_contacts += changed as u64;
-                        bodies.set_velocity_at(i, t, vi - impulse * wi * normal);
-                        bodies.set_velocity_at(j, t, vj + impulse * wj * normal);
-                        // The pair itself is re-tested once, by the second body, when both
-                        // proxies are fresh (a rounding residue may still approach).
-                        self.retest(a, Some(b), bodies, physics, t, out.stats);
-                        self.retest(b, None, bodies, physics, t, out.stats);
-                    }
-                }
-                Rule::Impulse { restitution, changed } => {
-                    contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
-                    let [mut body_i, mut body_j] = [bodies.impacted(i, t), bodies.impacted(j, t)];
-                    let clearance = contacts::clearance(bodies, i, j);
-                    let points = &self.manifold.points;
-                    match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {
-                        Some(total) if total > 0.0 => {
-                            impulse = total;
-                            out.stats.tc_contacts += changed as u64;
-                            for (k, body) in [(i, body_i), (j, body_j)] {
-                                if !bodies.is_fixed(k) {
-                                    bodies.set_motion_at(k, t, body.velocity, body.angular_velocity);
-                                }
-                            }
-                            self.retest_pair(a, b, bodies, physics, t, out.stats);
-                        }
-                        // Nothing to push, yet the search found them touching as they turn into
-                        // each other (it would find the same touch again while one sinks into
-                        // the other), or points still approach however the impulses go: a
-                        // jammed contact.
-                        Some(_) | None => {
-                            self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
-                        }
-                    }
-                }
+        match resolution {
+            Resolution::Jammed { by_rule: true } => {
+                let before = bodies.velocity(i);
+                self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
+                impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
             }
+            Resolution::Jammed { by_rule: false } => self.freeze_cluster(bodies, physics, &[a, b], t, out.stats),
+            Resolution::Pushed(total) => {
+                impulse = total;
+                // The pair itself is re-tested once, by the second body, when both proxies are
+                // fresh (a rounding residue may still approach).
+                self.retest_pair(a, b, bodies, physics, t, out.stats);
+            }
+            Resolution::Parting | Resolution::Passed => {}
         }
         // Spinning shapes may touch again on the same motions (spheres never do): with nothing
         // changed, the pair's next contact is predicted now, as a later window would find it.
@@ -426,7 +361,7 @@ impl<B: BroadPhase> Pipeline<B> {
             }
         }
         out.stats.pair_contacts += 1;
-        if physics.report_ends && !responds {
+        if physics.report_ends && resolution == Resolution::Passed {
             self.touching.insert(a, b, t);
             if let Some(event) = predict_end(bodies, a, b, t, self.window.from(t)) {
                 self.queue.push(event);
@@ -504,44 +439,21 @@ impl<B: BroadPhase> Pipeline<B> {
     fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
         let i = a as usize;
         let (point, normal) = contacts::wall_geometry(bodies, i, wall, &physics.bounds, t);
-        // The TC model is for collapse between bodies; detect mode only needs the jam rule
-        // (a body exactly as wide as the box).
-        let duration = if physics.mode == Mode::Simulate { physics.contact_duration } else { 0.0 };
-        let impulse = match self.rules.wall(a, t, physics.restitution, duration) {
-            Rule::Jam => {
+        let impulse = match self.impacts.wall(bodies, physics, a, wall, t, (point, normal), out.stats) {
+            Resolution::Jammed { by_rule: true } => {
                 let before = bodies.velocity(i);
                 self.freeze_cluster(bodies, physics, &[a], t, out.stats);
                 bodies.mass[i] * (before - bodies.velocity(i)).length()
             }
-            Rule::Impulse { restitution, changed } if bodies.is_sphere(i) && physics.friction == 0.0 => {
-                out.stats.tc_contacts += changed as u64;
-                let v = bodies.velocity(i);
-                let bounced = wall_bounce(v, wall.axis(), restitution);
-                bodies.set_velocity_at(i, t, bounced);
+            Resolution::Jammed { by_rule: false } => {
+                self.freeze_cluster(bodies, physics, &[a], t, out.stats);
+                0.0
+            }
+            Resolution::Pushed(total) => {
                 self.retest(a, None, bodies, physics, t, out.stats);
-                bodies.mass[i] * (v - bounced).length()
+                total
             }
-            Rule::Impulse { restitution, changed } => {
-                // The wall is an immovable body on the far side of the contact.
-                contacts::wall_points(bodies, i, wall, &physics.bounds, t, (point, -normal), &mut self.manifold);
-                let (mut wall_side, mut body) = (Impacted::FIXED, bodies.impacted(i, t));
-                let clearance = crate::shape_contact::SHAPE_CONTACT_TOLERANCE * bodies.radius(i);
-                let points = &self.manifold.points;
-                match resolve_impact(&mut wall_side, &mut body, points, restitution, physics.friction, clearance) {
-                    Some(total) if total > 0.0 => {
-                        out.stats.tc_contacts += changed as u64;
-                        bodies.set_motion_at(i, t, body.velocity, body.angular_velocity);
-                        self.retest(a, None, bodies, physics, t, out.stats);
-                        total
-                    }
-                    // As between bodies: nothing to push while the search finds it touching,
-                    // or no impulse that settles it: jammed against the wall.
-                    Some(_) | None => {
-                        self.freeze_cluster(bodies, physics, &[a], t, out.stats);
-                        0.0
-                    }
-                }
-            }
+            Resolution::Parting | Resolution::Passed => unreachable!("a wall always turns a body back"),
         };
         out.contacts.push(Contact {
             time: t,
@@ -553,7 +465,7 @@ impl<B: BroadPhase> Pipeline<B> {
         });
     }
 
-    /// The jam rule (see [`crate::collapse`]), counted as one jammed contact: every body touching
+    /// The jam rule (see [`crate::response::rules`]), counted as one jammed contact: every body touching
     /// `seeds` at `t`, directly or through each other, without separating, moves on with the
     /// cluster's centre-of-mass velocity less any component into a wall a member touches (a
     /// cluster pressed against static geometry stops, and its spins stop).
@@ -618,7 +530,7 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         // One rigid motion for all: no spin, or members would turn into each other.
         for &m in &cluster {
-            self.rules.freeze(m, t);
+            self.impacts.rules.freeze(m, t);
             bodies.set_motion_at(m as usize, t, velocity, DVec3::ZERO);
         }
         for &m in &cluster {

@@ -52,7 +52,7 @@
 //! checking that is the caller's job. Other inputs give meaningless numbers (possibly NaN) but
 //! [`FreeRotation::new`] never panics or loops forever: every loop here is bounded.
 
-use crate::narrow_phase::unit_scale;
+use crate::numeric::unit_scale;
 use glam::{DMat3, DQuat, DVec3};
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -97,7 +97,7 @@ fn trapezoid_nodes(m: f64) -> usize {
 ///
 /// ```
 /// use glam::{DQuat, DVec3};
-/// use vadop::free_rotation::FreeRotation;
+/// use vadop::motion::free_rotation::FreeRotation;
 /// // A tumbling brick: the angular momentum and the energy stay put while it wobbles.
 /// let inertia = DVec3::new(1.0, 2.0, 3.0);
 /// let rotation = FreeRotation::new(inertia, DQuat::IDENTITY, DVec3::new(0.3, 1.0, 0.2));
@@ -185,7 +185,7 @@ impl FreeRotation {
     ///
     /// ```
     /// use glam::{DQuat, DVec3};
-    /// use vadop::free_rotation::FreeRotation;
+    /// use vadop::motion::free_rotation::FreeRotation;
     /// // A sphere spins steadily: after a quarter turn about z, x has gone to y.
     /// let sphere = FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::new(0.0, 0.0, 2.0));
     /// let turned = sphere.orientation_at(std::f64::consts::PI / 4.0) * DVec3::X;
@@ -259,7 +259,7 @@ impl FreeRotation {
     ///
     /// ```
     /// use glam::{DQuat, DVec3};
-    /// use vadop::free_rotation::FreeRotation;
+    /// use vadop::motion::free_rotation::FreeRotation;
     /// let start = DQuat::from_rotation_x(0.4);
     /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), start, DVec3::new(1.0, 0.5, -2.0));
     /// let moved = |q: DQuat| (q * DVec3::new(1.0, 2.0, 3.0) - start * DVec3::new(1.0, 2.0, 3.0)).length();
@@ -282,7 +282,7 @@ impl FreeRotation {
     ///
     /// ```
     /// use glam::{DQuat, DVec3};
-    /// use vadop::free_rotation::FreeRotation;
+    /// use vadop::motion::free_rotation::FreeRotation;
     /// let omega = DVec3::new(0.1, 2.0, 0.3);
     /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, omega);
     /// assert!((rotation.angular_velocity_at(0.0) - omega).length() < 1e-15);
@@ -304,7 +304,7 @@ impl FreeRotation {
     ///
     /// ```
     /// use glam::{DQuat, DVec3};
-    /// use vadop::free_rotation::FreeRotation;
+    /// use vadop::motion::free_rotation::FreeRotation;
     /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(1.0, 1.0, 1.0));
     /// assert_eq!(rotation.angular_momentum(), DVec3::new(1.0, 2.0, 3.0));
     /// ```
@@ -316,7 +316,7 @@ impl FreeRotation {
     ///
     /// ```
     /// use glam::{DQuat, DVec3};
-    /// use vadop::free_rotation::FreeRotation;
+    /// use vadop::motion::free_rotation::FreeRotation;
     /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(1.0, 1.0, 1.0));
     /// assert_eq!(rotation.kinetic_energy(), 3.0);
     /// ```
@@ -330,7 +330,7 @@ impl FreeRotation {
     ///
     /// ```
     /// use glam::{DQuat, DVec3};
-    /// use vadop::free_rotation::FreeRotation;
+    /// use vadop::motion::free_rotation::FreeRotation;
     /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(0.1, 1.0, 0.1));
     /// let bound = rotation.max_angular_speed();
     /// assert!((0..1000).all(|i| rotation.angular_velocity_at(0.01 * i as f64).length() <= bound));

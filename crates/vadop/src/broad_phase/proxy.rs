@@ -16,7 +16,8 @@
 //! a body's proxy when it changes velocity.
 
 use crate::bodies::{Bodies, BodyState};
-use crate::narrow_phase::wall_contact_time;
+use crate::memory::prefetch;
+use crate::narrow_phase::spheres::wall_contact_time;
 use crate::parallel::Workers;
 use crate::window::Window;
 use glam::DVec3;
@@ -137,20 +138,6 @@ fn up(x: f64) -> f32 {
     }
 }
 
-/// Asks for the cache line holding `value` ahead of its use; a hint, without effect on results
-/// (and a no-op off x86_64).
-#[inline(always)]
-pub fn prefetch<T>(value: &T) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch reads nothing the program sees and never faults.
-    unsafe {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        _mm_prefetch::<_MM_HINT_T0>((value as *const T).cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = value;
-}
-
 /// Most values [`sampled_quantile`] looks at.
 const QUANTILE_SAMPLE: usize = 4096;
 
@@ -160,7 +147,7 @@ const QUANTILE_SAMPLE: usize = 4096;
 /// sampled whatever the number of threads. `None` when the sample holds no value.
 ///
 /// ```
-/// use vadop::proxy::sampled_quantile;
+/// use vadop::broad_phase::proxy::sampled_quantile;
 /// let mut scratch = Vec::new();
 /// let value = |i: usize| (i % 2 == 0).then_some(i as f64);
 /// assert_eq!(sampled_quantile(10, 0.5, value, &mut scratch), Some(4.0));

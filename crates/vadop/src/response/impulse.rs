@@ -154,7 +154,7 @@ pub fn rigid_impulse(a: &RigidSide, b: &RigidSide, normal: DVec3, restitution: f
     let impulse = if (sticking - normal_part * normal).length() <= friction * normal_part {
         sticking
     } else {
-        match crate::narrow_phase::direction(slip) {
+        match crate::numeric::direction(slip) {
             Some(along) => {
                 let direction = normal - friction * along;
                 let weight = normal.dot(matrix * direction);

@@ -10,316 +10,27 @@
 
 use crate::axis_pool::AxisPool;
 use crate::bodies::{Bodies, Sphere};
-use crate::broad_phase::brute_force::BruteForce;
-use crate::broad_phase::grid::Grid;
 use crate::broad_phase::sweep_prune::SweepPrune;
-use crate::collapse::{ContactRules, DEFAULT_CONTACT_DURATION};
 use crate::error::{check_length, check_magnitude, check_vector, Result, VadopError};
+use crate::frame::{Contact, FrameStats, Mode, Touched};
+use crate::frame::{Output, Physics};
 use crate::handle::BodyHandle;
-use crate::narrow_phase::Wall;
 use crate::parallel::Workers;
-use crate::pipeline::{Output, Physics, Pipeline, WindowRule};
-use crate::pseudo_dynamic::PseudoDynamic;
+use crate::response::rules::ContactRules;
+use crate::walls::BoxBounds;
 use glam::DVec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-/// A body moving more box lengths than this in one frame is rejected: it would bounce off the
-/// walls that many times per frame, which is never a meaningful simulation.
-pub const MAX_BOX_LENGTHS_PER_FRAME: f64 = 1e4;
+mod config;
+mod engine;
 
-/// How candidate pairs are found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Method {
-    /// Continuous: the fastest broad phase (see [`Method::resolve`]).
-    Auto,
-    /// Continuous: velocity-aligned volumes, sweep and prune over the axis pool (the paper).
-    Vadop,
-    /// Continuous: hierarchical uniform grid over pieces of the swept paths.
-    Grid,
-    /// Continuous: every pair tested (the oracle; O(n^2) per frame).
-    Brute,
-    /// Pseudo-dynamic: overlap checks at frame instants only (misses what passes in between).
-    Discrete,
-    /// Continuous baseline: classic sweep and prune over swept axis-aligned boxes (the three
-    /// coordinate axes for every body, one sorted list per axis, no tiles), as most engines do.
-    SweptAabb,
-    /// Continuous baseline: the VADOP sweep and prune with *every* pool axis for every body, a
-    /// swept k-DOP; isolates what the velocity alignment buys.
-    SweptKdop,
-}
-
-impl Method {
-    /// Every method, in the order the benchmarks list them.
-    pub const ALL: [Method; 7] = [
-        Method::Auto,
-        Method::Vadop,
-        Method::Grid,
-        Method::SweptAabb,
-        Method::SweptKdop,
-        Method::Discrete,
-        Method::Brute,
-    ];
-
-    /// The method's name on the command line and in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Auto => "auto",
-            Method::Vadop => "vadop",
-            Method::Grid => "grid",
-            Method::Brute => "brute",
-            Method::Discrete => "discrete",
-            Method::SweptAabb => "swept-aabb",
-            Method::SweptKdop => "swept-kdop",
-        }
-    }
-
-    /// The method called `name` (as [`Method::name`] writes it).
-    pub fn from_name(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
-    }
-
-    /// True for the methods that find every contact inside the frame.
-    pub fn is_continuous(self) -> bool {
-        self != Method::Discrete
-    }
-
-    /// The broad phase a method steps with: [`Method::Auto`] is the grid, the others are
-    /// themselves. Measured by `vadop-bench speed` (BENCHMARKS.md, "where each broad phase wins"):
-    /// on every scene it runs — the paper's at 0.05 to 5 diameters a frame, an equilibrium gas, a
-    /// stream within 1 to 10 degrees of one direction, heavy-tailed speeds — the grid is the
-    /// fastest continuous broad phase, the VADOP sweep and prune 1.3 to 6 times slower (closest in
-    /// streams, as velocity alignment predicts). No scene statistic picked out a case where it
-    /// wins, so Auto does not switch.
-    pub fn resolve(self) -> Method {
-        match self {
-            Method::Auto => Method::Grid,
-            other => other,
-        }
-    }
-}
-
-/// Whether bodies collide with each other or only report contacts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Mode {
-    /// Full response between bodies and with the walls.
-    Simulate,
-    /// Bodies pass through each other (contacts are reported, not resolved) and bounce only off
-    /// the walls, so every method sees exactly the same paths.
-    Detect,
-}
-
-/// World settings.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct WorldConfig {
-    pub method: Method,
-    pub mode: Mode,
-    /// Number of pool axes (methods Vadop and SweptKdop); `None` uses [`AUTO_POOL_AXES`].
-    pub pool_axes: Option<usize>,
-    /// Alignment angle phi in radians; `None` uses the pool's covering radius rho, the smallest
-    /// angle for which every pair of bodies shares an axis.
-    pub phi: Option<f64>,
-    /// Coefficient of restitution for body and wall impacts, in [0, 1].
-    pub restitution: f64,
-    /// Coulomb friction coefficient of every impact (0: frictionless), finite and >= 0. Friction
-    /// acts at the contact point, so it spins bodies up (spheres included).
-    #[serde(default)]
-    pub friction: f64,
-    /// Contact duration t_c of the TC model, in seconds: with restitution below 1, a contact of a
-    /// body whose previous contact lies less than t_c before is elastic (see [`crate::collapse`]).
-    #[serde(default = "default_contact_duration")]
-    pub contact_duration: f64,
-    /// Threads the frame pipeline shares its bulk work among; `None`: every core. Results are
-    /// bit-identical whatever the number; with 1, no thread pool is made. At most as many threads
-    /// as the system has cores are used ([`WorldConfig::thread_count`]): more would only wait for
-    /// each other (1000 threads on 2 cores made a run 375 times slower).
-    #[serde(default)]
-    pub threads: Option<usize>,
-    /// Detect mode: also report when each contact between bodies ends ([`World::contact_ends`])
-    /// and keep the pairs in contact ([`World::touching`]), as started and stopped events.
-    /// Off by default: it costs a prediction and a list entry per contact.
-    #[serde(default)]
-    pub contact_ends: bool,
-}
-
-fn default_contact_duration() -> f64 {
-    DEFAULT_CONTACT_DURATION
-}
-
-impl Default for WorldConfig {
-    fn default() -> Self {
-        WorldConfig {
-            method: Method::Auto,
-            mode: Mode::Simulate,
-            pool_axes: None,
-            phi: None,
-            restitution: 1.0,
-            friction: 0.0,
-            contact_duration: DEFAULT_CONTACT_DURATION,
-            threads: None,
-            contact_ends: false,
-        }
-    }
-}
-
-impl WorldConfig {
-    /// The number of threads a step uses: as configured, but never more than the cores the
-    /// system reports (its CPU quota, in a container), and every core when not configured. The
-    /// bound is applied here, not refused, so that a world saved on a large machine runs on a
-    /// small one.
-    ///
-    /// ```
-    /// use vadop::WorldConfig;
-    /// let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    /// let config = WorldConfig { threads: Some(100_000), ..WorldConfig::default() };
-    /// assert_eq!(config.thread_count(), cores);
-    /// assert_eq!(WorldConfig { threads: Some(1), ..config }.thread_count(), 1);
-    /// ```
-    pub fn thread_count(&self) -> usize {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        self.threads.map_or(cores, |threads| threads.min(cores))
-    }
-}
-
-/// The axis-aligned box the bodies live in.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct BoxBounds {
-    pub min: DVec3,
-    pub max: DVec3,
-}
-
-impl BoxBounds {
-    /// A box, checked to have finite corners and sides of at least [`crate::error::MIN_LENGTH`].
-    pub fn new(min: DVec3, max: DVec3) -> Result<BoxBounds> {
-        if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {
-            return Err(VadopError::BadBox { min: min.to_array(), max: max.to_array() });
-        }
-        check_vector("box corner", min)?;
-        check_vector("box corner", max)?;
-        check_length("box side", (max - min).min_element())?;
-        Ok(BoxBounds { min, max })
-    }
-    /// The cube `[0, side]^3`.
-    pub fn cube(side: f64) -> Result<BoxBounds> {
-        BoxBounds::new(DVec3::ZERO, DVec3::splat(side))
-    }
-    pub(crate) fn contains(&self, position: DVec3, radius: f64) -> bool {
-        (position - radius).cmpge(self.min).all() && (position + radius).cmple(self.max).all()
-    }
-}
-
-/// What a contact's body touched.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Touched {
-    Body(BodyHandle),
-    Wall(Wall),
-}
-
-/// One contact found in a frame. Bodies are named by the handles they have at the contact, which
-/// are their current handles: bodies are only removed between frames.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Contact {
-    /// Absolute simulation time of first touch.
-    pub time: f64,
-    /// The body (of a pair, the one with the lower index).
-    pub body: BodyHandle,
-    /// What it touched.
-    pub touched: Touched,
-    /// Contact point.
-    pub point: DVec3,
-    /// Unit normal from `body` towards what it touched.
-    pub normal: DVec3,
-    /// Magnitude of the impulse applied along the normal (0 when not resolved: detect mode
-    /// resolves only contacts with walls and static bodies; 0 for a contact's end).
-    pub impulse: f64,
-}
-
-/// Counters and timings of one frame.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct FrameStats {
-    /// Seconds spent refreshing bounding volumes at window starts (c_update).
-    pub update_seconds: f64,
-    /// Seconds spent sorting or binning them (c_sort).
-    pub sort_seconds: f64,
-    /// Seconds spent finding candidates and predicting contacts at window starts (c_test).
-    pub test_seconds: f64,
-    /// Seconds spent processing contacts: response, volume rebuilds and re-tests (c_response).
-    pub response_seconds: f64,
-    /// Broad-phase windows started in the frame (a window may span several frames).
-    pub windows: u64,
-    /// Insertion-sort moves over all lists (sweep and prune) or entries binned (grid).
-    pub endpoint_swaps: u64,
-    /// Entries held by the broad phase after its last window start.
-    pub list_entries: u64,
-    /// Candidate pairs reported at window starts.
-    pub candidate_pairs: u64,
-    /// Narrow-phase pair tests, re-tests included.
-    pub narrow_tests: u64,
-    /// Bodies re-tested after a velocity change (or entered mid-window).
-    pub retests: u64,
-    /// Contacts reported.
-    pub contacts: u64,
-    /// Of which body-body.
-    pub pair_contacts: u64,
-    /// Predictions voided by a velocity change before their time came.
-    pub invalidations: u64,
-    /// Bytes held by the engine: broad phase, proxies, event queue.
-    pub broad_phase_bytes: u64,
-    /// Contacts made elastic by the TC model (restitution below 1; see [`crate::collapse`]).
-    pub tc_contacts: u64,
-    /// Contacts resolved as resting contact by the jam rule (see [`crate::collapse`]).
-    pub jam_contacts: u64,
-    /// Contacts between bodies that ended (detect mode, when contact ends are reported).
-    #[serde(default)]
-    pub contact_ends: u64,
-}
-
-impl FrameStats {
-    /// c_total = c_update + c_sort + c_test + c_response, in seconds.
-    pub fn total_seconds(&self) -> f64 {
-        self.update_seconds + self.sort_seconds + self.test_seconds + self.response_seconds
-    }
-}
-
-/// Pool size used when none is given, whatever the bodies' speeds. Measured by experiment 4 of
-/// `vadop-bench experiments` (BENCHMARKS.md): with tiled axis lists the 3-axis pool is the fastest at every
-/// speed it tests (0.05, 0.5 and 5 diameters per frame, pools of 3 to 39,000 axes), because each
-/// extra axis per body costs more in updates and candidate checks than its thinner volume saves.
-/// phi stays rho, the smallest angle that keeps every pair sharing an axis; every axis for every
-/// body (the swept k-DOP, table 3) is no faster. The paper's finding that the best pool grows
-/// with speed holds for untiled lists, where thinner volumes are the only way to cut overlaps;
-/// the tiles do that job here.
-pub const AUTO_POOL_AXES: usize = 3;
-
-/// The engine of a method, built at the first step.
-// One engine per world: the size of its largest variant does not matter, a box would only add a
-// pointer hop.
-#[allow(clippy::large_enum_variant)]
-#[derive(Debug)]
-enum Engine {
-    Unbuilt,
-    Grid(Pipeline<Grid>),
-    SweepPrune(Pipeline<SweepPrune>),
-    Brute(Pipeline<BruteForce>),
-    Discrete(PseudoDynamic),
-}
-
-/// Runs `$body` with `$p` bound to the engine's pipeline, or `$otherwise` for the others.
-macro_rules! with_pipeline {
-    ($engine:expr, $p:ident => $body:expr, $otherwise:expr) => {
-        match $engine {
-            Engine::Grid($p) => $body,
-            Engine::SweepPrune($p) => $body,
-            Engine::Brute($p) => $body,
-            Engine::Discrete(_) | Engine::Unbuilt => $otherwise,
-        }
-    };
-}
-
-// After the macro, which they use too.
+use engine::Engine;
+pub(crate) mod overlap;
 mod rigid;
 mod snapshot;
 
+pub use config::{Method, WorldConfig, AUTO_POOL_AXES, MAX_BOX_LENGTHS_PER_FRAME};
 pub use rigid::{Body, BodyShape, ShapeId};
 
 /// A world of bodies in a box: spheres, rigid bodies of any shape and static level geometry.
@@ -348,7 +59,8 @@ pub struct World {
     free_slots: Vec<u32>,
     /// Added since the last step: validated and entered into the engine at the next step.
     unplaced: Vec<u32>,
-    engine: Engine,
+    /// Built at the first step (see [`engine::build`]).
+    engine: Option<Box<dyn Engine>>,
     /// The threads of the frame pipeline (none with one thread).
     threads: Option<rayon::ThreadPool>,
     pool: Arc<AxisPool>,
@@ -370,7 +82,8 @@ struct BeforeStep {
     waiting: Vec<u32>,
     speed_bound: f64,
     rules: ContactRules,
-    touching: Vec<(u32, u32, f64)>,
+    /// The pairs in contact, with their starts.
+    touching: (Vec<(u32, u32)>, Vec<f64>),
 }
 
 impl World {
@@ -401,7 +114,7 @@ impl World {
             live: 0,
             free_slots: Vec::new(),
             unplaced: Vec::new(),
-            engine: Engine::Unbuilt,
+            engine: None,
             threads: None,
             pool,
             time: 0.0,
@@ -464,9 +177,8 @@ impl World {
         self.bodies.remove(i);
         self.live -= 1;
         self.unplaced.retain(|&u| u != slot);
-        match &mut self.engine {
-            Engine::Discrete(pd) => pd.remove_body(slot),
-            engine => with_pipeline!(engine, p => p.remove(slot), ()),
+        if let Some(engine) = &mut self.engine {
+            engine.remove(slot);
         }
         if self.bodies.is_reusable(i) {
             self.free_slots.push(slot);
@@ -548,15 +260,9 @@ impl World {
     }
     /// The method actually stepping: [`Method::Auto`] resolved at the first step.
     pub fn method(&self) -> Method {
-        match &self.engine {
-            Engine::Unbuilt => self.config.method,
-            Engine::Grid(_) => Method::Grid,
-            Engine::Brute(_) => Method::Brute,
-            Engine::Discrete(_) => Method::Discrete,
-            Engine::SweepPrune(_) => match self.config.method {
-                Method::SweptAabb | Method::SweptKdop => self.config.method,
-                _ => Method::Vadop,
-            },
+        match self.engine {
+            None => self.config.method,
+            Some(_) => self.config.method.resolve(),
         }
     }
     /// The axis pool (used by the VADOP method).
@@ -601,10 +307,7 @@ impl World {
     /// touch. Empty unless [`WorldConfig::contact_ends`] is on, except with [`Method::Discrete`],
     /// whose frame-instant check always knows the pairs overlapping at the frame's end.
     pub fn touching(&self) -> Vec<(BodyHandle, BodyHandle)> {
-        let pairs = match &self.engine {
-            Engine::Discrete(pd) => pd.overlapping().to_vec(),
-            engine => with_pipeline!(engine, p => p.touching.pairs(), Vec::new()),
-        };
+        let pairs = self.engine.as_ref().map_or_else(Vec::new, |engine| engine.touching_pairs());
         let handle = |i: u32| self.bodies.handle(i as usize);
         pairs.into_iter().map(|(a, b)| (handle(a), handle(b))).collect()
     }
@@ -624,10 +327,7 @@ impl World {
     /// The sweep-and-prune broad phase (methods Vadop, SweptAabb, SweptKdop), once built (for
     /// inspection and tests).
     pub fn sweep_prune(&self) -> Option<&SweepPrune> {
-        match &self.engine {
-            Engine::SweepPrune(p) => Some(p.broad()),
-            _ => None,
-        }
+        self.engine.as_ref()?.broad_phase()?.downcast_ref()
     }
     /// Total kinetic energy: of the centres' motion and of the spins.
     pub fn kinetic_energy(&self) -> f64 {
@@ -660,13 +360,8 @@ impl World {
         let World { engine, bodies, contacts, ends, stats, threads, interrupt, .. } = self;
         let threads = &*threads;
         let mut out = Output { contacts, ends, stats };
-        let mut run = || match engine {
-            Engine::Grid(p) => p.step(bodies, &physics, t0, t1, &mut out),
-            Engine::SweepPrune(p) => p.step(bodies, &physics, t0, t1, &mut out),
-            Engine::Brute(p) => p.step(bodies, &physics, t0, t1, &mut out),
-            Engine::Discrete(pd) => pd.step(bodies, &physics, t0, t1, &mut out),
-            Engine::Unbuilt => unreachable!("built by place_new_bodies"),
-        };
+        let engine = engine.as_mut().expect("built by place_new_bodies");
+        let mut run = || engine.step(bodies, &physics, t0, t1, &mut out);
         let on_threads = || match threads {
             Some(pool) => pool.install(run),
             None => run(),
@@ -720,11 +415,9 @@ impl World {
     /// With an interrupt flag and an event pipeline: what an interrupted step must put back
     /// (`waiting`, the bodies not yet entered when it started), the bodies keeping their undo.
     fn keep_undo(&mut self, waiting: Vec<u32>) -> Option<BeforeStep> {
-        if self.interrupt.is_none() || matches!(self.engine, Engine::Discrete(_)) {
-            return None;
-        }
-        let rules = self.rules().cloned().unwrap_or_default();
-        let touching = with_pipeline!(&self.engine, p => p.touching.contacts(), Vec::new());
+        let engine = self.engine.as_ref().filter(|engine| engine.can_undo() && self.interrupt.is_some())?;
+        let rules = engine.rules().clone();
+        let touching = engine.touching_since();
         self.bodies.keep_undo();
         Some(BeforeStep { waiting, speed_bound: self.bodies.speed_bound, rules, touching })
     }
@@ -738,12 +431,10 @@ impl World {
         self.stats = FrameStats::default();
         self.enter_stepped(before.waiting);
         let BeforeStep { rules, touching, .. } = before;
-        with_pipeline!(&mut self.engine, p => {
-            p.rules = rules;
-            for (a, b, since) in touching {
-                p.touching.insert(a, b, since);
-            }
-        }, ());
+        if let Some(engine) = &mut self.engine {
+            *engine.rules_mut() = rules;
+            engine.restore_touching(touching.0, touching.1);
+        }
     }
 
     /// The live bodies but `waiting` (ascending), which earlier steps entered into the engine.
@@ -756,7 +447,7 @@ impl World {
     fn enter_stepped(&mut self, waiting: Vec<u32>) {
         let mut sorted = waiting.clone();
         sorted.sort_unstable();
-        self.engine = Engine::Unbuilt;
+        self.engine = None;
         self.unplaced = self.stepped(&sorted);
         self.place_new_bodies();
         self.unplaced = waiting;
@@ -774,25 +465,16 @@ impl World {
     }
 
     fn engine_bytes(&self) -> usize {
-        match &self.engine {
-            Engine::Discrete(pd) => pd.memory_bytes(),
-            engine => with_pipeline!(engine, p => p.memory_bytes(), 0),
-        }
+        self.engine.as_ref().map_or(0, |engine| engine.memory_bytes())
     }
 
     /// The engine's contact rules (its per-body contact history), once built.
     fn rules_mut(&mut self) -> Option<&mut ContactRules> {
-        match &mut self.engine {
-            Engine::Discrete(pd) => Some(&mut pd.rules),
-            engine => with_pipeline!(engine, p => Some(&mut p.rules), None),
-        }
+        self.engine.as_mut().map(|engine| engine.rules_mut())
     }
 
     fn rules(&self) -> Option<&ContactRules> {
-        match &self.engine {
-            Engine::Discrete(pd) => Some(&pd.rules),
-            engine => with_pipeline!(engine, p => Some(&p.rules), None),
-        }
+        self.engine.as_ref().map(|engine| engine.rules())
     }
 
     /// Slots no new body can take: the live bodies' and the retired ones (see
@@ -869,7 +551,7 @@ impl World {
             self.bodies.tighten_speed_bound();
         }
         if self.config.mode == Mode::Simulate && !self.unplaced.is_empty() {
-            if let Some((a, b, depth)) = crate::overlap::first_overlap(&self.bodies, &self.unplaced, self.time) {
+            if let Some((a, b, depth)) = crate::world::overlap::first_overlap(&self.bodies, &self.unplaced, self.time) {
                 let (a, b) = (self.bodies.handle(a as usize), self.bodies.handle(b as usize));
                 return Err(VadopError::Overlap { a, b, depth });
             }
@@ -879,57 +561,24 @@ impl World {
 
     /// Builds the engine on the first step and enters bodies added since the last one.
     fn place_new_bodies(&mut self) {
-        if matches!(self.engine, Engine::Unbuilt) {
+        if self.engine.is_none() {
             let threads = self.config.thread_count();
             // A pool only when there is something to share; a failed pool leaves one thread.
             self.threads =
                 (threads > 1).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
-            self.engine = self.build_engine(self.config.method.resolve());
+            let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
+            self.engine =
+                Some(engine::build(self.config.method.resolve(), &self.config, &self.pool, &self.bounds, workers));
         }
         let physics = self.physics();
         let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);
+        let engine = self.engine.as_mut().expect("built above");
         // Static bodies have no proxy: the pipeline bounds them when their revision changes.
         for &id in self.unplaced.iter().filter(|&&id| !bodies.is_fixed(id as usize)) {
-            match &mut self.engine {
-                Engine::Discrete(pd) => {
-                    pd.rules.resize(bodies.slots());
-                    pd.add_body(id);
-                }
-                engine => with_pipeline!(engine, p => p.enter(id, bodies, &physics, time, stats), ()),
-            }
+            engine.enter(id, bodies, &physics, time, stats);
         }
         // A one-off list as long as the bodies added: its room is given back, not kept.
         self.unplaced = Vec::new();
-    }
-
-    fn build_engine(&self, method: Method) -> Engine {
-        let (min, max) = (self.bounds.min, self.bounds.max);
-        let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
-        match method {
-            Method::Brute => {
-                Engine::Brute(Pipeline::new(BruteForce::default(), WindowRule::Frame, &self.bounds, workers))
-            }
-            Method::Discrete => Engine::Discrete(PseudoDynamic::default()),
-            Method::Grid | Method::Auto => {
-                Engine::Grid(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, &self.bounds, workers))
-            }
-            Method::Vadop => {
-                let phi = self.config.phi.unwrap_or(self.pool.covering_radius());
-                // A hair wider than phi, so rounding never costs a pair its shared axis.
-                let sin_phi = (phi.sin() * (1.0 + 1e-12) + 1e-15).min(1.0);
-                let sap = SweepPrune::new(self.pool.clone(), sin_phi, min, max, true);
-                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds, workers))
-            }
-            Method::SweptKdop => {
-                let sap = SweepPrune::new(self.pool.clone(), 1.0, min, max, true);
-                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds, workers))
-            }
-            Method::SweptAabb => {
-                let coordinate_axes = AxisPool::new(3).expect("the 3-axis pool always builds");
-                let sap = SweepPrune::new(coordinate_axes, 1.0, min, max, false);
-                Engine::SweepPrune(Pipeline::new(sap, WindowRule::Adaptive, &self.bounds, workers))
-            }
-        }
     }
 }
 

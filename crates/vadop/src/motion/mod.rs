@@ -1,0 +1,97 @@
+//! Motion between velocity changes: a body's straight path ([`Motion`]), how its orientation
+//! evolves ([`Spin`]: fixed, or the exact torque-free rotation of [`free_rotation`]), and the two
+//! together ([`RigidMotion`]). Every stage evaluates a body's place and orientation through these
+//! types, so all of them see the same bits; they never change a body nor know about contacts.
+
+pub mod free_rotation;
+
+pub use free_rotation::FreeRotation;
+
+use glam::{DQuat, DVec3};
+
+/// A body's straight motion: at `since` its centre is at `position`, then it moves with `velocity`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    pub position: DVec3,
+    pub since: f64,
+    pub velocity: DVec3,
+}
+
+impl Motion {
+    /// Centre at time `t`.
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.position + (t - self.since) * self.velocity
+    }
+}
+
+/// How a body's orientation evolves since its last velocity change: the exact torque-free
+/// rotation for a free body, [`Fixed`] for one that never turns.
+pub trait Spin {
+    /// The orientation (rotating body-frame vectors to world vectors) `dt` after the body's last
+    /// velocity change.
+    fn orientation_at(&self, dt: f64) -> DQuat;
+    /// Upper bound on the body's angular speed |w| over all time.
+    fn max_angular_speed(&self) -> f64;
+}
+
+impl<S: Spin + ?Sized> Spin for &S {
+    fn orientation_at(&self, dt: f64) -> DQuat {
+        (**self).orientation_at(dt)
+    }
+    fn max_angular_speed(&self) -> f64 {
+        (**self).max_angular_speed()
+    }
+}
+
+/// A spin that never turns: a constant orientation, angular speed bound 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fixed(pub DQuat);
+
+impl Spin for Fixed {
+    fn orientation_at(&self, _dt: f64) -> DQuat {
+        self.0
+    }
+    fn max_angular_speed(&self) -> f64 {
+        0.0
+    }
+}
+
+/// A body's motion since its last velocity change: centre of mass `position` at time `since`,
+/// moving with constant `velocity`, spinning per `spin`.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::narrow_phase::shapes::{Fixed, RigidMotion};
+/// let m = RigidMotion { position: DVec3::ZERO, since: 1.0, velocity: DVec3::X, spin: Fixed(DQuat::IDENTITY) };
+/// assert_eq!(m.position_at(3.0), DVec3::new(2.0, 0.0, 0.0));
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidMotion<S> {
+    /// Centre of mass at `since`.
+    pub position: DVec3,
+    /// The time of the last velocity change.
+    pub since: f64,
+    /// Constant velocity of the centre of mass.
+    pub velocity: DVec3,
+    /// Orientation as a function of the time since `since`.
+    pub spin: S,
+}
+
+impl<S: Spin> RigidMotion<S> {
+    /// Centre of mass at absolute time `t`.
+    pub fn position_at(&self, t: f64) -> DVec3 {
+        self.position + (t - self.since) * self.velocity
+    }
+    /// Orientation at absolute time `t`.
+    pub fn orientation_at(&self, t: f64) -> DQuat {
+        self.spin.orientation_at(t - self.since)
+    }
+}
+
+impl RigidMotion<Fixed> {
+    /// A body that never moves: at `position` with `orientation` from time `since` on.
+    pub fn fixed(position: DVec3, orientation: DQuat, since: f64) -> Self {
+        RigidMotion { position, since, velocity: DVec3::ZERO, spin: Fixed(orientation) }
+    }
+}

@@ -1,0 +1,347 @@
+//! Distance bounds between two placed shapes: closed forms where the shapes allow them, GJK with
+//! refinement and projections otherwise, and for meshes the bounds of their triangles' tree.
+//! Each query returns a lower and an upper bound on the separation, tight near contact and
+//! relative far from it; it owns that arithmetic and never decides a contact time.
+
+use super::scaled::{refine, Core, Scaled};
+use super::MARGIN;
+use glam::DVec3;
+use parry3d_f64::math::Pose;
+use parry3d_f64::partitioning::BvhLeafCost;
+use parry3d_f64::query::details::{closest_points_segment_segment_with_locations_nD, contact_support_map_support_map};
+use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
+use parry3d_f64::query::point::local_point_projection_on_support_map;
+use parry3d_f64::query::PointQuery;
+use parry3d_f64::shape::{Ball, Capsule, Cone, Cuboid, Cylinder, Segment, SupportMap};
+
+/// Within this many tolerances of contact the distance bounds are tightened to a fraction of the
+/// tolerance; beyond, they need only be tight relative to the distance, which sets the step.
+pub(super) const BAND: f64 = 8.0;
+
+/// Projections, alternating between the shapes, that look for closer points from each shape's
+/// extreme point a few tolerances from contact (see `closer_points`).
+pub(super) const PROJECTION_ROUNDS: usize = 4;
+
+/// Separation of `a` and `b` along the unit axis `n` from a to b: a lower bound on their signed
+/// distance.
+pub(super) fn separation(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, n: DVec3) -> f64 {
+    n.dot(b.support_point(pose_b, -n) - a.support_point(pose_a, n))
+}
+
+/// Climbs the separation of `a` and `b` over the axes around `best.1` by a pattern search with
+/// shrinking steps. For curved surfaces a hair apart the separation falls off with the square of
+/// the axis error times the curvature, and GJK's axis can be off by 1e-2 there; where a surface
+/// is ruled (a cylinder's side, an edge) the best axes form a ridge orthogonal to the ruling, so
+/// the search also moves along each such ridge, which keeps the axis exactly orthogonal to it.
+pub(super) fn polish(
+    a: &Scaled,
+    pose_a: &Pose,
+    b: &Scaled,
+    pose_b: &Pose,
+    mut best: (f64, DVec3),
+    enough: f64,
+) -> (f64, DVec3) {
+    let mut step = 1.0 / 64.0;
+    let mut evaluations = 0;
+    // Below a step of 1e-6 the separation of curved surfaces changes by 1e-12 of their size.
+    while step > 1e-6 && evaluations < 640 && best.0 < enough {
+        let n = best.1;
+        let (fa, fb) = (a.features(pose_a.rotation, n), b.features(pose_b.rotation, -n));
+        let (t1, t2) = n.any_orthonormal_pair();
+        let ridges = fa.edges().iter().chain(fb.edges()).filter_map(|e| e.cross(n).try_normalize());
+        let mut improved = false;
+        for d in [t1, t2].into_iter().chain(ridges) {
+            for sign in [1.0, -1.0] {
+                let m = (n + d * (sign * step)).normalize();
+                let gap = separation(a, pose_a, b, pose_b, m);
+                evaluations += 1;
+                if gap > best.0 {
+                    best = (gap, m);
+                    improved = true;
+                }
+            }
+        }
+        if !improved {
+            step *= 0.25;
+        }
+    }
+    best
+}
+
+/// The point of the shape nearest to `point` (both in the frame of `pose`, scaled), and its
+/// distance: an upper bound on the distance of the two shapes when `point` belongs to the other
+/// one. Any point parry returns lies in the shape (a support-map projection is a convex
+/// combination of support points), so the bound is valid whatever the projection's accuracy; a
+/// point found inside gives nothing, since that verdict is not certain.
+pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64, DVec3)> {
+    let local = pose.inverse_transform_point(point);
+    // Everything in scaled lengths, where parry's absolute tolerances mean the same at any scale:
+    // closed forms on a scaled copy of a primitive, GJK on the scaled support map otherwise.
+    let (p, s) = (shape.parry, shape.scale);
+    let projection = if let Some(ball) = p.as_ball() {
+        Ball::new(ball.radius * s).project_local_point(local, true)
+    } else if let Some(cuboid) = p.as_cuboid() {
+        Cuboid::new(cuboid.half_extents * s).project_local_point(local, true)
+    } else if let Some(c) = p.as_capsule() {
+        Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true)
+    } else if let Some(c) = p.as_cylinder() {
+        Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true)
+    } else if let Some(c) = p.as_cone() {
+        Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true)
+    } else if s == 1.0 {
+        p.project_local_point(local, true)
+    } else {
+        local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true)
+    };
+    (!projection.is_inside).then(|| ((local - projection.point).length(), pose * projection.point))
+}
+
+/// The closer of `known` (a distance and the points at it) and the pairs met projecting each of
+/// the known points, and each shape's extreme point along `axis` (from a to b) if given, on the
+/// other shape, and back, `rounds` times in all: alternating projections approach closest points,
+/// also where GJK's are off or an extreme point is an arbitrary point of a flat face.
+pub(super) fn closer_points(
+    (a, pose_a): (&Scaled, &Pose),
+    (b, pose_b): (&Scaled, &Pose),
+    known: (f64, Option<(DVec3, DVec3)>),
+    axis: Option<DVec3>,
+    rounds: usize,
+) -> (f64, Option<(DVec3, DVec3)>) {
+    let mut closest = known;
+    let known_points = known.1.map(|(x, y)| [(true, y), (false, x)]);
+    let extreme = axis.map(|m| [(true, b.support_point(pose_b, -m)), (false, a.support_point(pose_a, m))]);
+    // From a point of b, projecting on a, then on b, and so on; from a point of a, the other way.
+    for (from_b, mut point) in known_points.into_iter().chain(extreme).flatten() {
+        for round in 0..rounds {
+            let onto_a = from_b == (round % 2 == 0);
+            let Some((d, projected)) = (if onto_a { nearest(a, pose_a, point) } else { nearest(b, pose_b, point) })
+            else {
+                break;
+            };
+            if d < closest.0 {
+                closest = (d, Some(if onto_a { (projected, point) } else { (point, projected) }));
+            }
+            point = projected;
+        }
+    }
+    closest
+}
+
+/// Bounds on the signed distance of two shapes at one instant (scaled lengths, in the frame of
+/// their poses).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Bounds {
+    /// The separation along `axis`: at most the signed distance.
+    pub(super) lower: f64,
+    /// At least the signed distance.
+    pub(super) upper: f64,
+    /// Unit axis from the first shape to the second.
+    pub(super) axis: DVec3,
+    /// Points of the first and second shape whose distance is `upper` (or EPA's deepest points),
+    /// when known.
+    pub(super) witness: Option<(DVec3, DVec3)>,
+}
+
+/// A first estimate of the distance of two shapes (scaled, in the frame of their poses): closed
+/// forms where they exist, GJK (and EPA when the shapes intersect) otherwise.
+pub(super) struct Estimate {
+    /// At least the signed distance; infinite when unknown.
+    pub(super) upper: f64,
+    /// Unit axis from the first shape to the second.
+    pub(super) axis: DVec3,
+    /// Points of the shapes whose distance is `upper`, when known.
+    pub(super) witness: Option<(DVec3, DVec3)>,
+    /// GJK's own last search direction (unit, world frame).
+    pub(super) search: Option<DVec3>,
+    /// EPA's depth (negative) and deepest points when the shapes intersect.
+    pub(super) penetration: Option<(f64, (DVec3, DVec3))>,
+}
+
+/// The estimate from closed forms when both cores are points or segments, or one is a point
+/// outside the other shape: the cores' distance less the margins, exact to rounding, with its
+/// witness points and axis. `None` otherwise.
+pub(super) fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) -> Option<Estimate> {
+    let posed = |segment: &Segment, pose: &Pose| Segment::new(pose * segment.a, pose * segment.b);
+    let on = |segment: &Segment, point: DVec3| segment.project_local_point(point, true).point;
+    let (x, y) = match (&a.core, &b.core) {
+        (Core::Point, Core::Point) => (pose_a.translation, pose_b.translation),
+        (Core::Point, Core::Segment(t)) => (pose_a.translation, on(&posed(t, pose_b), pose_a.translation)),
+        (Core::Segment(s), Core::Point) => (on(&posed(s, pose_a), pose_b.translation), pose_b.translation),
+        (Core::Segment(s), Core::Segment(t)) => {
+            let (s, t) = (posed(s, pose_a), posed(t, pose_b));
+            let (at_s, at_t) = closest_points_segment_segment_with_locations_nD((&s.a, &s.b), (&t.a, &t.b));
+            (s.point_at(&at_s), t.point_at(&at_t))
+        }
+        (Core::Point, Core::Solid(_)) => (pose_a.translation, nearest(b, pose_b, pose_a.translation)?.1),
+        (Core::Solid(_), Core::Point) => (nearest(a, pose_a, pose_b.translation)?.1, pose_b.translation),
+        _ => return None,
+    };
+    let (axis, distance) = (y - x).normalize_and_length();
+    // Coincident cores (deep inside each other): any axis bounds the separation.
+    let axis = if distance > 0.0 {
+        axis
+    } else {
+        (pose_b.translation - pose_a.translation).try_normalize().unwrap_or(DVec3::X)
+    };
+    Some(Estimate {
+        upper: distance - a.margin - b.margin,
+        axis,
+        witness: Some((x + axis * a.margin, y - axis * b.margin)),
+        search: None,
+        penetration: None,
+    })
+}
+
+/// GJK's estimate (EPA's when the sets intersect and `depth` asks for it) from the sets `a` and
+/// `b` at `pos12` (b's pose in a's frame), grown by `margins` into the shapes; `toward` (in a's
+/// frame) is where GJK starts from and the axis to fall back on.
+pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
+    (a, pose_a): (&A, &Pose),
+    (b, pose_b): (&B, &Pose),
+    margins: (f64, f64),
+    toward: DVec3,
+    depth: bool,
+) -> Estimate {
+    let pos12 = pose_a.inv_mul(pose_b);
+    let mut estimate = Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None };
+    let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
+    let gjk_from = |dir: DVec3| {
+        let mut simplex = VoronoiSimplex::new();
+        simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+        gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)
+    };
+    let mut result = gjk_from(-toward);
+    if !matches!(result, GJKResult::ClosestPoints(..)) {
+        // GJK's verdict is not reliable a hair from contact: ask again from the other side.
+        let again = gjk_from(toward);
+        if matches!(again, GJKResult::ClosestPoints(..)) {
+            result = again;
+        }
+    }
+    match result {
+        GJKResult::ClosestPoints(p1, p2, dir) => {
+            let d = p2 - p1;
+            estimate.axis = d.try_normalize().unwrap_or(toward);
+            estimate.upper = d.length() - margins.0 - margins.1;
+            estimate.search = Some(pose_a.rotation * dir);
+            estimate.witness = Some(grown((*pose_a * p1, *pose_a * p2), pose_a.rotation * estimate.axis));
+        }
+        GJKResult::Intersection if !depth => {}
+        // Intersecting (measure the depth), or GJK did not converge (try again).
+        _ => {
+            if let Some(contact) = contact_support_map_support_map(&pos12, a, b, f64::MAX) {
+                estimate.axis = contact.normal1.try_normalize().unwrap_or(toward);
+                let points =
+                    grown((*pose_a * contact.point1, *pose_b * contact.point2), pose_a.rotation * estimate.axis);
+                let dist = contact.dist - margins.0 - margins.1;
+                if dist >= 0.0 {
+                    estimate.upper = (points.1 - points.0).length();
+                    estimate.witness = Some(points);
+                } else {
+                    estimate.penetration = Some((dist, points));
+                }
+            }
+        }
+    }
+    estimate.axis = pose_a.rotation * estimate.axis;
+    estimate
+}
+
+/// Lower and upper bounds on the signed distance of two convex support maps, with the axis (from
+/// `a` to `b`) whose separation is the lower bound.
+///
+/// The upper bound is the distance of two points of the shapes (closest points from closed forms
+/// or GJK, and each shape's extreme point along the axis projected on the other), or EPA's depth
+/// when they intersect (EPA's polytope lies inside the Minkowski difference, so its depth never
+/// exceeds the true one); the lower bound is a separation along an axis, computed from the exact
+/// support functions. With `depth` false, an intersection only needs to be recognised, not
+/// measured. GJK runs on the cores, and on the shapes too where their distance is a small part of
+/// the cores' (its precision is relative to the distance it measures). The bounds are tightened
+/// where it matters: within a few `tol` of contact.
+pub(super) fn convex_bounds(
+    a: &Scaled,
+    pose_a: &Pose,
+    b: &Scaled,
+    pose_b: &Pose,
+    depth: bool,
+    tol: f64,
+    slack: f64,
+) -> Bounds {
+    let band = BAND * tol;
+    // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
+    // fall back on if it fails.
+    let toward = (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
+    let (first, second) = match closed_form(a, pose_a, b, pose_b) {
+        Some(exact) => (exact, None),
+        None => {
+            let margins = (a.margin, b.margin);
+            let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth);
+            let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
+            // GJK's precision is relative to the distance it measures, the cores' with the
+            // margins: where the shapes' own is a small part of it, GJK runs on them too, and the
+            // tighter estimate counts (either fails at times a hair from contact).
+            let near = distance.abs() < (margins.0 + margins.1) / 16.0;
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth)))
+        }
+    };
+    let estimates = || std::iter::once(&first).chain(&second);
+    // Every estimate bounds the distance: the closest points and the deepest overlap of any.
+    let (mut upper, mut witness) =
+        estimates().map(|e| (e.upper, e.witness)).fold((f64::INFINITY, None), |x, y| if y.0 < x.0 { y } else { x });
+    let penetration = estimates().filter_map(|e| e.penetration).min_by(|x, y| x.0.total_cmp(&y.0));
+    // The upper bound the shapes will get: EPA's depth stands unless an axis separates them.
+    let effective = |best: (f64, DVec3), upper: f64| match penetration {
+        Some((dist, _)) if best.0 <= 0.0 => dist.min(upper),
+        _ => upper,
+    };
+    // Near contact the bounds must decide within the search's margins: a gap of half of one.
+    let settled = |best: (f64, DVec3), upper: f64| best.0 >= effective(best, upper) - 2.0 * slack - 0.5 * MARGIN * tol;
+    let mut best = (f64::NEG_INFINITY, first.axis);
+    for estimate in estimates() {
+        // GJK's own last search direction is often better than its closest points'.
+        let search = estimate.search.map(|dir| if dir.dot(estimate.axis) < 0.0 { -dir } else { dir });
+        for axis in std::iter::once(estimate.axis).chain(search) {
+            if settled(best, upper) {
+                break;
+            }
+            let gap = separation(a, pose_a, b, pose_b, axis);
+            if gap > best.0 {
+                best = (gap, axis);
+            }
+        }
+    }
+    // Near contact GJK loses accuracy (its simplices grow ill-conditioned), and a flat feature
+    // makes the axis matter to first order: look for a tighter axis and for closer points.
+    if !settled(best, upper) && best.0 < band && effective(best, upper) > -band {
+        let mut closer = |m: DVec3| {
+            (upper, witness) = closer_points((a, pose_a), (b, pose_b), (upper, witness), Some(m), PROJECTION_ROUNDS);
+            upper
+        };
+        best = refine(a, pose_a, b, pose_b, best.1, best);
+        let mut bound = closer(best.1);
+        if !settled(best, bound) {
+            let enough = effective(best, bound) - 2.0 * slack - 0.5 * MARGIN * tol;
+            best = polish(a, pose_a, b, pose_b, best, enough);
+            bound = closer(best.1);
+        }
+        upper = bound;
+    }
+    if let Some((dist, points)) = penetration {
+        // EPA's depth, unless a separating axis proves the shapes apart.
+        if best.0 <= 0.0 && dist < upper {
+            (upper, witness) = (dist, Some(points));
+        }
+    }
+    if upper == f64::INFINITY && best.0 <= 0.0 {
+        // Both GJK runs found the shapes intersecting and no depth was measured.
+        upper = 0.0;
+    }
+    Bounds { lower: best.0 - slack, upper: upper + slack, axis: best.1, witness }
+}
+
+/// One triangle's bounds rank by their lower bound in parry's best-first search of the mesh.
+impl BvhLeafCost for Bounds {
+    fn cost(&self) -> f64 {
+        self.lower
+    }
+}

@@ -1,0 +1,498 @@
+//! Gauges: what one search measures at a probe time, for each kind of pair (two convex shapes,
+//! a shape and a plane, a shape and a mesh, a shape and a wall), with the spin-free far bound
+//! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
+//! never chooses the probe times (the searcher does).
+
+use super::distance::{closer_points, convex_bounds, separation, Bounds};
+use super::guard;
+use super::scaled::{Body, Scaled};
+use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
+use crate::numeric::direction;
+use glam::DVec3;
+use parry3d_f64::math::Pose;
+use parry3d_f64::partitioning::BvhNode;
+use parry3d_f64::shape::{SupportMap, TriMesh, Triangle};
+use std::cell::{Cell, RefCell};
+
+/// Relative rounding allowance on support points and closest points, times the size of the
+/// coordinates involved.
+pub(super) const SLACK: f64 = 64.0 * f64::EPSILON;
+
+/// Bounds on the signed distance at one instant, and on how fast they can move (scaled units).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Probe {
+    /// `lower <= signed distance <= upper`.
+    pub(super) lower: f64,
+    pub(super) upper: f64,
+    /// The lower bound (a separation along a fixed axis) shrinks at most this fast.
+    pub(super) shrink: f64,
+    /// The signed distance grows at most this fast.
+    pub(super) grow: f64,
+    /// A looser lower bound that turning cannot shrink, from the bounding sphere of a spinning
+    /// body, and how fast it shrinks: `(-inf, 0)` when there is none. Far from contact it steps a
+    /// fast spinner by its straight motion, where `lower` would step it by its spin.
+    pub(super) far: (f64, f64),
+}
+
+/// No spin-free bound.
+pub(super) const NO_FAR: (f64, f64) = (f64::NEG_INFINITY, 0.0);
+
+impl Probe {
+    /// The longest step that keeps the distance above `guard` on either lower bound (infinite
+    /// when one never shrinks), or `None` when neither bound is above `guard`.
+    pub(super) fn approach_step(&self, guard: f64) -> Option<f64> {
+        let step = |(lower, shrink): (f64, f64)| {
+            let room = lower - guard;
+            (room > 0.0).then(|| if shrink > 0.0 { room / shrink } else { f64::INFINITY })
+        };
+        match (step((self.lower, self.shrink)), step(self.far)) {
+            (Some(near), Some(far)) => Some(near.max(far)),
+            (near, far) => near.or(far),
+        }
+    }
+}
+
+/// The signed distance of one pair (or of a body and a wall) as a function of the time since the
+/// reference, in scaled lengths.
+pub(super) trait Gauge {
+    fn probe(&self, tau: f64, depth: bool) -> Probe;
+    /// The times within which the distance may be at most `within`, from the bodies' bounding
+    /// volumes alone: `None` when it never is.
+    fn reach(&self, within: f64) -> Option<Reach>;
+    /// Drops what the last probes found (their warm start): the chain starts afresh.
+    fn forget(&self) {}
+}
+
+/// The times since the reference `[enter, leave]` outside which a pair is certainly farther apart
+/// than some distance: bounding volumes moving in straight lines meet in one interval at most.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Reach {
+    pub(super) enter: f64,
+    /// Infinite when they never part again.
+    pub(super) leave: f64,
+}
+
+impl Reach {
+    /// The times `tau >= 0` with `height + rate * tau <= limit`.
+    pub(super) fn below(height: f64, rate: f64, limit: f64) -> Option<Reach> {
+        if height <= limit {
+            let leave = if rate > 0.0 { (limit - height) / rate } else { f64::INFINITY };
+            Some(Reach { enter: 0.0, leave })
+        } else if rate < 0.0 {
+            Some(Reach { enter: (height - limit) / -rate, leave: f64::INFINITY })
+        } else {
+            None
+        }
+    }
+
+    /// The times `tau >= 0` with `|offset + velocity * tau| <= limit`: the closed forms of two
+    /// spheres of radii summing to `limit`.
+    pub(super) fn sphere(offset: DVec3, velocity: DVec3, limit: f64) -> Option<Reach> {
+        // Without relative motion the spheres part never.
+        let leave = sphere_separation_time(offset, velocity, limit).unwrap_or(f64::INFINITY);
+        if offset.length() <= limit {
+            return Some(Reach { enter: 0.0, leave });
+        }
+        // None when receding or missing, with a margin far below the `limit` this is called with.
+        let enter = sphere_sphere_time(offset, velocity, limit)?;
+        Some(Reach { enter, leave: leave.max(enter) })
+    }
+
+    /// The times in both.
+    pub(super) fn meet(self, other: Reach) -> Option<Reach> {
+        let met = Reach { enter: self.enter.max(other.enter), leave: self.leave.min(other.leave) };
+        (met.enter <= met.leave).then_some(met)
+    }
+}
+
+/// Two solid shapes. The frame has world axes and its origin at a's centre of mass.
+pub(super) struct ConvexPair<'a> {
+    pub(super) a: Body<'a>,
+    pub(super) b: Body<'a>,
+    pub(super) scale: f64,
+    /// b's centre minus a's at the reference, scaled.
+    pub(super) offset: DVec3,
+    /// b's velocity minus a's, scaled.
+    pub(super) velocity: DVec3,
+    /// Scaled bound on how fast turning moves the two surfaces.
+    pub(super) spin: f64,
+    /// Scaled sum of the bounding radii.
+    pub(super) size: f64,
+    /// Scaled contact tolerance.
+    pub(super) tol: f64,
+    /// What the last probe found, to start the next one from.
+    pub(super) warm: Cell<Option<Warm>>,
+}
+
+/// A probe's axis and witness points, fixed in the bodies (in frames that move with them): after
+/// a step the points still bound the distance, and so does the axis turned with the body whose
+/// face (or curved surface) it is the normal of, nearly as tightly.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Warm {
+    pub(super) axis: (DVec3, DVec3),
+    pub(super) witness: (DVec3, DVec3),
+}
+
+impl Warm {
+    /// What a probe's `bounds` leave for the next one; `carry` maps each shape's moving frame to
+    /// the probe's.
+    pub(super) fn new(bounds: &Bounds, carry: (&Pose, &Pose)) -> Option<Warm> {
+        let (x, y) = bounds.witness?;
+        Some(Warm {
+            axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
+            witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
+        })
+    }
+
+    /// Bounds from the axis, turned with either shape, and the witness points, carried along with
+    /// them (or, if those drifted apart, their projections on the other shape), when they lie
+    /// within half the room above `guard(tol)` of each other: the step on them then goes at least
+    /// two thirds as far as on exact bounds. `None` otherwise (GJK then).
+    pub(super) fn bounds(
+        &self,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        carry: (&Pose, &Pose),
+        tol: f64,
+        slack: f64,
+    ) -> Option<Bounds> {
+        let witness = (*carry.0 * self.witness.0, *carry.1 * self.witness.1);
+        let (lower, axis) = [carry.0.rotation * self.axis.0, carry.1.rotation * self.axis.1]
+            .map(|n| (separation(a, pose_a, b, pose_b, n), n))
+            .into_iter()
+            .fold((f64::NEG_INFINITY, DVec3::X), |best, c| if c.0 > best.0 { c } else { best });
+        let tight = |upper: f64| upper - lower <= 0.5 * (lower - guard(tol));
+        let carried = ((witness.1 - witness.0).length(), Some(witness));
+        let (upper, witness) =
+            if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
+        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
+    }
+}
+
+impl ConvexPair<'_> {
+    /// The best spin-free bound along the line of centres: a spinning body stays in its bounding
+    /// sphere, so its sphere against the other shape (or both spheres) is a lower bound that only
+    /// the straight motion and the other's spin shrink.
+    pub(super) fn far(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        slack: f64,
+    ) -> (f64, f64) {
+        // The centres of mass: a's at the origin of the frame.
+        let centre = self.offset + self.velocity * tau;
+        let Some(n) = direction(centre).filter(|_| self.spin > 0.0) else { return NO_FAR };
+        let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
+        let (spin_a, spin_b) = (self.a.spin_rate() * self.scale, self.b.spin_rate() * self.scale);
+        let closing = (-self.velocity.dot(n)).max(0.0);
+        let centres = n.dot(centre);
+        let near_b = n.dot(b.support_point(pose_b, -n));
+        let near_a = n.dot(a.support_point(pose_a, n));
+        let guard = guard(self.tol);
+        [
+            (centres - radius_a - radius_b, closing),
+            (near_b - radius_a, closing + spin_b),
+            (centres - radius_b - near_a, closing + spin_a),
+        ]
+        .map(|(lower, shrink)| (lower - slack, shrink))
+        .into_iter()
+        .filter(|&(lower, _)| lower > guard)
+        .max_by(|x, y| {
+            let step = |(lower, shrink): (f64, f64)| (lower - guard) / shrink;
+            step(*x).total_cmp(&step(*y))
+        })
+        .unwrap_or(NO_FAR)
+    }
+
+    pub(super) fn poses(&self, tau: f64) -> (Pose, Pose) {
+        let centre = self.offset + self.velocity * tau;
+        (
+            self.a.pose(self.a.orientation(tau), DVec3::ZERO, self.scale),
+            self.b.pose(self.b.orientation(tau), centre, self.scale),
+        )
+    }
+}
+
+impl Gauge for ConvexPair<'_> {
+    fn probe(&self, tau: f64, depth: bool) -> Probe {
+        let (pose_a, pose_b) = self.poses(tau);
+        let slack = SLACK * (pose_b.translation.length() + self.size);
+        let (ga, gb) = (self.a.support(self.scale), self.b.support(self.scale));
+        // Each shape's frame moves with its body.
+        let carry = (&pose_a, &pose_b);
+        let bounds = (self.warm.get())
+            .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
+            .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
+        self.warm.set(Warm::new(&bounds, carry));
+        Probe {
+            lower: bounds.lower,
+            upper: bounds.upper,
+            shrink: (-self.velocity.dot(bounds.axis)).max(0.0) + self.spin,
+            grow: self.velocity.length() + self.spin,
+            far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
+        }
+    }
+
+    /// The shapes lie in their bounding spheres about the centres of mass.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
+        Reach::sphere(self.offset, self.velocity, limit)
+    }
+
+    fn forget(&self) {
+        self.warm.set(None);
+    }
+}
+
+/// A solid and a half-space. The frame has world axes and its origin at the half-space's origin.
+pub(super) struct PlanePair<'a> {
+    pub(super) body: Body<'a>,
+    pub(super) plane: Body<'a>,
+    /// The half-space's outward normal in its own frame.
+    pub(super) normal: DVec3,
+    pub(super) scale: f64,
+    /// The body's centre minus the plane origin at the reference, scaled.
+    pub(super) offset: DVec3,
+    /// The body's velocity minus the plane's, scaled.
+    pub(super) velocity: DVec3,
+    pub(super) spin: f64,
+    pub(super) size: f64,
+}
+
+impl PlanePair<'_> {
+    /// World outward normal, the body's pose and its signed distance at `tau`.
+    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose, f64, f64) {
+        let n = self.plane.orientation(tau) * self.normal;
+        let centre = self.offset + self.velocity * tau;
+        let pose = self.body.pose(self.body.orientation(tau), centre, self.scale);
+        let distance = n.dot(self.body.support(self.scale).support_point(&pose, -n));
+        (n, pose, distance, SLACK * (centre.length() + self.size))
+    }
+}
+
+impl Gauge for PlanePair<'_> {
+    fn probe(&self, tau: f64, _depth: bool) -> Probe {
+        let (n, _, distance, slack) = self.state(tau);
+        let approach = self.velocity.dot(n);
+        // The body's bounding sphere above the plane, which does not turn.
+        let height = n.dot(self.offset + self.velocity * tau) - self.size;
+        Probe {
+            lower: distance - slack,
+            upper: distance + slack,
+            shrink: (-approach).max(0.0) + self.spin,
+            grow: approach.max(0.0) + self.spin,
+            far: (height - slack, (-approach).max(0.0)),
+        }
+    }
+
+    /// The body lies in its bounding sphere; the plane does not turn.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let n = self.plane.orientation(0.0) * self.normal;
+        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
+        Reach::below(n.dot(self.offset), n.dot(self.velocity), limit)
+    }
+}
+
+/// A solid and a triangle mesh. The frame has the mesh's axes and its origin at the body's centre
+/// of mass.
+pub(super) struct MeshPair<'a> {
+    pub(super) body: Body<'a>,
+    pub(super) mesh: Body<'a>,
+    pub(super) trimesh: &'a TriMesh,
+    pub(super) scale: f64,
+    /// The body's centre minus the mesh origin at the reference, scaled.
+    pub(super) offset: DVec3,
+    pub(super) velocity: DVec3,
+    pub(super) spin: f64,
+    pub(super) size: f64,
+    pub(super) tol: f64,
+    /// What the last probe found for each triangle it measured, to start the next one from.
+    pub(super) warm: RefCell<Vec<(u32, Warm)>>,
+}
+
+impl MeshPair<'_> {
+    /// The body's centre in the mesh frame (unscaled) and its scaled pose about that centre.
+    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose) {
+        let q_mesh = self.mesh.orientation(tau).inverse();
+        let centre = q_mesh * (self.offset + self.velocity * tau) / self.scale;
+        let pose = self.body.pose(q_mesh * self.body.orientation(tau), DVec3::ZERO, self.scale);
+        (centre, pose)
+    }
+
+    /// Triangle `id` in the frame about `centre`, scaled.
+    pub(super) fn triangle(&self, id: u32, centre: DVec3) -> Triangle {
+        let t = self.trimesh.triangle(id);
+        let s = self.scale;
+        Triangle::new((t.a - centre) * s, (t.b - centre) * s, (t.c - centre) * s)
+    }
+
+    /// Bounds on the signed distance of the body to the mesh (the smallest of the triangles'):
+    /// the smallest lower bound of a triangle (parry's best-first search over the mesh's
+    /// hierarchy, which skips boxes farther than the best so far), and the smallest upper bound
+    /// met on the way, with its triangle's axis and points.
+    pub(super) fn closest(&self, tau: f64, depth: bool) -> Option<Bounds> {
+        let nearest: Cell<Option<Bounds>> = Cell::new(None);
+        let (_, lowest) = self.search(tau, depth, &nearest)?;
+        let nearest = nearest.get().unwrap_or(lowest);
+        Some(Bounds { lower: lowest.lower, ..nearest })
+    }
+
+    /// The triangle with the smallest lower bound on its signed distance to the body; `nearest`
+    /// keeps the bounds with the smallest upper bound.
+    pub(super) fn search(&self, tau: f64, depth: bool, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
+        let (centre, pose) = self.state(tau);
+        let body = self.body.support(self.scale);
+        let slack = SLACK * self.size;
+        let s = self.scale;
+        // The body's box in the frame, from its support points.
+        let extent = |d: DVec3| d.dot(body.support_point(&pose, d));
+        let high = DVec3::new(extent(DVec3::X), extent(DVec3::Y), extent(DVec3::Z));
+        let low = -DVec3::new(extent(-DVec3::X), extent(-DVec3::Y), extent(-DVec3::Z));
+        let mut previous = self.warm.borrow_mut();
+        let next = RefCell::new(Vec::with_capacity(previous.len()));
+        let found = self.trimesh.bvh().find_best(
+            f64::MAX,
+            |node: &BvhNode, _| {
+                // No triangle in the node's box is nearer than that box is to the body's.
+                let (mins, maxs) = ((node.mins() - centre) * s, (node.maxs() - centre) * s);
+                let outside = (mins - high).max(low - maxs).max(DVec3::ZERO);
+                let gap = outside.length() * (1.0 - 1e-12) - slack;
+                if gap > 0.0 {
+                    gap
+                } else {
+                    -f64::MAX
+                }
+            },
+            |id, _| {
+                let triangle = self.triangle(id, centre);
+                let slack = SLACK * (triangle.a.length() + self.size);
+                let support = Scaled::new(&triangle, 1.0);
+                // The triangle's frame is fixed to it at its first vertex, the body's to the body.
+                let carry = (&Pose::from_translation(triangle.a), &pose);
+                let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
+                let bounds = (warm
+                    .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
+                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack));
+                if let Some(warm) = Warm::new(&bounds, carry) {
+                    next.borrow_mut().push((id, warm));
+                }
+                if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
+                    nearest.set(Some(bounds));
+                }
+                Some(bounds)
+            },
+        );
+        *previous = next.into_inner();
+        found
+    }
+}
+
+impl Gauge for MeshPair<'_> {
+    fn probe(&self, tau: f64, depth: bool) -> Probe {
+        let rate = self.velocity.length() + self.spin;
+        let (lower, upper) = match self.closest(tau, depth) {
+            Some(b) => (b.lower, b.upper),
+            None => (f64::INFINITY, f64::INFINITY),
+        };
+        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR }
+    }
+
+    /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
+    /// the box grown by the sphere's radius (and more at its corners) on each axis.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let q_mesh = self.mesh.orientation(0.0).inverse();
+        let (centre, velocity) = (q_mesh * self.offset, q_mesh * self.velocity);
+        let aabb = self.trimesh.local_aabb();
+        let (low, high) = (aabb.mins * self.scale, aabb.maxs * self.scale);
+        let extent = low.abs().max(high.abs()).max_element();
+        let grown = self.size + within + SLACK * (centre.length() + extent + self.size);
+        let mut reach = Reach { enter: 0.0, leave: f64::INFINITY };
+        for axis in 0..3 {
+            let (c, v) = (centre[axis], velocity[axis]);
+            reach = reach.meet(Reach::below(c, v, high[axis] + grown)?)?;
+            reach = reach.meet(Reach::below(-c, -v, grown - low[axis])?)?;
+        }
+        Some(reach)
+    }
+
+    fn forget(&self) {
+        self.warm.borrow_mut().clear();
+    }
+}
+
+/// The pair-specific gauge of two shapes.
+pub(super) enum PairGauge<'a> {
+    Convex(ConvexPair<'a>),
+    /// `flipped`: the plane is the pair's first body.
+    Plane(PlanePair<'a>, bool),
+    Mesh(MeshPair<'a>, bool),
+}
+
+impl Gauge for PairGauge<'_> {
+    fn probe(&self, tau: f64, depth: bool) -> Probe {
+        match self {
+            PairGauge::Convex(g) => g.probe(tau, depth),
+            PairGauge::Plane(g, _) => g.probe(tau, depth),
+            PairGauge::Mesh(g, _) => g.probe(tau, depth),
+        }
+    }
+    fn reach(&self, within: f64) -> Option<Reach> {
+        match self {
+            PairGauge::Convex(g) => g.reach(within),
+            PairGauge::Plane(g, _) => g.reach(within),
+            PairGauge::Mesh(g, _) => g.reach(within),
+        }
+    }
+    fn forget(&self) {
+        match self {
+            PairGauge::Convex(g) => g.forget(),
+            PairGauge::Plane(g, _) => g.forget(),
+            PairGauge::Mesh(g, _) => g.forget(),
+        }
+    }
+}
+
+/// A solid and one wall of the box. The frame has world axes and its origin at the body's centre
+/// of mass.
+pub(super) struct WallGauge<'a> {
+    pub(super) body: Body<'a>,
+    /// The wall's outward normal (out of the box).
+    pub(super) normal: DVec3,
+    pub(super) scale: f64,
+    /// Distance from the centre of mass to the wall plane at `since`, scaled.
+    pub(super) gap: f64,
+    /// Velocity towards the wall, scaled.
+    pub(super) speed: f64,
+    pub(super) spin: f64,
+    pub(super) size: f64,
+}
+
+impl WallGauge<'_> {
+    pub(super) fn distance(&self, tau: f64) -> (f64, DVec3, f64) {
+        let pose = self.body.pose(self.body.orientation(tau), DVec3::ZERO, self.scale);
+        let extreme = self.body.support(self.scale).support_point(&pose, self.normal);
+        let centre = self.gap - self.speed * tau;
+        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size))
+    }
+}
+
+impl Gauge for WallGauge<'_> {
+    fn probe(&self, tau: f64, _depth: bool) -> Probe {
+        let (distance, _, slack) = self.distance(tau);
+        // The body's bounding sphere from the wall.
+        let sphere = self.gap - self.speed * tau - self.size;
+        Probe {
+            lower: distance - slack,
+            upper: distance + slack,
+            shrink: self.speed.max(0.0) + self.spin,
+            grow: (-self.speed).max(0.0) + self.spin,
+            far: (sphere - slack, self.speed.max(0.0)),
+        }
+    }
+
+    /// The body lies in its bounding sphere.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        Reach::below(self.gap, -self.speed, self.size + within + SLACK * (self.gap.abs() + self.size))
+    }
+}

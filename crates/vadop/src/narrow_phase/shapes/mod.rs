@@ -1,0 +1,653 @@
+//! Shape narrow phase: the first contact of two shapes under rigid motion, or of a shape and a
+//! wall of the box, by conservative advancement over parry's distance queries.
+//!
+//! It owns the motion interface ([`Spin`], [`RigidMotion`]), the contact-time arithmetic for
+//! non-spherical shapes and its tolerance, and nothing else: like [`crate::narrow_phase::spheres`] it
+//! never sees the world, the broad phase or the queue, and it never moves a body. Sphere pairs
+//! keep their closed form in [`crate::narrow_phase::spheres`]; this module serves every pair with a
+//! non-spherical or static-only shape (a sphere pair works here too, only slower).
+//!
+//! # Motion
+//!
+//! Between velocity changes a body's centre of mass moves in a straight line,
+//! `p(t) = position + (t - since) * velocity`, and its orientation (which rotates body-frame
+//! vectors to world vectors, see [`crate::shape`]) is `spin.orientation_at(t - since)`; the spin
+//! also bounds the angular speed for all time. A static body is a [`RigidMotion`] with zero
+//! velocity and the [`Fixed`] spin; static-only shapes must not turn.
+//!
+//! # Bounding volumes first
+//!
+//! Each solid lies in a sphere of its bounding radius about its centre of mass, and the centres
+//! move in straight lines: the closed forms of [`crate::narrow_phase::spheres`] give the one interval of
+//! time in which the two spheres, grown by `2 tol` (see below), overlap. Outside it the shapes are
+//! more than `2 tol` apart: neither touching nor in contact. Against a half-space the sphere's
+//! height above the plane, and against a mesh the sphere against the mesh's box, give the
+//! interval alike. A pair whose interval misses the window costs no distance evaluation; any
+//! other is searched from the interval's start (the reference when it lies inside) and known
+//! apart, for good, from its end. Most candidate pairs of the broad phase never come that close.
+//!
+//! # Conservative advancement
+//!
+//! At a time t, let d be a lower bound on the distance of the shapes obtained as their
+//! separation along a fixed unit axis n from a to b (`min over b of n.y - max over a of n.x`).
+//! That separation cannot shrink faster than
+//! `mu = max(0, (v_a - v_b) . n) + w_a r_a + w_b r_b`,
+//! w being a body's angular speed bound and r how far its core (below) reaches from the centre of
+//! mass: its bounding radius, a capsule's half height, 0 for a sphere, whose surface does not move
+//! when it turns. So the distance stays above `tol/2` until `t + (d - tol/2) / mu`, and the
+//! search steps there, less the margins below: on bounds tightened to decide, the steps are at
+//! least `(tol/4) / mu` long (`(5/24) tol / mu` on a warm start's). Against a triangle mesh, whose nearest triangle may change, `mu` uses
+//! `|v_a - v_b|` instead of the projection; against a half-space or a wall, n is the fixed plane
+//! normal and the separation along it is the exact signed distance.
+//!
+//! A spinning solid never leaves its bounding sphere, so far from contact a fast spinner is also
+//! stepped on its sphere's separation from the other shape (or from the other's sphere, a plane
+//! or a wall), which its spin cannot shrink: the longer of the two steps is taken, and the
+//! approach costs what the straight motion needs, whatever the spin.
+//!
+//! Where spins dominate `mu` the steps are short and the bodies turn little between two probes:
+//! each probe of two solids (or of a solid and each mesh triangle the last probe measured) first
+//! tries the last one's axis, turned with either shape (a face normal turns with its face), and
+//! its witness points, carried along with the shapes. Any axis still gives a lower bound and any
+//! two points of the shapes an upper bound; when they lie within half the room above `tol/2` of
+//! each other, the step on them goes at least two thirds as far as on exact bounds, and GJK is not
+//! needed.
+//!
+//! The bounds never rest on GJK's own accuracy. The lower bound is a separation along an axis,
+//! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
+//! a hair from contact, where GJK's simplices grow ill-conditioned and its directions drift, the
+//! shapes' face normals, edge cross products and a local climb of the separation) only choose a
+//! tight one. The upper bound is the distance between two points of the shapes (closest points
+//! from closed forms or GJK, or each shape's extreme point projected on the other, and back and
+//! forth), or EPA's depth when they intersect (EPA's polytope lies inside the Minkowski
+//! difference). Near contact the bounds are tightened until their gap is half the search's
+//! margin (below), enough to decide. Everything runs in lengths scaled by an exact power of two
+//! near the pair's size, so parry's absolute tolerances act alike at every scale, and a scene
+//! scaled by a power of two gives bit-identical times.
+//!
+//! A ball is the set of points within its radius of its centre, a capsule within its radius of
+//! its segment: their *cores*; any other solid is its own core. Two shapes are as far apart as
+//! their cores less the radii, and between points and segments, or a point and a solid (parry's
+//! projections), that distance has closed forms, exact to rounding where GJK would converge
+//! slowly on the round surfaces. GJK and EPA, where still needed, run on the cores, and on the
+//! shapes themselves too where the shapes' distance is a small part of the cores' (their
+//! precision is relative to the distance they measure); either can fail a hair from contact, and
+//! the tighter bounds count.
+//!
+//! # Tolerance: the contract
+//!
+//! Two shapes *touch* when their distance is at most
+//! `tol = SHAPE_CONTACT_TOLERANCE * (r_a + r_b)` ([`contact_tolerance`]; r the bounding radii, a
+//! static-only shape counting 0; against the walls `SHAPE_CONTACT_TOLERANCE * r`). The relative
+//! tolerance is 1e-6, not the spheres' 1e-9: see [`SHAPE_CONTACT_TOLERANCE`].
+//!
+//! * A reported contact start has distance at most `tol`, and from the reference on (outside the
+//!   earlier contacts of the same motions) the distance stays above `tol/2` at every time before
+//!   it: no contact is missed, whatever the speeds, sizes or spins.
+//! * A contact lasts while the signed distance (negative when penetrating) stays at most
+//!   `2 tol`, and *ends* at a time where it is above `tol`. A pair may touch several times on one
+//!   motion (spinning shapes, detect mode): the k-th contact start is searched from the end of
+//!   the (k-1)-th, and a window gets the first contact *start* it contains.
+//! * At the reference instant itself, a touching pair is a new contact only if it is
+//!   approaching: if it goes on to penetrate `tol` deeper than it is before it separates beyond
+//!   `tol`. (A pair just resolved in simulate mode separates: its next contact is a new one.) A
+//!   pair already deeper than `tol` is a contact in progress, as for spheres in detect mode;
+//!   against the walls, which always turn a body back, depth does not matter.
+//!
+//! The search works a little inside the band: it stops at `(1 - 1/8) tol` and keeps the
+//! distance above `(1 + 1/8) tol/2`, so that an independent oracle (parry's own distance query)
+//! agrees with the contract.
+//!
+//! # Canonical times
+//!
+//! Every search starts from the reference instant `max(a.since, b.since)` (the wall search from
+//! `since`), or from where the bounding volumes first come within reach, and every iterate is a
+//! function of the two motions and of the time since the reference only (each probe starts from
+//! what the one before found), never of the window asked about: every caller, window or method
+//! gets the same time to the bit. A search stops once past the window's end; a later window
+//! recomputes the same iterates. The chain starts afresh at every contact start and end it finds
+//! (a cold probe, a fresh budget, the time since the reference derived from the absolute time),
+//! so what follows a contact start depends on that start alone: a caller holding it resumes the
+//! chain there ([`shape_contact_after`], [`contact_end_time`]) without replaying the contacts
+//! before it, and a spinner that touches a body thousands of times on one motion costs what its
+//! contacts need, not the square of their number. The pair is
+//! ordered: the world passes it in a fixed order (lower body id first), as (a, b) and (b, a) may
+//! differ in the last bits.
+//!
+//! # Termination guard
+//!
+//! A search that has not decided after [`MAX_ITERATIONS`] distance evaluations since the chain
+//! last started afresh (a pair resting or sliding in contact while turning, skimming along a hair
+//! apart for a long time, or a fast spinner's long approach), whose step falls below the
+//! resolution of time, or whose distance bounds are too loose to step, returns
+//! [`VadopError::ContactSearchStalled`] with the time up to which no contact starts: it never
+//! silently drops a contact. The world then starts the bodies' motions afresh from that time and
+//! searches on, unless they touch there (simulate mode then applies the jam rule).
+
+mod distance;
+mod gauges;
+mod scaled;
+mod searcher;
+
+use crate::error::{Result, VadopError};
+use crate::motion::{RigidMotion, Spin};
+use crate::numeric::unit_scale;
+use crate::shape::ShapeGeometry;
+use crate::walls::Wall;
+use crate::window::Window;
+use distance::{convex_bounds, Bounds};
+use gauges::{ConvexPair, MeshPair, PairGauge, PlanePair, WallGauge};
+use glam::{DQuat, DVec3};
+use parry3d_f64::shape::SupportMap;
+use scaled::Body;
+use searcher::Searcher;
+use std::cell::{Cell, RefCell};
+
+/// Where and how two shapes (or a shape and a wall) touch at a contact time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactPoint {
+    /// World point halfway between the two closest (or deepest) points.
+    pub point: DVec3,
+    /// Unit normal from the first body to the second (for a wall: out of the box).
+    pub normal: DVec3,
+    /// Signed distance, negative when penetrating.
+    pub distance: f64,
+}
+
+/// A contact search's answer together with the number of distance evaluations it took (what
+/// [`MAX_ITERATIONS`] caps between two restarts of its chain).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Search<T> {
+    /// What the search found, if anything.
+    pub found: Option<T>,
+    /// Distance evaluations (probes) it took.
+    pub iterations: u32,
+}
+
+/// Cap on the distance evaluations of one search between two restarts of its chain (the
+/// reference, a contact start or end); see the module doc. Low enough that a resting contact that
+/// stalls costs little before the jam rule takes it; a search out of budget in free space loses
+/// nothing, the world goes on from where it stopped.
+pub const MAX_ITERATIONS: u32 = 10_000;
+
+/// Cap on the distance evaluations that decide whether a pair touching at the reference goes
+/// deeper or parts: one that does neither for this long rests or slides in contact, which the
+/// world hands to the jam rule (a pair that merely grazes decides in a few dozen).
+pub const RESTING_BUDGET: u32 = 500;
+
+/// Relative tolerance on the distance within which two shapes count as touching, times the sum
+/// of their bounding radii.
+///
+/// It is larger than the spheres' [`crate::narrow_phase::spheres::CONTACT_TOLERANCE`] (1e-9), which lies
+/// below what parry's GJK and EPA resolve: measured on every pair of solid kinds placed at known
+/// distances, a hair from contact parry's closest points are off by up to several times the
+/// distance at 1e-9 of the pair's size (and GJK calls some such pairs intersecting), by up to 20%
+/// at 1e-8, and agree with the exact distance to within 1% from 1e-7 on, with the bounds of this
+/// module. The band `(tol/2, tol]` starts ten times above that.
+pub const SHAPE_CONTACT_TOLERANCE: f64 = 1e-6;
+
+/// Relative margin inside the tolerance band: the search stops at `(1 - MARGIN) tol` and keeps
+/// the distance above `(1 + MARGIN) tol/2` (a contact ends above `(1 + MARGIN) tol` and stays
+/// below `(1 - MARGIN) 2 tol`), so that an independent distance oracle (parry's own query, with
+/// its own convergence threshold) agrees with the contract.
+const MARGIN: f64 = 0.125;
+
+/// The distance a search keeps above until a contact starts: `tol/2` plus the margin.
+fn guard(tol: f64) -> f64 {
+    0.5 * tol * (1.0 + MARGIN)
+}
+
+/// The distance within which two shapes count as touching: [`SHAPE_CONTACT_TOLERANCE`] times the
+/// sum of their bounding radii (a static-only shape counts 0).
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::contact_tolerance;
+/// let ball = Shape::Sphere { radius: 2.0 }.geometry().unwrap();
+/// let floor = Shape::HalfSpace { normal: DVec3::Y }.geometry().unwrap();
+/// assert!((contact_tolerance(&ball, &floor) - 2e-6).abs() < 1e-15);
+/// ```
+pub fn contact_tolerance(a: &ShapeGeometry, b: &ShapeGeometry) -> f64 {
+    SHAPE_CONTACT_TOLERANCE * (a.size() + b.size())
+}
+
+/// The searcher of a pair, or `None` for two static-only shapes (which never meet).
+fn pair_searcher<'a, S: Spin, T: Spin>(
+    a: (&'a ShapeGeometry, &'a RigidMotion<S>),
+    b: (&'a ShapeGeometry, &'a RigidMotion<T>),
+) -> Result<Option<Searcher<PairGauge<'a>>>> {
+    let reference = a.1.since.max(b.1.since);
+    let (a, b) = (Body::new(a.0, a.1, reference), Body::new(b.0, b.1, reference));
+    let size = a.geometry.size() + b.geometry.size();
+    let stall = |reason| VadopError::ContactSearchStalled { time: reference, iterations: 0, reason };
+    if !(size > 0.0) {
+        return Ok(None);
+    }
+    for body in [&a, &b] {
+        if body.geometry.is_static_only() && body.spin.max_angular_speed() != 0.0 {
+            return Err(stall("a static-only shape (mesh or half-space) must not turn: give it a spin bounded by 0"));
+        }
+    }
+    let scale = unit_scale(size);
+    let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
+    let spin = (a.spin_rate() + b.spin_rate()) * scale;
+    if !spin.is_finite() {
+        return Err(stall("the angular speed bound is not finite"));
+    }
+    let gauge = match (a.geometry.is_static_only(), b.geometry.is_static_only()) {
+        (false, false) => PairGauge::Convex(ConvexPair {
+            offset: (b.position - a.position) * scale,
+            velocity: (b.velocity - a.velocity) * scale,
+            a,
+            b,
+            scale,
+            spin,
+            size: size * scale,
+            tol,
+            warm: Cell::new(None),
+        }),
+        (first_static, _) => {
+            let (body, fixed) = if first_static { (b, a) } else { (a, b) };
+            let offset = (body.position - fixed.position) * scale;
+            let velocity = (body.velocity - fixed.velocity) * scale;
+            let parry = fixed.geometry.parry_shape();
+            if let Some(half_space) = parry.as_halfspace() {
+                let normal = half_space.normal;
+                let pair = PlanePair { body, plane: fixed, normal, scale, offset, velocity, spin, size: size * scale };
+                PairGauge::Plane(pair, first_static)
+            } else {
+                let trimesh = parry.as_trimesh().expect("static-only shapes are half-spaces or meshes");
+                let warm = RefCell::new(Vec::new());
+                let pair = MeshPair {
+                    body,
+                    mesh: fixed,
+                    trimesh,
+                    scale,
+                    offset,
+                    velocity,
+                    spin,
+                    size: size * scale,
+                    tol,
+                    warm,
+                };
+                PairGauge::Mesh(pair, first_static)
+            }
+        }
+    };
+    Ok(Some(Searcher::new(gauge, reference, tol)))
+}
+
+/// The first time in `window` (half-open `[start, end)`) at which two shapes begin to touch,
+/// canonical (see the [module documentation](self) for the tolerance and the rules), with the
+/// number of distance evaluations it took.
+pub fn shape_contact_search<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    window: Window,
+) -> Result<Search<f64>> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(Search { found: None, iterations: 0 }) };
+    let found = searcher.first_start_in(window, true)?.map(|tau| searcher.reference + tau);
+    Ok(Search { found, iterations: searcher.iterations })
+}
+
+/// The first time in `window` (half-open `[start, end)`) at which two shapes begin to touch: the
+/// canonical contact start by conservative advancement from `max(a.since, b.since)`. The distance
+/// there is at most [`contact_tolerance`], and above half of it at every earlier time from the
+/// reference on (outside earlier contacts). `None` when no contact starts in the window (two
+/// static-only shapes never touch). [`VadopError::ContactSearchStalled`] if the search could not
+/// decide (see the module documentation).
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::{shape_contact_time, RigidMotion};
+/// use vadop::Window;
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+/// let wall = Shape::HalfSpace { normal: -DVec3::X }.geometry().unwrap();
+/// // A unit cube, face first, 4 from a wall at x = 4.5, closing at 2: touches at 2.
+/// let cube_motion = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
+/// let cube_motion = RigidMotion { velocity: DVec3::new(2.0, 0.0, 0.0), ..cube_motion };
+/// let wall_motion = RigidMotion::fixed(DVec3::new(4.5, 0.0, 0.0), DQuat::IDENTITY, 0.0);
+/// let t = shape_contact_time((&cube, &cube_motion), (&wall, &wall_motion), Window::new(0.0, 10.0)).unwrap();
+/// assert!((t.unwrap() - 2.0).abs() < 1e-5);
+/// // Another window holding it gives the same time to the bit.
+/// let again = shape_contact_time((&cube, &cube_motion), (&wall, &wall_motion), Window::new(1.5, 2.5)).unwrap();
+/// assert_eq!(again, t);
+/// ```
+pub fn shape_contact_time<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    window: Window,
+) -> Result<Option<f64>> {
+    Ok(shape_contact_search(a, b, window)?.found)
+}
+
+/// The time, before `until`, at which the contact that started at `start` ends (the signed
+/// distance is above the tolerance again), for detect mode where bodies pass through each other.
+/// `start` is a canonical contact start (from [`shape_contact_time`] on the same motions): the
+/// chain restarts at every contact start and end it finds, so the end follows from `start` alone,
+/// the same for every caller, without replaying earlier contacts. `None` when it has not ended
+/// before `until`. Any other `start` is taken as the start of a contact in progress; for a time
+/// inside a contact whose start the caller does not hold, see [`contact_in_progress_end_time`].
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::{contact_end_time, shape_contact_time, RigidMotion};
+/// use vadop::Window;
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+/// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
+/// let b = RigidMotion { velocity: DVec3::new(-1.0, 0.0, 0.0), ..RigidMotion::fixed(DVec3::new(3.0, 0.0, 0.0), DQuat::IDENTITY, 0.0) };
+/// // b passes through a: it touches at 2 and leaves at 4.
+/// let start = shape_contact_time((&cube, &a), (&cube, &b), Window::new(0.0, 10.0)).unwrap().unwrap();
+/// let end = contact_end_time((&cube, &a), (&cube, &b), start, 10.0).unwrap().unwrap();
+/// assert!((start - 2.0).abs() < 1e-5 && (end - 4.0).abs() < 1e-5, "{start} {end}");
+/// ```
+pub fn contact_end_time<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    start: f64,
+    until: f64,
+) -> Result<Option<f64>> {
+    Ok(contact_end_search(a, b, start, until)?.found)
+}
+
+/// [`contact_end_time`] with the number of distance evaluations it took.
+pub fn contact_end_search<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    start: f64,
+    until: f64,
+) -> Result<Search<f64>> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(Search { found: None, iterations: 0 }) };
+    let found = searcher.end_of(start, until)?.map(|tau| searcher.reference + tau);
+    Ok(Search { found, iterations: searcher.iterations })
+}
+
+/// The end, before `until`, of the contact two shapes are in at time `at`, whose start the
+/// caller does not hold: the contacts are replayed from the reference to the one in progress at
+/// `at`, so every `at` inside one contact gives the end of [`contact_end_time`] from its start,
+/// to the bit. A pair that is not in contact at `at` on its motions is taken to be in one from
+/// `at` on.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::{contact_end_time, contact_in_progress_end_time, shape_contact_time, RigidMotion};
+/// use vadop::Window;
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+/// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
+/// let b = RigidMotion { velocity: DVec3::new(-1.0, 0.0, 0.0), ..RigidMotion::fixed(DVec3::new(3.0, 0.0, 0.0), DQuat::IDENTITY, 0.0) };
+/// let start = shape_contact_time((&cube, &a), (&cube, &b), Window::new(0.0, 10.0)).unwrap().unwrap();
+/// let end = contact_end_time((&cube, &a), (&cube, &b), start, 10.0).unwrap();
+/// for at in [2.5, 3.0, 3.9] {
+///     assert_eq!(contact_in_progress_end_time((&cube, &a), (&cube, &b), at, 10.0).unwrap(), end);
+/// }
+/// ```
+pub fn contact_in_progress_end_time<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    at: f64,
+    until: f64,
+) -> Result<Option<f64>> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(None) };
+    Ok(searcher.end_of_contact_at(at, until, true)?.map(|tau| searcher.reference + tau))
+}
+
+/// The first time in `window` at which two shapes begin to touch again after the contact that
+/// started at `start` (a canonical start the caller holds, from [`shape_contact_time`] on the same
+/// motions): what [`shape_contact_time`] finds in a window after `start`, to the bit, without
+/// replaying the contacts before `start`. Spinning shapes may touch many times on one motion.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::motion::free_rotation::FreeRotation;
+/// use vadop::narrow_phase::shapes::{shape_contact_after, shape_contact_time, RigidMotion};
+/// use vadop::Window;
+/// let plank = Shape::Cuboid { half_extents: DVec3::new(1.0, 0.1, 0.1) }.geometry().unwrap();
+/// let ball = Shape::Sphere { radius: 0.2 }.geometry().unwrap();
+/// // A plank spinning about z beside a ball: its end sweeps past the ball twice a turn.
+/// let spin = FreeRotation::new(plank.principal_inertia_unit(), DQuat::IDENTITY, DVec3::new(0.0, 0.0, 6.0));
+/// let spinning = RigidMotion { position: DVec3::ZERO, since: 0.0, velocity: DVec3::ZERO, spin };
+/// let ball_motion = RigidMotion::fixed(DVec3::new(0.0, 1.1, 0.0), DQuat::IDENTITY, 0.0);
+/// let window = Window::new(0.0, 5.0);
+/// let first = shape_contact_time((&plank, &spinning), (&ball, &ball_motion), window).unwrap().unwrap();
+/// let later = Window::new(first.next_up(), 5.0);
+/// let second = shape_contact_after((&plank, &spinning), (&ball, &ball_motion), first, later).unwrap();
+/// assert_eq!(second, shape_contact_time((&plank, &spinning), (&ball, &ball_motion), later).unwrap());
+/// assert!(second.unwrap() > first);
+/// ```
+pub fn shape_contact_after<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    start: f64,
+    window: Window,
+) -> Result<Option<f64>> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(None) };
+    Ok(searcher.first_start_after(start, window)?.map(|tau| searcher.reference + tau))
+}
+
+/// Where two shapes touch at `time` (normally a contact time), in world coordinates: the normal
+/// (from a to b) is the axis of the tightest separation found (at a touch, the contact normal),
+/// the point lies halfway between the closest points (parry's GJK, or a shape's extreme point
+/// and its projection on the other, whichever are closer; EPA's deepest points when they
+/// penetrate), and the distance is their signed distance. `None` for two static-only shapes.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::{contact_geometry, RigidMotion};
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+/// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
+/// let b = RigidMotion::fixed(DVec3::new(1.0, 0.25, 0.0), DQuat::IDENTITY, 0.0);
+/// // Face to face along x: the normal is +x, the point on the shared face.
+/// let c = contact_geometry((&cube, &a), (&cube, &b), 0.0).unwrap();
+/// assert!((c.normal - DVec3::X).length() < 1e-9 && c.distance.abs() < 1e-9);
+/// assert!((c.point.x - 0.5).abs() < 1e-9);
+/// ```
+pub fn contact_geometry<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    time: f64,
+) -> Option<ContactPoint> {
+    let searcher = pair_searcher(a, b).ok()??;
+    let tau = time - searcher.reference;
+    match &searcher.gauge {
+        PairGauge::Convex(pair) => {
+            let (pose_a, pose_b) = pair.poses(tau);
+            let (ga, gb) = (pair.a.support(pair.scale), pair.b.support(pair.scale));
+            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, true, pair.tol, 0.0);
+            let origin = pair.a.position + pair.a.velocity * tau;
+            let witness = bounds
+                .witness
+                .unwrap_or_else(|| (ga.support_point(&pose_a, bounds.axis), gb.support_point(&pose_b, -bounds.axis)));
+            Some(contact_point(origin, witness, bounds, DQuat::IDENTITY, pair.scale))
+        }
+        PairGauge::Plane(pair, flipped) => {
+            let (n, pose, distance, _) = pair.state(tau);
+            let deepest = pair.body.support(pair.scale).support_point(&pose, -n);
+            let origin = pair.plane.position + pair.plane.velocity * tau;
+            let point = origin + (deepest - n * (0.5 * distance)) / pair.scale;
+            let normal = if *flipped { n } else { -n };
+            Some(ContactPoint { point, normal, distance: distance / pair.scale })
+        }
+        PairGauge::Mesh(pair, flipped) => {
+            let bounds = pair.closest(tau, true)?;
+            let (_, pose) = pair.state(tau);
+            let witness = bounds.witness.unwrap_or_else(|| {
+                // The body's extreme point towards the mesh, on both sides.
+                let point = pair.body.support(pair.scale).support_point(&pose, -bounds.axis);
+                (point, point)
+            });
+            let origin = pair.body.position + pair.body.velocity * tau;
+            let c = contact_point(origin, witness, bounds, pair.mesh.orientation(tau), pair.scale);
+            Some(if *flipped { c } else { ContactPoint { normal: -c.normal, ..c } })
+        }
+    }
+}
+
+/// The world contact point and normal from bounds in a frame rotated by `rotation` from the world
+/// axes, scaled by `scale`, whose origin is at `origin`.
+fn contact_point(origin: DVec3, witness: (DVec3, DVec3), bounds: Bounds, rotation: DQuat, scale: f64) -> ContactPoint {
+    let midpoint = rotation * ((witness.0 + witness.1) * 0.5) / scale;
+    let distance = if bounds.upper.is_finite() { bounds.upper } else { bounds.lower };
+    ContactPoint { point: origin + midpoint, normal: (rotation * bounds.axis).normalize(), distance: distance / scale }
+}
+
+/// The searcher of a body against one wall of the box `[min, max]`.
+fn wall_searcher<'a, S: Spin>(
+    geometry: &'a ShapeGeometry,
+    motion: &'a RigidMotion<S>,
+    wall: Wall,
+    min: DVec3,
+    max: DVec3,
+) -> Option<Searcher<WallGauge<'a>>> {
+    let size = geometry.bounding_radius()?;
+    let body = Body::new(geometry, motion, motion.since);
+    let scale = unit_scale(size);
+    let axis = wall.axis();
+    let gap = if wall.is_max() { max[axis] - body.position[axis] } else { body.position[axis] - min[axis] };
+    let speed = if wall.is_max() { body.velocity[axis] } else { -body.velocity[axis] };
+    let spin = body.spin_rate() * scale;
+    let gauge = WallGauge {
+        normal: wall.outward_normal(),
+        gap: gap * scale,
+        speed: speed * scale,
+        spin,
+        size: size * scale,
+        scale,
+        body,
+    };
+    Some(Searcher::new(gauge, motion.since, SHAPE_CONTACT_TOLERANCE * size * scale))
+}
+
+/// The first time in `window` at which a (spinning) shape inside the box `[min, max]` begins to
+/// touch one of its six walls while moving into it, with the wall; canonical from `since`, with
+/// the tolerance `SHAPE_CONTACT_TOLERANCE * r` (r the bounding radius) and the rules of the module
+/// documentation. A body touching a wall at `since` touches it then only if it goes on into the
+/// wall, however deep it already is. Ties go to the lowest wall ([`Wall::ALL`] order).
+/// Static-only shapes have no walls: `None`.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::{shape_wall_time, RigidMotion};
+/// use vadop::{Wall, Window};
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(1.0) }.geometry().unwrap();
+/// let motion = RigidMotion { velocity: DVec3::new(0.0, 0.0, -3.0), ..RigidMotion::fixed(DVec3::splat(5.0), DQuat::IDENTITY, 0.0) };
+/// let (t, wall) = shape_wall_time(&cube, &motion, DVec3::ZERO, DVec3::splat(10.0), Window::new(0.0, 5.0)).unwrap().unwrap();
+/// assert_eq!(wall, Wall::MinZ);
+/// assert!((t - 4.0 / 3.0).abs() < 1e-5);
+/// ```
+pub fn shape_wall_time<S: Spin>(
+    geometry: &ShapeGeometry,
+    motion: &RigidMotion<S>,
+    min: DVec3,
+    max: DVec3,
+    window: Window,
+) -> Result<Option<(f64, Wall)>> {
+    Ok(shape_wall_search(geometry, motion, min, max, window)?.found)
+}
+
+/// [`shape_wall_time`] with the number of distance evaluations it took (over the six walls).
+pub fn shape_wall_search<S: Spin>(
+    geometry: &ShapeGeometry,
+    motion: &RigidMotion<S>,
+    min: DVec3,
+    max: DVec3,
+    window: Window,
+) -> Result<Search<(f64, Wall)>> {
+    let mut best: Option<(f64, Wall)> = None;
+    let mut iterations = 0;
+    for wall in Wall::ALL {
+        let Some(mut searcher) = wall_searcher(geometry, motion, wall, min, max) else { break };
+        // A later wall only matters before the best time so far.
+        let window = Window::new(window.start, best.map_or(window.end, |(t, _)| t.next_up().min(window.end)));
+        let found = searcher.first_start_in(window, false);
+        iterations += searcher.iterations;
+        if let Some(tau) = found? {
+            let time = searcher.reference + tau;
+            if best.is_none_or(|(t, _)| time < t) {
+                best = Some((time, wall));
+            }
+        }
+    }
+    Ok(Search { found: best, iterations })
+}
+
+/// Where a shape touches `wall` of the box `[min, max]` at `time`: its extreme point towards the
+/// wall moved halfway to it, the wall's outward normal, and the signed distance. `None` for
+/// static-only shapes.
+pub fn wall_contact_geometry<S: Spin>(
+    geometry: &ShapeGeometry,
+    motion: &RigidMotion<S>,
+    wall: Wall,
+    min: DVec3,
+    max: DVec3,
+    time: f64,
+) -> Option<ContactPoint> {
+    let searcher = wall_searcher(geometry, motion, wall, min, max)?;
+    let g = &searcher.gauge;
+    let tau = time - searcher.reference;
+    let (distance, extreme, _) = g.distance(tau);
+    let centre = g.body.position + g.body.velocity * tau;
+    let point = centre + (extreme + g.normal * (0.5 * distance)) / g.scale;
+    Some(ContactPoint { point, normal: g.normal, distance: distance / g.scale })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Fixed;
+    use crate::shape::Shape;
+
+    fn still(position: DVec3) -> RigidMotion<Fixed> {
+        RigidMotion::fixed(position, DQuat::IDENTITY, 0.0)
+    }
+
+    #[test]
+    fn head_on_cubes_and_their_end() {
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        let a = still(DVec3::ZERO);
+        let b = RigidMotion { velocity: DVec3::new(-2.0, 0.0, 0.0), ..still(DVec3::new(5.0, 0.0, 0.0)) };
+        let w = Window::new(0.0, 100.0);
+        let start = shape_contact_time((&cube, &a), (&cube, &b), w).unwrap().unwrap();
+        assert!((start - 2.0).abs() < 1e-5, "{start}");
+        let end = contact_end_time((&cube, &a), (&cube, &b), start, 100.0).unwrap().unwrap();
+        assert!((end - 3.0).abs() < 1e-5, "{end}");
+        // After the pass-through, no second contact.
+        assert_eq!(shape_contact_time((&cube, &a), (&cube, &b), Window::new(start.next_up(), 100.0)).unwrap(), None);
+        let c = contact_geometry((&cube, &a), (&cube, &b), start).unwrap();
+        assert!((c.normal - DVec3::X).length() < 1e-9, "{c:?}");
+        assert!((c.point.x - 0.5).abs() < 1e-5, "{c:?}");
+    }
+
+    #[test]
+    fn separating_pair_touching_at_the_reference_is_not_a_contact() {
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        let a = still(DVec3::ZERO);
+        let away = RigidMotion { velocity: DVec3::new(1.0, 0.0, 0.0), ..still(DVec3::new(1.0, 0.0, 0.0)) };
+        assert_eq!(shape_contact_time((&cube, &a), (&cube, &away), Window::new(0.0, 10.0)).unwrap(), None);
+        let into = RigidMotion { velocity: DVec3::new(-1.0, 0.0, 0.0), ..away };
+        assert_eq!(shape_contact_time((&cube, &a), (&cube, &into), Window::new(0.0, 10.0)).unwrap(), Some(0.0));
+        // Sliding along each other, not turning: resting, no contact ever.
+        let slide = RigidMotion { velocity: DVec3::new(0.0, 1.0, 0.0), ..away };
+        let floor = Shape::HalfSpace { normal: DVec3::X }.geometry().unwrap();
+        let floor_motion = still(DVec3::new(0.5, 0.0, 0.0));
+        let on_floor = RigidMotion { position: DVec3::new(1.0, 0.0, 0.0), ..slide };
+        assert_eq!(
+            shape_contact_time((&floor, &floor_motion), (&cube, &on_floor), Window::new(0.0, 10.0)).unwrap(),
+            None
+        );
+    }
+
+    #[test]
+    fn two_static_shapes_never_meet() {
+        let floor = Shape::HalfSpace { normal: DVec3::Y }.geometry().unwrap();
+        let m = still(DVec3::ZERO);
+        assert_eq!(shape_contact_time((&floor, &m), (&floor, &m), Window::new(0.0, 1.0)).unwrap(), None);
+        assert!(contact_geometry((&floor, &m), (&floor, &m), 0.0).is_none());
+    }
+}

@@ -1,0 +1,257 @@
+//! Shapes as the search sees them: scaled by an exact power of two to unit size, split into a
+//! core and a radius where the shape has one (a sphere's centre, a capsule's segment), with the
+//! support maps and features the distance bounds read, and a body's shape placed at a probe time.
+//! It owns that scaled view only; it never bounds distances or steps a search.
+
+use super::distance::separation;
+use crate::motion::{RigidMotion, Spin};
+use crate::shape::ShapeGeometry;
+use glam::{DQuat, DVec3};
+use parry3d_f64::math::Pose;
+use parry3d_f64::shape::{Segment, Shape, SupportMap};
+
+/// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
+/// for its flat features.
+pub(super) struct Scaled<'a> {
+    /// The shape is the set of points within `margin` of its core.
+    pub(super) core: Core<'a>,
+    pub(super) margin: f64,
+    pub(super) parry: &'a dyn Shape,
+    pub(super) scale: f64,
+}
+
+/// The convex set a shape is the neighbourhood of, in the shape frame and scaled: a ball's
+/// centre, a capsule's segment, or the shape itself. Distances between points and segments have
+/// closed forms, where GJK would converge slowly on the round surfaces around them.
+#[derive(Clone, Copy)]
+pub(super) enum Core<'a> {
+    Point,
+    Segment(Segment),
+    Solid(&'a dyn SupportMap),
+}
+
+impl<'a> Scaled<'a> {
+    /// The shape `parry`, scaled by `scale`.
+    pub(super) fn new(parry: &'a dyn Shape, scale: f64) -> Self {
+        let (core, margin) = if let Some(ball) = parry.as_ball() {
+            (Core::Point, ball.radius)
+        } else if let Some(capsule) = parry.as_capsule() {
+            let segment = Segment::new(capsule.segment.a * scale, capsule.segment.b * scale);
+            (Core::Segment(segment), capsule.radius)
+        } else {
+            (Core::Solid(parry.as_support_map().expect("solid shapes have support maps")), 0.0)
+        };
+        Scaled { core, margin: margin * scale, parry, scale }
+    }
+
+    /// The shape's core, as a support map.
+    pub(super) fn core(&self) -> CoreOf<'_, 'a> {
+        CoreOf(self)
+    }
+}
+
+/// The support map of a shape's core.
+pub(super) struct CoreOf<'s, 'a>(&'s Scaled<'a>);
+
+impl SupportMap for CoreOf<'_, '_> {
+    #[inline]
+    fn local_support_point(&self, dir: DVec3) -> DVec3 {
+        match &self.0.core {
+            Core::Point => DVec3::ZERO,
+            Core::Segment(segment) => segment.local_support_point(dir),
+            Core::Solid(shape) => shape.local_support_point(dir) * self.0.scale,
+        }
+    }
+}
+
+/// Directions of a shape's flat features near a direction: face normals and edge (or ruling)
+/// directions, in the frame of the pose they were computed for.
+#[derive(Default)]
+pub(super) struct Features {
+    pub(super) normals: [DVec3; 3],
+    pub(super) normal_count: usize,
+    pub(super) edges: [DVec3; 4],
+    pub(super) edge_count: usize,
+}
+
+impl Features {
+    pub(super) fn normal(&mut self, n: DVec3) {
+        if self.normal_count < self.normals.len() {
+            self.normals[self.normal_count] = n;
+            self.normal_count += 1;
+        }
+    }
+    pub(super) fn edge(&mut self, e: DVec3) {
+        if self.edge_count < self.edges.len() {
+            self.edges[self.edge_count] = e;
+            self.edge_count += 1;
+        }
+    }
+    pub(super) fn normals(&self) -> &[DVec3] {
+        &self.normals[..self.normal_count]
+    }
+    pub(super) fn edges(&self) -> &[DVec3] {
+        &self.edges[..self.edge_count]
+    }
+}
+
+impl Scaled<'_> {
+    /// The flat features of the shape (posed by `rotation`) that may face along `dir`: the
+    /// directions a separating axis must be exactly orthogonal to, or equal to, for the
+    /// separation along it to be tight when the shapes nearly touch.
+    pub(super) fn features(&self, rotation: DQuat, dir: DVec3) -> Features {
+        let local = rotation.inverse() * dir;
+        let mut f = Features::default();
+        let shape = self.parry;
+        if shape.as_cuboid().is_some() {
+            for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+                f.normal(axis);
+                f.edge(axis);
+            }
+        } else if let Some(hull) = shape.as_convex_polyhedron() {
+            let best = hull.faces().iter().max_by(|x, y| x.normal.dot(local).total_cmp(&y.normal.dot(local)));
+            if let Some(face) = best {
+                f.normal(face.normal);
+                let first = face.first_vertex_or_edge as usize;
+                let ids = &hull.vertices_adj_to_face()[first..first + face.num_vertices_or_edges as usize];
+                let points = hull.points();
+                for (k, &i) in ids.iter().enumerate() {
+                    let j = ids[(k + 1) % ids.len()];
+                    f.edge(points[j as usize] - points[i as usize]);
+                }
+            }
+        } else if let Some(t) = shape.as_triangle() {
+            f.normal((t.b - t.a).cross(t.c - t.a));
+            for e in [t.b - t.a, t.c - t.b, t.a - t.c] {
+                f.edge(e);
+            }
+        } else if shape.as_cylinder().is_some() {
+            f.normal(DVec3::Y);
+            f.edge(DVec3::Y);
+            // The rim's tangent where it faces `local`.
+            f.edge(DVec3::Y.cross(DVec3::new(local.x, 0.0, local.z)));
+        } else if let Some(capsule) = shape.as_capsule() {
+            f.edge(capsule.segment.b - capsule.segment.a);
+        } else if let Some(cone) = shape.as_cone() {
+            f.normal(DVec3::Y);
+            // The ruling through the support point (from the apex to the rim towards `local`) and
+            // the rim's tangent there.
+            if let Some(radial) = DVec3::new(local.x, 0.0, local.z).try_normalize() {
+                f.edge(radial * cone.radius - DVec3::Y * (2.0 * cone.half_height));
+                f.edge(DVec3::Y.cross(radial));
+            }
+        }
+        for n in &mut f.normals[..f.normal_count] {
+            *n = rotation * *n;
+        }
+        for e in &mut f.edges[..f.edge_count] {
+            *e = rotation * *e;
+        }
+        f
+    }
+}
+
+/// The best separation of `a` and `b` over `axis` and the axes their flat features suggest
+/// around it: face normals, edge cross products, and `axis` made exactly orthogonal to each edge.
+/// GJK's axis alone loses the separation times the lever arm of a face when its direction is off
+/// by the rounding of closest points a hair apart; these axes are computed from the shapes' exact
+/// data instead. Every candidate gives a valid lower bound: the choice only affects tightness.
+pub(super) fn refine(
+    a: &Scaled,
+    pose_a: &Pose,
+    b: &Scaled,
+    pose_b: &Pose,
+    axis: DVec3,
+    mut best: (f64, DVec3),
+) -> (f64, DVec3) {
+    let fa = a.features(pose_a.rotation, axis);
+    let fb = b.features(pose_b.rotation, -axis);
+    // Both senses: `axis` itself may point the wrong way when GJK failed.
+    let mut try_axis = |m: DVec3| {
+        if let Some(m) = m.try_normalize() {
+            for m in [m, -m] {
+                let gap = separation(a, pose_a, b, pose_b, m);
+                if gap > best.0 {
+                    best = (gap, m);
+                }
+            }
+        }
+    };
+    for &n in fa.normals().iter().chain(fb.normals()) {
+        try_axis(n);
+    }
+    for &ea in fa.edges() {
+        for &eb in fb.edges() {
+            try_axis(ea.cross(eb));
+        }
+    }
+    for &e in fa.edges().iter().chain(fb.edges()) {
+        try_axis(e.cross(axis.cross(e)));
+    }
+    best
+}
+
+impl Scaled<'_> {
+    /// The centre of the shape's local box, scaled.
+    pub(super) fn middle(&self) -> DVec3 {
+        self.parry.compute_local_aabb().center() * self.scale
+    }
+}
+
+impl SupportMap for Scaled<'_> {
+    #[inline]
+    fn local_support_point(&self, dir: DVec3) -> DVec3 {
+        let core = self.core().local_support_point(dir);
+        match self.core {
+            Core::Solid(_) => core,
+            _ => core + dir.normalize_or_zero() * self.margin,
+        }
+    }
+}
+
+/// A body as the gauges see it, relative to the reference instant.
+pub(super) struct Body<'a> {
+    pub(super) geometry: &'a ShapeGeometry,
+    pub(super) spin: &'a dyn Spin,
+    /// Reference minus `since`: the spin is read at `lag + tau`.
+    pub(super) lag: f64,
+    /// Centre of mass at the reference.
+    pub(super) position: DVec3,
+    pub(super) velocity: DVec3,
+}
+
+impl<'a> Body<'a> {
+    pub(super) fn new<S: Spin>(geometry: &'a ShapeGeometry, motion: &'a RigidMotion<S>, reference: f64) -> Self {
+        let lag = reference - motion.since;
+        Body {
+            geometry,
+            spin: &motion.spin,
+            lag,
+            position: motion.position + lag * motion.velocity,
+            velocity: motion.velocity,
+        }
+    }
+
+    pub(super) fn orientation(&self, tau: f64) -> DQuat {
+        self.spin.orientation_at(self.lag + tau)
+    }
+
+    /// How fast turning can move the surface, in unscaled lengths per time.
+    pub(super) fn spin_rate(&self) -> f64 {
+        if self.geometry.rotation_radius() == 0.0 {
+            0.0
+        } else {
+            self.spin.max_angular_speed() * self.geometry.rotation_radius()
+        }
+    }
+
+    pub(super) fn support(&self, scale: f64) -> Scaled<'a> {
+        Scaled::new(self.geometry.parry_shape().as_ref(), scale)
+    }
+
+    /// The scaled parry pose of the shape for centre of mass `centre` and orientation `q`.
+    pub(super) fn pose(&self, q: DQuat, centre: DVec3, scale: f64) -> Pose {
+        let body = self.geometry.body_from_shape();
+        Pose::from_parts(centre + q * (body.translation * scale), q * body.rotation)
+    }
+}

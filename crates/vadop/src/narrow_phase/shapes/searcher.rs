@@ -1,0 +1,288 @@
+//! The searcher: conservative advancement over a gauge, from a canonical reference through every
+//! contact start and end it finds, with the restart points, the budgets and the termination guard
+//! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
+
+use super::gauges::{Gauge, Probe, Reach};
+use super::{guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
+use crate::error::{Result, VadopError};
+use crate::window::Window;
+
+/// The iteration of one search: the reference, the scaled tolerance, the step count, and the
+/// times outside which the pair is more than `2 tol` apart (neither touching nor in contact).
+pub(super) struct Searcher<G> {
+    pub(super) gauge: G,
+    pub(super) reference: f64,
+    pub(super) tol: f64,
+    pub(super) iterations: u32,
+    /// `iterations` when the chain last started afresh: [`MAX_ITERATIONS`] caps each piece.
+    pub(super) restarted: u32,
+    pub(super) reach: Option<Reach>,
+}
+
+/// What the pair does when it touches at the reference.
+pub(super) enum AtReference {
+    /// It goes deeper: a new contact at the reference.
+    Approaching,
+    /// Deeper than the tolerance already: a contact in progress.
+    Inside,
+    /// Separating: the contact in progress ends at this tau.
+    Ended(f64),
+    /// Neither deeper nor apart, ever: no new contact.
+    Resting,
+}
+
+impl<G: Gauge> Searcher<G> {
+    pub(super) fn new(gauge: G, reference: f64, tol: f64) -> Self {
+        let reach = gauge.reach(2.0 * tol);
+        Searcher { gauge, reference, tol, iterations: 0, restarted: 0, reach }
+    }
+
+    /// Starts the chain afresh at absolute `time`, a contact start or end it found (or a time the
+    /// caller knows to be one): a cold probe, a fresh iteration budget, and the time since the
+    /// reference derived from the absolute time alone. What follows is then a function of the
+    /// motions and `time` only, so a caller that holds a contact's start resumes the chain there
+    /// without replaying the contacts before it, to the bit.
+    pub(super) fn restart_at(&mut self, time: f64) -> f64 {
+        self.gauge.forget();
+        self.restarted = self.iterations;
+        (time - self.reference).max(0.0)
+    }
+
+    /// From this time since the reference on the pair stays more than `2 tol` apart.
+    pub(super) fn leave(&self) -> f64 {
+        self.reach.map_or(0.0, |r| r.leave)
+    }
+
+    pub(super) fn stall(&self, tau: f64, reason: &'static str) -> VadopError {
+        VadopError::ContactSearchStalled { time: self.reference + tau, iterations: self.iterations, reason }
+    }
+
+    pub(super) fn probe(&mut self, tau: f64, depth: bool) -> Result<Probe> {
+        if self.iterations - self.restarted >= MAX_ITERATIONS {
+            return Err(self.stall(tau, "the iteration cap was reached (resting or sliding contact while turning?)"));
+        }
+        if self.iterations.is_multiple_of(crate::interrupt::POLL_INTERVAL) && crate::interrupt::raised() {
+            // Void: the world undoes the step.
+            return Err(self.stall(tau, "the step was interrupted"));
+        }
+        self.iterations += 1;
+        Ok(self.gauge.probe(tau, depth))
+    }
+
+    /// `tau + step`; `None` when that is beyond every horizon.
+    pub(super) fn advance(&self, tau: f64, step: f64) -> Result<Option<f64>> {
+        let next = tau + step;
+        if !next.is_finite() {
+            return Ok(None);
+        }
+        if !(next > tau) {
+            return Err(self.stall(tau, "the step fell below the resolution of time"));
+        }
+        Ok(Some(next))
+    }
+
+    /// At most this, a contact starts (`tol` less the margin).
+    pub(super) fn touch(&self) -> f64 {
+        self.tol * (1.0 - MARGIN)
+    }
+    /// The distance is kept above this until a contact starts (`tol/2` plus the margin).
+    pub(super) fn guard(&self) -> f64 {
+        guard(self.tol)
+    }
+    /// Above this, a contact has ended (`tol` plus the margin).
+    pub(super) fn clear(&self) -> f64 {
+        self.tol * (1.0 + MARGIN)
+    }
+    /// During a contact the signed distance is kept below this (`2 tol` less the margin).
+    pub(super) fn ceiling(&self) -> f64 {
+        2.0 * self.tol * (1.0 - MARGIN)
+    }
+
+    /// The first contact start from `tau` (where the pair does not touch) before absolute time
+    /// `end`.
+    pub(super) fn next_start(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
+        loop {
+            if !(self.reference + tau < end && tau <= self.leave()) {
+                return Ok(None);
+            }
+            let p = self.probe(tau, false)?;
+            if p.upper <= self.touch() {
+                return Ok(Some(tau));
+            }
+            let Some(step) = p.approach_step(self.guard()) else {
+                return Err(self.stall(tau, "the distance bounds were too loose to step"));
+            };
+            if step == f64::INFINITY {
+                // The separation along a fixed axis never shrinks: no contact ever.
+                return Ok(None);
+            }
+            match self.advance(tau, step)? {
+                Some(next) => tau = next,
+                None => return Ok(None),
+            }
+        }
+    }
+
+    /// The end of the contact in progress at `tau`, before absolute time `end`.
+    pub(super) fn contact_end(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
+        loop {
+            if !(self.reference + tau < end) {
+                return Ok(None);
+            }
+            if tau >= self.leave() {
+                // The bounding volumes have parted: more than `2 tol` apart.
+                return Ok(Some(tau));
+            }
+            let p = self.probe(tau, true)?;
+            if p.lower > self.clear() {
+                return Ok(Some(tau));
+            }
+            let room = self.ceiling() - p.upper;
+            if !(room > 0.0) {
+                return Err(self.stall(tau, "the distance bounds were too loose to step"));
+            }
+            if !(p.grow > 0.0) {
+                return Ok(None);
+            }
+            // In contact until the step's end, and apart from `leave` on.
+            match self.advance(tau, room / p.grow)? {
+                Some(next) => tau = next.min(self.leave()),
+                None => return Ok(None),
+            }
+        }
+    }
+
+    /// Whether a pair touching at the reference (`p0`) is approaching. Decided by the motion
+    /// itself, whatever window asks: does it get `tol` deeper before it separates beyond `tol`?
+    pub(super) fn classify(&mut self, p0: Probe, deep_is_contact: bool) -> Result<AtReference> {
+        if deep_is_contact && p0.upper < -self.tol {
+            return Ok(AtReference::Inside);
+        }
+        let floor = p0.upper.min(0.0) - self.tol;
+        let (mut tau, mut p) = (0.0, p0);
+        let budget = self.iterations + RESTING_BUDGET;
+        loop {
+            if p.lower <= floor {
+                return Ok(AtReference::Approaching);
+            }
+            if p.lower > self.clear() {
+                return Ok(AtReference::Ended(tau));
+            }
+            let room = self.ceiling() - p.upper;
+            if !(room > 0.0) {
+                return Err(self.stall(tau, "the distance bounds were too loose to step"));
+            }
+            let down = if p.shrink > 0.0 { (p.lower - floor) / p.shrink } else { f64::INFINITY };
+            let up = if p.grow > 0.0 { room / p.grow } else { f64::INFINITY };
+            match self.advance(tau, down.min(up))? {
+                // Neither deeper nor apart before the bounding volumes part.
+                Some(next) if next >= self.leave() => return Ok(AtReference::Ended(self.leave())),
+                Some(next) => tau = next,
+                None => return Ok(AtReference::Resting),
+            }
+            if self.iterations >= budget {
+                return Err(self.stall(tau, "resting or sliding in contact: neither deeper nor apart"));
+            }
+            p = self.probe(tau, true)?;
+        }
+    }
+
+    /// The first contact start in `window`, as a time since the reference.
+    pub(super) fn first_start_in(&mut self, window: Window, deep_is_contact: bool) -> Result<Option<f64>> {
+        let Some(reach) = self.reach else { return Ok(None) };
+        if !(self.reference + reach.enter < window.end) {
+            return Ok(None);
+        }
+        // Before `enter` the pair is more than `2 tol` apart: the search starts there, and the
+        // rules at the reference apply only when it is in reach at the reference.
+        let mut tau = reach.enter;
+        let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
+        if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
+            let next = match self.classify(p0, deep_is_contact)? {
+                AtReference::Approaching if self.reference >= window.start => return Ok(Some(0.0)),
+                AtReference::Approaching | AtReference::Inside => self.after_contact(self.reference, window.end)?,
+                AtReference::Ended(end) => Some(self.restart_at(self.reference + end)),
+                AtReference::Resting => None,
+            };
+            match next {
+                Some(next) => tau = next,
+                None => return Ok(None),
+            }
+        }
+        self.start_from(tau, window)
+    }
+
+    /// The first contact start in `window` from `tau`, where the pair does not touch.
+    pub(super) fn start_from(&mut self, mut tau: f64, window: Window) -> Result<Option<f64>> {
+        loop {
+            let Some(start) = self.next_start(tau, window.end)? else { return Ok(None) };
+            if self.reference + start >= window.start {
+                return Ok(Some(start));
+            }
+            match self.after_contact(self.reference + start, window.end)? {
+                Some(next) => tau = next,
+                None => return Ok(None),
+            }
+        }
+    }
+
+    /// Where the chain goes on after the contact that starts at absolute time `start`: the time
+    /// since the reference at which it has ended, restarted there; `None` if not before `until`.
+    pub(super) fn after_contact(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
+        let tau = self.restart_at(start);
+        Ok(match self.contact_end(tau, until)? {
+            Some(end) => Some(self.restart_at(self.reference + end)),
+            None => None,
+        })
+    }
+
+    /// The first contact start in `window` after the contact that starts at absolute time
+    /// `start`, which the caller holds from this chain: no replay of the contacts before it.
+    pub(super) fn first_start_after(&mut self, start: f64, window: Window) -> Result<Option<f64>> {
+        match self.after_contact(start, window.end)? {
+            Some(tau) => self.start_from(tau, window),
+            None => Ok(None),
+        }
+    }
+
+    /// The end of the contact that starts at absolute time `start` (a canonical start the caller
+    /// holds), before `until`.
+    pub(super) fn end_of(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
+        let tau = self.restart_at(start);
+        self.contact_end(tau, until)
+    }
+
+    /// The end, before `until`, of the contact in progress at absolute time `at`, found by
+    /// replaying the chain from the reference: the same for every `at` inside one contact. A pair
+    /// the chain does not find in contact at `at` is taken to be in a contact from `at` on.
+    pub(super) fn end_of_contact_at(&mut self, at: f64, until: f64, deep_is_contact: bool) -> Result<Option<f64>> {
+        let Some(reach) = self.reach else { return self.end_of(at, until) };
+        let mut tau = reach.enter;
+        let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
+        if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
+            let end = match self.classify(p0, deep_is_contact)? {
+                AtReference::Approaching | AtReference::Inside => {
+                    let tau = self.restart_at(self.reference);
+                    self.contact_end(tau, until)?
+                }
+                AtReference::Ended(end) => Some(end),
+                AtReference::Resting => None,
+            };
+            match end {
+                Some(end) if self.reference + end > at => return Ok(Some(end)),
+                Some(end) => tau = self.restart_at(self.reference + end),
+                None => return Ok(None),
+            }
+        }
+        let before = at.next_up();
+        while let Some(start) = self.next_start(tau, before)? {
+            let start = self.restart_at(self.reference + start);
+            match self.contact_end(start, until)? {
+                Some(end) if self.reference + end > at => return Ok(Some(end)),
+                Some(end) => tau = self.restart_at(self.reference + end),
+                None => return Ok(None),
+            }
+        }
+        self.end_of(at, until)
+    }
+}

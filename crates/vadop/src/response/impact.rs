@@ -1,0 +1,193 @@
+//! The impact policy: what a contact found by the narrow phase does to the bodies, in one place
+//! for both engines. It picks the contact rule (restitution under the TC model, or the jam rule),
+//! the arithmetic (the spheres' closed form, or rigid impulses over the contact points against a
+//! body, static geometry or a wall) and applies the new motions. It answers with what the engine
+//! must still do ([`Resolution`]); it never re-tests, schedules or freezes a cluster itself,
+//! because which bodies are near is the engine's knowledge, not the response's.
+
+use super::impulse::{pair_impulse, resolve_impact, wall_bounce, Impacted};
+use super::rules::{ContactRules, Rule};
+use crate::bodies::Bodies;
+use crate::frame::{FrameStats, Mode, Physics};
+use crate::narrow_phase::contacts::{self, ManifoldScratch};
+use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
+use crate::walls::Wall;
+use glam::{DMat3, DVec3};
+
+/// What the engine must do once an impact is resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Resolution {
+    /// Detect mode between two moving bodies: they keep their paths, nothing changed.
+    Passed,
+    /// New motions were set, with this total impulse: re-test the bodies that moved.
+    Pushed(f64),
+    /// Two plain spheres already parting: a zero impulse, nothing changed.
+    Parting,
+    /// Freeze the cluster touching them (the jam rule). `by_rule` when the contact rules called
+    /// it, so the impulse reported is what the freeze took; otherwise the impulses found nothing
+    /// that settles a touch, and it is reported without one.
+    Jammed { by_rule: bool },
+}
+
+/// The TC model's contact duration for a contact now: the TC model is for collapse between
+/// bodies in simulate mode; detect mode only needs the jam rule.
+fn tc_duration(physics: &Physics) -> f64 {
+    if physics.mode == Mode::Simulate {
+        physics.contact_duration
+    } else {
+        0.0
+    }
+}
+
+/// Body `i` at time `t` as an impact sees it: immovable when static.
+pub(crate) fn impacted(bodies: &Bodies, i: usize, t: f64) -> Impacted {
+    if bodies.is_fixed(i) {
+        return Impacted::FIXED;
+    }
+    let rotation = DMat3::from_quat(bodies.orientation_at(i, t));
+    let inverse = DMat3::from_diagonal(bodies.principal_inertia(i).recip());
+    Impacted {
+        velocity: bodies.velocity(i),
+        angular_velocity: bodies.angular_velocity_at(i, t),
+        inverse_mass: bodies.inverse_mass(i),
+        inverse_inertia: rotation * inverse * rotation.transpose(),
+        centre: bodies.position_at(i, t),
+    }
+}
+
+/// Two moving spheres pushed apart along `normal` (from `i` to `j`) at `t` with `restitution`;
+/// the impulse, 0 (and nothing changed) when they already part.
+pub(crate) fn push_spheres(
+    bodies: &mut Bodies,
+    (i, j): (usize, usize),
+    t: f64,
+    normal: DVec3,
+    restitution: f64,
+) -> f64 {
+    let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
+    let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
+    let impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
+    if impulse > 0.0 {
+        bodies.set_velocity_at(i, t, vi - impulse * wi * normal);
+        bodies.set_velocity_at(j, t, vj + impulse * wj * normal);
+    }
+    impulse
+}
+
+/// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
+pub(crate) fn bounce_off_wall(bodies: &mut Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> f64 {
+    let v = bodies.velocity(i);
+    let bounced = wall_bounce(v, wall.axis(), restitution);
+    bodies.set_velocity_at(i, t, bounced);
+    bodies.mass[i] * (v - bounced).length()
+}
+
+/// The scratch an engine keeps for its impacts: the contact rules' history and the contact
+/// points a rigid impact is resolved over.
+#[derive(Debug, Default)]
+pub(crate) struct Impacts {
+    pub rules: ContactRules,
+    pub manifold: ManifoldScratch,
+}
+
+impl Impacts {
+    /// Bodies `a` and `b` touch at `t` at `point` with `normal` (from `a` to `b`).
+    pub(crate) fn pair(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        (a, b): (u32, u32),
+        t: f64,
+        (point, normal): (DVec3, DVec3),
+        stats: &mut FrameStats,
+    ) -> Resolution {
+        let (i, j) = (a as usize, b as usize);
+        let fixed = (bodies.is_fixed(i), bodies.is_fixed(j));
+        // Static level geometry turns bodies back in detect mode too, as the walls do.
+        if physics.mode != Mode::Simulate && fixed == (false, false) {
+            return Resolution::Passed;
+        }
+        let duration = tc_duration(physics);
+        // Level geometry keeps no contact history, as a wall keeps none: the TC model and the
+        // jam count are about the moving body's own contacts.
+        let rule = match fixed {
+            (true, _) => self.rules.wall(b, t, physics.restitution, duration),
+            (_, true) => self.rules.wall(a, t, physics.restitution, duration),
+            _ => self.rules.pair(a, b, t, physics.restitution, duration),
+        };
+        // Two moving spheres without friction: the closed-form impulse along the line of centres.
+        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
+        match rule {
+            Rule::Jam => Resolution::Jammed { by_rule: true },
+            Rule::Impulse { restitution, changed } if plain => {
+                let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
+                // Zero impulse changes nothing; re-testing would find the same touch again.
+                if impulse > 0.0 {
+                    stats.tc_contacts += changed as u64;
+                    Resolution::Pushed(impulse)
+                } else {
+                    Resolution::Parting
+                }
+            }
+            Rule::Impulse { restitution, changed } => {
+                contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
+                let [mut body_i, mut body_j] = [impacted(bodies, i, t), impacted(bodies, j, t)];
+                let clearance = contacts::clearance(bodies, i, j);
+                let points = &self.manifold.points;
+                match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {
+                    Some(total) if total > 0.0 => {
+                        stats.tc_contacts += changed as u64;
+                        for (k, body) in [(i, body_i), (j, body_j)] {
+                            if !bodies.is_fixed(k) {
+                                bodies.set_motion_at(k, t, body.velocity, body.angular_velocity);
+                            }
+                        }
+                        Resolution::Pushed(total)
+                    }
+                    // Nothing to push, yet the search found them touching as they turn into
+                    // each other (it would find the same touch again while one sinks into the
+                    // other), or points still approach however the impulses go: jammed.
+                    Some(_) | None => Resolution::Jammed { by_rule: false },
+                }
+            }
+        }
+    }
+
+    /// Body `a` touches `wall` at `t` at `point`, `normal` out of the box.
+    pub(crate) fn wall(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        a: u32,
+        wall: Wall,
+        t: f64,
+        (point, normal): (DVec3, DVec3),
+        stats: &mut FrameStats,
+    ) -> Resolution {
+        let i = a as usize;
+        match self.rules.wall(a, t, physics.restitution, tc_duration(physics)) {
+            Rule::Jam => Resolution::Jammed { by_rule: true },
+            Rule::Impulse { restitution, changed } if bodies.is_sphere(i) && physics.friction == 0.0 => {
+                stats.tc_contacts += changed as u64;
+                Resolution::Pushed(bounce_off_wall(bodies, i, wall, t, restitution))
+            }
+            Rule::Impulse { restitution, changed } => {
+                // The wall is an immovable body on the far side of the contact.
+                contacts::wall_points(bodies, i, wall, &physics.bounds, t, (point, -normal), &mut self.manifold);
+                let (mut wall_side, mut body) = (Impacted::FIXED, impacted(bodies, i, t));
+                let clearance = SHAPE_CONTACT_TOLERANCE * bodies.radius(i);
+                let points = &self.manifold.points;
+                match resolve_impact(&mut wall_side, &mut body, points, restitution, physics.friction, clearance) {
+                    Some(total) if total > 0.0 => {
+                        stats.tc_contacts += changed as u64;
+                        bodies.set_motion_at(i, t, body.velocity, body.angular_velocity);
+                        Resolution::Pushed(total)
+                    }
+                    // As between bodies: nothing to push while the search finds it touching, or
+                    // no impulse that settles it: jammed against the wall.
+                    Some(_) | None => Resolution::Jammed { by_rule: false },
+                }
+            }
+        }
+    }
+}
