@@ -6,7 +6,8 @@
 //! an int out of its range) naming the argument, the row and what was expected, before the world
 //! is touched; lists and tuples are read with `numpy.asarray` where arrays are taken; whatever
 //! the core still rejects (overlaps, absurd speeds, bad settings) becomes a `ValueError` with the
-//! core's message. Body handles cross as ints, [`vadop::BodyHandle::to_bits`]. Stepping releases the GIL.
+//! core's message. Body handles cross as ints, [`vadop::BodyHandle::to_bits`]. Stepping releases
+//! the GIL.
 
 mod contacts;
 mod convert;
