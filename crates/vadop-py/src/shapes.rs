@@ -7,7 +7,7 @@
 //! dtype and shape, a finite number); what makes a shape valid (sizes > 0, hulls with volume,
 //! meshes with good indices) is the core's to say, in [`Shape::geometry`].
 
-use super::{checked_array, finite_row, vectors, vectors_array};
+use crate::convert::{checked_array, finite_row, vectors, vectors_array};
 use glam::DVec3;
 use numpy::ndarray::Array2;
 use numpy::prelude::*;
