@@ -1,0 +1,440 @@
+//! What a run reports, as data: the scene described from the world itself, the run's settings,
+//! the axis pool, the accuracy against a reference method, the conservation of energy and
+//! momentum, and the totals accumulated frame by frame from which the summary is built once, at
+//! the end. The summary is written as JSON and read back by the benchmark from its child runs, so
+//! it must never hold NaN (JSON has none). It keeps nothing per frame, and never formats text for
+//! the user: that is `text`.
+
+use super::quantiles::{Quantiles, Spread};
+use super::writers::FrameRow;
+use crate::CliResult;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+use vadop::shape::Shape;
+use vadop::{BodyShape, World};
+
+/// What was simulated, described from the world itself so that generated scenes, scene files and
+/// saved worlds read alike.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct SceneInfo {
+    /// Where the scene came from ("paper scene ...", "scene file ...", "saved world ...").
+    pub source: String,
+    /// Moving bodies.
+    pub bodies: usize,
+    /// The moving bodies by kind of shape, in the order of [`KINDS`] (kinds with none left out).
+    #[serde(default)]
+    pub kinds: Vec<KindCount>,
+    /// The static bodies by kind of shape.
+    #[serde(default)]
+    pub static_bodies: Vec<KindCount>,
+    /// Side lengths of the box.
+    pub extent: [f64; 3],
+    /// Fraction of the box volume the moving bodies fill.
+    pub packing: f64,
+    /// Speed of the fastest body in its own diameters per frame (a shape's diameter is its
+    /// bounding sphere's).
+    pub max_speed: f64,
+    /// Fastest spin in radians per frame.
+    #[serde(default)]
+    pub max_spin: f64,
+}
+
+/// How many bodies of one kind of shape.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct KindCount {
+    pub kind: String,
+    pub count: usize,
+}
+
+/// The kinds of shape, singular and plural, in the order of the core's `Shape`.
+pub(super) const KINDS: [(&str, &str); 8] = [
+    ("sphere", "spheres"),
+    ("cuboid", "cuboids"),
+    ("capsule", "capsules"),
+    ("cylinder", "cylinders"),
+    ("cone", "cones"),
+    ("convex hull", "convex hulls"),
+    ("triangle mesh", "triangle meshes"),
+    ("half-space", "half-spaces"),
+];
+
+/// The place of `shape`'s kind in [`KINDS`].
+fn kind_of(shape: &Shape) -> usize {
+    match shape {
+        Shape::Sphere { .. } => 0,
+        Shape::Cuboid { .. } => 1,
+        Shape::Capsule { .. } => 2,
+        Shape::Cylinder { .. } => 3,
+        Shape::Cone { .. } => 4,
+        Shape::ConvexHull { .. } => 5,
+        Shape::TriMesh { .. } => 6,
+        Shape::HalfSpace { .. } => 7,
+    }
+}
+
+impl SceneInfo {
+    pub fn of(world: &World, source: String, dt: f64) -> CliResult<SceneInfo> {
+        let extent = world.bounds().max - world.bounds().min;
+        let (mut moving, mut fixed) = ([0usize; KINDS.len()], [0usize; KINDS.len()]);
+        let (mut volume, mut max_speed, mut max_spin) = (0.0, 0.0f64, 0.0f64);
+        for (_, body) in world.bodies() {
+            let (kind, body_volume, radius) = match body.shape {
+                BodyShape::Sphere { radius } => (0, 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3), radius),
+                BodyShape::Shape(id) => {
+                    let geometry = world.shape(id).map_err(|e| e.to_string())?;
+                    (kind_of(geometry.shape()), geometry.volume(), geometry.bounding_radius().unwrap_or(0.0))
+                }
+            };
+            if !body.mass.is_finite() {
+                fixed[kind] += 1;
+                continue;
+            }
+            moving[kind] += 1;
+            volume += body_volume;
+            max_speed = max_speed.max(body.velocity.length() * dt / (2.0 * radius));
+            max_spin = max_spin.max(body.angular_velocity.length() * dt);
+        }
+        let by_kind = |counts: [usize; KINDS.len()]| {
+            KINDS
+                .iter()
+                .zip(counts)
+                .filter(|(_, count)| *count > 0)
+                .map(|((kind, _), count)| KindCount { kind: kind.to_string(), count })
+                .collect::<Vec<_>>()
+        };
+        Ok(SceneInfo {
+            source,
+            bodies: moving.iter().sum(),
+            kinds: by_kind(moving),
+            static_bodies: by_kind(fixed),
+            extent: extent.to_array(),
+            packing: volume / extent.element_product(),
+            max_speed,
+            max_spin,
+        })
+    }
+
+    /// True when bodies spin or may be set spinning by an impact: bodies other than spheres,
+    /// static bodies, spins.
+    pub fn may_spin(&self) -> bool {
+        self.kinds.iter().any(|k| k.kind != KINDS[0].0) || !self.static_bodies.is_empty() || self.max_spin > 0.0
+    }
+}
+
+/// What does not come from the frames: the run's settings.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RunInfo {
+    pub scene: SceneInfo,
+    pub method: String,
+    pub mode: String,
+    pub dt: f64,
+    pub restitution: f64,
+    /// Coulomb friction coefficient of every impact.
+    #[serde(default)]
+    pub friction: f64,
+    pub frames_requested: u64,
+}
+
+/// The axis pool of a VADOP run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PoolInfo {
+    pub axes: usize,
+    pub covering_radius_deg: f64,
+    pub phi_deg: f64,
+    /// Mean of list entries / bodies over the frames that start a window (the lists are built
+    /// there): how many axes each body is bounded on.
+    pub axes_per_body: f64,
+}
+
+/// Pair contacts compared with a reference method stepped alongside.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct Accuracy {
+    pub reference: String,
+    /// True in detect mode: every method follows the same paths, so the counts are exact misses.
+    pub identical_paths: bool,
+    /// Pair contacts the reference reported, over all frames.
+    pub reference_pairs: u64,
+    /// (pair, frame) contacts of the reference that the run did not report in that frame.
+    pub missed: u64,
+    /// (pair, frame) contacts of the run that the reference did not report in that frame.
+    pub extra: u64,
+    /// First frame whose pair contacts differ.
+    pub first_difference_frame: Option<u64>,
+}
+
+/// What a run keeps, or exchanges only with the walls and static bodies, at one instant: the
+/// world's totals over its moving bodies, spins included.
+pub struct Motion {
+    kinetic: f64,
+    momentum: DVec3,
+    /// Sum of |m v| over the moving bodies: the scale of a change of momentum.
+    momentum_sum: f64,
+    angular_momentum: DVec3,
+}
+
+impl Motion {
+    pub fn of(world: &World) -> Motion {
+        let momentum_sum =
+            world.bodies().filter(|(_, b)| b.mass.is_finite()).map(|(_, b)| b.mass * b.velocity.length()).sum();
+        Motion {
+            kinetic: world.kinetic_energy(),
+            momentum: world.momentum(),
+            momentum_sum,
+            angular_momentum: world.angular_momentum(),
+        }
+    }
+}
+
+/// Kinetic energy (of translation and of spin), momentum and, when bodies spin, angular momentum
+/// at the start and end of a run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Conservation {
+    pub kinetic_start: f64,
+    pub kinetic_end: f64,
+    /// (end - start) / start; absent when nothing moves.
+    pub kinetic_relative_drift: Option<f64>,
+    pub momentum_start: [f64; 3],
+    pub momentum_end: [f64; 3],
+    /// |end - start|.
+    pub momentum_change: f64,
+    /// Sum of |m v| over the moving bodies at the start, the scale of `momentum_change`: the
+    /// walls and static bodies exchange momentum with the bodies, up to twice this per crossing.
+    #[serde(default)]
+    pub momentum_sum: f64,
+    /// Angular momentum about the origin, of the centres' motion and of the spins: reported when
+    /// bodies spin or may be set spinning (shapes, static bodies, friction), absent otherwise.
+    #[serde(default)]
+    pub angular_momentum_start: Option<[f64; 3]>,
+    #[serde(default)]
+    pub angular_momentum_end: Option<[f64; 3]>,
+    /// |end - start|.
+    #[serde(default)]
+    pub angular_momentum_change: Option<f64>,
+}
+
+impl Conservation {
+    /// From `start` to `end`, with angular momentum when `spins`.
+    pub fn new(start: &Motion, end: &Motion, spins: bool) -> Conservation {
+        let angular = |value: DVec3| spins.then_some(value.to_array());
+        Conservation {
+            kinetic_start: start.kinetic,
+            kinetic_end: end.kinetic,
+            kinetic_relative_drift: (start.kinetic > 0.0).then(|| (end.kinetic - start.kinetic) / start.kinetic),
+            momentum_start: start.momentum.to_array(),
+            momentum_end: end.momentum.to_array(),
+            momentum_change: (end.momentum - start.momentum).length(),
+            momentum_sum: start.momentum_sum,
+            angular_momentum_start: angular(start.angular_momentum),
+            angular_momentum_end: angular(end.angular_momentum),
+            angular_momentum_change: spins.then(|| (end.angular_momentum - start.angular_momentum).length()),
+        }
+    }
+}
+
+/// What the summary needs from the frames, accumulated one row at a time.
+#[derive(Debug, Clone, Default)]
+pub struct FrameTotals {
+    pub frames: u64,
+    pub contacts: u64,
+    pub pair_contacts: u64,
+    static_contacts: u64,
+    /// Frames that started a broad-phase window, and their list entries: the lists are built
+    /// there, and other frames report none.
+    window_frames: u64,
+    window_list_entries: u64,
+    endpoint_swaps: u64,
+    candidate_pairs: u64,
+    narrow_tests: u64,
+    invalidations: u64,
+    windows: u64,
+    retests: u64,
+    tc_contacts: u64,
+    jam_contacts: u64,
+    contact_ends: u64,
+    update_ms: f64,
+    sort_ms: f64,
+    test_ms: f64,
+    response_ms: f64,
+    broad_phase_bytes: u64,
+    c_total_ms: Quantiles,
+    wall_ms: Quantiles,
+}
+
+impl FrameTotals {
+    pub fn add(&mut self, row: &FrameRow) {
+        self.frames += 1;
+        self.contacts += row.contacts;
+        self.pair_contacts += row.pair_contacts;
+        self.static_contacts += row.static_contacts;
+        if row.windows > 0 {
+            self.window_frames += 1;
+            self.window_list_entries += row.list_entries;
+        }
+        self.endpoint_swaps += row.endpoint_swaps;
+        self.candidate_pairs += row.candidate_pairs;
+        self.narrow_tests += row.narrow_tests;
+        self.invalidations += row.invalidations;
+        self.windows += row.windows;
+        self.retests += row.retests;
+        self.tc_contacts += row.tc_contacts;
+        self.jam_contacts += row.jam_contacts;
+        self.contact_ends += row.contact_ends;
+        self.update_ms += row.update_ms;
+        self.sort_ms += row.sort_ms;
+        self.test_ms += row.test_ms;
+        self.response_ms += row.response_ms;
+        self.broad_phase_bytes = self.broad_phase_bytes.max(row.broad_phase_bytes);
+        self.c_total_ms.add(row.ms);
+        self.wall_ms.add(row.wall_ms);
+    }
+
+    /// Axes each of `bodies` is bounded on: list entries per body, over the frames that start a
+    /// window; 0 for none.
+    pub fn axes_per_body(&self, bodies: usize) -> f64 {
+        let body_frames = self.window_frames as f64 * bodies as f64;
+        if body_frames > 0.0 {
+            self.window_list_entries as f64 / body_frames
+        } else {
+            0.0
+        }
+    }
+
+    /// The per-frame mean of a total, 0 for no frames.
+    fn mean(&self, total: f64) -> f64 {
+        if self.frames == 0 {
+            0.0
+        } else {
+            total / self.frames as f64
+        }
+    }
+}
+
+/// Contact counts over the run.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ContactTotals {
+    pub total: u64,
+    /// Between two moving bodies.
+    pub pairs: u64,
+    /// Of a moving body with a static body.
+    #[serde(default)]
+    pub statics: u64,
+    pub walls: u64,
+    /// Contacts between bodies that ended (with --contact-ends).
+    #[serde(default)]
+    pub ends: u64,
+    /// Contacts per second of wall-clock stepping time.
+    pub per_wall_second: f64,
+}
+
+/// Means per frame of the cost split, in milliseconds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CostSplit {
+    pub update_ms: f64,
+    pub sort_ms: f64,
+    pub test_ms: f64,
+    pub response_ms: f64,
+}
+
+/// Means per frame of the broad- and narrow-phase counters.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct PerFrame {
+    pub contacts: f64,
+    pub endpoint_swaps: f64,
+    pub candidate_pairs: f64,
+    pub narrow_tests: f64,
+    pub invalidations: f64,
+    pub windows: f64,
+    pub retests: f64,
+}
+
+/// Every contact whose physics a rule changed (see the core's `collapse` module).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RuleCounts {
+    /// Made elastic by the TC model (restitution below 1).
+    pub tc_contacts: u64,
+    /// Resolved by the jam rule (a jammed cluster frozen).
+    pub jam_contacts: u64,
+}
+
+/// Everything a run reports, built once and then printed, written as JSON or read back.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Summary {
+    pub run: RunInfo,
+    pub frames_completed: u64,
+    pub simulated_seconds: f64,
+    pub pool: Option<PoolInfo>,
+    pub contacts: ContactTotals,
+    pub accuracy: Option<Accuracy>,
+    pub c_total_ms: Spread,
+    pub wall_ms: Spread,
+    pub cost_split: CostSplit,
+    pub per_frame: PerFrame,
+    pub rules: RuleCounts,
+    /// Largest broad-phase footprint over the frames.
+    pub broad_phase_bytes: u64,
+    /// Peak resident memory of the whole process (VmHWM), where the system reports it.
+    pub peak_memory_mib: Option<f64>,
+    /// Simulate mode only: energy and momentum are meaningless when bodies pass through each other.
+    pub conservation: Option<Conservation>,
+    /// The error that stopped the run early.
+    pub error: Option<String>,
+}
+
+impl Summary {
+    pub fn new(
+        run: RunInfo,
+        frames: &FrameTotals,
+        pool: Option<PoolInfo>,
+        accuracy: Option<Accuracy>,
+        conservation: Option<Conservation>,
+        error: Option<String>,
+    ) -> Summary {
+        let (total, pairs, statics) = (frames.contacts, frames.pair_contacts, frames.static_contacts);
+        let wall_seconds = frames.wall_ms.sum / 1e3;
+        Summary {
+            frames_completed: frames.frames,
+            simulated_seconds: frames.frames as f64 * run.dt,
+            pool,
+            contacts: ContactTotals {
+                total,
+                pairs,
+                statics,
+                walls: total - pairs - statics,
+                ends: frames.contact_ends,
+                per_wall_second: if wall_seconds > 0.0 { total as f64 / wall_seconds } else { 0.0 },
+            },
+            accuracy,
+            c_total_ms: frames.c_total_ms.spread(),
+            wall_ms: frames.wall_ms.spread(),
+            cost_split: CostSplit {
+                update_ms: frames.mean(frames.update_ms),
+                sort_ms: frames.mean(frames.sort_ms),
+                test_ms: frames.mean(frames.test_ms),
+                response_ms: frames.mean(frames.response_ms),
+            },
+            per_frame: PerFrame {
+                contacts: frames.mean(total as f64),
+                endpoint_swaps: frames.mean(frames.endpoint_swaps as f64),
+                candidate_pairs: frames.mean(frames.candidate_pairs as f64),
+                narrow_tests: frames.mean(frames.narrow_tests as f64),
+                invalidations: frames.mean(frames.invalidations as f64),
+                windows: frames.mean(frames.windows as f64),
+                retests: frames.mean(frames.retests as f64),
+            },
+            rules: RuleCounts { tc_contacts: frames.tc_contacts, jam_contacts: frames.jam_contacts },
+            broad_phase_bytes: frames.broad_phase_bytes,
+            peak_memory_mib: peak_memory_mib(),
+            conservation,
+            error,
+            run,
+        }
+    }
+}
+
+/// Peak resident memory of this process in MiB (VmHWM), or `None` off Linux.
+fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|line| line.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
