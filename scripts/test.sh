@@ -20,6 +20,7 @@ step "checking the toolchain (scripts/setup.sh)" ./scripts/setup.sh
 export PATH="$HOME/.cargo/bin:$PATH"
 # Hygiene first, so a formatting slip fails in seconds rather than after the long tests.
 step "formatting (cargo fmt --check)" cargo fmt --all --check
+step "layout (no import circle between the core's modules, no oversized file)" python3 scripts/check_layout.py
 step "lints (cargo clippy; builds the workspace the first time: several minutes)" \
   cargo clippy --release --workspace --all-targets -- -D warnings
 step "Rust tests (cargo test --all-targets)" cargo test --release --workspace --all-targets

@@ -11,7 +11,7 @@ use crate::CliResult;
 use clap::Args;
 use glam::DVec3;
 use std::time::Instant;
-use vadop::narrow_phase::CONTACT_TOLERANCE;
+use vadop::narrow_phase::spheres::CONTACT_TOLERANCE;
 use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
 use vadop::{Sphere, Touched, World, WorldConfig};
 

@@ -8,7 +8,7 @@ use crate::interrupt::interruptible;
 use crate::world::PyWorld;
 use pyo3::prelude::*;
 use std::sync::Mutex;
-use vadop::collapse::DEFAULT_CONTACT_DURATION;
+use vadop::response::rules::DEFAULT_CONTACT_DURATION;
 use vadop::scene::{PaperScene, MAX_SCENE_BODIES};
 use vadop::{Contact, World};
 

@@ -2,7 +2,8 @@
 //! [`Shape`], a [`Shape`] written back as the keyword arguments that make it, and the triangles
 //! of a shape's surface for drawing.
 //!
-//! Each kind's parameters are listed once, in [`KINDS`], which the parser and its messages follow;
+//! Each kind's name and parameters come from the core's one list ([`ShapeKind`]), which the parser
+//! and its messages follow;
 //! [`describe`] writes the same names back. Values are only converted here (an array of the right
 //! dtype and shape, a finite number); what makes a shape valid (sizes > 0, hulls with volume,
 //! meshes with good indices) is the core's to say, in [`Shape::geometry`].
@@ -15,19 +16,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use vadop::shape::{Shape, ShapeGeometry};
-
-/// Every kind `add_shape` takes, with its parameters in the order messages list them.
-const KINDS: [(&str, &[&str]); 8] = [
-    ("sphere", &["radius"]),
-    ("cuboid", &["half_extents"]),
-    ("capsule", &["half_height", "radius"]),
-    ("cylinder", &["half_height", "radius"]),
-    ("cone", &["half_height", "radius"]),
-    ("convex_hull", &["points"]),
-    ("trimesh", &["vertices", "triangles"]),
-    ("halfspace", &["normal"]),
-];
+use vadop::shape::{Shape, ShapeGeometry, ShapeKind};
 
 /// Segments around a round surface drawn by [`surface`]: smooth enough for a viewer, a few
 /// hundred triangles a shape.
@@ -36,10 +25,11 @@ const ROUND_SEGMENTS: u32 = 24;
 /// The shape `add_shape(kind, **params)` describes. An unknown kind is a `ValueError`; a missing
 /// or unexpected parameter, or one of the wrong type, a `TypeError` naming it.
 pub(crate) fn parse(kind: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<Shape> {
-    let Some(&(kind, names)) = KINDS.iter().find(|(name, _)| *name == kind) else {
-        let kinds: Vec<String> = KINDS.iter().map(|(name, _)| format!("'{name}'")).collect();
+    let Some(shape_kind) = ShapeKind::from_name(kind) else {
+        let kinds: Vec<String> = ShapeKind::ALL.iter().map(|k| format!("'{}'", k.name())).collect();
         return Err(PyValueError::new_err(format!("kind must be one of {}, got {kind:?}", kinds.join(", "))));
     };
+    let (kind, names) = (shape_kind.name(), shape_kind.parameters());
     let takes = || format!("a '{kind}' takes {}", names.join(", "));
     let mut given: Vec<(String, Bound<'_, PyAny>)> = Vec::new();
     for (name, value) in params.into_iter().flat_map(|p| p.iter()) {
@@ -60,18 +50,17 @@ pub(crate) fn parse(kind: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<
     // Every parameter is looked up before any is read, so a missing one is reported first.
     let values = names.iter().map(|name| param(name)).collect::<PyResult<Vec<_>>>()?;
     let number = |k: usize| number(values[k], names[k]);
-    Ok(match kind {
-        "sphere" => Shape::Sphere { radius: number(0)? },
-        "cuboid" => Shape::Cuboid { half_extents: DVec3::from_array(finite_row(values[0], "half_extents")?) },
-        "capsule" => Shape::Capsule { half_height: number(0)?, radius: number(1)? },
-        "cylinder" => Shape::Cylinder { half_height: number(0)?, radius: number(1)? },
-        "cone" => Shape::Cone { half_height: number(0)?, radius: number(1)? },
-        "convex_hull" => Shape::ConvexHull { points: vectors(values[0], "points", None)? },
-        "trimesh" => {
+    Ok(match shape_kind {
+        ShapeKind::Sphere => Shape::Sphere { radius: number(0)? },
+        ShapeKind::Cuboid => Shape::Cuboid { half_extents: DVec3::from_array(finite_row(values[0], "half_extents")?) },
+        ShapeKind::Capsule => Shape::Capsule { half_height: number(0)?, radius: number(1)? },
+        ShapeKind::Cylinder => Shape::Cylinder { half_height: number(0)?, radius: number(1)? },
+        ShapeKind::Cone => Shape::Cone { half_height: number(0)?, radius: number(1)? },
+        ShapeKind::ConvexHull => Shape::ConvexHull { points: vectors(values[0], "points", None)? },
+        ShapeKind::TriMesh => {
             Shape::TriMesh { vertices: vectors(values[0], "vertices", None)?, triangles: triangles(values[1])? }
         }
-        "halfspace" => Shape::HalfSpace { normal: DVec3::from_array(finite_row(values[0], "normal")?) },
-        _ => unreachable!("every kind of KINDS is matched"),
+        ShapeKind::HalfSpace => Shape::HalfSpace { normal: DVec3::from_array(finite_row(values[0], "normal")?) },
     })
 }
 
@@ -111,7 +100,7 @@ fn triangles(value: &Bound<'_, PyAny>) -> PyResult<Vec<[u32; 3]>> {
 pub(crate) fn describe<'py>(py: Python<'py>, shape: &Shape) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let vector = |v: DVec3| PyArray1::from_slice(py, &v.to_array());
-    d.set_item("kind", kind_of(shape))?;
+    d.set_item("kind", shape.kind().name())?;
     match shape {
         Shape::Sphere { radius } => d.set_item("radius", radius)?,
         Shape::Cuboid { half_extents } => d.set_item("half_extents", vector(*half_extents))?,
@@ -129,20 +118,6 @@ pub(crate) fn describe<'py>(py: Python<'py>, shape: &Shape) -> PyResult<Bound<'p
         Shape::HalfSpace { normal } => d.set_item("normal", vector(*normal))?,
     }
     Ok(d)
-}
-
-/// The kind's name in [`KINDS`].
-fn kind_of(shape: &Shape) -> &'static str {
-    match shape {
-        Shape::Sphere { .. } => "sphere",
-        Shape::Cuboid { .. } => "cuboid",
-        Shape::Capsule { .. } => "capsule",
-        Shape::Cylinder { .. } => "cylinder",
-        Shape::Cone { .. } => "cone",
-        Shape::ConvexHull { .. } => "convex_hull",
-        Shape::TriMesh { .. } => "trimesh",
-        Shape::HalfSpace { .. } => "halfspace",
-    }
 }
 
 /// Triangles as an int64 (m, 3) array.

@@ -101,14 +101,6 @@ impl Ord for Event {
 }
 
 /// Min-heap of events by time, with deterministic ties.
-///
-/// ```
-/// use vadop::event_queue::{Event, EventQueue, Partner};
-/// let mut queue = EventQueue::default();
-/// queue.push(Event { time: 0.5, body: 3, partner: Partner::Body(7), body_stamp: 0, partner_stamp: 0 });
-/// queue.push(Event { time: 0.2, body: 1, partner: Partner::Body(2), body_stamp: 0, partner_stamp: 0 });
-/// assert_eq!(queue.pop().map(|e| e.body), Some(1));
-/// ```
 #[derive(Debug, Default)]
 pub struct EventQueue {
     /// Events pushed one at a time.
@@ -200,6 +192,14 @@ impl EventQueue {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn event_queue_example() {
+        let mut queue = EventQueue::default();
+        queue.push(Event { time: 0.5, body: 3, partner: Partner::Body(7), body_stamp: 0, partner_stamp: 0 });
+        queue.push(Event { time: 0.2, body: 1, partner: Partner::Body(2), body_stamp: 0, partner_stamp: 0 });
+        assert_eq!(queue.pop().map(|e| e.body), Some(1));
+    }
 
     fn event(time: f64, body: u32, partner: Partner) -> Event {
         Event { time, body, partner, body_stamp: 0, partner_stamp: 0 }

@@ -8,21 +8,18 @@
 //! hierarchical grid over pieces of the swept paths is the other broad phase, and the default
 //! picks the faster for the scene.
 //!
-//! The modules follow the pipeline, one stage each:
-//! [`axis_pool`] → [`bounding_volume`] → [`proxy`] → [`broad_phase`] → [`narrow_phase`] →
-//! [`event_queue`] → [`response`] (with [`collapse`], the rules that keep inelastic and jammed
-//! contacts finite) → [`pipeline`] → [`world`]; plus [`window`] (the time-window convention),
-//! [`bodies`] (the state store) with [`free_rotation`] (the exact torque-free spin of a rigid
-//! body between collisions), [`handle`] (how users name a body), [`touching`] (the pairs in
-//! contact, when contact ends are reported), [`parallel`] (how bulk work is shared between
-//! threads),
-//! [`coherent_sort`] (insertion sort with a budget),
-//! [`pseudo_dynamic`] (the frame-instant baseline), [`overlap`] (start-of-run validation) and
-//! [`scene`] (the paper's scene and the scene file format). Non-spherical bodies: [`shape`] (what
-//! a body looks like and the geometry derived from it) and [`shape_contact`] (their narrow phase,
-//! by conservative advancement, beside the spheres' closed forms in [`narrow_phase`]; a private
-//! `contacts` module picks one for a pair of bodies, and `static_geometry` bounds static bodies
-//! once).
+//! The modules follow the pipeline, one stage each, every stage importing only what lies below
+//! it: the vocabulary every stage speaks ([`Mode`], [`Contact`], [`Touched`], [`FrameStats`],
+//! [`BoxBounds`], [`Wall`], [`motion`] with [`motion::free_rotation`], [`numeric`], [`error`],
+//! [`handle`], [`window`]) → [`axis_pool`] → [`bounding_volume`] → [`shape`] and [`bodies`] (the
+//! state store) → [`broad_phase`] (over its proxy table, [`broad_phase::proxy`]) →
+//! [`narrow_phase`] (the spheres' closed forms, [`narrow_phase::spheres`]; any other shape by
+//! conservative advancement, [`narrow_phase::shapes`]) → the event queue → [`response`] (the
+//! impulses, and the [`response::rules`] that keep inelastic and jammed contacts finite) → the
+//! frame pipeline → [`world`]; plus [`scene`] (the paper's scene and the scene file format) and
+//! [`memory`] (what a world needs and may still take). The event queue, the frame pipeline and
+//! how bulk work is shared between threads are private: they are how a step runs, not what it
+//! answers.
 //!
 //! ```
 //! use vadop::{scene::PaperScene, scene::FRAMES_PER_SECOND, Method, Mode, WorldConfig};

@@ -45,18 +45,6 @@ impl Workers {
     /// its own; the buffers are appended to `out` in chunk order, so `out` is the same whatever the
     /// number of threads. On one thread `f` writes straight into `out`, with no second buffer the
     /// size of the output. Returns `f`'s results in chunk order.
-    ///
-    /// ```
-    /// use vadop::parallel::Workers;
-    /// let mut evens = Vec::new();
-    /// let counts = Workers::new(3).extend_ranges(10, &mut evens, |r, out| {
-    ///     let before = out.len();
-    ///     out.extend(r.filter(|i| i % 2 == 0));
-    ///     out.len() - before
-    /// });
-    /// assert_eq!(evens, [0, 2, 4, 6, 8]);
-    /// assert_eq!(counts.iter().sum::<usize>(), 5);
-    /// ```
     pub fn extend_ranges<T: Send, R: Send>(
         &self,
         len: usize,
@@ -109,13 +97,6 @@ impl Workers {
 
     /// `f(k, part)` for every part, in parallel with more than one thread: for work already cut
     /// into disjoint pieces (see [`split_at_points`]).
-    ///
-    /// ```
-    /// use vadop::parallel::{split_at_points, Workers};
-    /// let mut v = [1, 2, 3, 4, 5];
-    /// Workers::new(2).for_each_part(split_at_points(&mut v, &[2]), |k, part| part.iter_mut().for_each(|x| *x += k));
-    /// assert_eq!(v, [1, 2, 4, 5, 6]);
-    /// ```
     pub fn for_each_part<S: Send>(&self, parts: Vec<S>, f: impl Fn(usize, S) + Sync + Send) {
         if self.threads == 1 {
             parts.into_iter().enumerate().for_each(|(k, part)| f(k, part));
@@ -127,14 +108,6 @@ impl Workers {
     /// `len` split into one range per thread, each with about the same share of `weight`: the
     /// boundaries `b` where the running total `weight(b)` (ascending, from 0 at 0) crosses each
     /// thread's share.
-    ///
-    /// ```
-    /// use vadop::parallel::Workers;
-    /// // Running totals 0, 1, 2, 10, 11: the item at 2 weighs 8 of the 11.
-    /// let running = [0, 1, 2, 10, 11];
-    /// assert_eq!(Workers::new(2).balanced_points(5, 11, |b| running[b]), vec![3]);
-    /// assert_eq!(Workers::new(1).balanced_points(5, 11, |b| running[b]), Vec::<usize>::new());
-    /// ```
     pub fn balanced_points(&self, len: usize, total: usize, weight: impl Fn(usize) -> usize) -> Vec<usize> {
         (1..self.threads)
             .map(|k| {
@@ -204,5 +177,37 @@ impl<'a, T: Copy> DisjointWriter<'a, T> {
         // SAFETY: in bounds (checked above), and no other thread touches slot i (the caller's
         // promise); `T: Copy` has nothing to drop in the value overwritten.
         unsafe { self.start.add(i).write(value) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extend_ranges_example() {
+        let mut evens = Vec::new();
+        let counts = Workers::new(3).extend_ranges(10, &mut evens, |r, out| {
+            let before = out.len();
+            out.extend(r.filter(|i| i % 2 == 0));
+            out.len() - before
+        });
+        assert_eq!(evens, [0, 2, 4, 6, 8]);
+        assert_eq!(counts.iter().sum::<usize>(), 5);
+    }
+
+    #[test]
+    fn for_each_part_example() {
+        let mut v = [1, 2, 3, 4, 5];
+        Workers::new(2).for_each_part(split_at_points(&mut v, &[2]), |k, part| part.iter_mut().for_each(|x| *x += k));
+        assert_eq!(v, [1, 2, 4, 5, 6]);
+    }
+
+    #[test]
+    fn balanced_points_example() {
+        // Running totals 0, 1, 2, 10, 11: the item at 2 weighs 8 of the 11.
+        let running = [0, 1, 2, 10, 11];
+        assert_eq!(Workers::new(2).balanced_points(5, 11, |b| running[b]), vec![3]);
+        assert_eq!(Workers::new(1).balanced_points(5, 11, |b| running[b]), Vec::<usize>::new());
     }
 }

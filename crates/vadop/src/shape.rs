@@ -61,27 +61,107 @@ use parry3d_f64::shape::{ConvexPolyhedron, SharedShape, TriMesh};
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Shape {
     /// A ball about the shape origin.
+    #[serde(rename = "sphere", alias = "Sphere")]
     Sphere { radius: f64 },
     /// A box about the shape origin, `half_extents` along the shape's axes.
+    #[serde(rename = "cuboid", alias = "Cuboid")]
     Cuboid { half_extents: DVec3 },
     /// The points within `radius` of the segment from `-half_height` to `+half_height` on the
     /// shape's y axis.
+    #[serde(rename = "capsule", alias = "Capsule")]
     Capsule { half_height: f64, radius: f64 },
     /// A solid cylinder along the shape's y axis, from `-half_height` to `+half_height`.
+    #[serde(rename = "cylinder", alias = "Cylinder")]
     Cylinder { half_height: f64, radius: f64 },
     /// A solid cone along the shape's y axis: base disc of `radius` at `-half_height`, apex at
     /// `+half_height`.
+    #[serde(rename = "cone", alias = "Cone")]
     Cone { half_height: f64, radius: f64 },
     /// The convex hull of `points` (at least four, not all in one plane). Give the points about
     /// the shape's own centre: coordinates far from it cost precision.
+    #[serde(rename = "convex_hull", alias = "ConvexHull")]
     ConvexHull { points: Vec<DVec3> },
     /// Static-only level geometry: the triangles (a surface, not a solid; each triangle indexes
     /// three distinct `vertices`). A body inside a closed mesh touches nothing until it reaches a
     /// triangle.
+    #[serde(rename = "trimesh", alias = "TriMesh")]
     TriMesh { vertices: Vec<DVec3>, triangles: Vec<[u32; 3]> },
     /// Static-only level geometry: the solid half-space behind the plane through the shape origin
     /// orthogonal to `normal`, which points out of the solid (any non-zero length).
+    #[serde(rename = "halfspace", alias = "HalfSpace")]
     HalfSpace { normal: DVec3 },
+}
+
+/// Declares [`ShapeKind`] from one table: each kind of [`Shape`], the one name it goes by
+/// everywhere (scene files, Python, the CLI's summaries, the viewer), its parameters in the order
+/// messages list them, and the words a readable summary uses. A new shape is one variant of
+/// [`Shape`] and one row here.
+macro_rules! shape_kinds {
+    ($($variant:ident => $name:literal, [$($parameter:literal),*], $singular:literal, $plural:literal;)*) => {
+        /// The kind of a [`Shape`], without its sizes.
+        ///
+        /// ```
+        /// use vadop::shape::{Shape, ShapeKind};
+        /// let kind = Shape::ConvexHull { points: Vec::new() }.kind();
+        /// assert_eq!((kind.name(), kind.parameters()), ("convex_hull", &["points"][..]));
+        /// assert_eq!(ShapeKind::from_name("convex_hull"), Some(kind));
+        /// ```
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum ShapeKind {
+            $($variant,)*
+        }
+
+        impl ShapeKind {
+            /// Every kind, in the order summaries list them.
+            pub const ALL: [ShapeKind; [$($name),*].len()] = [$(ShapeKind::$variant),*];
+
+            /// The kind's name, as scene files, Python and the viewer spell it.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(ShapeKind::$variant => $name,)*
+                }
+            }
+
+            /// The kind called `name`.
+            pub fn from_name(name: &str) -> Option<ShapeKind> {
+                ShapeKind::ALL.into_iter().find(|kind| kind.name() == name)
+            }
+
+            /// The shape's parameters (the fields of its [`Shape`] variant), in order.
+            pub fn parameters(self) -> &'static [&'static str] {
+                match self {
+                    $(ShapeKind::$variant => &[$($parameter),*],)*
+                }
+            }
+
+            /// How a readable summary names one body of the kind, and several.
+            pub fn words(self) -> (&'static str, &'static str) {
+                match self {
+                    $(ShapeKind::$variant => ($singular, $plural),)*
+                }
+            }
+        }
+
+        impl Shape {
+            /// The shape's kind.
+            pub fn kind(&self) -> ShapeKind {
+                match self {
+                    $(Shape::$variant { .. } => ShapeKind::$variant,)*
+                }
+            }
+        }
+    };
+}
+
+shape_kinds! {
+    Sphere => "sphere", ["radius"], "sphere", "spheres";
+    Cuboid => "cuboid", ["half_extents"], "cuboid", "cuboids";
+    Capsule => "capsule", ["half_height", "radius"], "capsule", "capsules";
+    Cylinder => "cylinder", ["half_height", "radius"], "cylinder", "cylinders";
+    Cone => "cone", ["half_height", "radius"], "cone", "cones";
+    ConvexHull => "convex_hull", ["points"], "convex hull", "convex hulls";
+    TriMesh => "trimesh", ["vertices", "triangles"], "triangle mesh", "triangle meshes";
+    HalfSpace => "halfspace", ["normal"], "half-space", "half-spaces";
 }
 
 /// Everything derived once from a [`Shape`]: built by [`Shape::geometry`], which validates.
@@ -440,6 +520,30 @@ mod tests {
             out.push(support.local_support_point(DVec3::new(r * phi.cos(), r * phi.sin(), z)));
         }
         out
+    }
+
+    #[test]
+    fn scene_files_spell_every_kind_by_its_one_name_and_read_the_old_names_too() {
+        let shapes = [
+            Shape::Sphere { radius: 1.0 },
+            Shape::Cuboid { half_extents: DVec3::ONE },
+            Shape::Capsule { half_height: 1.0, radius: 1.0 },
+            Shape::Cylinder { half_height: 1.0, radius: 1.0 },
+            Shape::Cone { half_height: 1.0, radius: 1.0 },
+            Shape::ConvexHull { points: vec![DVec3::ZERO] },
+            Shape::TriMesh { vertices: vec![DVec3::ZERO], triangles: vec![[0, 0, 0]] },
+            Shape::HalfSpace { normal: DVec3::Y },
+        ];
+        let kinds: Vec<ShapeKind> = shapes.iter().map(Shape::kind).collect();
+        assert_eq!(kinds, ShapeKind::ALL);
+        for shape in shapes {
+            let json = serde_json::to_value(&shape).unwrap();
+            let tag = json.as_object().unwrap().keys().next().unwrap().clone();
+            assert_eq!(tag, shape.kind().name());
+            let old = format!("{:?}", shape.kind());
+            let renamed = serde_json::json!({ old: json[&tag].clone() });
+            assert_eq!(serde_json::from_value::<Shape>(renamed).unwrap(), shape);
+        }
     }
 
     #[test]

@@ -10,7 +10,7 @@ use super::writers::FrameRow;
 use crate::CliResult;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
-use vadop::shape::Shape;
+use vadop::shape::ShapeKind;
 use vadop::{BodyShape, World};
 
 /// What was simulated, described from the world itself so that generated scenes, scene files and
@@ -21,7 +21,7 @@ pub struct SceneInfo {
     pub source: String,
     /// Moving bodies.
     pub bodies: usize,
-    /// The moving bodies by kind of shape, in the order of [`KINDS`] (kinds with none left out).
+    /// The moving bodies by kind of shape, in the order of `ShapeKind::ALL` (kinds with none left out), each named by its summary word.
     #[serde(default)]
     pub kinds: Vec<KindCount>,
     /// The static bodies by kind of shape.
@@ -46,43 +46,22 @@ pub struct KindCount {
     pub count: usize,
 }
 
-/// The kinds of shape, singular and plural, in the order of the core's `Shape`.
-pub(super) const KINDS: [(&str, &str); 8] = [
-    ("sphere", "spheres"),
-    ("cuboid", "cuboids"),
-    ("capsule", "capsules"),
-    ("cylinder", "cylinders"),
-    ("cone", "cones"),
-    ("convex hull", "convex hulls"),
-    ("triangle mesh", "triangle meshes"),
-    ("half-space", "half-spaces"),
-];
-
-/// The place of `shape`'s kind in [`KINDS`].
-fn kind_of(shape: &Shape) -> usize {
-    match shape {
-        Shape::Sphere { .. } => 0,
-        Shape::Cuboid { .. } => 1,
-        Shape::Capsule { .. } => 2,
-        Shape::Cylinder { .. } => 3,
-        Shape::Cone { .. } => 4,
-        Shape::ConvexHull { .. } => 5,
-        Shape::TriMesh { .. } => 6,
-        Shape::HalfSpace { .. } => 7,
-    }
-}
+/// Kinds of shape a summary counts: the core's, in its order.
+const KINDS: usize = ShapeKind::ALL.len();
 
 impl SceneInfo {
     pub fn of(world: &World, source: String, dt: f64) -> CliResult<SceneInfo> {
         let extent = world.bounds().max - world.bounds().min;
-        let (mut moving, mut fixed) = ([0usize; KINDS.len()], [0usize; KINDS.len()]);
+        let (mut moving, mut fixed) = ([0usize; KINDS], [0usize; KINDS]);
         let (mut volume, mut max_speed, mut max_spin) = (0.0, 0.0f64, 0.0f64);
         for (_, body) in world.bodies() {
             let (kind, body_volume, radius) = match body.shape {
-                BodyShape::Sphere { radius } => (0, 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3), radius),
+                BodyShape::Sphere { radius } => {
+                    (ShapeKind::Sphere as usize, 4.0 / 3.0 * std::f64::consts::PI * radius.powi(3), radius)
+                }
                 BodyShape::Shape(id) => {
                     let geometry = world.shape(id).map_err(|e| e.to_string())?;
-                    (kind_of(geometry.shape()), geometry.volume(), geometry.bounding_radius().unwrap_or(0.0))
+                    (geometry.shape().kind() as usize, geometry.volume(), geometry.bounding_radius().unwrap_or(0.0))
                 }
             };
             if !body.mass.is_finite() {
@@ -94,12 +73,12 @@ impl SceneInfo {
             max_speed = max_speed.max(body.velocity.length() * dt / (2.0 * radius));
             max_spin = max_spin.max(body.angular_velocity.length() * dt);
         }
-        let by_kind = |counts: [usize; KINDS.len()]| {
-            KINDS
+        let by_kind = |counts: [usize; KINDS]| {
+            ShapeKind::ALL
                 .iter()
                 .zip(counts)
                 .filter(|(_, count)| *count > 0)
-                .map(|((kind, _), count)| KindCount { kind: kind.to_string(), count })
+                .map(|(kind, count)| KindCount { kind: kind.words().0.to_string(), count })
                 .collect::<Vec<_>>()
         };
         Ok(SceneInfo {
@@ -117,7 +96,9 @@ impl SceneInfo {
     /// True when bodies spin or may be set spinning by an impact: bodies other than spheres,
     /// static bodies, spins.
     pub fn may_spin(&self) -> bool {
-        self.kinds.iter().any(|k| k.kind != KINDS[0].0) || !self.static_bodies.is_empty() || self.max_spin > 0.0
+        self.kinds.iter().any(|k| k.kind != ShapeKind::Sphere.words().0)
+            || !self.static_bodies.is_empty()
+            || self.max_spin > 0.0
     }
 }
 

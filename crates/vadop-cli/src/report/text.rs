@@ -4,13 +4,14 @@
 //! the README quote. It derives only presentation (shares, ratios, plurals) from the `Summary` as
 //! built, and never reads a world or the frames.
 
-use super::summary::{KindCount, Summary, KINDS};
+use super::summary::{KindCount, Summary};
 use std::fmt;
 use vadop::memory::format_bytes;
+use vadop::shape::ShapeKind;
 
 /// `count` bodies of `kind`, as a reader says it: "1 cone", "3 convex hulls".
 fn counted(count: usize, kind: &str) -> String {
-    let plural = KINDS.iter().find(|(one, _)| *one == kind).map_or(kind, |(_, many)| many);
+    let plural = ShapeKind::ALL.iter().map(|k| k.words()).find(|(one, _)| *one == kind).map_or(kind, |(_, many)| many);
     number(count as u64, kind, plural)
 }
 

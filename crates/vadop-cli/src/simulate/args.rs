@@ -4,6 +4,7 @@
 //! how the help reads, byte for byte. It never checks physics input (the core does, and its
 //! messages name the valid ranges), never opens a file and never builds a world.
 
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::str::FromStr;
@@ -146,8 +147,8 @@ pub struct SimulateArgs {
     /// (continuous, every pair), discrete (overlap checks at frame instants only), or the
     /// continuous baselines swept-aabb (classic sweep and prune over swept boxes), swept-kdop (all
     /// pool axes for every body) and grid (uniform grid over swept boxes)
-    #[arg(long, value_enum, default_value_t = MethodArg::Auto, help_heading = "Run")]
-    pub(super) method: MethodArg,
+    #[arg(long, value_parser = method_names(), default_value = "auto", help_heading = "Run")]
+    pub(super) method: Method,
     /// Method stepped alongside on the same scene to count missed and extra pair contacts
     /// [default: brute for at most 3000 bodies (300 in a scene with shapes other than spheres,
     /// whose pair tests cost far more) unless --method is brute, else none]
@@ -170,7 +171,7 @@ pub struct SimulateArgs {
     /// Contact duration t_c of the TC model in seconds: with restitution below 1, a contact of a
     /// body whose previous contact lies less than t_c before is elastic, which ends inelastic
     /// collapse
-    #[arg(long, value_name = "SECONDS", default_value_t = vadop::collapse::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
+    #[arg(long, value_name = "SECONDS", default_value_t = vadop::response::rules::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
     pub(super) contact_duration: f64,
     /// Detect mode: also report when each contact between bodies ends (rows `body-end` in
     /// --contacts, counted in the summary), as started and stopped events
@@ -215,29 +216,10 @@ pub struct SimulateArgs {
     pub(super) quiet: bool,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(super) enum MethodArg {
-    Auto,
-    Vadop,
-    Brute,
-    Discrete,
-    SweptAabb,
-    SweptKdop,
-    Grid,
-}
-
-impl MethodArg {
-    pub(super) fn method(self) -> Method {
-        match self {
-            MethodArg::Auto => Method::Auto,
-            MethodArg::Vadop => Method::Vadop,
-            MethodArg::Brute => Method::Brute,
-            MethodArg::Discrete => Method::Discrete,
-            MethodArg::SweptAabb => Method::SweptAabb,
-            MethodArg::SweptKdop => Method::SweptKdop,
-            MethodArg::Grid => Method::Grid,
-        }
-    }
+/// `--method`: the core's own list of methods, by the names it gives them.
+fn method_names() -> impl TypedValueParser<Value = Method> {
+    PossibleValuesParser::new(Method::ALL.map(Method::name))
+        .map(|name| Method::from_name(&name).expect("clap admits only the listed names"))
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

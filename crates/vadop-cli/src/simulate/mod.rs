@@ -55,7 +55,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         return resume(path, files, args);
     }
     let config = WorldConfig {
-        method: args.method.method(),
+        method: args.method,
         mode: match args.mode {
             ModeArg::Detect => Mode::Detect,
             ModeArg::Simulate => Mode::Simulate,

@@ -6,13 +6,6 @@
 //! merge sort instead, so no frame ever costs O(n^2). It knows nothing about what it sorts.
 
 /// Sorts `items` by `less`; returns the number of single-place moves insertion sort made.
-///
-/// ```
-/// use vadop::broad_phase::coherent_sort::coherent_sort;
-/// let mut v = vec![1.0, 3.0, 2.0, 4.0];
-/// assert_eq!(coherent_sort(&mut v, |a: &f64, b: &f64| a < b), 1);
-/// assert_eq!(v, [1.0, 2.0, 3.0, 4.0]);
-/// ```
 pub fn coherent_sort<T: Copy>(items: &mut [T], less: impl Fn(&T, &T) -> bool) -> u64 {
     let budget = 8 * items.len() as u64 + 1024;
     let mut moves = 0u64;
@@ -44,6 +37,13 @@ pub fn coherent_sort<T: Copy>(items: &mut [T], less: impl Fn(&T, &T) -> bool) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn coherent_sort_example() {
+        let mut v = vec![1.0, 3.0, 2.0, 4.0];
+        assert_eq!(coherent_sort(&mut v, |a: &f64, b: &f64| a < b), 1);
+        assert_eq!(v, [1.0, 2.0, 3.0, 4.0]);
+    }
 
     #[test]
     fn reversed_input_falls_back_and_still_sorts() {

@@ -62,7 +62,7 @@ impl Spin for Fixed {
 ///
 /// ```
 /// use glam::{DQuat, DVec3};
-/// use vadop::narrow_phase::shapes::{Fixed, RigidMotion};
+/// use vadop::motion::{Fixed, RigidMotion};
 /// let m = RigidMotion { position: DVec3::ZERO, since: 1.0, velocity: DVec3::X, spin: Fixed(DQuat::IDENTITY) };
 /// assert_eq!(m.position_at(3.0), DVec3::new(2.0, 0.0, 0.0));
 /// ```

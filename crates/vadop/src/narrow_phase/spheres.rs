@@ -99,7 +99,8 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::spheres::{pair_contact_time, Motion};
+/// use vadop::narrow_phase::spheres::pair_contact_time;
+/// use vadop::motion::Motion;
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // The gap of 5 closes at 3: one contact at 5/3, whichever frame asks.
@@ -158,7 +159,8 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::spheres::{pair_contact_time, pair_separation_time, Motion};
+/// use vadop::narrow_phase::spheres::{pair_contact_time, pair_separation_time};
+/// use vadop::motion::Motion;
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
@@ -178,7 +180,9 @@ pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f
 ///
 /// ```
 /// use glam::DVec3;
-/// use vadop::narrow_phase::spheres::{wall_contact_time, Motion, Wall};
+/// use vadop::narrow_phase::spheres::wall_contact_time;
+/// use vadop::Wall;
+/// use vadop::motion::Motion;
 /// let motion = Motion { position: DVec3::new(5.0, 5.0, 5.0), since: 1.0, velocity: DVec3::new(2.0, 0.0, 0.0) };
 /// assert_eq!(wall_contact_time(&motion, 1.0, DVec3::ZERO, DVec3::splat(10.0)), Some((3.0, Wall::MaxX)));
 /// ```

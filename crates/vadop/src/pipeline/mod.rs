@@ -1,8 +1,9 @@
 //! The frame pipeline of the continuous methods: proxies → candidate pairs → predicted contacts →
 //! the event loop, window after window.
 //!
-//! It owns the broad-phase window, the proxy table, the event queue and the contact rules, and
-//! the loop that ties the stages together. A *window* is the stretch of time one broad-phase pass
+//! It owns the scheduling: the broad-phase window, the proxy table, the event queue, what a
+//! velocity change re-tests, the jam rule's clusters, and the loop that ties the stages together;
+//! how an impact changes the bodies is the response's ([`crate::response`]). A *window* is the stretch of time one broad-phase pass
 //! covers; it is chosen from the bodies' speeds, not from the caller's frames, so a window may
 //! span many short frames or a long frame many windows, and the cost of a frame does not depend
 //! on its length beyond the contacts in it. At a window's start every proxy is refreshed, the
@@ -17,8 +18,8 @@
 //! Exactness: contact times are canonical (see [`crate::narrow_phase::spheres`]) and each prediction is
 //! kept only inside the window its bounds hold for, so every contact is predicted, and reported
 //! once, in the frame whose `[start, end)` holds its time, whichever window, frame length or
-//! method finds it. It never validates input (the world does) and never reads a broad phase's
-//! internals.
+//! method finds it. It never validates input (the world does), never reads a broad phase's
+//! internals and never computes an impulse.
 
 pub(crate) mod pseudo_dynamic;
 pub(crate) mod touching;
@@ -439,7 +440,7 @@ impl<B: BroadPhase> Pipeline<B> {
     fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
         let i = a as usize;
         let (point, normal) = contacts::wall_geometry(bodies, i, wall, &physics.bounds, t);
-        let impulse = match self.impacts.wall(bodies, physics, a, wall, t, (point, normal), out.stats) {
+        let impulse = match self.impacts.wall(bodies, physics, (a, wall), t, (point, normal), out.stats) {
             Resolution::Jammed { by_rule: true } => {
                 let before = bodies.velocity(i);
                 self.freeze_cluster(bodies, physics, &[a], t, out.stats);

@@ -22,17 +22,6 @@ struct Link {
 }
 
 /// Touching pairs with a list per body.
-///
-/// ```
-/// use vadop::pipeline::touching::Touching;
-/// let mut touching = Touching::default();
-/// touching.insert(3, 1, 0.5);
-/// touching.insert(1, 7, 0.25);
-/// assert_eq!(touching.partners(1).collect::<Vec<_>>(), [7, 3]);
-/// assert_eq!(touching.contacts_of(3).collect::<Vec<_>>(), [(1, 0.5)]);
-/// assert!(touching.remove(1, 3));
-/// assert_eq!(touching.contacts(), [(1, 7, 0.25)]);
-/// ```
 #[derive(Debug, Default, Clone)]
 pub struct Touching {
     /// First link of each body's list.
@@ -170,6 +159,17 @@ impl Touching {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn touching_example() {
+        let mut touching = Touching::default();
+        touching.insert(3, 1, 0.5);
+        touching.insert(1, 7, 0.25);
+        assert_eq!(touching.partners(1).collect::<Vec<_>>(), [7, 3]);
+        assert_eq!(touching.contacts_of(3).collect::<Vec<_>>(), [(1, 0.5)]);
+        assert!(touching.remove(1, 3));
+        assert_eq!(touching.contacts(), [(1, 7, 0.25)]);
+    }
 
     #[test]
     fn lists_stay_consistent_under_inserts_and_removals() {

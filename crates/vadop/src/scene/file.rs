@@ -14,7 +14,7 @@ use glam::{DQuat, DVec3};
 use std::collections::BTreeMap;
 
 /// A box and the bodies in it: spheres, and bodies of the shapes it names (see the
-/// [module documentation](self) for the file format).
+/// [module documentation](crate::scene) for the file format).
 ///
 /// ```
 /// use vadop::scene::{Scene, SceneEntry};

@@ -21,13 +21,16 @@
 //!
 //! Bodies of other shapes take three more lists, each optional (`spheres` too):
 //!
-//! - `shapes`, the table of named shapes: `{"name": "brick", "shape": {"Cuboid": {"half_extents":
-//!   [0.5, 0.25, 0.25]}}}`. A shape is written as [`Shape`] serialises: `{"Sphere": {"radius":
-//!   r}}`, `{"Cuboid": {"half_extents": [x, y, z]}}`, `{"Capsule": {"half_height": h, "radius":
-//!   r}}`, `Cylinder` and `Cone` alike, `{"ConvexHull": {"points": [[x, y, z], ...]}}`,
-//!   `{"TriMesh": {"vertices": [[x, y, z], ...], "triangles": [[i, j, k], ...]}}` and
-//!   `{"HalfSpace": {"normal": [x, y, z]}}`, sizes in the shape's own frame (see
-//!   [`crate::shape`]). Names are unique and case-sensitive.
+//! - `shapes`, the table of named shapes: `{"name": "brick", "shape": {"cuboid": {"half_extents":
+//!   [0.5, 0.25, 0.25]}}}`. A shape is written as [`Shape`](crate::shape::Shape) serialises, under its kind's name
+//!   ([`ShapeKind::name`](crate::shape::ShapeKind::name), the names Python and the viewer use):
+//!   `{"sphere": {"radius": r}}`, `{"cuboid": {"half_extents": [x, y, z]}}`, `{"capsule":
+//!   {"half_height": h, "radius": r}}`, `cylinder` and `cone` alike, `{"convex_hull": {"points":
+//!   [[x, y, z], ...]}}`, `{"trimesh": {"vertices": [[x, y, z], ...], "triangles": [[i, j, k],
+//!   ...]}}` and `{"halfspace": {"normal": [x, y, z]}}`, sizes in the shape's own frame (see
+//!   [`crate::shape`]). Older files name the kinds `Sphere`, `Cuboid`,
+//!   `ConvexHull`, `TriMesh`, `HalfSpace`, ...; they are read as well. Names are unique and
+//!   case-sensitive.
 //! - `bodies`, the moving bodies: `{"shape": "brick", "position": [x, y, z], "orientation": [x, y,
 //!   z, w], "velocity": [x, y, z], "angular_velocity": [x, y, z], "mass": m}`. `position` places
 //!   the shape's origin; `orientation` is a quaternion in the order **[x, y, z, w]**, the vector

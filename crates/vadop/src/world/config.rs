@@ -9,52 +9,51 @@ use crate::response::DEFAULT_CONTACT_DURATION;
 /// walls that many times per frame, which is never a meaningful simulation.
 pub const MAX_BOX_LENGTHS_PER_FRAME: f64 = 1e4;
 
-/// How candidate pairs are found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Method {
+/// Declares [`Method`] from one table: each method's variant, its documentation and its name on
+/// the command line, in Python and in reports, in the order the benchmarks list them. A new
+/// method is one row here and one arm of the world's engine wiring.
+macro_rules! methods {
+    ($($(#[doc = $doc:literal])* $variant:ident => $name:literal,)*) => {
+        /// How candidate pairs are found.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+        pub enum Method {
+            $($(#[doc = $doc])* $variant,)*
+        }
+
+        impl Method {
+            /// Every method, in the order the benchmarks list them.
+            pub const ALL: [Method; [$($name),*].len()] = [$(Method::$variant),*];
+
+            /// The method's name on the command line and in reports.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Method::$variant => $name,)*
+                }
+            }
+        }
+    };
+}
+
+methods! {
     /// Continuous: the fastest broad phase (see [`Method::resolve`]).
-    Auto,
+    Auto => "auto",
     /// Continuous: velocity-aligned volumes, sweep and prune over the axis pool (the paper).
-    Vadop,
+    Vadop => "vadop",
     /// Continuous: hierarchical uniform grid over pieces of the swept paths.
-    Grid,
-    /// Continuous: every pair tested (the oracle; O(n^2) per frame).
-    Brute,
-    /// Pseudo-dynamic: overlap checks at frame instants only (misses what passes in between).
-    Discrete,
+    Grid => "grid",
     /// Continuous baseline: classic sweep and prune over swept axis-aligned boxes (the three
     /// coordinate axes for every body, one sorted list per axis, no tiles), as most engines do.
-    SweptAabb,
+    SweptAabb => "swept-aabb",
     /// Continuous baseline: the VADOP sweep and prune with *every* pool axis for every body, a
     /// swept k-DOP; isolates what the velocity alignment buys.
-    SweptKdop,
+    SweptKdop => "swept-kdop",
+    /// Pseudo-dynamic: overlap checks at frame instants only (misses what passes in between).
+    Discrete => "discrete",
+    /// Continuous: every pair tested (the oracle; O(n^2) per frame).
+    Brute => "brute",
 }
 
 impl Method {
-    /// Every method, in the order the benchmarks list them.
-    pub const ALL: [Method; 7] = [
-        Method::Auto,
-        Method::Vadop,
-        Method::Grid,
-        Method::SweptAabb,
-        Method::SweptKdop,
-        Method::Discrete,
-        Method::Brute,
-    ];
-
-    /// The method's name on the command line and in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Auto => "auto",
-            Method::Vadop => "vadop",
-            Method::Grid => "grid",
-            Method::Brute => "brute",
-            Method::Discrete => "discrete",
-            Method::SweptAabb => "swept-aabb",
-            Method::SweptKdop => "swept-kdop",
-        }
-    }
-
     /// The method called `name` (as [`Method::name`] writes it).
     pub fn from_name(name: &str) -> Option<Method> {
         Method::ALL.into_iter().find(|m| m.name() == name)
@@ -116,8 +115,8 @@ pub struct WorldConfig {
     /// each other (1000 threads on 2 cores made a run 375 times slower).
     #[serde(default)]
     pub threads: Option<usize>,
-    /// Detect mode: also report when each contact between bodies ends ([`World::contact_ends`])
-    /// and keep the pairs in contact ([`World::touching`]), as started and stopped events.
+    /// Detect mode: also report when each contact between bodies ends ([`World::contact_ends`](crate::World::contact_ends))
+    /// and keep the pairs in contact ([`World::touching`](crate::World::touching)), as started and stopped events.
     /// Off by default: it costs a prediction and a list entry per contact.
     #[serde(default)]
     pub contact_ends: bool,

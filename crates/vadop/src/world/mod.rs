@@ -3,7 +3,7 @@
 //!
 //! It is the thin front of the library: it owns the bodies and the settings, validates every
 //! input before anything changes, and hands each frame to the method's engine — the frame
-//! pipeline of a continuous method ([`crate::pipeline`]) over its broad phase, or the
+//! pipeline of a continuous method (`pipeline`) over its broad phase, or the
 //! pseudo-dynamic stepper. The methods differ only in where candidate pairs come from; the narrow
 //! phase, queue and response are shared, so every continuous method and the brute-force oracle
 //! produce bit-identical contact sequences. It never decides what touches or how bodies respond.

@@ -13,7 +13,7 @@
 //! `p(t) = position + (t - since) * velocity`, and its orientation (which rotates body-frame
 //! vectors to world vectors, see [`crate::shape`]) is `spin.orientation_at(t - since)`; the spin
 //! also bounds the angular speed for all time. A static body is a [`RigidMotion`] with zero
-//! velocity and the [`Fixed`] spin; static-only shapes must not turn.
+//! velocity and the [`Fixed`](crate::motion::Fixed) spin; static-only shapes must not turn.
 //!
 //! # Bounding volumes first
 //!
@@ -301,7 +301,8 @@ pub fn shape_contact_search<S: Spin, T: Spin>(
 /// ```
 /// use glam::{DQuat, DVec3};
 /// use vadop::shape::Shape;
-/// use vadop::narrow_phase::shapes::{shape_contact_time, RigidMotion};
+/// use vadop::narrow_phase::shapes::shape_contact_time;
+/// use vadop::motion::RigidMotion;
 /// use vadop::Window;
 /// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
 /// let wall = Shape::HalfSpace { normal: -DVec3::X }.geometry().unwrap();
@@ -334,7 +335,8 @@ pub fn shape_contact_time<S: Spin, T: Spin>(
 /// ```
 /// use glam::{DQuat, DVec3};
 /// use vadop::shape::Shape;
-/// use vadop::narrow_phase::shapes::{contact_end_time, shape_contact_time, RigidMotion};
+/// use vadop::narrow_phase::shapes::{contact_end_time, shape_contact_time};
+/// use vadop::motion::RigidMotion;
 /// use vadop::Window;
 /// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
 /// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
@@ -374,7 +376,8 @@ pub fn contact_end_search<S: Spin, T: Spin>(
 /// ```
 /// use glam::{DQuat, DVec3};
 /// use vadop::shape::Shape;
-/// use vadop::narrow_phase::shapes::{contact_end_time, contact_in_progress_end_time, shape_contact_time, RigidMotion};
+/// use vadop::narrow_phase::shapes::{contact_end_time, contact_in_progress_end_time, shape_contact_time};
+/// use vadop::motion::RigidMotion;
 /// use vadop::Window;
 /// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
 /// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
@@ -404,7 +407,8 @@ pub fn contact_in_progress_end_time<S: Spin, T: Spin>(
 /// use glam::{DQuat, DVec3};
 /// use vadop::shape::Shape;
 /// use vadop::motion::free_rotation::FreeRotation;
-/// use vadop::narrow_phase::shapes::{shape_contact_after, shape_contact_time, RigidMotion};
+/// use vadop::narrow_phase::shapes::{shape_contact_after, shape_contact_time};
+/// use vadop::motion::RigidMotion;
 /// use vadop::Window;
 /// let plank = Shape::Cuboid { half_extents: DVec3::new(1.0, 0.1, 0.1) }.geometry().unwrap();
 /// let ball = Shape::Sphere { radius: 0.2 }.geometry().unwrap();
@@ -438,7 +442,8 @@ pub fn shape_contact_after<S: Spin, T: Spin>(
 /// ```
 /// use glam::{DQuat, DVec3};
 /// use vadop::shape::Shape;
-/// use vadop::narrow_phase::shapes::{contact_geometry, RigidMotion};
+/// use vadop::narrow_phase::shapes::contact_geometry;
+/// use vadop::motion::RigidMotion;
 /// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
 /// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
 /// let b = RigidMotion::fixed(DVec3::new(1.0, 0.25, 0.0), DQuat::IDENTITY, 0.0);
@@ -533,7 +538,8 @@ fn wall_searcher<'a, S: Spin>(
 /// ```
 /// use glam::{DQuat, DVec3};
 /// use vadop::shape::Shape;
-/// use vadop::narrow_phase::shapes::{shape_wall_time, RigidMotion};
+/// use vadop::narrow_phase::shapes::shape_wall_time;
+/// use vadop::motion::RigidMotion;
 /// use vadop::{Wall, Window};
 /// let cube = Shape::Cuboid { half_extents: DVec3::splat(1.0) }.geometry().unwrap();
 /// let motion = RigidMotion { velocity: DVec3::new(0.0, 0.0, -3.0), ..RigidMotion::fixed(DVec3::splat(5.0), DQuat::IDENTITY, 0.0) };
