@@ -11,15 +11,15 @@
 //! The modules follow the pipeline, one stage each, every stage importing only what lies below
 //! it: the vocabulary every stage speaks ([`Mode`], [`Contact`], [`Touched`], [`FrameStats`],
 //! [`BoxBounds`], [`Wall`], [`motion`] with [`motion::free_rotation`], [`numeric`], [`error`],
-//! [`handle`], [`window`]) → [`axis_pool`] → [`bounding_volume`] → [`shape`] and [`bodies`] (the
-//! state store) → [`broad_phase`] (over its proxy table, [`broad_phase::proxy`]) →
+//! [`handle`], [`window`]) → [`axis_pool`] → [`bounding_volume`] → [`shape`] and the body store →
+//! [`broad_phase`] (over its proxy table, [`broad_phase::proxy`]) →
 //! [`narrow_phase`] (the spheres' closed forms, [`narrow_phase::spheres`]; any other shape by
 //! conservative advancement, [`narrow_phase::shapes`]) → the event queue → [`response`] (the
 //! impulses, and the [`response::rules`] that keep inelastic and jammed contacts finite) → the
 //! frame pipeline → [`world`]; plus [`scene`] (the paper's scene and the scene file format) and
-//! [`memory`] (what a world needs and may still take). The event queue, the frame pipeline and
-//! how bulk work is shared between threads are private: they are how a step runs, not what it
-//! answers.
+//! [`memory`] (what a world needs and may still take). The body store, the event queue, the frame
+//! pipeline and how bulk work is shared between threads are private: they are how a step runs,
+//! not what it answers.
 //!
 //! ```
 //! use vadop::{scene::PaperScene, scene::FRAMES_PER_SECOND, Method, Mode, WorldConfig};
@@ -53,7 +53,7 @@ pub mod window;
 
 // The stages, in pipeline order.
 pub mod axis_pool;
-pub mod bodies;
+pub(crate) mod bodies;
 pub mod bounding_volume;
 pub mod broad_phase;
 pub(crate) mod event_queue;

@@ -9,7 +9,7 @@
 //! that will soon hit another never pays for the rest of its path. It is the only thing a broad
 //! phase reads, so broad phases know nothing of shapes: a body of any shape is bounded by the
 //! sphere about its centre that contains it. The table holds no motion of its own: a proxy's
-//! motion is the body's ([`crate::bodies::BodyState`], one cache line), which a broad phase
+//! motion is the body's (the store's `BodyState`, one cache line), which a broad phase
 //! reads through [`Proxies`]; a body's stamp changes whenever its motion does, so an entry made
 //! from an older motion is stale and its predictions void. The table never decides what is a
 //! candidate and never moves a body; the pipeline refreshes every proxy at a window's start and
