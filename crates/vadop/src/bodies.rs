@@ -98,6 +98,10 @@ pub struct Rigid {
     pub spin_start: Vec<(DQuat, DVec3)>,
     /// Per slot: a static body, which never moves, has infinite mass and is no broad phase's.
     pub fixed: Vec<bool>,
+    /// Per slot: bumped whenever the body's motion (its path or its spin) is written, but not when
+    /// only its predictions are voided (a proxy renewal bumps the stamp alone): a shape search
+    /// parked on the old motion is void, one parked on the same motion is taken up again.
+    pub(crate) motion_epoch: Vec<u32>,
     /// Bumped whenever a static body is added or removed, so the static geometry is rebuilt.
     pub statics_revision: u64,
     /// True once the per-slot arrays are kept (a world of spheres never sets it).
@@ -339,6 +343,7 @@ impl Bodies {
             self.rigid.spin = vec![steady(); slots];
             self.rigid.spin_start = vec![(DQuat::IDENTITY, DVec3::ZERO); slots];
             self.rigid.fixed = vec![false; slots];
+            self.rigid.motion_epoch = vec![0; slots];
             self.rigid.active = true;
         }
     }
@@ -375,6 +380,7 @@ impl Bodies {
 
     /// Body `i` spins from now (its `since`) from `orientation` with `angular_velocity`.
     pub(crate) fn start_spin(&mut self, i: usize, orientation: DQuat, angular_velocity: DVec3) {
+        self.new_motion(i);
         self.rigid.spin[i] = FreeRotation::new(self.principal_inertia(i), orientation, angular_velocity);
         self.rigid.spin_start[i] = (orientation, angular_velocity);
     }
@@ -419,13 +425,30 @@ impl Bodies {
                 self.rigid.spin.push(steady());
                 self.rigid.spin_start.push((DQuat::IDENTITY, DVec3::ZERO));
                 self.rigid.fixed.push(false);
+                self.rigid.motion_epoch.push(0);
             }
         } else {
             self.state[i] = state;
             self.mass[i] = sphere.mass;
             self.stamp[i] = self.stamp[i].wrapping_add(1);
+            self.new_motion(i);
             self.alive[i] = true;
         }
+    }
+
+    /// Body `i`'s motion was just written: searches parked on the old one are void.
+    #[inline]
+    fn new_motion(&mut self, i: usize) {
+        if let Some(epoch) = self.rigid.motion_epoch.get_mut(i) {
+            *epoch = epoch.wrapping_add(1);
+        }
+    }
+
+    /// The count of motions body `i` has had (see [`Rigid::motion_epoch`]); 0 in a world of
+    /// plain spheres.
+    #[inline]
+    pub(crate) fn motion_epoch(&self, i: usize) -> u32 {
+        self.rigid.motion_epoch.get(i).copied().unwrap_or(0)
     }
 
     /// Empties slot `i`: voids the body's predictions and moves the slot on to its next
@@ -436,6 +459,7 @@ impl Bodies {
         }
         self.alive[i] = false;
         self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.new_motion(i);
         self.generation[i] += 1;
     }
 
@@ -477,6 +501,7 @@ impl Bodies {
     pub(crate) fn undo(&mut self, speed_bound: f64) {
         for o in self.undo.take().unwrap_or_default().into_iter().rev() {
             self.state[o.slot] = o.state;
+            self.new_motion(o.slot);
             if self.has_rigid() {
                 let (spin, start) = o.spin.unwrap_or_else(|| (steady(), (DQuat::IDENTITY, DVec3::ZERO)));
                 (self.rigid.spin[o.slot], self.rigid.spin_start[o.slot]) = (spin, start);
@@ -497,6 +522,7 @@ impl Bodies {
         }
         self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
         self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.new_motion(i);
         self.speed_bound = self.speed_bound.max(speed(velocity));
     }
 

@@ -146,6 +146,12 @@ impl EventQueue {
     pub fn upcoming(&self, ahead: usize) -> Option<&Event> {
         self.bulk.len().checked_sub(ahead + 1).map(|k| &self.bulk[k])
     }
+    /// Puts back an event popped but not handled: it pops again in its order.
+    pub fn put_back(&mut self, event: Event) {
+        self.heap.push(event);
+        // It is not a repeat of itself.
+        self.last = None;
+    }
     /// Time of the earliest event (valid or not).
     #[inline]
     pub fn peek_time(&self) -> Option<f64> {

@@ -485,6 +485,20 @@ impl ShapeGeometry {
     }
 }
 
+/// One solid of each moving kind, about one unit across, for the narrow phase's unit tests.
+#[cfg(test)]
+pub(crate) fn one_solid_of_each_kind() -> [Shape; 6] {
+    let hull = [[0.5, 0.0, 0.0], [-0.3, 0.4, 0.1], [-0.2, -0.4, 0.2], [0.0, 0.1, -0.5], [0.1, 0.0, 0.45]];
+    [
+        Shape::Sphere { radius: 0.4 },
+        Shape::Capsule { half_height: 0.3, radius: 0.2 },
+        Shape::Cuboid { half_extents: DVec3::new(0.35, 0.25, 0.2) },
+        Shape::Cone { half_height: 0.4, radius: 0.3 },
+        Shape::Cylinder { half_height: 0.4, radius: 0.3 },
+        Shape::ConvexHull { points: hull.map(DVec3::from_array).to_vec() },
+    ]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -337,6 +337,40 @@ fn version_2_files_load_with_removed_ids_stale() {
     assert_eq!(added, world.add_sphere(small_sphere(0.0)).unwrap());
 }
 
+/// Spinning shapes, whose searches the pipeline parks at a window's end and takes up in the
+/// next: contacts and states are bit-identical for 1, 2 and 3 threads, for every method and mode,
+/// and for a run resumed from a file (which keeps no parked search, so its searches start from
+/// their references again).
+#[test]
+fn shapes_give_the_same_bits_for_every_thread_count_and_when_resumed() {
+    let scene = vadop::scene::ShapesScene::new(300, 0.05, 0.5).build().unwrap();
+    for method in [Method::Auto, Method::Vadop, Method::Grid, Method::Brute] {
+        for (mode, restitution) in [(Mode::Detect, 1.0), (Mode::Simulate, 0.5)] {
+            let config =
+                |threads| WorldConfig { method, mode, restitution, threads: Some(threads), ..WorldConfig::default() };
+            let go = |threads: usize| {
+                let mut world = scene.world(config(threads)).unwrap();
+                let contacts = run(&mut world, 0, 10);
+                (contacts, state_bits(&world))
+            };
+            let one = go(1);
+            assert!(one.0.iter().map(Vec::len).sum::<usize>() > 20, "{method:?} {mode:?}");
+            for threads in [2, 3] {
+                assert_eq!(go(threads), one, "{method:?} {mode:?} with {threads} threads");
+            }
+            let mut first = scene.world(config(2)).unwrap();
+            let mut found = run(&mut first, 0, 4);
+            let path = scratch(&format!("shape-threads-{method:?}-{mode:?}"));
+            first.save(&path).unwrap();
+            let mut resumed = World::load(&path).unwrap();
+            std::fs::remove_file(&path).unwrap();
+            found.extend(run(&mut resumed, 4, 6));
+            assert_eq!(found, one.0, "{method:?} {mode:?}: saved and resumed");
+            assert_eq!(state_bits(&resumed), one.1, "{method:?} {mode:?}: state after resuming");
+        }
+    }
+}
+
 /// Steps `count` frames: each frame's contact starts and ends as bits.
 fn frames(world: &mut World, count: usize) -> Vec<(Vec<String>, Vec<String>)> {
     (0..count)

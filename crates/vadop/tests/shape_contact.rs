@@ -21,8 +21,8 @@ use vadop::motion::Motion;
 use vadop::motion::{RigidMotion, Spin};
 use vadop::narrow_phase::shapes::{
     contact_end_search, contact_end_time, contact_geometry, contact_in_progress_end_time, contact_tolerance,
-    shape_contact_after, shape_contact_search, shape_contact_time, shape_wall_search, shape_wall_time,
-    wall_contact_geometry,
+    shape_contact_after, shape_contact_after_parked, shape_contact_resumed, shape_contact_search, shape_contact_time,
+    shape_wall_search, shape_wall_time, wall_contact_geometry,
 };
 use vadop::narrow_phase::spheres::pair_contact_time;
 use vadop::shape::{Shape, ShapeGeometry};
@@ -820,6 +820,26 @@ fn static_geometry_cut_never_drops_a_contact() {
     }
 }
 
+/// A random pair of long spinning solids (their kinds too), `b` closing on `a` at a speed in
+/// `closing`: in reach at the reference for even cases (the search starts there), far apart for
+/// odd ones.
+fn spinning_pair(
+    rng: &mut ChaCha8Rng,
+    case: u32,
+    points: &[DVec3],
+    closing: std::ops::Range<f64>,
+) -> (usize, usize, Body, Body) {
+    let (ka, kb) = (rng.random_range(0..6), rng.random_range(0..6));
+    let (ga, gb) = (long_solid(ka, rng, points), long_solid(kb, rng, points));
+    let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+    let gap = if case.is_multiple_of(2) { rng.random_range(-0.3..0.0) } else { rng.random_range(0.5..2.0) };
+    let u = random_spin(rng, 1.0).normalize();
+    let a = body(ga, DVec3::ZERO, DVec3::ZERO, DQuat::IDENTITY, random_spin(rng, 4.0));
+    let velocity = -u * rng.random_range(closing) + random_spin(rng, 0.2);
+    let b = body(gb, u * (reach + gap), velocity, DQuat::IDENTITY, random_spin(rng, 4.0));
+    (ka, kb, a, b)
+}
+
 /// (e) Starts are canonical frame by frame: asked one frame at a time, as the pipeline does,
 /// every contact of a pair comes out in its own frame and bit for bit as one long window gives it,
 /// whether its search starts at the reference or where the bounding spheres first meet; its end
@@ -830,15 +850,7 @@ fn starts_are_canonical_frame_by_frame() {
     let points: Vec<DVec3> = (0..8).map(|_| random_spin(&mut rng, 1.0)).collect();
     let mut total = 0;
     for case in 0..cases(30) {
-        let (ka, kb) = (rng.random_range(0..6), rng.random_range(0..6));
-        let (ga, gb) = (long_solid(ka, &mut rng, &points), long_solid(kb, &mut rng, &points));
-        let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
-        // Half the pairs start in reach (the search starts at the reference), half far apart.
-        let gap = if case % 2 == 0 { rng.random_range(-0.3..0.0) } else { rng.random_range(0.5..2.0) };
-        let u = random_spin(&mut rng, 1.0).normalize();
-        let a = body(ga, DVec3::ZERO, DVec3::ZERO, DQuat::IDENTITY, random_spin(&mut rng, 4.0));
-        let velocity = -u * rng.random_range(0.5..2.0) + random_spin(&mut rng, 0.2);
-        let b = body(gb, u * (reach + gap), velocity, DQuat::IDENTITY, random_spin(&mut rng, 4.0));
+        let (ka, kb, a, b) = spinning_pair(&mut rng, case, &points, 0.5..2.0);
         let window = Window::new(0.0, 4.0);
         let long: Vec<f64> = contacts(&a, &b, window).into_iter().map(|(start, _)| start).collect();
         let mut framed = Vec::new();
@@ -860,6 +872,45 @@ fn starts_are_canonical_frame_by_frame() {
         total += long.len();
     }
     assert!(total >= 10, "only {total} contacts");
+}
+
+/// A search parked at a frame's end and taken up in the next finds the same starts as one long
+/// search, to the bit, and makes each probe once: the frame-by-frame replays from the reference
+/// that it saves cost many times more.
+#[test]
+fn parked_searches_resume_bit_exactly_frame_by_frame() {
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let points: Vec<DVec3> = (0..8).map(|_| random_spin(&mut rng, 1.0)).collect();
+    let (mut resumed_probes, mut replayed_probes, mut total) = (0u64, 0u64, 0);
+    for case in 0..cases(30) {
+        let (ka, kb, a, b) = spinning_pair(&mut rng, case, &points, 0.2..1.0);
+        let long: Vec<f64> = contacts(&a, &b, Window::new(0.0, 4.0)).into_iter().map(|(start, _)| start).collect();
+        // As the pipeline asks: the first start of each frame, taken up where the last search
+        // parked, then each later start of the frame after the one before it.
+        let (mut framed, mut parked) = (Vec::new(), None);
+        for frame in 0..40 {
+            let frame = Window::new(frame as f64 * 0.1, (frame + 1) as f64 * 0.1);
+            let replay = shape_contact_search(pair(&a), pair(&b), frame).unwrap();
+            replayed_probes += replay.iterations as u64;
+            let (search, mut park) = shape_contact_resumed(pair(&a), pair(&b), frame, parked.as_ref()).unwrap();
+            resumed_probes += search.iterations as u64;
+            assert_eq!(search.found, replay.found, "case {case}: frame {frame:?}");
+            let mut next = search.found;
+            while let Some(start) = next {
+                assert!(frame.contains(start), "case {case}: {start} outside {frame:?}");
+                framed.push(start);
+                (next, park) =
+                    shape_contact_after_parked(pair(&a), pair(&b), start, Window::new(start.next_up(), frame.end))
+                        .unwrap();
+            }
+            parked = park;
+        }
+        let bits = |times: &[f64]| times.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&framed), bits(&long), "case {case}: {} vs {}", name(ka), name(kb));
+        total += long.len();
+    }
+    assert!(total >= 10, "only {total} contacts");
+    assert!(resumed_probes * 4 < replayed_probes, "resumed {resumed_probes} probes, replays {replayed_probes}");
 }
 
 /// parry's contact of two solids at time `t`: its signed distance (negative when they overlap)

@@ -12,9 +12,10 @@
 
 use crate::bodies::{Bodies, BodyState};
 use crate::error::{Result, VadopError};
+use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
-use crate::narrow_phase::shapes::{shape_contact_after, shape_contact_time, shape_wall_time};
+use crate::narrow_phase::shapes::{shape_contact_after_parked, shape_contact_resumed, shape_wall_time, Resume};
 use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, wall_contact_time, CONTACT_TOLERANCE};
 use crate::numeric::{direction, unit_scale};
 use crate::walls::BoxBounds;
@@ -32,14 +33,23 @@ pub(crate) type Found = Option<(f64, bool)>;
 
 /// A search's answer within `window`, an undecided search answered as stalled where it stopped.
 fn settled(found: Result<Option<f64>>, window: Window) -> Found {
-    let found = match found {
-        Ok(found) => found.map(|t| (t, false)),
-        Err(VadopError::ContactSearchStalled { time, .. }) => Some((time, true)),
-        // The shape narrow phase fails in no other way on validated bodies.
-        Err(_) => None,
-    };
-    found.filter(|&(t, _)| window.contains(t))
+    settled_parked(found.map(|found| (found, None)), window).0
 }
+
+/// [`settled`] for a search that may park, with where it parked.
+fn settled_parked(found: Result<(Option<f64>, Option<Resume>)>, window: Window) -> (Found, Option<Resume>) {
+    let (found, parked) = match found {
+        Ok((found, parked)) => (found.map(|t| (t, false)), parked),
+        Err(VadopError::ContactSearchStalled { time, .. }) => (Some((time, true)), None),
+        // The shape narrow phase fails in no other way on validated bodies.
+        Err(_) => (None, None),
+    };
+    (found.filter(|&(t, _)| window.contains(t)), parked)
+}
+
+/// A shape pair's search parked: the pair (lower id first), the motion epochs it ran on, and
+/// where it stopped.
+pub(crate) type Parking = ((u32, u32), (u32, u32), Resume);
 
 /// The canonical time in `window` at which bodies `a` and `b` start to touch, `a` the lower id,
 /// from their motions `state_a`, `state_b` (current for the stamps the caller holds).
@@ -54,20 +64,44 @@ pub(crate) fn pair_start(
         let time = pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
         return window.contains(time).then_some((time, false));
     }
-    let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
+    pair_start_parked(bodies, a, b, window, None).0
+}
+
+/// [`pair_start`] for a pair that is not two spheres, taking the search up where `parked` holds
+/// it (from an earlier window, on the same motions), with where it parks now.
+pub(crate) fn pair_start_parked(
+    bodies: &Bodies,
+    a: usize,
+    b: usize,
+    window: Window,
+    parked: Option<&ParkedSearches>,
+) -> (Found, Option<Parking>) {
+    let (Some(ga), Some(gb)) = (bodies.geometry(a), bodies.geometry(b)) else { return (None, None) };
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    settled(shape_contact_time((ga, &ma), (gb, &mb), window), window)
+    let (key, epochs) = ((a as u32, b as u32), (bodies.motion_epoch(a), bodies.motion_epoch(b)));
+    let resume = parked.and_then(|p| p.get(key.0, key.1, epochs));
+    let (found, parks) =
+        settled_parked(shape_contact_resumed((ga, &ma), (gb, &mb), window, resume).map(|(s, p)| (s.found, p)), window);
+    (found, parks.map(|r| (key, epochs, r)))
 }
 
 /// The canonical time in `window` at which bodies `a` and `b` (`a` the lower id), which started
-/// to touch at `start`, touch again on the same motions (spinning shapes may; spheres never do).
-pub(crate) fn pair_start_after(bodies: &Bodies, a: usize, b: usize, start: f64, window: Window) -> Found {
-    if bodies.are_spheres(a, b) {
-        return None;
-    }
-    let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
+/// to touch at `start`, touch again on the same motions (spinning shapes may; spheres never do),
+/// with where the search parks when they do not.
+pub(crate) fn pair_start_after(
+    bodies: &Bodies,
+    a: usize,
+    b: usize,
+    start: f64,
+    window: Window,
+) -> (Found, Option<Parking>) {
+    let (Some(ga), Some(gb), false) = (bodies.geometry(a), bodies.geometry(b), bodies.are_spheres(a, b)) else {
+        return (None, None);
+    };
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    settled(shape_contact_after((ga, &ma), (gb, &mb), start, window), window)
+    let (key, epochs) = ((a as u32, b as u32), (bodies.motion_epoch(a), bodies.motion_epoch(b)));
+    let (found, parks) = settled_parked(shape_contact_after_parked((ga, &ma), (gb, &mb), start, window), window);
+    (found, parks.map(|r| (key, epochs, r)))
 }
 
 /// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id), in

@@ -8,6 +8,7 @@
 //! bit-identical, canonical times. It never schedules, responds, or changes a body.
 
 pub(crate) mod contacts;
+pub(crate) mod parked;
 pub mod shapes;
 pub mod spheres;
 pub(crate) mod static_geometry;

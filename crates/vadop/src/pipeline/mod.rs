@@ -21,6 +21,7 @@
 //! method finds it. It never validates input (the world does), never reads a broad phase's
 //! internals and never computes an impulse.
 
+mod pass_through;
 pub(crate) mod pseudo_dynamic;
 pub(crate) mod touching;
 
@@ -30,7 +31,8 @@ use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::frame::{Contact, FrameStats, Mode, Touched};
 use crate::frame::{Output, Physics};
-use crate::narrow_phase::contacts;
+use crate::narrow_phase::contacts::{self, Parking};
+use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
@@ -40,6 +42,8 @@ use crate::walls::BoxBounds;
 use crate::walls::Wall;
 use crate::window::Window;
 use glam::DVec3;
+use pass_through::Searched;
+use std::collections::VecDeque;
 use std::time::Instant;
 
 /// A window ends early once this many proxies per live body were refreshed within it: the broad
@@ -88,6 +92,15 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     pub(crate) touching: Touching,
     /// The static bodies, bounded once.
     statics: StaticGeometry,
+    /// Where each shape pair's last search stopped, to take it up in the next window.
+    parked: ParkedSearches,
+    /// Scratch of a window start in a world of shapes: its predictions and parked searches.
+    predictions: Vec<Prediction>,
+    /// Pass-through contacts searched ahead, earliest first (see [`pass_through`]), and the
+    /// scratch of those searches.
+    ahead: VecDeque<Searched>,
+    batch: Vec<Event>,
+    searched: Vec<Searched>,
     /// The current window (empty before the first).
     window: Window,
     /// Proxies refreshed since the window started.
@@ -119,6 +132,11 @@ impl<B: BroadPhase> Pipeline<B> {
             impacts: Impacts::default(),
             touching: Touching::default(),
             statics: StaticGeometry::default(),
+            parked: ParkedSearches::default(),
+            predictions: Vec::new(),
+            ahead: VecDeque::new(),
+            batch: Vec::new(),
+            searched: Vec::new(),
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
@@ -143,6 +161,8 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.queue.memory_bytes()
             + self.impacts.rules.memory_bytes()
             + self.touching.memory_bytes()
+            + self.parked.memory_bytes()
+            + self.predictions.capacity() * std::mem::size_of::<Prediction>()
             + self.travel.capacity() * 8
             + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
     }
@@ -162,6 +182,7 @@ impl<B: BroadPhase> Pipeline<B> {
     pub(crate) fn remove(&mut self, i: u32) {
         self.proxies.remove(i as usize);
         self.impacts.rules.forget(i as usize);
+        self.parked.remove(i);
         // Its contacts end with it, unreported: it is gone, not apart.
         self.touching.remove_body(i);
     }
@@ -235,6 +256,8 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         self.window = Window::new(now, end);
         self.updates = 0;
+        // Searched ahead within the window that ends: their next contacts stop at its end.
+        self.ahead.clear();
         stats.windows += 1;
 
         let start = Instant::now();
@@ -250,12 +273,38 @@ impl<B: BroadPhase> Pipeline<B> {
         let start = Instant::now();
         self.statics.update(bodies);
         let mut predicted = self.queue.take_bulk();
-        let candidates = self.broad.find_pairs(
-            self.proxies.view(bodies),
-            &self.workers,
-            |a, b, window, out| out.extend(predict_pair(bodies, a, b, window)),
-            &mut predicted,
-        );
+        let candidates = if bodies.has_rigid() {
+            // Shape searches park where they stop; the store is read by every worker and
+            // written once they are done, in an order that does not depend on their number.
+            let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
+            let candidates = self.broad.find_pairs(
+                self.proxies.view(bodies),
+                &self.workers,
+                |a, b, window, out| {
+                    let (event, parks) = predict_pair_parked(bodies, a, b, window, parked);
+                    out.extend(event.map(Prediction::Event));
+                    out.extend(parks.map(Prediction::Parked));
+                },
+                &mut found,
+            );
+            for prediction in found.drain(..) {
+                match prediction {
+                    Prediction::Event(event) => predicted.push(event),
+                    Prediction::Parked((pair, epochs, resume)) => {
+                        self.parked.keep(pair.0, pair.1, epochs, resume, self.window.start);
+                    }
+                }
+            }
+            self.predictions = found;
+            candidates
+        } else {
+            self.broad.find_pairs(
+                self.proxies.view(bodies),
+                &self.workers,
+                |a, b, window, out| out.extend(predict_pair(bodies, a, b, window)),
+                &mut predicted,
+            )
+        };
         let (proxies, statics, window) = (self.proxies.view(bodies), &self.statics, self.window);
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
@@ -304,7 +353,10 @@ impl<B: BroadPhase> Pipeline<B> {
                 continue;
             }
             match event.partner {
-                Partner::Body(j) => self.pair_contact(bodies, physics, event.body, j, event.time, out),
+                Partner::Body(j) => match self.searched_ahead(bodies, physics, &event, until) {
+                    Some(searched) => self.pass_through(bodies, physics, &event, searched, out),
+                    None => self.pair_contact(bodies, physics, event.body, j, event.time, out),
+                },
                 Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
                 Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
                 Partner::Wall(wall) => self.wall_contact(bodies, physics, event.body, wall, event.time, out),
@@ -356,11 +408,59 @@ impl<B: BroadPhase> Pipeline<B> {
         // changed, the pair's next contact is predicted now, as a later window would find it.
         if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
             let later = self.window.from(t.next_up());
-            if let Some((time, stalled)) = contacts::pair_start_after(bodies, i, j, t, later) {
-                let partner = if stalled { Partner::Stalled(b) } else { Partner::Body(b) };
-                self.queue.push(Event { time, body: a, partner, body_stamp: stamps.0, partner_stamp: stamps.1 });
+            let (found, parks) = contacts::pair_start_after(bodies, i, j, t, later);
+            if let Some(found) = found {
+                self.queue.push(pair_event((a, stamps.0), (b, stamps.1), found));
+            }
+            if let Some((pair, epochs, resume)) = parks {
+                self.parked.keep(pair.0, pair.1, epochs, resume, self.window.start);
             }
         }
+        self.report_pair_contact(bodies, physics, (a, b), t, (point, normal, impulse), resolution, out);
+    }
+
+    /// Shapes passing through each other in detect mode at `event`, searched ahead: as
+    /// [`Self::pair_contact`] handles them (no impulse, the next contact predicted now).
+    fn pass_through(
+        &mut self,
+        bodies: &Bodies,
+        physics: &Physics,
+        event: &Event,
+        searched: Searched,
+        out: &mut Output,
+    ) {
+        let Partner::Body(b) = event.partner else { unreachable!("a pass-through is a pair contact") };
+        if let Some(found) = searched.next {
+            self.queue.push(pair_event((event.body, event.body_stamp), (b, event.partner_stamp), found));
+        }
+        if let Some((pair, epochs, resume)) = searched.parks {
+            self.parked.keep(pair.0, pair.1, epochs, resume, self.window.start);
+        }
+        let (point, normal) = searched.point_normal;
+        self.report_pair_contact(
+            bodies,
+            physics,
+            (event.body, b),
+            event.time,
+            (point, normal, 0.0),
+            Resolution::Passed,
+            out,
+        );
+    }
+
+    /// Reports the contact of bodies `a < b` at `t` (where, its normal and the impulse applied),
+    /// and starts following it to its end when it was passed through with ends reported.
+    #[allow(clippy::too_many_arguments)]
+    fn report_pair_contact(
+        &mut self,
+        bodies: &Bodies,
+        physics: &Physics,
+        (a, b): (u32, u32),
+        t: f64,
+        (point, normal, impulse): (DVec3, DVec3, f64),
+        resolution: Resolution,
+        out: &mut Output,
+    ) {
         out.stats.pair_contacts += 1;
         if physics.report_ends && resolution == Resolution::Passed {
             self.touching.insert(a, b, t);
@@ -368,6 +468,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 self.queue.push(event);
             }
         }
+        let (i, j) = (a as usize, b as usize);
         out.contacts.push(Contact {
             time: t,
             body: bodies.handle(i),
@@ -556,13 +657,24 @@ impl<B: BroadPhase> Pipeline<B> {
         self.updates += 1;
         stats.retests += 1;
         let window = self.window.from(t);
-        let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
+        let (queue, proxies, parked) = (&mut self.queue, self.proxies.view(bodies), &mut self.parked);
         let mut tests = 0u64;
         let own = proxies.reported(body as usize);
         self.broad.update(body, proxies, skip, |other, bounds_window| {
             tests += 1;
-            if let Some(event) = predict_pair(bodies, own, other, bounds_window.intersect(window)) {
+            let window = bounds_window.intersect(window);
+            if !bodies.has_rigid() {
+                if let Some(event) = predict_pair(bodies, own, other, window) {
+                    queue.push(event);
+                }
+                return;
+            }
+            let (event, parks) = predict_pair_parked(bodies, own, other, window, parked);
+            if let Some(event) = event {
                 queue.push(event);
+            }
+            if let Some((pair, epochs, resume)) = parks {
+                parked.keep(pair.0, pair.1, epochs, resume, window.start);
             }
         });
         stats.narrow_tests += tests;
@@ -607,14 +719,42 @@ fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: Window) -> O
 fn predict_pair(bodies: &Bodies, x: Reported, y: Reported, window: Window) -> Option<Event> {
     // Always the lower id first, so every method does bit-identical arithmetic for a pair.
     let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    let (time, stalled) = contacts::pair_start(bodies, (a.body as usize, a.state), (b.body as usize, b.state), window)?;
-    Some(Event {
-        time,
-        body: a.body,
-        partner: if stalled { Partner::Stalled(b.body) } else { Partner::Body(b.body) },
-        body_stamp: a.stamp,
-        partner_stamp: b.stamp,
-    })
+    let found = contacts::pair_start(bodies, (a.body as usize, a.state), (b.body as usize, b.state), window)?;
+    Some(pair_event((a.body, a.stamp), (b.body, b.stamp), found))
+}
+
+/// What predicting a pair in a world of shapes gives: an event for the queue, or where a shape
+/// search parked, for [`ParkedSearches`].
+#[derive(Debug)]
+enum Prediction {
+    Event(Event),
+    Parked(Parking),
+}
+
+/// [`predict_pair`] in a world of shapes: a shape pair's search taken up where `parked` holds it,
+/// with where it parks now.
+#[inline]
+fn predict_pair_parked(
+    bodies: &Bodies,
+    x: Reported,
+    y: Reported,
+    window: Window,
+    parked: &ParkedSearches,
+) -> (Option<Event>, Option<Parking>) {
+    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
+    if bodies.are_spheres(a.body as usize, b.body as usize) {
+        return (predict_pair(bodies, a, b, window), None);
+    }
+    let (found, parks) = contacts::pair_start_parked(bodies, a.body as usize, b.body as usize, window, Some(parked));
+    (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
+}
+
+/// The event of bodies `a < b` (each with its stamp) starting to touch, or of their search
+/// stalling, at the time found.
+#[inline]
+fn pair_event((a, stamp_a): (u32, u32), (b, stamp_b): (u32, u32), (time, stalled): (f64, bool)) -> Event {
+    let partner = if stalled { Partner::Stalled(b) } else { Partner::Body(b) };
+    Event { time, body: a, partner, body_stamp: stamp_a, partner_stamp: stamp_b }
 }
 
 /// Calls `found` with body `i`'s contact with every static body its proxy's box meets, inside

@@ -53,6 +53,15 @@
 //! each other, the step on them goes at least two thirds as far as on exact bounds, and GJK is not
 //! needed.
 //!
+//! Inside a contact, while the search looks for its end, only an upper bound on the signed
+//! distance steps it (the distance must stay below `2 tol` until the end), and far from the end
+//! the last full measure's witness points, carried along, give one with no search: their
+//! distance, or, where a point lies inside both shapes, minus how deep it lies in each (a ball
+//! that deep about it lies in each shape, and two shapes holding such balls about one point must
+//! move the sum of their radii apart to part). Shapes passing through each other in detect mode
+//! are then followed with closed-form depths of the points in each solid, and GJK and EPA run
+//! only a hair from the contact's start and end.
+//!
 //! The bounds never rest on GJK's own accuracy. The lower bound is a separation along an axis,
 //! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
 //! a hair from contact, where GJK's simplices grow ill-conditioned and its directions drift, the
@@ -104,8 +113,11 @@
 //! `since`), or from where the bounding volumes first come within reach, and every iterate is a
 //! function of the two motions and of the time since the reference only (each probe starts from
 //! what the one before found), never of the window asked about: every caller, window or method
-//! gets the same time to the bit. A search stops once past the window's end; a later window
-//! recomputes the same iterates. The chain starts afresh at every contact start and end it finds
+//! gets the same time to the bit. A search stops once past the window's end and *parks* there
+//! ([`Resume`]: the next probe's time, the warm start, the budget spent): a later window of the
+//! same motions takes the chain up where it parked ([`shape_contact_resumed`]) and makes the very
+//! iterates a search from the reference would, without replaying them, so a pair that stays in
+//! reach for many windows costs what its motion needs once. The chain starts afresh at every contact start and end it finds
 //! (a cold probe, a fresh budget, the time since the reference derived from the absolute time),
 //! so what follows a contact start depends on that start alone: a caller holding it resumes the
 //! chain there ([`shape_contact_after`], [`contact_end_time`]) without replaying the contacts
@@ -136,11 +148,11 @@ use crate::shape::ShapeGeometry;
 use crate::walls::Wall;
 use crate::window::Window;
 use distance::{convex_bounds, Bounds};
-use gauges::{ConvexPair, MeshPair, PairGauge, PlanePair, WallGauge};
+use gauges::{ConvexPair, Gauge, MeshPair, PairGauge, PlanePair, WallGauge, Warm};
 use glam::{DQuat, DVec3};
 use parry3d_f64::shape::SupportMap;
 use scaled::Body;
-use searcher::Searcher;
+use searcher::{Parked, Searcher};
 use std::cell::{Cell, RefCell};
 
 /// Where and how two shapes (or a shape and a wall) touch at a contact time.
@@ -162,6 +174,59 @@ pub struct Search<T> {
     pub found: Option<T>,
     /// Distance evaluations (probes) it took.
     pub iterations: u32,
+}
+
+/// A search's chain parked where it stopped without finding a contact start, so that a later
+/// search of the same two motions takes it up there instead of replaying it
+/// from the reference: the same iterates follow, so the same times, to the bit (see *Canonical
+/// times* in the [module documentation](self)). Valid for a window that starts at or after
+/// [`Resume::searched_to`]; the caller keeps it with the motions it was made on, and drops it
+/// when either changes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Resume {
+    /// The chain's reference instant: a resume of other motions is ignored.
+    reference: f64,
+    searched_to: f64,
+    parked: Parked,
+    /// Probes since the chain last started afresh (its budget so far).
+    spent: u32,
+    warm: Option<Warm>,
+}
+
+impl Resume {
+    /// No contact starts on the chain before this time (the end of the window searched).
+    pub fn searched_to(&self) -> f64 {
+        self.searched_to
+    }
+
+    /// Where `searcher` parked after finding nothing before `searched_to`; `None` when it did
+    /// not park (it never probed, or found something) or its gauge's warm start cannot be kept.
+    fn of<G: Gauge>(searcher: &Searcher<G>, searched_to: f64) -> Option<Resume> {
+        let parked = searcher.parked?;
+        let warm = searcher.gauge.warm_start()?;
+        let spent = searcher.iterations - searcher.restarted;
+        Some(Resume { reference: searcher.reference, searched_to, parked, spent, warm })
+    }
+
+    /// The first contact start in `window` on `searcher`'s chain, taken up from `resume` when it
+    /// was parked on the same chain before `window` starts, searched from the reference
+    /// otherwise; with where the chain parks when it finds none.
+    fn first_start<G: Gauge>(
+        searcher: &mut Searcher<G>,
+        resume: Option<&Resume>,
+        window: Window,
+        deep_is_contact: bool,
+    ) -> Result<(Option<f64>, Option<Resume>)> {
+        let found = match resume.filter(|r| r.reference == searcher.reference && r.searched_to <= window.start) {
+            Some(r) => {
+                searcher.gauge.set_warm_start(r.warm);
+                searcher.resume(r.parked, r.spent, window)?
+            }
+            None => searcher.first_start_in(window, deep_is_contact)?,
+        };
+        let parked = if found.is_none() { Resume::of(searcher, window.end) } else { None };
+        Ok((found.map(|tau| searcher.reference + tau), parked))
+    }
 }
 
 /// Cap on the distance evaluations of one search between two restarts of its chain (the
@@ -286,9 +351,43 @@ pub fn shape_contact_search<S: Spin, T: Spin>(
     b: (&ShapeGeometry, &RigidMotion<T>),
     window: Window,
 ) -> Result<Search<f64>> {
-    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(Search { found: None, iterations: 0 }) };
-    let found = searcher.first_start_in(window, true)?.map(|tau| searcher.reference + tau);
-    Ok(Search { found, iterations: searcher.iterations })
+    Ok(shape_contact_resumed(a, b, window, None)?.0)
+}
+
+/// [`shape_contact_search`] taking up the chain where `resume` parked it (by an earlier search
+/// of the same motions), with where the chain parks when no contact starts in `window`: what a
+/// caller keeps to search a later window of the same motions without replaying this one. The
+/// answer is the same, to the bit, with or without `resume`.
+///
+/// ```
+/// use glam::{DQuat, DVec3};
+/// use vadop::shape::Shape;
+/// use vadop::narrow_phase::shapes::{shape_contact_resumed, shape_contact_time};
+/// use vadop::motion::RigidMotion;
+/// use vadop::Window;
+/// let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+/// let a = RigidMotion::fixed(DVec3::ZERO, DQuat::IDENTITY, 0.0);
+/// let b = RigidMotion { velocity: DVec3::new(-0.25, 0.0, 0.0), ..RigidMotion::fixed(DVec3::new(3.0, 0.0, 0.0), DQuat::IDENTITY, 0.0) };
+/// // Window after window, each search taking up where the last one parked.
+/// let (mut resume, mut found) = (None, None);
+/// for k in 0..10 {
+///     let window = Window::new(k as f64, k as f64 + 1.0);
+///     let (search, parked) = shape_contact_resumed((&cube, &a), (&cube, &b), window, resume.as_ref()).unwrap();
+///     assert_eq!(search.found, shape_contact_time((&cube, &a), (&cube, &b), window).unwrap());
+///     found = found.or(search.found);
+///     resume = parked;
+/// }
+/// assert!((found.unwrap() - 8.0).abs() < 1e-5);
+/// ```
+pub fn shape_contact_resumed<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    window: Window,
+    resume: Option<&Resume>,
+) -> Result<(Search<f64>, Option<Resume>)> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok((Search { found: None, iterations: 0 }, None)) };
+    let (found, parked) = Resume::first_start(&mut searcher, resume, window, true)?;
+    Ok((Search { found, iterations: searcher.probes() }, parked))
 }
 
 /// The first time in `window` (half-open `[start, end)`) at which two shapes begin to touch: the
@@ -364,7 +463,7 @@ pub fn contact_end_search<S: Spin, T: Spin>(
 ) -> Result<Search<f64>> {
     let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(Search { found: None, iterations: 0 }) };
     let found = searcher.end_of(start, until)?.map(|tau| searcher.reference + tau);
-    Ok(Search { found, iterations: searcher.iterations })
+    Ok(Search { found, iterations: searcher.probes() })
 }
 
 /// The end, before `until`, of the contact two shapes are in at time `at`, whose start the
@@ -429,8 +528,21 @@ pub fn shape_contact_after<S: Spin, T: Spin>(
     start: f64,
     window: Window,
 ) -> Result<Option<f64>> {
-    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok(None) };
-    Ok(searcher.first_start_after(start, window)?.map(|tau| searcher.reference + tau))
+    Ok(shape_contact_after_parked(a, b, start, window)?.0)
+}
+
+/// [`shape_contact_after`] with where the chain parks when no contact starts in `window` (see
+/// [`shape_contact_resumed`]).
+pub fn shape_contact_after_parked<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    start: f64,
+    window: Window,
+) -> Result<(Option<f64>, Option<Resume>)> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok((None, None)) };
+    let found = searcher.first_start_after(start, window)?;
+    let parked = if found.is_none() { Resume::of(&searcher, window.end) } else { None };
+    Ok((found.map(|tau| searcher.reference + tau), parked))
 }
 
 /// Where two shapes touch at `time` (normally a contact time), in world coordinates: the normal
@@ -572,7 +684,7 @@ pub fn shape_wall_search<S: Spin>(
         // A later wall only matters before the best time so far.
         let window = Window::new(window.start, best.map_or(window.end, |(t, _)| t.next_up().min(window.end)));
         let found = searcher.first_start_in(window, false);
-        iterations += searcher.iterations;
+        iterations += searcher.probes();
         if let Some(tau) = found? {
             let time = searcher.reference + tau;
             if best.is_none_or(|(t, _)| time < t) {

@@ -8,6 +8,7 @@ use crate::motion::{RigidMotion, Spin};
 use crate::shape::ShapeGeometry;
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
+use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::{Segment, Shape, SupportMap};
 
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
@@ -44,10 +45,63 @@ impl<'a> Scaled<'a> {
         Scaled { core, margin: margin * scale, parry, scale }
     }
 
+    /// How deep the point `p` (in the shape's frame, scaled) lies inside the shape: the radius of
+    /// a ball about it that the shape holds, exact to rounding, at most 0 outside; with the
+    /// direction (in the shape's frame) in which that depth grows fastest, away from the nearest
+    /// face. A kind without a closed form counts every point 0 deep.
+    pub(super) fn depth_at(&self, p: DVec3) -> (f64, DVec3) {
+        match &self.core {
+            Core::Point => (self.margin - p.length(), -p.normalize_or_zero()),
+            Core::Segment(segment) => {
+                let on = segment.project_local_point(p, true).point;
+                (self.margin - on.distance(p), (on - p).normalize_or_zero())
+            }
+            Core::Solid(_) => {
+                let (depth, inward) = solid_depth(self.parry, p / self.scale);
+                (depth * self.scale, inward)
+            }
+        }
+    }
+
     /// The shape's core, as a support map.
     pub(super) fn core(&self) -> CoreOf<'_, 'a> {
         CoreOf(self)
     }
+}
+
+/// How deep `p` lies inside a solid without a core, in the shape's own lengths, and the
+/// direction away from the nearest face: the nearest of the planes of its faces, and for round
+/// sides the exact distance to them; 0 for a kind without a closed form.
+fn solid_depth(shape: &dyn Shape, p: DVec3) -> (f64, DVec3) {
+    let nearest = |faces: &mut dyn Iterator<Item = (f64, DVec3)>| {
+        faces.fold((f64::INFINITY, DVec3::ZERO), |x, y| if y.0 < x.0 { y } else { x })
+    };
+    if let Some(cuboid) = shape.as_cuboid() {
+        let inward = |axis: usize| -DVec3::AXES[axis] * p[axis].signum();
+        return nearest(&mut (0..3).map(|k| (cuboid.half_extents[k] - p[k].abs(), inward(k))));
+    }
+    let across = DVec3::new(p.x, 0.0, p.z);
+    let (radius, outward) = (across.length(), across.normalize_or_zero());
+    if let Some(cylinder) = shape.as_cylinder() {
+        let faces =
+            [(cylinder.radius - radius, -outward), (cylinder.half_height - p.y.abs(), -DVec3::Y * p.y.signum())];
+        return nearest(&mut faces.into_iter());
+    }
+    if let Some(cone) = shape.as_cone() {
+        // Apex at +h, base of radius r at -h: a point inside is nearest the base or the side's
+        // generator through it, whose line it meets at right angles (the half angle is acute).
+        let (h, r) = (cone.half_height, cone.radius);
+        let slant = (4.0 * h * h + r * r).sqrt();
+        let side = (r * (h - p.y) / (2.0 * h) - radius) * (2.0 * h) / slant;
+        let side_inward = -(outward * (2.0 * h) + DVec3::Y * r) / slant;
+        return nearest(&mut [(side, side_inward), (p.y + h, DVec3::Y)].into_iter());
+    }
+    if let Some(hull) = shape.as_convex_polyhedron() {
+        let (points, corners) = (hull.points(), hull.vertices_adj_to_face());
+        let face = |normal: DVec3, corner: u32| (normal.dot(points[corners[corner as usize] as usize] - p), -normal);
+        return nearest(&mut hull.faces().iter().map(|f| face(f.normal, f.first_vertex_or_edge)));
+    }
+    (0.0, DVec3::ZERO)
 }
 
 /// The support map of a shape's core.
@@ -253,5 +307,41 @@ impl<'a> Body<'a> {
     pub(super) fn pose(&self, q: DQuat, centre: DVec3, scale: f64) -> Pose {
         let body = self.geometry.body_from_shape();
         Pose::from_parts(centre + q * (body.translation * scale), q * body.rotation)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// The depth of a point inside each solid is its distance to the boundary (parry's
+    /// projection), to rounding; outside it is at most 0; and the inward direction deepens it.
+    #[test]
+    fn depth_inside_every_solid_is_the_distance_to_its_boundary() {
+        let shapes = crate::shape::one_solid_of_each_kind();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut random = move || rng.random_range(-0.5..0.5);
+        for shape in &shapes {
+            let geometry = shape.geometry().unwrap();
+            // Scaled by 4: depths scale with it.
+            let scaled = Scaled::new(geometry.parry_shape().as_ref(), 4.0);
+            let mut inside = 0;
+            for _ in 0..5000 {
+                let p = DVec3::new(random(), random(), random()) * 1.2;
+                let projection = geometry.parry_shape().project_local_point(p, false);
+                let (depth, inward) = scaled.depth_at(p * 4.0);
+                if projection.is_inside {
+                    inside += 1;
+                    let exact = projection.point.distance(p) * 4.0;
+                    assert!((depth - exact).abs() < 1e-12, "{shape:?} at {p}: {depth} against {exact}");
+                    let deeper = scaled.depth_at(p * 4.0 + inward * (1e-3 * depth)).0;
+                    assert!(deeper >= depth - 1e-12, "{shape:?} at {p}: {inward} does not deepen");
+                } else {
+                    assert!(depth <= 1e-12, "{shape:?} at {p}: outside, yet {depth} deep");
+                }
+            }
+            assert!(inside > 100, "{shape:?}: only {inside} points inside");
+        }
     }
 }

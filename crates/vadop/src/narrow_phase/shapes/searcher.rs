@@ -2,7 +2,7 @@
 //! contact start and end it finds, with the restart points, the budgets and the termination guard
 //! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
 
-use super::gauges::{Gauge, Probe, Reach};
+use super::gauges::{Gauge, Measure, Probe, Reach};
 use super::{guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
 use crate::error::{Result, VadopError};
 use crate::window::Window;
@@ -16,7 +16,26 @@ pub(super) struct Searcher<G> {
     pub(super) iterations: u32,
     /// `iterations` when the chain last started afresh: [`MAX_ITERATIONS`] caps each piece.
     pub(super) restarted: u32,
+    /// Probes of a resumed chain made before this searcher took it up (counted in `iterations`
+    /// for the budget, not made here).
+    pub(super) carried: u32,
     pub(super) reach: Option<Reach>,
+    /// Where the chain stopped without finding anything, if it stopped at a horizon (the end it
+    /// was asked to search to, or the end of all contacts): what [`Resume`] carries.
+    pub(super) parked: Option<Parked>,
+}
+
+/// Where a chain stopped at a horizon: the next probe's time since the reference, and whether
+/// it was following a contact to its end. The probe at `tau` has not been made.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Parked {
+    pub(super) tau: f64,
+    pub(super) in_contact: bool,
+}
+
+impl Parked {
+    /// A chain that finds nothing more, ever.
+    const DONE: Parked = Parked { tau: f64::INFINITY, in_contact: false };
 }
 
 /// What the pair does when it touches at the reference.
@@ -34,7 +53,7 @@ pub(super) enum AtReference {
 impl<G: Gauge> Searcher<G> {
     pub(super) fn new(gauge: G, reference: f64, tol: f64) -> Self {
         let reach = gauge.reach(2.0 * tol);
-        Searcher { gauge, reference, tol, iterations: 0, restarted: 0, reach }
+        Searcher { gauge, reference, tol, iterations: 0, restarted: 0, carried: 0, reach, parked: None }
     }
 
     /// Starts the chain afresh at absolute `time`, a contact start or end it found (or a time the
@@ -54,10 +73,15 @@ impl<G: Gauge> Searcher<G> {
     }
 
     pub(super) fn stall(&self, tau: f64, reason: &'static str) -> VadopError {
-        VadopError::ContactSearchStalled { time: self.reference + tau, iterations: self.iterations, reason }
+        VadopError::ContactSearchStalled { time: self.reference + tau, iterations: self.probes(), reason }
     }
 
-    pub(super) fn probe(&mut self, tau: f64, depth: bool) -> Result<Probe> {
+    /// Probes made by this searcher.
+    pub(super) fn probes(&self) -> u32 {
+        self.iterations - self.carried
+    }
+
+    pub(super) fn probe(&mut self, tau: f64, measure: Measure) -> Result<Probe> {
         if self.iterations - self.restarted >= MAX_ITERATIONS {
             return Err(self.stall(tau, "the iteration cap was reached (resting or sliding contact while turning?)"));
         }
@@ -66,7 +90,7 @@ impl<G: Gauge> Searcher<G> {
             return Err(self.stall(tau, "the step was interrupted"));
         }
         self.iterations += 1;
-        Ok(self.gauge.probe(tau, depth))
+        Ok(self.gauge.probe(tau, measure))
     }
 
     /// `tau + step`; `None` when that is beyond every horizon.
@@ -79,6 +103,12 @@ impl<G: Gauge> Searcher<G> {
             return Err(self.stall(tau, "the step fell below the resolution of time"));
         }
         Ok(Some(next))
+    }
+
+    /// Nothing more, ever: parks the chain for good.
+    fn done(&mut self) -> Option<f64> {
+        self.parked = Some(Parked::DONE);
+        None
     }
 
     /// At most this, a contact starts (`tol` less the margin).
@@ -103,9 +133,10 @@ impl<G: Gauge> Searcher<G> {
     pub(super) fn next_start(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
         loop {
             if !(self.reference + tau < end && tau <= self.leave()) {
+                self.parked = Some(Parked { tau, in_contact: false });
                 return Ok(None);
             }
-            let p = self.probe(tau, false)?;
+            let p = self.probe(tau, Measure::Gap)?;
             if p.upper <= self.touch() {
                 return Ok(Some(tau));
             }
@@ -114,11 +145,11 @@ impl<G: Gauge> Searcher<G> {
             };
             if step == f64::INFINITY {
                 // The separation along a fixed axis never shrinks: no contact ever.
-                return Ok(None);
+                return Ok(self.done());
             }
             match self.advance(tau, step)? {
                 Some(next) => tau = next,
-                None => return Ok(None),
+                None => return Ok(self.done()),
             }
         }
     }
@@ -127,13 +158,14 @@ impl<G: Gauge> Searcher<G> {
     pub(super) fn contact_end(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
         loop {
             if !(self.reference + tau < end) {
+                self.parked = Some(Parked { tau, in_contact: true });
                 return Ok(None);
             }
             if tau >= self.leave() {
                 // The bounding volumes have parted: more than `2 tol` apart.
                 return Ok(Some(tau));
             }
-            let p = self.probe(tau, true)?;
+            let p = self.probe(tau, Measure::Contact)?;
             if p.lower > self.clear() {
                 return Ok(Some(tau));
             }
@@ -142,12 +174,12 @@ impl<G: Gauge> Searcher<G> {
                 return Err(self.stall(tau, "the distance bounds were too loose to step"));
             }
             if !(p.grow > 0.0) {
-                return Ok(None);
+                return Ok(self.done());
             }
             // In contact until the step's end, and apart from `leave` on.
             match self.advance(tau, room / p.grow)? {
                 Some(next) => tau = next.min(self.leave()),
-                None => return Ok(None),
+                None => return Ok(self.done()),
             }
         }
     }
@@ -183,7 +215,7 @@ impl<G: Gauge> Searcher<G> {
             if self.iterations >= budget {
                 return Err(self.stall(tau, "resting or sliding in contact: neither deeper nor apart"));
             }
-            p = self.probe(tau, true)?;
+            p = self.probe(tau, Measure::Depth)?;
         }
     }
 
@@ -196,19 +228,36 @@ impl<G: Gauge> Searcher<G> {
         // Before `enter` the pair is more than `2 tol` apart: the search starts there, and the
         // rules at the reference apply only when it is in reach at the reference.
         let mut tau = reach.enter;
-        let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
+        let p0 = if tau == 0.0 { Some(self.probe(0.0, Measure::Depth)?) } else { None };
         if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
             let next = match self.classify(p0, deep_is_contact)? {
                 AtReference::Approaching if self.reference >= window.start => return Ok(Some(0.0)),
                 AtReference::Approaching | AtReference::Inside => self.after_contact(self.reference, window.end)?,
                 AtReference::Ended(end) => Some(self.restart_at(self.reference + end)),
-                AtReference::Resting => None,
+                AtReference::Resting => self.done(),
             };
             match next {
                 Some(next) => tau = next,
                 None => return Ok(None),
             }
         }
+        self.start_from(tau, window)
+    }
+
+    /// The first contact start in `window` on the chain parked at `parked` (by a search of the
+    /// same motions that ended no later than `window.start`): what [`Self::first_start_in`]
+    /// finds, to the bit, without replaying the chain up to there. `spent` is the probes made
+    /// since the chain last started afresh.
+    pub(super) fn resume(&mut self, parked: Parked, spent: u32, window: Window) -> Result<Option<f64>> {
+        (self.iterations, self.restarted, self.carried) = (spent, 0, spent);
+        let tau = if parked.in_contact {
+            match self.contact_end(parked.tau, window.end)? {
+                Some(end) => self.restart_at(self.reference + end),
+                None => return Ok(None),
+            }
+        } else {
+            parked.tau
+        };
         self.start_from(tau, window)
     }
 
@@ -258,7 +307,7 @@ impl<G: Gauge> Searcher<G> {
     pub(super) fn end_of_contact_at(&mut self, at: f64, until: f64, deep_is_contact: bool) -> Result<Option<f64>> {
         let Some(reach) = self.reach else { return self.end_of(at, until) };
         let mut tau = reach.enter;
-        let p0 = if tau == 0.0 { Some(self.probe(0.0, true)?) } else { None };
+        let p0 = if tau == 0.0 { Some(self.probe(0.0, Measure::Depth)?) } else { None };
         if let Some(p0) = p0.filter(|p0| p0.upper <= self.touch()) {
             let end = match self.classify(p0, deep_is_contact)? {
                 AtReference::Approaching | AtReference::Inside => {

@@ -1,0 +1,110 @@
+//! Shapes passing through each other in detect mode, with their searches shared among the
+//! workers. A pair contact there changes no body, and what costs is the search for the pair's
+//! next contact (the end of this one, then the next start), which the event loop runs as each
+//! contact pops, one at a time.
+//!
+//! It owns that speculation only: when a pass-through pops, the searches of the pass-throughs
+//! queued right behind it run at once, on every worker, from the bodies as they are. The loop
+//! still handles every event in order; a pass-through takes its search from here when both
+//! bodies' stamps are still the event's (then their motions are the ones searched), and a search
+//! whose event went void is dropped. Contacts, their order and every state are the loop's to
+//! the bit, for every thread count. It never handles an event, and never changes a body.
+
+use super::Pipeline;
+use crate::bodies::Bodies;
+use crate::broad_phase::BroadPhase;
+use crate::event_queue::{Event, Partner};
+use crate::frame::{Mode, Physics};
+use crate::narrow_phase::contacts::{self, Found, Parking};
+use glam::DVec3;
+
+/// Pass-throughs searched ahead per worker: enough to share out, few enough that most are still
+/// valid when they pop.
+const AHEAD_PER_WORKER: usize = 8;
+
+/// What the search after one pass-through contact found.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Searched {
+    /// The contact it was searched for.
+    event: Event,
+    /// Where the two touch, and the normal.
+    pub(super) point_normal: (DVec3, DVec3),
+    /// The pair's next contact start on the same motions, if any in the window.
+    pub(super) next: Found,
+    /// Where the search parked when it found none.
+    pub(super) parks: Option<Parking>,
+}
+
+/// Whether `event` (valid) is two moving bodies, not both spheres, passing through each other.
+fn passes_through(bodies: &Bodies, physics: &Physics, event: &Event) -> bool {
+    let Partner::Body(j) = event.partner else { return false };
+    let (i, j) = (event.body as usize, j as usize);
+    physics.mode == Mode::Detect && !(bodies.are_spheres(i, j) || bodies.is_fixed(i) || bodies.is_fixed(j))
+}
+
+impl<B: BroadPhase> Pipeline<B> {
+    /// The search after the pass-through `event` (just popped, valid), from those run ahead, or
+    /// with those behind it in the queue (before `until`) on every worker; `None` when it is no
+    /// pass-through or there is one worker (the loop then searches as for any contact).
+    pub(super) fn searched_ahead(
+        &mut self,
+        bodies: &Bodies,
+        physics: &Physics,
+        event: &Event,
+        until: f64,
+    ) -> Option<Searched> {
+        if self.workers.threads() == 1 || !passes_through(bodies, physics, event) {
+            return None;
+        }
+        // Searches for events that popped before this one are stale (their events went void).
+        while self.ahead.front().is_some_and(|s| s.event > *event) {
+            self.ahead.pop_front();
+        }
+        if self.ahead.front().is_none_or(|s| s.event != *event) {
+            self.search_ahead(bodies, physics, *event, until);
+        }
+        self.ahead.pop_front().filter(|s| s.event == *event)
+    }
+
+    /// Searches `first` and the pass-throughs queued right behind it that are not searched yet,
+    /// in parallel, and keeps them with those searched before, earliest first.
+    fn search_ahead(&mut self, bodies: &Bodies, physics: &Physics, first: Event, until: f64) {
+        let mut events = std::mem::take(&mut self.batch);
+        events.clear();
+        events.push(first);
+        let limit = AHEAD_PER_WORKER * self.workers.threads();
+        while events.len() <= limit {
+            match self.queue.peek_time() {
+                Some(time) if time < until => events.push(self.queue.pop().expect("peeked")),
+                _ => break,
+            }
+        }
+        events[1..].iter().for_each(|&event| self.queue.put_back(event));
+        let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
+        let ahead = &self.ahead;
+        let mut seen = 0;
+        events.retain(|event| {
+            seen += 1;
+            let Partner::Body(j) = event.partner else { return false };
+            let valid = current(event.body as usize, event.body_stamp) && current(j as usize, event.partner_stamp);
+            let searched = ahead.iter().any(|s| s.event == *event);
+            seen == 1 || (valid && passes_through(bodies, physics, event) && !searched)
+        });
+        let (window, mut searched) = (self.window, std::mem::take(&mut self.searched));
+        searched.clear();
+        self.workers.extend_ranges(events.len(), &mut searched, |range, found| {
+            for &event in &events[range] {
+                let Partner::Body(j) = event.partner else { unreachable!("pass-throughs are pair contacts") };
+                let (i, j) = (event.body as usize, j as usize);
+                let (next, parks) =
+                    contacts::pair_start_after(bodies, i, j, event.time, window.from(event.time.next_up()));
+                let point_normal = contacts::pair_geometry(bodies, i, j, event.time);
+                found.push(Searched { event, point_normal, next, parks });
+            }
+        });
+        self.ahead.extend(searched.drain(..));
+        // Earliest first: the events' order is reversed.
+        self.ahead.make_contiguous().sort_unstable_by_key(|s| std::cmp::Reverse(s.event));
+        (self.batch, self.searched) = (events, searched);
+    }
+}
