@@ -23,6 +23,7 @@
 
 mod pass_through;
 pub(crate) mod pseudo_dynamic;
+mod retest;
 pub(crate) mod touching;
 
 use crate::bodies::Bodies;
@@ -101,6 +102,9 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     ahead: VecDeque<Searched>,
     batch: Vec<Event>,
     searched: Vec<Searched>,
+    /// Scratch of a re-test in a world of shapes: the candidate partners, with their stamps and
+    /// the windows their bounds hold for.
+    partners: Vec<(u32, u32, Window)>,
     /// The current window (empty before the first).
     window: Window,
     /// Proxies refreshed since the window started.
@@ -137,6 +141,7 @@ impl<B: BroadPhase> Pipeline<B> {
             ahead: VecDeque::new(),
             batch: Vec::new(),
             searched: Vec::new(),
+            partners: Vec::new(),
             window: Window::default(),
             updates: 0,
             shrink: 1.0,
@@ -290,9 +295,7 @@ impl<B: BroadPhase> Pipeline<B> {
             for prediction in found.drain(..) {
                 match prediction {
                     Prediction::Event(event) => predicted.push(event),
-                    Prediction::Parked((pair, epochs, resume)) => {
-                        self.parked.keep(pair.0, pair.1, epochs, resume, self.window.start);
-                    }
+                    Prediction::Parked(parking) => self.park(parking),
                 }
             }
             self.predictions = found;
@@ -412,11 +415,17 @@ impl<B: BroadPhase> Pipeline<B> {
             if let Some(found) = found {
                 self.queue.push(pair_event((a, stamps.0), (b, stamps.1), found));
             }
-            if let Some((pair, epochs, resume)) = parks {
-                self.parked.keep(pair.0, pair.1, epochs, resume, self.window.start);
+            if let Some(parking) = parks {
+                self.park(parking);
             }
         }
         self.report_pair_contact(bodies, physics, (a, b), t, (point, normal, impulse), resolution, out);
+    }
+
+    /// Keeps where a shape pair's search parked; pairs not searched since the window started
+    /// are dropped from the store.
+    fn park(&mut self, ((a, b), epochs, resume): Parking) {
+        self.parked.keep(a, b, epochs, resume, self.window.start);
     }
 
     /// Shapes passing through each other in detect mode at `event`, searched ahead: as
@@ -433,8 +442,8 @@ impl<B: BroadPhase> Pipeline<B> {
         if let Some(found) = searched.next {
             self.queue.push(pair_event((event.body, event.body_stamp), (b, event.partner_stamp), found));
         }
-        if let Some((pair, epochs, resume)) = searched.parks {
-            self.parked.keep(pair.0, pair.1, epochs, resume, self.window.start);
+        if let Some(parking) = searched.parks {
+            self.park(parking);
         }
         let (point, normal) = searched.point_normal;
         self.report_pair_contact(
@@ -640,58 +649,6 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         self.cluster = cluster;
         self.near = near;
-    }
-
-    /// After `body` changed velocity at `t`: a fresh proxy, and its contacts with the walls and
-    /// its candidate partners (except `skip`, tested by the partner) for the rest of the window.
-    fn retest(
-        &mut self,
-        body: u32,
-        skip: Option<u32>,
-        bodies: &Bodies,
-        physics: &Physics,
-        t: f64,
-        stats: &mut FrameStats,
-    ) {
-        self.proxies.enter(body as usize, bodies, t);
-        self.updates += 1;
-        stats.retests += 1;
-        let window = self.window.from(t);
-        let (queue, proxies, parked) = (&mut self.queue, self.proxies.view(bodies), &mut self.parked);
-        let mut tests = 0u64;
-        let own = proxies.reported(body as usize);
-        self.broad.update(body, proxies, skip, |other, bounds_window| {
-            tests += 1;
-            let window = bounds_window.intersect(window);
-            if !bodies.has_rigid() {
-                if let Some(event) = predict_pair(bodies, own, other, window) {
-                    queue.push(event);
-                }
-                return;
-            }
-            let (event, parks) = predict_pair_parked(bodies, own, other, window, parked);
-            if let Some(event) = event {
-                queue.push(event);
-            }
-            if let Some((pair, epochs, resume)) = parks {
-                parked.keep(pair.0, pair.1, epochs, resume, window.start);
-            }
-        });
-        stats.narrow_tests += tests;
-        if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
-            queue.push(event);
-        }
-        for_each_static_event(bodies, proxies, &self.statics, body as usize, window, |event| queue.push(event));
-        if self.proxies.expires(body as usize) {
-            queue.push(renewal(bodies, &self.proxies, body));
-        }
-        if physics.report_ends {
-            for (other, since) in self.touching.contacts_of(body) {
-                if let Some(event) = predict_end(bodies, body, other, since, window) {
-                    queue.push(event);
-                }
-            }
-        }
     }
 }
 

@@ -1,0 +1,107 @@
+//! What a velocity change re-tests: the body's fresh proxy enters the broad phase, and its
+//! contacts with its candidate partners, the walls, the static geometry and (with ends
+//! reported) the end of each contact it is in are predicted for the rest of the window.
+//!
+//! It owns that re-test only. A shape's searches against its partners are independent of one
+//! another, so in a world of shapes with more than one worker they run on every worker, and
+//! their events and parked searches are kept in the partners' order, as one worker would: the
+//! queue and the store come out the same for every thread count. It never handles an event.
+
+use super::{for_each_static_event, Pipeline, Prediction};
+use super::{predict_end, predict_pair, predict_pair_parked, predict_wall, renewal};
+use crate::bodies::Bodies;
+use crate::broad_phase::proxy::Reported;
+use crate::broad_phase::BroadPhase;
+use crate::frame::{FrameStats, Physics};
+use crate::window::Window;
+
+/// Below this many candidate partners a re-test is not worth sharing out.
+const SHARED_PARTNERS: usize = 4;
+
+impl<B: BroadPhase> Pipeline<B> {
+    /// After `body` changed velocity at `t`: a fresh proxy, and its contacts with the walls and
+    /// its candidate partners (except `skip`, tested by the partner) for the rest of the window.
+    pub(super) fn retest(
+        &mut self,
+        body: u32,
+        skip: Option<u32>,
+        bodies: &Bodies,
+        physics: &Physics,
+        t: f64,
+        stats: &mut FrameStats,
+    ) {
+        self.proxies.enter(body as usize, bodies, t);
+        self.updates += 1;
+        stats.retests += 1;
+        let window = self.window.from(t);
+        let proxies = self.proxies.view(bodies);
+        // The body as the broad phase reports it, its state borrowed from the store alone.
+        let own = Reported { body, stamp: proxies.reported(body as usize).stamp, state: &bodies.state[body as usize] };
+        if !bodies.has_rigid() {
+            let (queue, mut tests) = (&mut self.queue, 0u64);
+            self.broad.update(body, proxies, skip, |other, bounds| {
+                tests += 1;
+                if let Some(event) = predict_pair(bodies, own, other, bounds.intersect(window)) {
+                    queue.push(event);
+                }
+            });
+            stats.narrow_tests += tests;
+        } else {
+            let mut partners = std::mem::take(&mut self.partners);
+            partners.clear();
+            self.broad.update(body, proxies, skip, |other, bounds| {
+                partners.push((other.body, other.stamp, bounds.intersect(window)));
+            });
+            stats.narrow_tests += partners.len() as u64;
+            let reported = |(other, stamp, _): (u32, u32, Window)| Reported {
+                body: other,
+                stamp,
+                state: &bodies.state[other as usize],
+            };
+            if self.workers.threads() > 1 && partners.len() >= SHARED_PARTNERS {
+                let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
+                found.clear();
+                self.workers.extend_ranges(partners.len(), &mut found, |range, out| {
+                    for &partner in &partners[range] {
+                        let (event, parks) = predict_pair_parked(bodies, own, reported(partner), partner.2, parked);
+                        out.extend(event.map(Prediction::Event));
+                        out.extend(parks.map(Prediction::Parked));
+                    }
+                });
+                for prediction in found.drain(..) {
+                    match prediction {
+                        Prediction::Event(event) => self.queue.push(event),
+                        Prediction::Parked(parking) => self.park(parking),
+                    }
+                }
+                self.predictions = found;
+            } else {
+                for &partner in &partners {
+                    let (event, parks) = predict_pair_parked(bodies, own, reported(partner), partner.2, &self.parked);
+                    if let Some(event) = event {
+                        self.queue.push(event);
+                    }
+                    if let Some(parking) = parks {
+                        self.park(parking);
+                    }
+                }
+            }
+            self.partners = partners;
+        }
+        let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
+        if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
+            queue.push(event);
+        }
+        for_each_static_event(bodies, proxies, &self.statics, body as usize, window, |event| queue.push(event));
+        if self.proxies.expires(body as usize) {
+            queue.push(renewal(bodies, &self.proxies, body));
+        }
+        if physics.report_ends {
+            for (other, since) in self.touching.contacts_of(body) {
+                if let Some(event) = predict_end(bodies, body, other, since, window) {
+                    queue.push(event);
+                }
+            }
+        }
+    }
+}
