@@ -78,11 +78,16 @@ pub(crate) fn pair_start_parked(
 ) -> (Found, Option<Parking>) {
     let (Some(ga), Some(gb)) = (bodies.geometry(a), bodies.geometry(b)) else { return (None, None) };
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    let (key, epochs) = ((a as u32, b as u32), (bodies.motion_epoch(a), bodies.motion_epoch(b)));
+    let (key, epochs) = parking_key(bodies, a, b);
     let resume = parked.and_then(|p| p.get(key.0, key.1, epochs));
     let (found, parks) =
         settled_parked(shape_contact_resumed((ga, &ma), (gb, &mb), window, resume).map(|(s, p)| (s.found, p)), window);
     (found, parks.map(|r| (key, epochs, r)))
+}
+
+/// The pair `a < b` and the motion epochs its parked searches are kept under.
+fn parking_key(bodies: &Bodies, a: usize, b: usize) -> ((u32, u32), (u32, u32)) {
+    ((a as u32, b as u32), (bodies.motion_epoch(a), bodies.motion_epoch(b)))
 }
 
 /// The canonical time in `window` at which bodies `a` and `b` (`a` the lower id), which started
@@ -99,7 +104,7 @@ pub(crate) fn pair_start_after(
         return (None, None);
     };
     let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
-    let (key, epochs) = ((a as u32, b as u32), (bodies.motion_epoch(a), bodies.motion_epoch(b)));
+    let (key, epochs) = parking_key(bodies, a, b);
     let (found, parks) = settled_parked(shape_contact_after_parked((ga, &ma), (gb, &mb), start, window), window);
     (found, parks.map(|r| (key, epochs, r)))
 }

@@ -168,6 +168,9 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.touching.memory_bytes()
             + self.parked.memory_bytes()
             + self.predictions.capacity() * std::mem::size_of::<Prediction>()
+            + (self.ahead.capacity() + self.searched.capacity()) * std::mem::size_of::<Searched>()
+            + self.batch.capacity() * std::mem::size_of::<Event>()
+            + self.partners.capacity() * std::mem::size_of::<(u32, u32, Window)>()
             + self.travel.capacity() * 8
             + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
     }
@@ -285,19 +288,10 @@ impl<B: BroadPhase> Pipeline<B> {
             let candidates = self.broad.find_pairs(
                 self.proxies.view(bodies),
                 &self.workers,
-                |a, b, window, out| {
-                    let (event, parks) = predict_pair_parked(bodies, a, b, window, parked);
-                    out.extend(event.map(Prediction::Event));
-                    out.extend(parks.map(Prediction::Parked));
-                },
+                |a, b, window, out| predict_into(bodies, (a, b, window), parked, out),
                 &mut found,
             );
-            for prediction in found.drain(..) {
-                match prediction {
-                    Prediction::Event(event) => predicted.push(event),
-                    Prediction::Parked(parking) => self.park(parking),
-                }
-            }
+            sort_predictions(&mut found, &mut self.parked, self.window.start, |event| predicted.push(event));
             self.predictions = found;
             candidates
         } else {
@@ -412,20 +406,20 @@ impl<B: BroadPhase> Pipeline<B> {
         if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
             let later = self.window.from(t.next_up());
             let (found, parks) = contacts::pair_start_after(bodies, i, j, t, later);
-            if let Some(found) = found {
-                self.queue.push(pair_event((a, stamps.0), (b, stamps.1), found));
-            }
-            if let Some(parking) = parks {
-                self.park(parking);
-            }
+            self.follow_pair((a, stamps.0), (b, stamps.1), found, parks);
         }
         self.report_pair_contact(bodies, physics, (a, b), t, (point, normal, impulse), resolution, out);
     }
 
-    /// Keeps where a shape pair's search parked; pairs not searched since the window started
-    /// are dropped from the store.
-    fn park(&mut self, ((a, b), epochs, resume): Parking) {
-        self.parked.keep(a, b, epochs, resume, self.window.start);
+    /// What the search after a contact of bodies `a < b` (each with its stamp) found: their next
+    /// contact goes into the queue, or where the search parked into the store.
+    fn follow_pair(&mut self, a: (u32, u32), b: (u32, u32), next: contacts::Found, parks: Option<Parking>) {
+        if let Some(found) = next {
+            self.queue.push(pair_event(a, b, found));
+        }
+        if let Some(((a, b), epochs, resume)) = parks {
+            self.parked.keep(a, b, epochs, resume, self.window.start);
+        }
     }
 
     /// Shapes passing through each other in detect mode at `event`, searched ahead: as
@@ -439,12 +433,7 @@ impl<B: BroadPhase> Pipeline<B> {
         out: &mut Output,
     ) {
         let Partner::Body(b) = event.partner else { unreachable!("a pass-through is a pair contact") };
-        if let Some(found) = searched.next {
-            self.queue.push(pair_event((event.body, event.body_stamp), (b, event.partner_stamp), found));
-        }
-        if let Some(parking) = searched.parks {
-            self.park(parking);
-        }
+        self.follow_pair((event.body, event.body_stamp), (b, event.partner_stamp), searched.next, searched.parks);
         let (point, normal) = searched.point_normal;
         self.report_pair_contact(
             bodies,
@@ -704,6 +693,35 @@ fn predict_pair_parked(
     }
     let (found, parks) = contacts::pair_start_parked(bodies, a.body as usize, b.body as usize, window, Some(parked));
     (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
+}
+
+/// [`predict_pair_parked`] for `(x, y, window)` into `out`, for [`sort_predictions`].
+#[inline]
+fn predict_into(
+    bodies: &Bodies,
+    (x, y, window): (Reported, Reported, Window),
+    parked: &ParkedSearches,
+    out: &mut Vec<Prediction>,
+) {
+    let (event, parks) = predict_pair_parked(bodies, x, y, window, parked);
+    out.extend(event.map(Prediction::Event));
+    out.extend(parks.map(Prediction::Parked));
+}
+
+/// Empties `found` in its order: each event to `event`, each parked search into `parked` (pairs
+/// not searched since `window_start` are dropped from the store).
+fn sort_predictions(
+    found: &mut Vec<Prediction>,
+    parked: &mut ParkedSearches,
+    window_start: f64,
+    mut event: impl FnMut(Event),
+) {
+    for prediction in found.drain(..) {
+        match prediction {
+            Prediction::Event(e) => event(e),
+            Prediction::Parked(((a, b), epochs, resume)) => parked.keep(a, b, epochs, resume, window_start),
+        }
+    }
 }
 
 /// The event of bodies `a < b` (each with its stamp) starting to touch, or of their search

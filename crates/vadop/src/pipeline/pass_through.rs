@@ -71,25 +71,22 @@ impl<B: BroadPhase> Pipeline<B> {
     fn search_ahead(&mut self, bodies: &Bodies, physics: &Physics, first: Event, until: f64) {
         let mut events = std::mem::take(&mut self.batch);
         events.clear();
-        events.push(first);
         let limit = AHEAD_PER_WORKER * self.workers.threads();
-        while events.len() <= limit {
+        while events.len() < limit {
             match self.queue.peek_time() {
                 Some(time) if time < until => events.push(self.queue.pop().expect("peeked")),
                 _ => break,
             }
         }
-        events[1..].iter().for_each(|&event| self.queue.put_back(event));
+        events.iter().for_each(|&event| self.queue.put_back(event));
         let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
         let ahead = &self.ahead;
-        let mut seen = 0;
         events.retain(|event| {
-            seen += 1;
             let Partner::Body(j) = event.partner else { return false };
             let valid = current(event.body as usize, event.body_stamp) && current(j as usize, event.partner_stamp);
-            let searched = ahead.iter().any(|s| s.event == *event);
-            seen == 1 || (valid && passes_through(bodies, physics, event) && !searched)
+            valid && passes_through(bodies, physics, event) && !ahead.iter().any(|s| s.event == *event)
         });
+        events.insert(0, first);
         let (window, mut searched) = (self.window, std::mem::take(&mut self.searched));
         searched.clear();
         self.workers.extend_ranges(events.len(), &mut searched, |range, found| {

@@ -7,8 +7,8 @@
 //! their events and parked searches are kept in the partners' order, as one worker would: the
 //! queue and the store come out the same for every thread count. It never handles an event.
 
-use super::{for_each_static_event, Pipeline, Prediction};
-use super::{predict_end, predict_pair, predict_pair_parked, predict_wall, renewal};
+use super::{for_each_static_event, predict_end, predict_into, predict_pair, predict_wall, renewal};
+use super::{sort_predictions, Pipeline, Prediction};
 use crate::bodies::Bodies;
 use crate::broad_phase::proxy::Reported;
 use crate::broad_phase::BroadPhase;
@@ -58,34 +58,21 @@ impl<B: BroadPhase> Pipeline<B> {
                 stamp,
                 state: &bodies.state[other as usize],
             };
+            let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
+            found.clear();
+            let predict = |range: std::ops::Range<usize>, out: &mut Vec<Prediction>| {
+                for &partner in &partners[range] {
+                    predict_into(bodies, (own, reported(partner), partner.2), parked, out);
+                }
+            };
             if self.workers.threads() > 1 && partners.len() >= SHARED_PARTNERS {
-                let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
-                found.clear();
-                self.workers.extend_ranges(partners.len(), &mut found, |range, out| {
-                    for &partner in &partners[range] {
-                        let (event, parks) = predict_pair_parked(bodies, own, reported(partner), partner.2, parked);
-                        out.extend(event.map(Prediction::Event));
-                        out.extend(parks.map(Prediction::Parked));
-                    }
-                });
-                for prediction in found.drain(..) {
-                    match prediction {
-                        Prediction::Event(event) => self.queue.push(event),
-                        Prediction::Parked(parking) => self.park(parking),
-                    }
-                }
-                self.predictions = found;
+                self.workers.extend_ranges(partners.len(), &mut found, predict);
             } else {
-                for &partner in &partners {
-                    let (event, parks) = predict_pair_parked(bodies, own, reported(partner), partner.2, &self.parked);
-                    if let Some(event) = event {
-                        self.queue.push(event);
-                    }
-                    if let Some(parking) = parks {
-                        self.park(parking);
-                    }
-                }
+                predict(0..partners.len(), &mut found);
             }
+            let queue = &mut self.queue;
+            sort_predictions(&mut found, &mut self.parked, self.window.start, |event| queue.push(event));
+            self.predictions = found;
             self.partners = partners;
         }
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
