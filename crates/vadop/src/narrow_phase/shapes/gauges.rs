@@ -4,8 +4,9 @@
 //! never chooses the probe times (the searcher does).
 
 use super::distance::{closer_points, convex_bounds, separation, Bounds};
-use super::guard;
+use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{Body, Scaled};
+use super::{ceiling, guard};
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
 use glam::DVec3;
@@ -32,6 +33,9 @@ pub(super) struct Probe {
     /// body, and how fast it shrinks: `(-inf, 0)` when there is none. Far from contact it steps a
     /// fast spinner by its straight motion, where `lower` would step it by its spin.
     pub(super) far: (f64, f64),
+    /// Within a contact, how long the signed distance certainly stays below the search's
+    /// ceiling from here (see [`super::inner_balls`]): 0 when nothing says so.
+    pub(super) hold: f64,
 }
 
 /// No spin-free bound.
@@ -152,6 +156,8 @@ pub(super) struct ConvexPair<'a> {
     pub(super) tol: f64,
     /// What the last probe found, to start the next one from.
     pub(super) warm: Cell<Option<Warm>>,
+    /// The balls about the shapes' middles ([`Scaled::middle_ball`], in the shapes' frames).
+    pub(super) middles: (Option<ShapeBall>, Option<ShapeBall>),
 }
 
 /// A probe's axis and witness points, fixed in the bodies (in frames that move with them): after
@@ -189,15 +195,17 @@ impl Warm {
         (a, pose_a): (&Scaled, &Pose),
         (b, pose_b): (&Scaled, &Pose),
         slack: f64,
-    ) -> f64 {
+    ) -> (f64, Deepest) {
         let (x, y) = (*pose_a * self.witness.0, *pose_b * self.witness.1);
         let mut point = (x + y) * 0.5;
-        let mut deepest: f64 = 0.0;
+        let mut deepest = Deepest::Witnesses(x, y);
+        let mut depth: f64 = 0.0;
         for _ in 0..DEEP_POINT_MOVES {
             let (in_a, inward_a) = a.depth_at(pose_a.inverse_transform_point(point));
             let (in_b, inward_b) = b.depth_at(pose_b.inverse_transform_point(point));
-            if in_a > 0.0 && in_b > 0.0 {
-                deepest = deepest.max(in_a + in_b);
+            if in_a > 0.0 && in_b > 0.0 && in_a + in_b > depth {
+                let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
+                (depth, deepest) = (in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward });
             }
             point += if in_a < in_b {
                 pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
@@ -205,10 +213,10 @@ impl Warm {
                 pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
             };
         }
-        if deepest > 0.0 {
-            slack - deepest
+        if depth > 0.0 {
+            (slack - depth, deepest)
         } else {
-            (y - x).length() + slack
+            ((y - x).length() + slack, deepest)
         }
     }
 
@@ -237,7 +245,62 @@ impl Warm {
     }
 }
 
+/// Where [`Warm::contact_upper`] found its bound: a point inside both shapes, as deep as given
+/// in each and with the directions in which it deepens in each; or the carried witness points.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Deepest {
+    Inside { point: DVec3, depths: (f64, f64), inward: (DVec3, DVec3) },
+    Witnesses(DVec3, DVec3),
+}
+
 impl ConvexPair<'_> {
+    /// How long the contact in progress at `tau` certainly lasts, from balls in both shapes: the
+    /// balls about `deepest` (or the witness points), the balls about each shape's middle, balls
+    /// deeper in each shape than `deepest`, and each near ball with the other shape's deeper one.
+    fn hold(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        deepest: Deepest,
+        slack: f64,
+    ) -> f64 {
+        let turning =
+            |body: &Body| if body.geometry.rotation_radius() == 0.0 { 0.0 } else { body.spin.max_angular_speed() };
+        let (mass_a, mass_b) = (DVec3::ZERO, self.offset + self.velocity * tau);
+        let (turn_a, turn_b) = (turning(&self.a), turning(&self.b));
+        let ball_a = |(centre, radius): (DVec3, f64)| InnerBall::new(centre, radius, mass_a, turn_a);
+        let ball_b = |(centre, radius): (DVec3, f64)| InnerBall::new(centre, radius, mass_b, turn_b);
+        let (middle_a, middle_b) = self.middles;
+        let middle_a = middle_a.map(|(centre, radius)| ball_a((*pose_a * centre, radius)));
+        let middle_b = middle_b.map(|(centre, radius)| ball_b((*pose_b * centre, radius)));
+        // Balls deeper in each shape, as wide as the middle ones: while the shapes pass through
+        // or leave each other, their centres part at the rate along the contact's normal, not
+        // at the pair's whole speed. A centre outside its shape holds no ball.
+        let inside = |shape: &Scaled, pose: &Pose, centre: DVec3| {
+            let depth = shape.depth_at(pose.inverse_transform_point(centre)).0;
+            (depth > 0.0).then_some((centre, depth))
+        };
+        let (near, inward) = match deepest {
+            Deepest::Inside { point, depths, inward } => (((point, depths.0), (point, depths.1)), inward),
+            Deepest::Witnesses(x, y) => {
+                let inward_of = |shape: &Scaled, pose: &Pose, p: DVec3| {
+                    pose.rotation * shape.depth_at(pose.inverse_transform_point(p)).1
+                };
+                (((x, 0.0), (y, 0.0)), (inward_of(a, pose_a, x), inward_of(b, pose_b, y)))
+            }
+        };
+        let width = |middle: Option<InnerBall>| middle.map_or(0.0, |m| m.radius);
+        let deep_a = inside(a, pose_a, near.0 .0 + inward.0 * width(middle_a)).map(ball_a);
+        let deep_b = inside(b, pose_b, near.1 .0 + inward.1 * width(middle_b)).map(ball_b);
+        let (near_a, near_b) = (Some(ball_a(near.0)), Some(ball_b(near.1)));
+        let limit = ceiling(self.tol);
+        [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
+            .into_iter()
+            .filter_map(|(x, y)| Some(held(x?, y?, self.velocity, limit, slack)))
+            .fold(0.0, f64::max)
+    }
+
     /// The best spin-free bound along the line of centres: a spinning body stays in its bounding
     /// sphere, so its sphere against the other shape (or both spheres) is a lower bound that only
     /// the straight motion and the other's spin shrink.
@@ -290,11 +353,12 @@ impl Gauge for ConvexPair<'_> {
         let grow = self.velocity.length() + self.spin;
         if measure == Measure::Contact {
             if let Some(warm) = self.warm.get() {
-                let upper = warm.contact_upper((&ga, &pose_a), (&gb, &pose_b), slack);
+                let (upper, deepest) = warm.contact_upper((&ga, &pose_a), (&gb, &pose_b), slack);
                 let room = |upper: f64| 2.0 * self.tol - upper;
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= 0.25 * room(warm.upper) {
                     // Far from the contact's end: nothing else is needed, and the warm start stays.
-                    return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR };
+                    let hold = self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), deepest, slack);
+                    return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold };
                 }
             }
         }
@@ -305,12 +369,17 @@ impl Gauge for ConvexPair<'_> {
             .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
+        let hold = match bounds.witness.filter(|_| measure == Measure::Contact) {
+            Some((x, y)) => self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack),
+            None => 0.0,
+        };
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
             shrink: (-self.velocity.dot(bounds.axis)).max(0.0) + self.spin,
             grow,
             far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
+            hold,
         }
     }
 
@@ -369,6 +438,7 @@ impl Gauge for PlanePair<'_> {
             shrink: (-approach).max(0.0) + self.spin,
             grow: approach.max(0.0) + self.spin,
             far: (height - slack, (-approach).max(0.0)),
+            hold: 0.0,
         }
     }
 
@@ -481,7 +551,7 @@ impl Gauge for MeshPair<'_> {
             Some(b) => (b.lower, b.upper),
             None => (f64::INFINITY, f64::INFINITY),
         };
-        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR }
+        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0 }
     }
 
     /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
@@ -591,6 +661,7 @@ impl Gauge for WallGauge<'_> {
             shrink: self.speed.max(0.0) + self.spin,
             grow: (-self.speed).max(0.0) + self.spin,
             far: (sphere - slack, self.speed.max(0.0)),
+            hold: 0.0,
         }
     }
 
@@ -625,7 +696,7 @@ mod tests {
             let (pose_a, pose_b) = (Pose::from_parts(DVec3::ZERO, qa), Pose::from_parts(offset, qb));
             let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, true, 1e-6, 1e-14);
             let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b)) else { continue };
-            let here = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
+            let (here, _) = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
             if bounds.upper < -1e-3 {
                 measured += 1;
                 ratio += here / bounds.upper;
@@ -634,7 +705,7 @@ mod tests {
             let nudge = DVec3::new(random(), random(), random()) * 0.1;
             let spin = DQuat::from_scaled_axis(DVec3::new(random(), random(), random()) * 0.3);
             let (later_a, later_b) = (Pose::from_parts(nudge, spin * qa), Pose::from_parts(offset - nudge, qb));
-            let upper = warm.contact_upper((&a, &later_a), (&b, &later_b), 1e-14);
+            let (upper, _) = warm.contact_upper((&a, &later_a), (&b, &later_b), 1e-14);
             let relative = later_a.inv_mul(&later_b);
             let parry = parry3d_f64::query::contact(
                 &Pose::IDENTITY,

@@ -60,7 +60,12 @@
 //! that deep about it lies in each shape, and two shapes holding such balls about one point must
 //! move the sum of their radii apart to part). Shapes passing through each other in detect mode
 //! are then followed with closed-form depths of the points in each solid, and GJK and EPA run
-//! only a hair from the contact's start and end.
+//! only a hair from the contact's start and end. Each such probe also says how long the contact
+//! certainly lasts from balls fixed in the two bodies (`inner_balls`): the balls about that
+//! point, about each shape's middle, and wider ones deeper in each shape, whose centres move
+//! with the bodies along the pair's actual direction (a worst-case rate only for turning, times
+//! a centre's distance from its centre of mass); the step is the longer of that and the one on
+//! the rate bound.
 //!
 //! The bounds never rest on GJK's own accuracy. The lower bound is a separation along an axis,
 //! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
@@ -138,6 +143,7 @@
 
 mod distance;
 mod gauges;
+mod inner_balls;
 mod scaled;
 mod searcher;
 
@@ -262,6 +268,11 @@ fn guard(tol: f64) -> f64 {
     0.5 * tol * (1.0 + MARGIN)
 }
 
+/// The signed distance a contact is kept below until it ends: `2 tol` less the margin.
+fn ceiling(tol: f64) -> f64 {
+    2.0 * tol * (1.0 - MARGIN)
+}
+
 /// The distance within which two shapes count as touching: [`SHAPE_CONTACT_TOLERANCE`] times the
 /// sum of their bounding radii (a static-only shape counts 0).
 ///
@@ -302,6 +313,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
     }
     let gauge = match (a.geometry.is_static_only(), b.geometry.is_static_only()) {
         (false, false) => PairGauge::Convex(ConvexPair {
+            middles: (a.support(scale).middle_ball(), b.support(scale).middle_ball()),
             offset: (b.position - a.position) * scale,
             velocity: (b.velocity - a.velocity) * scale,
             a,

@@ -4,6 +4,7 @@
 //! It owns that scaled view only; it never bounds distances or steps a search.
 
 use super::distance::separation;
+use super::inner_balls::ShapeBall;
 use crate::motion::{RigidMotion, Spin};
 use crate::shape::ShapeGeometry;
 use glam::{DQuat, DVec3};
@@ -249,6 +250,15 @@ impl Scaled<'_> {
     /// The centre of the shape's local box, scaled.
     pub(super) fn middle(&self) -> DVec3 {
         self.parry.compute_local_aabb().center() * self.scale
+    }
+
+    /// The ball about [`Self::middle`] that the shape holds, its centre and radius: `None` when
+    /// the middle lies outside (a box's centre need not lie in a convex shape) or the kind has
+    /// no closed-form depth.
+    pub(super) fn middle_ball(&self) -> Option<ShapeBall> {
+        let middle = self.middle();
+        let depth = self.depth_at(middle).0;
+        (depth > 0.0).then_some((middle, depth))
     }
 }
 

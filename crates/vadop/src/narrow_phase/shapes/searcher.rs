@@ -3,7 +3,7 @@
 //! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
 
 use super::gauges::{Gauge, Measure, Probe, Reach};
-use super::{guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
+use super::{ceiling, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
 use crate::error::{Result, VadopError};
 use crate::window::Window;
 
@@ -125,7 +125,7 @@ impl<G: Gauge> Searcher<G> {
     }
     /// During a contact the signed distance is kept below this (`2 tol` less the margin).
     pub(super) fn ceiling(&self) -> f64 {
-        2.0 * self.tol * (1.0 - MARGIN)
+        ceiling(self.tol)
     }
 
     /// The first contact start from `tau` (where the pair does not touch) before absolute time
@@ -177,7 +177,7 @@ impl<G: Gauge> Searcher<G> {
                 return Ok(self.done());
             }
             // In contact until the step's end, and apart from `leave` on.
-            match self.advance(tau, room / p.grow)? {
+            match self.advance(tau, (room / p.grow).max(p.hold))? {
                 Some(next) => tau = next.min(self.leave()),
                 None => return Ok(self.done()),
             }
