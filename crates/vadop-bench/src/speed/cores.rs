@@ -4,8 +4,9 @@
 //! measured again, not read from the detect section). Detect mode on the paper scene for every n
 //! and speed of the detect section, with the goals of 33 ms per frame at 0.05 and 66 ms at 0.5 diameters
 //! per frame for n = 10^6; the equilibrium gas of the throughput section in simulate mode, up to
-//! n = 10^6 (aim: 1.5 M pair collisions/s on every core); and
-//! one run at n = 10^7 on every core, with its peak memory per body.
+//! n = 10^6 (aim: 1.5 M pair collisions/s on every core); the mixed shapes of `--kind shapes`
+//! (walls bouncing them) in detect mode at n = 10^4 and 10^5; and one run at n = 10^7 on every
+//! core, with its peak memory per body.
 
 use super::throughput::{collision_rates, gas, RMS_SPEED};
 use super::{cell, mean_ms, ms_cell, ratio, Context, Section, Timed};
@@ -25,23 +26,35 @@ const SPEEDUP_GOAL: f64 = 1.8;
 const GAS_PACKING: f64 = 0.05;
 /// Aim for the gas at n = 10^6 on every core, in pair collisions per second.
 const GAS_AIM: f64 = 1.5e6;
+/// Speed of the shapes rows, in diameters per frame (a shape's diameter is its bounding sphere's).
+const SHAPES_SPEED: f64 = 0.5;
+
+/// What a row runs.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    /// The paper scene in detect mode: ms/frame.
+    Detect,
+    /// The gas in simulate mode, measured after `warm_up` frames: pair collisions per second.
+    Gas { warm_up: u64 },
+    /// Mixed shapes in detect mode: ms/frame, no goal of its own.
+    Shapes,
+}
 
 /// One scene on one thread and on every core.
 struct Row {
     scene: String,
+    kind: Kind,
     bodies: usize,
     one: Rc<Timed>,
     all: Rc<Timed>,
-    /// For the gas: frames of warm-up before the measured ones; `None` for detect rows.
-    warm_up: Option<u64>,
 }
 
 impl Row {
-    /// ms/frame (detect) or pair collisions per second (gas), on one thread and on all.
+    /// ms/frame (detect, shapes) or pair collisions per second (gas), on one thread and on all.
     fn values(&self) -> (Option<f64>, Option<f64>) {
-        match self.warm_up {
-            None => (mean_ms(&self.one), mean_ms(&self.all)),
-            Some(warm_up) => {
+        match self.kind {
+            Kind::Detect | Kind::Shapes => (mean_ms(&self.one), mean_ms(&self.all)),
+            Kind::Gas { warm_up } => {
                 let rate = |t: &Timed| collision_rates(t, warm_up).map(|r| r.1);
                 (rate(&self.one), rate(&self.all))
             }
@@ -51,9 +64,9 @@ impl Row {
     /// How many times faster every core is than one.
     fn speedup(&self) -> Option<f64> {
         let (one, all) = self.values();
-        match self.warm_up {
-            None => ratio(one, all),
-            Some(_) => ratio(all, one),
+        match self.kind {
+            Kind::Detect | Kind::Shapes => ratio(one, all),
+            Kind::Gas { .. } => ratio(all, one),
         }
     }
 }
@@ -63,7 +76,9 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
     let product = context.runner.product()?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let detect_rows = plan.detect_bodies.len() * plan.speeds.len();
-    let progress = Progress::new(2 * (detect_rows + plan.cores_gas_bodies.len()) + plan.huge_bodies.len());
+    let progress = Progress::new(
+        2 * (detect_rows + plan.cores_gas_bodies.len() + plan.cores_shapes_bodies.len()) + plan.huge_bodies.len(),
+    );
     let mut rows = Vec::new();
     for &bodies in &plan.detect_bodies {
         for &speed in &plan.speeds {
@@ -71,10 +86,10 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
             let all = Simulation { threads: Some(cores), ..one.clone() };
             rows.push(Row {
                 scene: format!("detect, speed {speed}"),
+                kind: Kind::Detect,
                 bodies,
                 one: context.measure(product, &one, &progress),
                 all: context.measure(product, &all, &progress),
-                warm_up: None,
             });
             write(context, cores, &rows, &[])?;
         }
@@ -84,10 +99,23 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
         let (all, _, _) = gas(plan, bodies, GAS_PACKING, RMS_SPEED, cores);
         rows.push(Row {
             scene: format!("gas, packing {GAS_PACKING} (pair collisions/s)"),
+            kind: Kind::Gas { warm_up },
             bodies,
             one: context.measure(product, &one, &progress),
             all: context.measure(product, &all, &progress),
-            warm_up: Some(warm_up),
+        });
+        write(context, cores, &rows, &[])?;
+    }
+    for &bodies in &plan.cores_shapes_bodies {
+        let frames = window_frames(SHAPES_SPEED, plan.quick);
+        let one = Simulation { kind: "shapes", ..Simulation::paper(bodies, SHAPES_SPEED, frames, "auto") };
+        let all = Simulation { threads: Some(cores), ..one.clone() };
+        rows.push(Row {
+            scene: format!("shapes, detect, speed {SHAPES_SPEED}"),
+            kind: Kind::Shapes,
+            bodies,
+            one: context.measure(product, &one, &progress),
+            all: context.measure(product, &all, &progress),
         });
         write(context, cores, &rows, &[])?;
     }
@@ -115,10 +143,14 @@ pub(super) fn run(context: &Context) -> CliResult<()> {
                 .collect();
             Series::new(&format!("detect mode, speed {speed}"), points)
         })
-        .chain(std::iter::once(Series::markers(
-            "simulate mode, gas",
-            rows.iter().filter(|r| r.warm_up.is_some()).filter_map(|r| Some((r.bodies as f64, r.speedup()?))).collect(),
-        )))
+        .chain([Kind::Gas { warm_up: 0 }, Kind::Shapes].map(|kind| {
+            let name = if kind == Kind::Shapes { "detect mode, mixed shapes" } else { "simulate mode, gas" };
+            let same = |r: &&Row| std::mem::discriminant(&r.kind) == std::mem::discriminant(&kind);
+            Series::markers(
+                name,
+                rows.iter().filter(same).filter_map(|r| Some((r.bodies as f64, r.speedup()?))).collect(),
+            )
+        }))
         .collect();
     plots::line_chart(
         &path,
@@ -137,7 +169,9 @@ fn write(context: &Context, cores: usize, rows: &[Row], huge: &[(usize, f64, Rc<
          sections stays out of the speed-up). Detect rows: the paper scene, mean \
          wall-clock ms/frame over frames covering several broad-phase windows; gas rows: the equilibrium gas of the \
          throughput section (rms speed {RMS_SPEED} diameters per frame), pair collisions per second of the measured \
-         frames. Median of {} runs. Goals: a speed-up of at least {SPEEDUP_GOAL} at n >= 10^5; at n = 10^6 on every \
+         frames; shapes rows: `vadop simulate --kind shapes` (spheres, boxes, capsules, cylinders, cones and hulls, \
+         spinning, bouncing off the walls) in detect mode at {SHAPES_SPEED} diameters per frame, mean wall-clock \
+         ms/frame. Median of {} runs. Goals: a speed-up of at least {SPEEDUP_GOAL} at n >= 10^5; at n = 10^6 on every \
          core, at most {} ms/frame at speed {} and {} ms/frame at speed {}; for the gas at n = 10^6 on every \
          core, an aim of {} M pair collisions/s.\n\n",
         context.repeats,
@@ -152,7 +186,7 @@ fn write(context: &Context, cores: usize, rows: &[Row], huge: &[(usize, f64, Rc<
     let mut csv = String::from("scene,n,threads,value,unit,speedup,status\n");
     for r in rows {
         let (one, all) = r.values();
-        let decimals = if r.warm_up.is_some() { 0 } else { 3 };
+        let decimals = if matches!(r.kind, Kind::Gas { .. }) { 0 } else { 3 };
         let shown = |timed: &Timed, value: Option<f64>| match timed {
             Ok(_) => cell(value, decimals),
             Err(e) => crate::markdown::table_cell(e),
@@ -167,7 +201,7 @@ fn write(context: &Context, cores: usize, rows: &[Row], huge: &[(usize, f64, Rc<
             shown(&r.all, all),
             cell(r.speedup(), 2)
         );
-        let unit = if r.warm_up.is_some() { "pair_collisions_per_s" } else { "ms_per_frame" };
+        let unit = if matches!(r.kind, Kind::Gas { .. }) { "pair_collisions_per_s" } else { "ms_per_frame" };
         for (threads, timed, value) in [(1, &r.one, one), (cores, &r.all, all)] {
             let status = timed.as_ref().as_ref().err().map_or("ok".to_string(), |e| e.replace(',', ";"));
             let _ = writeln!(
@@ -210,10 +244,13 @@ fn write(context: &Context, cores: usize, rows: &[Row], huge: &[(usize, f64, Rc<
 
 /// Whether the row meets its goal: the n = 10^6 ms/frame goals, else the speed-up goal from
 /// n = 10^5 on (and for the gas at n = 10^6 the aim of 1.5 M collisions/s); empty where there is
-/// none.
+/// none (the shapes rows).
 fn goal(row: &Row, all: Option<f64>) -> String {
+    if row.kind == Kind::Shapes {
+        return String::new();
+    }
     let speed_goal =
-        GOALS.iter().find(|(speed, _)| row.warm_up.is_none() && row.scene == format!("detect, speed {speed}"));
+        GOALS.iter().find(|(speed, _)| row.kind == Kind::Detect && row.scene == format!("detect, speed {speed}"));
     if let (1_000_000, Some(&(_, ms))) = (row.bodies, speed_goal) {
         return match all {
             Some(v) if v <= ms => format!("met (≤ {ms} ms)"),
@@ -227,9 +264,9 @@ fn goal(row: &Row, all: Option<f64>) -> String {
         _ => String::new(),
     };
     let aim = GAS_AIM / 1e6;
-    match (row.warm_up, row.bodies, all) {
-        (Some(_), 1_000_000, Some(rate)) if rate >= GAS_AIM => format!("{speedup}; {aim} M/s met"),
-        (Some(_), 1_000_000, Some(_)) => format!("{speedup}; {aim} M/s missed"),
+    match (row.kind, row.bodies, all) {
+        (Kind::Gas { .. }, 1_000_000, Some(rate)) if rate >= GAS_AIM => format!("{speedup}; {aim} M/s met"),
+        (Kind::Gas { .. }, 1_000_000, Some(_)) => format!("{speedup}; {aim} M/s missed"),
         _ => speedup,
     }
 }

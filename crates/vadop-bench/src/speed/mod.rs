@@ -80,6 +80,8 @@ struct Plan {
     throughput_bodies: Vec<usize>,
     /// Body counts of the gas rows of the cores section.
     cores_gas_bodies: Vec<usize>,
+    /// Body counts of the shapes rows of the cores section.
+    cores_shapes_bodies: Vec<usize>,
     packings: Vec<f64>,
     /// Travel per frame in rms diameters, for the frame-length sweep.
     travels: Vec<f64>,
@@ -103,6 +105,7 @@ impl Plan {
                 retest_calls: 2000,
                 throughput_bodies: vec![10_000],
                 cores_gas_bodies: vec![10_000],
+                cores_shapes_bodies: vec![1_000],
                 packings: vec![0.05, 0.2, 0.4],
                 travels: vec![0.05, 0.2, 1.0, 5.0],
                 warm_up_travel: 1.0,
@@ -120,6 +123,7 @@ impl Plan {
                 retest_calls: 10_000,
                 throughput_bodies: vec![10_000, 100_000],
                 cores_gas_bodies: vec![10_000, 100_000, 1_000_000],
+                cores_shapes_bodies: vec![10_000, 100_000],
                 packings: vec![0.05, 0.2, 0.4],
                 travels: vec![0.05, 0.2, 1.0, 5.0],
                 warm_up_travel: 5.0,

@@ -72,11 +72,14 @@ impl<B: BroadPhase> Pipeline<B> {
         let mut events = std::mem::take(&mut self.batch);
         events.clear();
         let limit = AHEAD_PER_WORKER * self.workers.threads();
+        // Popping drops repeats of the event popped before (those of `first` too).
         while events.len() < limit {
-            match self.queue.peek_time() {
-                Some(time) if time < until => events.push(self.queue.pop().expect("peeked")),
-                _ => break,
+            let Some(event) = self.queue.pop() else { break };
+            if !(event.time < until) {
+                self.queue.put_back(event);
+                break;
             }
+            events.push(event);
         }
         events.iter().for_each(|&event| self.queue.put_back(event));
         let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
