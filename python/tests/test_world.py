@@ -147,7 +147,7 @@ def test_stats_is_a_dict_of_the_last_frame() -> None:
     stats = world.stats()
     expected = {"update_seconds", "sort_seconds", "test_seconds", "response_seconds", "total_seconds",
                 "windows", "endpoint_swaps", "list_entries", "candidate_pairs", "narrow_tests", "retests",
-                "contacts", "pair_contacts", "invalidations", "broad_phase_bytes", "tc_contacts", "jam_contacts"}
+                "contacts", "pair_contacts", "invalidations", "broad_phase_bytes", "tc_contacts", "jam_contacts", "pair_virial"}
     assert set(stats) == expected
     parts = sum(stats[k] for k in ("update_seconds", "sort_seconds", "test_seconds", "response_seconds"))
     assert stats["total_seconds"] == pytest.approx(parts)

@@ -146,6 +146,14 @@ fn csv_and_json_have_one_row_per_frame() {
     let total = report["summary"]["contacts"]["total"].as_u64().expect("contact total");
     let contact_lines = std::fs::read_to_string(&contacts).expect("contacts written").lines().count() as u64;
     assert_eq!(contact_lines, 1 + total);
+    // The elastic run's pressure: the CSV's per-frame virial sums to the summary's W, and the
+    // impacts push apart, so Z exceeds the ideal gas's 1.
+    let column = header.iter().position(|&c| c == "pair_virial").expect("a pair_virial column");
+    let virial: f64 = lines[1..].iter().map(|l| l.split(',').nth(column).unwrap().parse::<f64>().unwrap()).sum();
+    let pressure = &report["summary"]["pressure"];
+    let reported = pressure["virial"].as_f64().expect("the summary's virial");
+    assert!((virial - reported).abs() <= 1e-9 * reported.abs() && reported > 0.0, "{virial} vs {pressure}");
+    assert!(pressure["z"].as_f64().expect("Z") > 1.0, "{pressure}");
 
     // The saved scene runs again as a scene file and gives the same contacts.
     let again = vadop(&["simulate", "--scene", &path(&scene), "--frames", "7", "--json", &path(&json), "--quiet"]);

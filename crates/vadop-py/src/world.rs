@@ -553,7 +553,10 @@ impl PyWorld {
     /// counters (broad-phase windows, endpoint swaps, list entries, candidate pairs, narrow tests,
     /// re-tests, contacts, pair contacts, invalidations, broad-phase bytes) and the contacts whose
     /// physics a rule changed (``tc_contacts``: made elastic by the TC model; ``jam_contacts``:
-    /// resolved by the jam rule).
+    /// resolved by the jam rule), and ``pair_virial``: the collisional virial of the frame's
+    /// impacts between moving bodies (separation of the centres dotted with the momentum
+    /// exchanged; simulate mode). Over a run of duration T at translational kinetic energy K,
+    /// Z = PV/NkT = 1 + sum(pair_virial) / (2 K T).
     ///
     /// >>> import vadop
     /// >>> w = vadop.scene(300, 0.1, 2.0)
@@ -581,6 +584,7 @@ impl PyWorld {
         d.set_item("broad_phase_bytes", s.broad_phase_bytes)?;
         d.set_item("tc_contacts", s.tc_contacts)?;
         d.set_item("jam_contacts", s.jam_contacts)?;
+        d.set_item("pair_virial", s.pair_virial)?;
         Ok(d)
     }
 
@@ -591,6 +595,15 @@ impl PyWorld {
     /// 25.0
     fn kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
         Ok(self.lock(py)?.kinetic_energy())
+    }
+
+    /// Kinetic energy of the centres' motion only (3/2 NkT for a gas; spins left out).
+    ///
+    /// >>> import vadop
+    /// >>> vadop.World([[2.0, 5, 5]], [[3.0, 4, 0]], [0.5], [2.0], box=10.0).translational_kinetic_energy()
+    /// 25.0
+    fn translational_kinetic_energy(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(self.lock(py)?.translational_kinetic_energy())
     }
 
     /// Total linear momentum, float64 (3,).

@@ -80,6 +80,14 @@ pub struct FrameStats {
     /// Contacts between bodies that ended (detect mode, when contact ends are reported).
     #[serde(default)]
     pub contact_ends: u64,
+    /// The collisional virial of the frame's impacts between moving bodies: over each impact,
+    /// the separation of the centres (second minus first) dotted with the momentum the second
+    /// gained (mass x length^2 / time; 0 in detect mode, where bodies pass through each other).
+    /// Over a run of duration T and translational kinetic energy K it gives the pressure:
+    /// PV = NkT + W / (3T), so Z = PV/NkT = 1 + W / (2KT) with W the sum over the frames (in a
+    /// walled box the walls' impulses give the same, with V the volume the centres can reach).
+    #[serde(default)]
+    pub pair_virial: f64,
 }
 
 impl FrameStats {

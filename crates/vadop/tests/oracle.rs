@@ -25,6 +25,11 @@ fn assert_same_contacts(scene: &Scene, method: Method, mode: Mode, pool_axes: Op
         let expected = oracle.step(DT).unwrap();
         assert_eq!(found.len(), expected.len(), "frame {frame}: contact count differs");
         assert_eq!(found, expected, "frame {frame}: contact sequences differ");
+        let (virial, expected_virial) = (vadop.stats().pair_virial, oracle.stats().pair_virial);
+        assert_eq!(virial.to_bits(), expected_virial.to_bits(), "frame {frame}: virial {virial} vs {expected_virial}");
+        if mode == Mode::Detect {
+            assert_eq!(virial, 0.0, "frame {frame}: detect mode exchanges no momentum between bodies");
+        }
         total += found.len();
         // Every pair of bodies shares an axis, so pruning only ever uses true separating axes.
         if let (true, Some(sap)) = (frame == 0 || frame == frames - 1, vadop.sweep_prune()) {

@@ -147,6 +147,8 @@ pub struct Accuracy {
 /// world's totals over its moving bodies, spins included.
 pub struct Motion {
     kinetic: f64,
+    /// Of the centres' motion only: the gas's temperature.
+    translational: f64,
     momentum: DVec3,
     /// Sum of |m v| over the moving bodies: the scale of a change of momentum.
     momentum_sum: f64,
@@ -159,6 +161,7 @@ impl Motion {
             world.bodies().filter(|(_, b)| b.mass.is_finite()).map(|(_, b)| b.mass * b.velocity.length()).sum();
         Motion {
             kinetic: world.kinetic_energy(),
+            translational: world.translational_kinetic_energy(),
             momentum: world.momentum(),
             momentum_sum,
             angular_momentum: world.angular_momentum(),
@@ -191,6 +194,36 @@ pub struct Conservation {
     /// |end - start|.
     #[serde(default)]
     pub angular_momentum_change: Option<f64>,
+    /// Kinetic energy of the centres' motion at the start and the end: the temperature of a gas.
+    #[serde(default)]
+    pub translational_start: f64,
+    #[serde(default)]
+    pub translational_end: f64,
+}
+
+/// The pressure of an elastic, frictionless run from the collisional virial of its impacts
+/// between moving bodies (the per-frame `pair_virial`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Pressure {
+    /// The virial W summed over the frames: each impact's separation of centres dotted with the
+    /// momentum exchanged.
+    pub virial: f64,
+    /// The compressibility factor PV/NkT = 1 + W / (2 K T), K the translational kinetic energy
+    /// (the mean of the start's and the end's, equal up to rounding in such a run) and T the
+    /// simulated time; N counts the moving bodies.
+    pub z: f64,
+    /// Impacts between moving bodies that made it.
+    pub impacts: u64,
+}
+
+impl Pressure {
+    /// The pressure of a run of `seconds` with `impacts` between moving bodies whose virial
+    /// summed to `virial`; `None` where it means nothing (no time simulated, nothing moving).
+    pub fn new(virial: f64, conservation: &Conservation, seconds: f64, impacts: u64) -> Option<Pressure> {
+        let kinetic = 0.5 * (conservation.translational_start + conservation.translational_end);
+        let scale = 2.0 * kinetic * seconds;
+        (scale > 0.0 && scale.is_finite()).then(|| Pressure { virial, z: 1.0 + virial / scale, impacts })
+    }
 }
 
 impl Conservation {
@@ -208,6 +241,8 @@ impl Conservation {
             angular_momentum_start: angular(start.angular_momentum),
             angular_momentum_end: angular(end.angular_momentum),
             angular_momentum_change: spins.then(|| (end.angular_momentum - start.angular_momentum).length()),
+            translational_start: start.translational,
+            translational_end: end.translational,
         }
     }
 }
@@ -232,6 +267,7 @@ pub struct FrameTotals {
     tc_contacts: u64,
     jam_contacts: u64,
     contact_ends: u64,
+    pair_virial: f64,
     update_ms: f64,
     sort_ms: f64,
     test_ms: f64,
@@ -260,6 +296,7 @@ impl FrameTotals {
         self.tc_contacts += row.tc_contacts;
         self.jam_contacts += row.jam_contacts;
         self.contact_ends += row.contact_ends;
+        self.pair_virial += row.pair_virial;
         self.update_ms += row.update_ms;
         self.sort_ms += row.sort_ms;
         self.test_ms += row.test_ms;
@@ -357,6 +394,9 @@ pub struct Summary {
     pub peak_memory_mib: Option<f64>,
     /// Simulate mode only: energy and momentum are meaningless when bodies pass through each other.
     pub conservation: Option<Conservation>,
+    /// Elastic, frictionless simulate runs: the pressure from the collisional virial.
+    #[serde(default)]
+    pub pressure: Option<Pressure>,
     /// The error that stopped the run early.
     pub error: Option<String>,
 }
@@ -372,9 +412,16 @@ impl Summary {
     ) -> Summary {
         let (total, pairs, statics) = (frames.contacts, frames.pair_contacts, frames.static_contacts);
         let wall_seconds = frames.wall_ms.sum / 1e3;
+        let simulated_seconds = frames.frames as f64 * run.dt;
+        // Only an elastic, frictionless gas keeps the temperature that Z is measured against.
+        let pressure = conservation
+            .as_ref()
+            .filter(|_| run.restitution == 1.0 && run.friction == 0.0)
+            .and_then(|c| Pressure::new(frames.pair_virial, c, simulated_seconds, pairs));
         Summary {
+            pressure,
             frames_completed: frames.frames,
-            simulated_seconds: frames.frames as f64 * run.dt,
+            simulated_seconds,
             pool,
             contacts: ContactTotals {
                 total,

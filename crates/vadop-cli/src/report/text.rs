@@ -206,6 +206,13 @@ impl fmt::Display for Summary {
                 c.momentum_change
             )?;
         }
+        if let Some(p) = &self.pressure {
+            writeln!(
+                f,
+                "pressure    Z = PV/NkT = {:.6} from the collisional virial of {} impacts between moving bodies",
+                p.z, p.impacts
+            )?;
+        }
         if let Some(error) = &self.error {
             writeln!(f, "stopped     {error}")?;
         }

@@ -48,12 +48,15 @@ pub struct FrameRow {
     /// Contacts between bodies that ended (with --contact-ends).
     #[serde(default)]
     pub contact_ends: u64,
+    /// The collisional virial of the frame's impacts between moving bodies (simulate mode).
+    #[serde(default)]
+    pub pair_virial: f64,
 }
 
 impl FrameRow {
     const CSV_HEADER: &'static str = "frame,time,contacts,pair_contacts,ms,update_ms,sort_ms,test_ms,response_ms,\
         endpoint_swaps,list_entries,candidate_pairs,narrow_tests,invalidations,wall_ms,broad_phase_bytes,\
-        windows,retests,tc_contacts,jam_contacts,contact_ends,static_contacts";
+        windows,retests,tc_contacts,jam_contacts,contact_ends,static_contacts,pair_virial";
 
     /// A frame's row; `static_contacts` of its body contacts were with static bodies.
     pub fn new(frame: u64, time: f64, stats: &FrameStats, static_contacts: u64, wall_seconds: f64) -> FrameRow {
@@ -81,13 +84,14 @@ impl FrameRow {
             tc_contacts: stats.tc_contacts,
             jam_contacts: stats.jam_contacts,
             contact_ends: stats.contact_ends,
+            pair_virial: stats.pair_virial,
         }
     }
 
     /// The row in the order of `CSV_HEADER`.
     fn csv_line(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.time,
             self.contacts,
@@ -109,7 +113,8 @@ impl FrameRow {
             self.tc_contacts,
             self.jam_contacts,
             self.contact_ends,
-            self.static_contacts
+            self.static_contacts,
+            self.pair_virial
         )
     }
 }

@@ -66,6 +66,9 @@ Reading the summary (README.md, \"Reading the summary\", says more):
               to rounding), or the change a lossy one was asked for; the momentum change beside
               the bodies' sum of |m v| at the start (walls and static bodies exchange momentum
               with the bodies, so the total is not kept)
+  pressure    elastic frictionless simulate runs: Z = PV/NkT = 1 + W / (2 K T) from the
+              collisional virial W of the impacts between moving bodies (K the translational
+              kinetic energy, T the simulated time)
   stopped     the error that ended the run early; what ran before it is still reported
 
 CSV columns (--csv; --json holds the same rows): frame, time (end of the frame), contacts,
@@ -73,7 +76,8 @@ pair_contacts (two moving bodies), ms (c_total), update_ms, sort_ms, test_ms, re
 endpoint_swaps, list_entries (broad-phase entries after the frame's last window start; 0 in a
 frame that starts none), candidate_pairs, narrow_tests, invalidations, wall_ms (the whole step
 call), broad_phase_bytes, windows, retests, tc_contacts, jam_contacts, contact_ends,
-static_contacts (with static bodies; the rest of the contacts are with walls).")
+static_contacts (with static bodies; the rest of the contacts are with walls), pair_virial (the
+collisional virial of the impacts between moving bodies, simulate mode).")
 )]
 pub struct SimulateArgs {
     /// Scene file (JSON: {"bounds": {"min": [x,y,z], "max": [x,y,z]}, "spheres": [{"position",

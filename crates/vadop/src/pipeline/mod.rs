@@ -38,7 +38,7 @@ use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
 use crate::pipeline::touching::Touching;
-use crate::response::impact::{Impacts, Resolution};
+use crate::response::impact::{exchange_virial, Impacts, Resolution};
 use crate::walls::BoxBounds;
 use crate::walls::Wall;
 use crate::window::Window;
@@ -384,17 +384,27 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
+        let before_j = bodies.velocity(j);
         let resolution = self.impacts.pair(bodies, physics, (a, b), t, (point, normal), out.stats);
+        // Impacts with static bodies are the level's pressure, as the walls' are: not the virial.
+        let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
         let mut impulse = 0.0;
         match resolution {
-            Resolution::Jammed { by_rule: true } => {
+            Resolution::Jammed { by_rule } => {
                 let before = bodies.velocity(i);
-                self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
-                impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
+                let virial = self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
+                if between_moving {
+                    out.stats.pair_virial += virial;
+                }
+                if by_rule {
+                    impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
+                }
             }
-            Resolution::Jammed { by_rule: false } => self.freeze_cluster(bodies, physics, &[a, b], t, out.stats),
             Resolution::Pushed(total) => {
                 impulse = total;
+                if between_moving {
+                    out.stats.pair_virial += exchange_virial(bodies, (i, j), t, before_j);
+                }
                 // The pair itself is re-tested once, by the second body, when both proxies are
                 // fresh (a rounding residue may still approach).
                 self.retest_pair(a, b, bodies, physics, t, out.stats);
@@ -568,7 +578,9 @@ impl<B: BroadPhase> Pipeline<B> {
     /// The jam rule (see [`crate::response::rules`]), counted as one jammed contact: every body touching
     /// `seeds` at `t`, directly or through each other, without separating, moves on with the
     /// cluster's centre-of-mass velocity less any component into a wall a member touches (a
-    /// cluster pressed against static geometry stops, and its spins stop).
+    /// cluster pressed against static geometry stops, and its spins stop). Returns the
+    /// cluster's virial: its members' momentum changes dotted with their centres' offsets from
+    /// the first member's (what they exchanged; a stop against a wall or static body counts too).
     fn freeze_cluster(
         &mut self,
         bodies: &mut Bodies,
@@ -576,7 +588,7 @@ impl<B: BroadPhase> Pipeline<B> {
         seeds: &[u32],
         t: f64,
         stats: &mut FrameStats,
-    ) {
+    ) -> f64 {
         stats.jam_contacts += 1;
         let mut cluster = std::mem::take(&mut self.cluster);
         let mut near = std::mem::take(&mut self.near);
@@ -629,15 +641,21 @@ impl<B: BroadPhase> Pipeline<B> {
             }
         }
         // One rigid motion for all: no spin, or members would turn into each other.
+        let mut virial = 0.0;
+        let origin = cluster.first().map_or(DVec3::ZERO, |&m| bodies.position_at(m as usize, t));
         for &m in &cluster {
-            self.impacts.rules.freeze(m, t);
-            bodies.set_motion_at(m as usize, t, velocity, DVec3::ZERO);
+            let m = m as usize;
+            let gained = bodies.mass[m] * (velocity - bodies.velocity(m));
+            virial += (bodies.position_at(m, t) - origin).dot(gained);
+            self.impacts.rules.freeze(m as u32, t);
+            bodies.set_motion_at(m, t, velocity, DVec3::ZERO);
         }
         for &m in &cluster {
             self.retest(m, None, bodies, physics, t, stats);
         }
         self.cluster = cluster;
         self.near = near;
+        virial
     }
 }
 

@@ -17,7 +17,7 @@ use crate::frame::{Contact, Mode, Touched};
 use crate::frame::{Output, Physics};
 use crate::narrow_phase::spheres::wall_contact_time;
 use crate::numeric::direction;
-use crate::response::impact::{bounce_off_wall, push_spheres};
+use crate::response::impact::{bounce_off_wall, exchange_virial, push_spheres};
 use crate::response::rules::{ContactRules, Rule};
 use glam::DVec3;
 use std::time::Instant;
@@ -167,10 +167,12 @@ impl PseudoDynamic {
             let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
             let mut impulse = 0.0;
             if physics.mode == Mode::Simulate {
+                let before_j = bodies.velocity(j);
                 impulse = push_spheres(bodies, (i, j), t1, normal, physics.restitution);
                 if impulse == 0.0 {
                     continue;
                 }
+                out.stats.pair_virial += exchange_virial(bodies, (i, j), t1, before_j);
             } else if self.previous.binary_search(&(a, b)).is_ok() {
                 continue;
             }

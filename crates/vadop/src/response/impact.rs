@@ -74,6 +74,14 @@ pub(crate) fn push_spheres(
     impulse
 }
 
+/// The collisional virial of an impact of bodies `i` and `j` at `t`: the separation of their
+/// centres (`j`'s minus `i`'s) dotted with the momentum `j` gained, `before` being `j`'s velocity
+/// before the impact. An impact conserves momentum, so taking `i` as the second body gives the same.
+pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, before: DVec3) -> f64 {
+    let separation = bodies.position_at(j, t) - bodies.position_at(i, t);
+    separation.dot(bodies.mass[j] * (bodies.velocity(j) - before))
+}
+
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
 pub(crate) fn bounce_off_wall(bodies: &mut Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> f64 {
     let v = bodies.velocity(i);

@@ -331,8 +331,22 @@ impl World {
     }
     /// Total kinetic energy: of the centres' motion and of the spins.
     pub fn kinetic_energy(&self) -> f64 {
+        self.translational_kinetic_energy() + self.moving_ids().map(|i| self.bodies.spin_energy(i)).sum::<f64>()
+    }
+    /// Kinetic energy of the centres' motion only: the temperature of a gas (3/2 NkT) and the
+    /// scale of its collisional virial.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BoxBounds, Sphere, World, WorldConfig};
+    /// let mut world = World::new(BoxBounds::cube(10.0)?, WorldConfig::default())?;
+    /// world.add_sphere(Sphere { position: DVec3::splat(5.0), velocity: DVec3::new(3.0, 0.0, 4.0), radius: 0.5, mass: 2.0 })?;
+    /// assert_eq!(world.translational_kinetic_energy(), 25.0);
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn translational_kinetic_energy(&self) -> f64 {
         let b = &self.bodies;
-        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity(i).length_squared() + b.spin_energy(i)).sum()
+        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity(i).length_squared()).sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
