@@ -83,6 +83,7 @@ class World:
         contact_duration: float = 1e-05,
         threads: Optional[int] = None,
         contact_ends: bool = False,
+        gravity: tuple[float, float, float] | list[float] | None = None,
     ) -> World: ...
     def add(
         self,

@@ -300,6 +300,7 @@ pub(crate) fn config(
     contact_duration: f64,
     threads: Option<IntArg>,
     contact_ends: bool,
+    gravity: DVec3,
 ) -> PyResult<WorldConfig> {
     let pool_axes = pool_axes.map(|m| m.in_range("pool_axes", 3, MAX_AXES as i128).map(|m| m as usize)).transpose()?;
     // Any count that fits: the core uses no more threads than there are cores.
@@ -314,6 +315,7 @@ pub(crate) fn config(
         contact_duration,
         threads,
         contact_ends,
+        gravity,
     })
 }
 

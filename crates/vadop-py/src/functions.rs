@@ -6,6 +6,7 @@ use crate::contacts::Contacts;
 use crate::convert::{bounds, check_memory, check_world_memory, config, spheres, value_error, IntArg};
 use crate::interrupt::interruptible;
 use crate::world::PyWorld;
+use glam::DVec3;
 use pyo3::prelude::*;
 use std::sync::Mutex;
 use vadop::response::rules::DEFAULT_CONTACT_DURATION;
@@ -48,7 +49,7 @@ pub(crate) fn scene(
 ) -> PyResult<PyWorld> {
     let bodies = bodies.in_range("bodies", 1, MAX_SCENE_BODIES as i128)? as usize;
     let seed = seed.in_range("seed", 0, u64::MAX.into())? as u64;
-    let config = config(method, mode, pool_axes, phi, restitution, 0.0, contact_duration, threads, false)?;
+    let config = config(method, mode, pool_axes, phi, restitution, 0.0, contact_duration, threads, false, DVec3::ZERO)?;
     check_world_memory(bodies)?;
     let parameters = PaperScene { bodies, packing_fraction, max_speed, radius, seed };
     let world = py.allow_threads(|| parameters.build().and_then(|s| s.world(config))).map_err(value_error)?;
@@ -87,7 +88,8 @@ pub(crate) fn detect(
 ) -> PyResult<Contacts> {
     let frames = frames.in_range("frames", 0, u64::MAX.into())? as u64;
     let bounds = bounds(r#box)?;
-    let config = config(method, "detect", pool_axes, phi, 1.0, 0.0, DEFAULT_CONTACT_DURATION, threads, false)?;
+    let config =
+        config(method, "detect", pool_axes, phi, 1.0, 0.0, DEFAULT_CONTACT_DURATION, threads, false, DVec3::ZERO)?;
     let spheres = spheres(positions, velocities, radii, None, &bounds)?;
     check_world_memory(spheres.len())?;
     let mut world = World::new(bounds, config).map_err(value_error)?;

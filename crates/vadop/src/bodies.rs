@@ -65,6 +65,9 @@ pub struct Bodies {
     /// `Bodies::tighten_speed_bound`, so a step need not read every body to rule out an absurd
     /// speed.
     pub speed_bound: f64,
+    /// The world's uniform acceleration: every moving body's path is a parabola under it (static
+    /// bodies stay put), so two moving bodies keep a straight relative motion.
+    pub gravity: DVec3,
     /// Shapes, spins and static bodies: empty in a world of plain spheres.
     pub rigid: Rigid,
     /// While a step that may be interrupted runs: each motion it overwrote, oldest first, so
@@ -193,6 +196,11 @@ pub fn speed(velocity: DVec3) -> f64 {
 }
 
 impl Bodies {
+    /// An empty store whose moving bodies fall under `gravity`.
+    pub(crate) fn under(gravity: DVec3) -> Bodies {
+        Bodies { gravity, ..Bodies::default() }
+    }
+
     /// Number of slots, removed ones included.
     pub fn slots(&self) -> usize {
         self.state.len()
@@ -201,7 +209,23 @@ impl Bodies {
     /// Centre of body `i` at absolute time `t`.
     #[inline]
     pub fn position_at(&self, i: usize, t: f64) -> DVec3 {
-        self.state[i].motion.at(t)
+        self.state[i].motion.at_under(t, self.gravity_on(i))
+    }
+
+    /// Velocity of body `i` at absolute time `t`.
+    #[inline]
+    pub fn velocity_at(&self, i: usize, t: f64) -> DVec3 {
+        self.state[i].motion.velocity_under(t, self.gravity_on(i))
+    }
+
+    /// The acceleration body `i` moves under: the world's gravity, none for a static body.
+    #[inline]
+    pub fn gravity_on(&self, i: usize) -> DVec3 {
+        if self.gravity == DVec3::ZERO || self.is_fixed(i) {
+            DVec3::ZERO
+        } else {
+            self.gravity
+        }
     }
 
     /// Body `i`'s straight motion since its last velocity change.
@@ -210,7 +234,8 @@ impl Bodies {
         self.state[i].motion
     }
 
-    /// Velocity of body `i`.
+    /// Velocity of body `i` at its last velocity change (its `since`; at any time without
+    /// gravity).
     #[inline]
     pub fn velocity(&self, i: usize) -> DVec3 {
         self.state[i].motion.velocity
@@ -332,7 +357,7 @@ impl Bodies {
         if self.is_fixed(i) {
             return DVec3::ZERO;
         }
-        self.velocity(i) + self.angular_velocity_at(i, t).cross(point - self.position_at(i, t))
+        self.velocity_at(i, t) + self.angular_velocity_at(i, t).cross(point - self.position_at(i, t))
     }
 
     /// Keeps the [`Rigid`] part from now on: every slot gets an entry (its sphere, steady).
@@ -542,7 +567,7 @@ impl Bodies {
     pub fn sphere_at(&self, i: usize, t: f64) -> Sphere {
         Sphere {
             position: self.position_at(i, t),
-            velocity: self.velocity(i),
+            velocity: self.velocity_at(i, t),
             radius: self.radius(i),
             mass: self.mass[i],
         }

@@ -95,6 +95,12 @@ pub enum VadopError {
         "contact ends are reported in detect mode only: in simulate mode a contact is an impact, over as it starts"
     )]
     ContactEndsNeedDetectMode,
+    /// Gravity that is not a finite vector.
+    #[error("gravity must be a finite vector, got {0:?}")]
+    BadGravity([f64; 3]),
+    /// Gravity with what it does not support yet.
+    #[error("gravity is supported for spheres only, without static bodies, and in simulate mode with restitution 1 (a ball coming to rest on a floor needs a resting state, not built yet): {0}")]
+    GravityUnsupported(&'static str),
     /// A length (radius, box side) below the supported range.
     #[error(
         "{what} {value:e} is out of range: radii, box sides and shape sizes must be at least 1e-50 (and at most 1e50)"

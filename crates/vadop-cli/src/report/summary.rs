@@ -149,6 +149,8 @@ pub struct Motion {
     kinetic: f64,
     /// Of the centres' motion only: the gas's temperature.
     translational: f64,
+    /// In the world's gravity (0 without).
+    potential: f64,
     momentum: DVec3,
     /// Sum of |m v| over the moving bodies: the scale of a change of momentum.
     momentum_sum: f64,
@@ -162,6 +164,7 @@ impl Motion {
         Motion {
             kinetic: world.kinetic_energy(),
             translational: world.translational_kinetic_energy(),
+            potential: world.potential_energy(),
             momentum: world.momentum(),
             momentum_sum,
             angular_momentum: world.angular_momentum(),
@@ -175,8 +178,14 @@ impl Motion {
 pub struct Conservation {
     pub kinetic_start: f64,
     pub kinetic_end: f64,
-    /// (end - start) / start; absent when nothing moves.
+    /// (end - start) / start of the kinetic energy, plus the potential energy under gravity
+    /// (then relative to the start's kinetic plus |potential|); absent when nothing moves.
     pub kinetic_relative_drift: Option<f64>,
+    /// Potential energy in the world's gravity at the start and the end (0 without gravity).
+    #[serde(default)]
+    pub potential_start: f64,
+    #[serde(default)]
+    pub potential_end: f64,
     pub momentum_start: [f64; 3],
     pub momentum_end: [f64; 3],
     /// |end - start|.
@@ -233,7 +242,14 @@ impl Conservation {
         Conservation {
             kinetic_start: start.kinetic,
             kinetic_end: end.kinetic,
-            kinetic_relative_drift: (start.kinetic > 0.0).then(|| (end.kinetic - start.kinetic) / start.kinetic),
+            kinetic_relative_drift: if start.potential == 0.0 && end.potential == 0.0 {
+                (start.kinetic > 0.0).then(|| (end.kinetic - start.kinetic) / start.kinetic)
+            } else {
+                let scale = start.kinetic + start.potential.abs();
+                Some((end.kinetic + end.potential - start.kinetic - start.potential) / scale)
+            },
+            potential_start: start.potential,
+            potential_end: end.potential,
             momentum_start: start.momentum.to_array(),
             momentum_end: end.momentum.to_array(),
             momentum_change: (end.momentum - start.momentum).length(),
@@ -394,7 +410,7 @@ pub struct Summary {
     pub peak_memory_mib: Option<f64>,
     /// Simulate mode only: energy and momentum are meaningless when bodies pass through each other.
     pub conservation: Option<Conservation>,
-    /// Elastic, frictionless simulate runs: the pressure from the collisional virial.
+    /// Elastic, frictionless simulate runs without gravity: the pressure from the collisional virial.
     #[serde(default)]
     pub pressure: Option<Pressure>,
     /// The error that stopped the run early.
@@ -416,7 +432,9 @@ impl Summary {
         // Only an elastic, frictionless gas keeps the temperature that Z is measured against.
         let pressure = conservation
             .as_ref()
-            .filter(|_| run.restitution == 1.0 && run.friction == 0.0)
+            .filter(|c| {
+                run.restitution == 1.0 && run.friction == 0.0 && c.potential_start == 0.0 && c.potential_end == 0.0
+            })
             .and_then(|c| Pressure::new(frames.pair_virial, c, simulated_seconds, pairs));
         Summary {
             pressure,

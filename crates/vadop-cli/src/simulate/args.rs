@@ -62,8 +62,8 @@ Reading the summary (README.md, \"Reading the summary\", says more):
               invalidations (predictions voided by a velocity change before their time)
   rules       contacts made elastic by the TC model, or resolved by the jam rule
   memory      largest broad-phase footprint, peak resident memory of the whole process
-  energy      simulate mode: relative kinetic-energy drift of an elastic frictionless run (0 up
-              to rounding), or the change a lossy one was asked for; the momentum change beside
+  energy      simulate mode: relative kinetic-energy drift (plus the potential energy under
+              --gravity) of an elastic frictionless run (0 up to rounding), or the change a lossy one was asked for; the momentum change beside
               the bodies' sum of |m v| at the start (walls and static bodies exchange momentum
               with the bodies, so the total is not kept)
   pressure    elastic frictionless simulate runs: Z = PV/NkT = 1 + W / (2 K T) from the
@@ -177,6 +177,10 @@ pub struct SimulateArgs {
     /// collapse
     #[arg(long, value_name = "SECONDS", default_value_t = vadop::response::rules::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
     pub(super) contact_duration: f64,
+    /// Uniform acceleration of every moving body, as x,y,z (e.g. 0,0,-9.81): parabolic paths,
+    /// exact for every method; spheres only, and restitution 1 in simulate mode, for now
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_negative_numbers = true, help_heading = "World")]
+    pub(super) gravity: Option<glam::DVec3>,
     /// Detect mode: also report when each contact between bodies ends (rows `body-end` in
     /// --contacts, counted in the summary), as started and stopped events
     #[arg(long, help_heading = "World")]
@@ -261,4 +265,12 @@ impl FromStr for PoolSize {
         // The range is the core's to check, so its message names the supported sizes.
         text.parse().map(|m| PoolSize(Some(m))).map_err(|_| format!("expected a number of axes or auto, got {text}"))
     }
+}
+
+/// A vector written as three comma-separated numbers.
+fn parse_vector(text: &str) -> Result<glam::DVec3, String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [x, y, z] = parts[..] else { return Err(format!("expected three numbers x,y,z, got {text:?}")) };
+    let number = |s: &str| s.parse::<f64>().map_err(|e| format!("{s:?}: {e}"));
+    Ok(glam::DVec3::new(number(x)?, number(y)?, number(z)?))
 }

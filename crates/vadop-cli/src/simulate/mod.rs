@@ -67,6 +67,7 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         contact_duration: args.contact_duration,
         threads: args.threads,
         contact_ends: args.contact_ends,
+        gravity: args.gravity.unwrap_or_default(),
     };
     let (scene, source) = match &args.scene {
         Some(path) => {

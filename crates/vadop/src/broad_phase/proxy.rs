@@ -73,6 +73,12 @@ pub struct ProxyTable {
     expires: Vec<bool>,
     /// Scratch for the median radius (a sample).
     radii: Vec<f64>,
+    /// The bodies' uniform acceleration, and how far a path may bend off its tangent within a
+    /// proxy: every proxy is the straight path from its start along its velocity there, its
+    /// radius widened by this bend, and lasts no longer than the bend allows. Broad phases thus
+    /// see straight paths whatever the gravity (0 and no limit without it).
+    gravity: DVec3,
+    bend: f64,
 }
 
 /// A box in single precision relative to an origin, rounded outwards: it only ever grows, so it
@@ -295,6 +301,10 @@ impl ProxyTable {
         {
             self.typical_radius = median;
         }
+        // A quarter of a typical radius: proxies a little wider, and renewed only after the time
+        // it takes gravity to bend a path that far (about 0.1 s for unit spheres under 9.81).
+        self.gravity = bodies.gravity;
+        self.bend = if self.gravity == DVec3::ZERO { 0.0 } else { 0.25 * self.typical_radius };
         let rule = self.rule();
         workers.zip_chunks(&mut self.spans, &mut self.expires, |offset, spans, expires| {
             for (k, (span, expires)) in spans.iter_mut().zip(expires).enumerate() {
@@ -331,6 +341,8 @@ impl ProxyTable {
             box_min: self.box_min,
             box_max: self.box_max,
             reach: 2.0 * self.typical_radius * self.reach,
+            gravity: self.gravity,
+            bend: self.bend,
         }
     }
 
@@ -382,22 +394,23 @@ impl<'a> Proxies<'a> {
         Reported { body: i as u32, stamp: self.table.stamp(i), state: &self.states[i] }
     }
 
-    /// Bounding radius of body `i`.
+    /// Bounding radius of body `i`'s proxy: the body's, widened by the bend gravity may give
+    /// its path within the proxy.
     #[inline]
     pub fn radius(&self, i: usize) -> f64 {
-        self.states[i].radius
+        self.states[i].radius + self.table.bend
     }
 
-    /// Velocity of body `i`.
+    /// Velocity of body `i` at its proxy's start.
     #[inline]
     pub fn velocity(&self, i: usize) -> DVec3 {
-        self.states[i].motion.velocity
+        self.states[i].motion.velocity_under(self.table.spans[i].start, self.table.gravity)
     }
 
     /// Centre of body `i` at its proxy's start.
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
-        self.states[i].motion.at(self.table.spans[i].start)
+        self.states[i].motion.at_under(self.table.spans[i].start, self.table.gravity)
     }
 }
 
@@ -409,6 +422,9 @@ struct ProxyRule {
     box_max: DVec3,
     /// Longest path a proxy may cover.
     reach: f64,
+    gravity: DVec3,
+    /// How far a path may bend off its tangent within a proxy.
+    bend: f64,
 }
 
 impl ProxyRule {
@@ -417,24 +433,31 @@ impl ProxyRule {
     fn span(&self, i: usize, bodies: &Bodies, t: f64) -> (Span, bool) {
         let start = t.max(self.window.start);
         let motion = bodies.motion(i);
-        let velocity = motion.velocity;
-        let radius = bodies.bounding_radius(i);
+        let velocity = motion.velocity_under(start, self.gravity);
+        let body_radius = bodies.bounding_radius(i);
+        let radius = body_radius + self.bend;
         // Up to and including the wall contact: a pair touching at that very instant is still
         // found with the motion before the bounce, whichever of the two events comes first. A
         // body of another shape reaches the walls later than its bounding sphere: its proxy goes
         // on to the window's end, and its own wall contact changes its velocity.
-        let wall =
-            bodies.is_sphere(i).then(|| wall_contact_time(&motion, radius, self.box_min, self.box_max)).flatten();
+        let wall = bodies
+            .is_sphere(i)
+            .then(|| wall_contact_time(&motion, body_radius, self.box_min, self.box_max, self.gravity))
+            .flatten();
         let mut end = match wall {
             Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let reached = start + self.reach / velocity.length();
+        let mut reached = start + self.reach / velocity.length();
+        if self.bend > 0.0 {
+            // Within the proxy the path stays within the bend of its tangent: |g| tau^2 / 2 <= bend.
+            reached = reached.min(start + (2.0 * self.bend / self.gravity.length()).sqrt());
+        }
         let expires = reached < end && reached > start;
         if expires {
             end = reached;
         }
-        let origin = motion.at(start);
+        let origin = motion.at_under(start, self.gravity);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         let bbox = CompactBox::new(low, high, self.box_min);
         (Span { start, end, bbox }, expires)

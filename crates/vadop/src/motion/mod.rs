@@ -23,6 +23,35 @@ impl Motion {
     pub fn at(&self, t: f64) -> DVec3 {
         self.position + (t - self.since) * self.velocity
     }
+
+    /// Centre at time `t` under the uniform acceleration `gravity`: a parabola from `position`
+    /// with `velocity` at `since` (the straight path, to the bit, without gravity).
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::motion::Motion;
+    /// let thrown = Motion { position: DVec3::ZERO, since: 1.0, velocity: DVec3::new(1.0, 0.0, 4.0) };
+    /// let g = DVec3::new(0.0, 0.0, -2.0);
+    /// assert_eq!(thrown.at_under(3.0, g), DVec3::new(2.0, 0.0, 4.0));
+    /// assert_eq!(thrown.velocity_under(3.0, g), DVec3::new(1.0, 0.0, 0.0));
+    /// ```
+    #[inline]
+    pub fn at_under(&self, t: f64, gravity: DVec3) -> DVec3 {
+        if gravity == DVec3::ZERO {
+            return self.at(t);
+        }
+        let tau = t - self.since;
+        self.position + tau * self.velocity + (0.5 * tau * tau) * gravity
+    }
+
+    /// Velocity at time `t` under the uniform acceleration `gravity`.
+    #[inline]
+    pub fn velocity_under(&self, t: f64, gravity: DVec3) -> DVec3 {
+        if gravity == DVec3::ZERO {
+            return self.velocity;
+        }
+        self.velocity + (t - self.since) * gravity
+    }
 }
 
 /// How a body's orientation evolves since its last velocity change: the exact torque-free

@@ -61,7 +61,8 @@ pub(crate) fn pair_start(
     window: Window,
 ) -> Found {
     if bodies.are_spheres(a, b) {
-        let time = pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
+        let time =
+            pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, bodies.gravity)?;
         return window.contains(time).then_some((time, false));
     }
     pair_start_parked(bodies, a, b, window, None).0
@@ -113,7 +114,12 @@ pub(crate) fn pair_start_after(
 /// contact since `since`, part.
 pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: Window) -> Found {
     if bodies.are_spheres(a, b) {
-        let time = pair_separation_time(&bodies.motion(a), &bodies.motion(b), bodies.radius(a) + bodies.radius(b))?;
+        let time = pair_separation_time(
+            &bodies.motion(a),
+            &bodies.motion(b),
+            bodies.radius(a) + bodies.radius(b),
+            bodies.gravity,
+        )?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
@@ -134,7 +140,9 @@ pub(crate) fn wall_start(
 ) -> Option<std::result::Result<(f64, Wall), f64>> {
     let shape = if bodies.is_sphere(i) { None } else { bodies.geometry(i) };
     let found = match shape {
-        None => Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max)?),
+        None => {
+            Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max, bodies.gravity_on(i))?)
+        }
         Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), bounds.min, bounds.max, window) {
             Ok(found) => Ok(found?),
             Err(VadopError::ContactSearchStalled { time, .. }) => Err(time),
@@ -160,7 +168,9 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
     }
     let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
     // Coincident centres have no normal; the relative velocity gives one.
-    let normal = direction(pj - pi).or_else(|| direction(bodies.velocity(i) - bodies.velocity(j))).unwrap_or(DVec3::X);
+    let normal = direction(pj - pi)
+        .or_else(|| direction(bodies.velocity_at(i, t) - bodies.velocity_at(j, t)))
+        .unwrap_or(DVec3::X);
     (pi + normal * bodies.radius(i), normal)
 }
 
@@ -184,7 +194,7 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
         let reach = (bodies.radius(i) + bodies.radius(j)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
         let scale = unit_scale(reach);
         let offset = (bodies.position_at(j, t) - bodies.position_at(i, t)) * scale;
-        let separating = (bodies.velocity(j) - bodies.velocity(i)).dot(offset) > 0.0;
+        let separating = (bodies.velocity_at(j, t) - bodies.velocity_at(i, t)).dot(offset) > 0.0;
         return offset.length_squared() <= (reach * scale) * (reach * scale) && !separating;
     }
     let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) else { return false };

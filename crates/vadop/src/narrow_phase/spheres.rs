@@ -3,8 +3,11 @@
 //!
 //! It owns the contact arithmetic and its tolerance, and nothing else: it never sees the world,
 //! the broad phase or the queue, so every method and the brute-force oracle call the very same
-//! functions and get bit-identical times. Motion is linear between velocity changes:
-//! p(t) = p + (t - since) v.
+//! functions and get bit-identical times. Motion is linear between velocity changes,
+//! p(t) = p + (t - since) v, or a parabola under the world's gravity g,
+//! p(t) = p + (t - since) v + (t - since)^2 g / 2: two bodies under the same g keep a linear
+//! relative motion, so a pair's closed form is the same, from both centres and velocities at
+//! the reference instant; only a wall sees the parabola (a quadratic per axis).
 //!
 //! Times are *canonical*: a pair's contact time is computed from the instant its relative motion
 //! began (the later of the two bodies' last velocity changes), never from the window or frame
@@ -93,9 +96,10 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
     Some(gap / (-approach + discriminant.sqrt()))
 }
 
-/// Canonical absolute time at which two spheres on their current straight motions first touch
-/// while approaching, if ever: computed from the later of the two `since` instants, so it does
-/// not depend on when or by whom it is asked.
+/// Canonical absolute time at which two spheres on their current motions, both under the uniform
+/// acceleration `gravity` (zero for straight paths), first touch while approaching, if ever:
+/// computed from the later of the two `since` instants, so it does not depend on when or by whom
+/// it is asked.
 ///
 /// ```
 /// use glam::DVec3;
@@ -104,16 +108,19 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // The gap of 5 closes at 3: one contact at 5/3, whichever frame asks.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0), Some(5.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::ZERO), Some(5.0 / 3.0));
+/// // Falling together, they meet at the same instant.
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::new(0.0, 0.0, -9.81)), Some(5.0 / 3.0));
 /// ```
 #[inline]
-pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, gravity: DVec3) -> Option<f64> {
     let reference = a.since.max(b.since);
-    let relative_velocity = b.velocity - a.velocity;
-    let tau = sphere_sphere_time(b.at(reference) - a.at(reference), relative_velocity, radius_sum)?;
+    let (va, vb) = (a.velocity_under(reference, gravity), b.velocity_under(reference, gravity));
+    let offset = b.at_under(reference, gravity) - a.at_under(reference, gravity);
+    let tau = sphere_sphere_time(offset, vb - va, radius_sum)?;
     // Checked only for predicted contacts, which are far fewer than candidate pairs.
-    let scale = unit_scale(a.velocity.abs().max_element().max(b.velocity.abs().max_element()));
-    let (va, vb) = (a.velocity * scale, b.velocity * scale);
+    let scale = unit_scale(va.abs().max_element().max(vb.abs().max_element()));
+    let (va, vb) = (va * scale, vb * scale);
     if (vb - va).length() <= NOISE_VELOCITY * (va.length() + vb.length()) {
         return None;
     }
@@ -153,9 +160,9 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
     tau.is_finite().then_some(tau)
 }
 
-/// Canonical absolute time at which two touching spheres on their current straight motions
-/// separate (see [`sphere_separation_time`]), computed from the later of the two `since` instants
-/// like [`pair_contact_time`]; `None` when they move together and never separate.
+/// Canonical absolute time at which two touching spheres on their current motions, both under
+/// `gravity`, separate (see [`sphere_separation_time`]), computed from the later of the two
+/// `since` instants like [`pair_contact_time`]; `None` when they move together and never separate.
 ///
 /// ```
 /// use glam::DVec3;
@@ -164,19 +171,22 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0), Some(5.0 / 3.0));
-/// assert_eq!(pair_separation_time(&a, &b, 1.0), Some(7.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::ZERO), Some(5.0 / 3.0));
+/// assert_eq!(pair_separation_time(&a, &b, 1.0, DVec3::ZERO), Some(7.0 / 3.0));
 /// ```
 #[inline]
-pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64, gravity: DVec3) -> Option<f64> {
     let reference = a.since.max(b.since);
-    let tau = sphere_separation_time(b.at(reference) - a.at(reference), b.velocity - a.velocity, radius_sum)?;
+    let offset = b.at_under(reference, gravity) - a.at_under(reference, gravity);
+    let relative_velocity = b.velocity_under(reference, gravity) - a.velocity_under(reference, gravity);
+    let tau = sphere_separation_time(offset, relative_velocity, radius_sum)?;
     let time = reference + tau;
     time.is_finite().then_some(time)
 }
 
-/// Canonical absolute time at which a sphere of `radius` on `motion` inside the box `[min, max]`
-/// first touches a wall while moving towards it, with the wall. Ties go to the lowest axis.
+/// Canonical absolute time at which a sphere of `radius` on `motion` under `gravity` inside the
+/// box `[min, max]` first touches a wall while moving towards it, with the wall. Ties go to the
+/// lowest axis.
 ///
 /// ```
 /// use glam::DVec3;
@@ -184,12 +194,28 @@ pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f
 /// use vadop::Wall;
 /// use vadop::motion::Motion;
 /// let motion = Motion { position: DVec3::new(5.0, 5.0, 5.0), since: 1.0, velocity: DVec3::new(2.0, 0.0, 0.0) };
-/// assert_eq!(wall_contact_time(&motion, 1.0, DVec3::ZERO, DVec3::splat(10.0)), Some((3.0, Wall::MaxX)));
+/// let (min, max) = (DVec3::ZERO, DVec3::splat(10.0));
+/// assert_eq!(wall_contact_time(&motion, 1.0, min, max, DVec3::ZERO), Some((3.0, Wall::MaxX)));
+/// // Dropped from rest 4 above the floor under g = 2: it lands after sqrt(2 * 4 / 2) = 2.
+/// let dropped = Motion { position: DVec3::new(5.0, 5.0, 5.0), since: 1.0, velocity: DVec3::ZERO };
+/// assert_eq!(wall_contact_time(&dropped, 1.0, min, max, DVec3::new(0.0, 0.0, -2.0)), Some((3.0, Wall::MinZ)));
 /// ```
 #[inline]
-pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -> Option<(f64, Wall)> {
+pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, gravity: DVec3) -> Option<(f64, Wall)> {
     let mut best: Option<(f64, Wall)> = None;
     for axis in 0..3 {
+        if gravity[axis] != 0.0 {
+            let (x, v, g) = (motion.position[axis], motion.velocity[axis], gravity[axis]);
+            for (is_max, distance) in [(false, x - (min[axis] + radius)), (true, max[axis] - radius - x)] {
+                // Seen from the wall's side: the distance to it, the speed and the pull towards it.
+                let sign = if is_max { 1.0 } else { -1.0 };
+                let Some(tau) = parabola_arrival(distance, sign * v, sign * g) else { continue };
+                if best.is_none_or(|(t, _)| tau < t) {
+                    best = Some((tau, Wall::new(axis, is_max)));
+                }
+            }
+            continue;
+        }
         let speed = motion.velocity[axis];
         let (distance, is_max) = if speed > 0.0 {
             (max[axis] - radius - motion.position[axis], true)
@@ -205,6 +231,33 @@ pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -
         }
     }
     best.map(|(tau, wall)| (motion.since + tau, wall)).filter(|(time, _)| time.is_finite())
+}
+
+/// First `tau >= 0` at which a point `distance` from a wall, moving towards it at `speed` and
+/// pulled towards it by `pull` (negative values: away), reaches it while still moving towards
+/// it: the root of `pull tau^2 / 2 + speed tau = distance` where the speed there,
+/// `sqrt(speed^2 + 2 pull distance)`, is positive. A point at (or a rounding error past) the wall
+/// and moving or pulled out touches it now; one at rest on it touches it too (no resting state).
+#[inline]
+fn parabola_arrival(distance: f64, speed: f64, pull: f64) -> Option<f64> {
+    let distance = distance.max(0.0);
+    if distance == 0.0 && (speed > 0.0 || (speed == 0.0 && pull > 0.0)) {
+        return Some(0.0);
+    }
+    let arrival_sq = speed * speed + 2.0 * pull * distance;
+    if !(arrival_sq >= 0.0) {
+        return None;
+    }
+    let arrival = arrival_sq.sqrt();
+    // The two forms of the root, each free of cancellation for its sign of the speed.
+    let tau = if speed >= 0.0 {
+        2.0 * distance / (speed + arrival)
+    } else if pull > 0.0 {
+        (arrival - speed) / pull
+    } else {
+        return None;
+    };
+    (tau >= 0.0 && tau.is_finite()).then_some(tau)
 }
 
 #[cfg(test)]
@@ -286,24 +339,26 @@ mod tests {
         // Body b changed velocity at 0.7; the pair's time is computed from 0.7 whatever frame asks.
         let a = Motion { position: DVec3::new(0.0, 0.0, 0.0), since: 0.0, velocity: DVec3::new(1.0, 0.0, 0.0) };
         let b = Motion { position: DVec3::new(5.0, 0.0, 0.0), since: 0.7, velocity: DVec3::new(-1.0, 0.0, 0.0) };
-        let t = pair_contact_time(&a, &b, 1.0).unwrap();
+        let t = pair_contact_time(&a, &b, 1.0, DVec3::ZERO).unwrap();
         // At 0.7, a is at 0.7: the gap 5 - 0.7 - 1 closes at 2.
         assert_eq!(t, 0.7 + (5.0 - 0.7 - 1.0) / 2.0);
         // Moving together exactly (relative velocity noise only): no contact.
         let c = Motion { velocity: DVec3::new(1.0 + 1e-15, 0.0, 0.0), ..b };
         let d = Motion { position: DVec3::new(3.0, 0.0, 0.0), ..a };
-        assert_eq!(pair_contact_time(&d, &Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c }, 1.0), None);
+        assert_eq!(pair_contact_time(&d, &Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c }, 1.0, DVec3::ZERO), None);
     }
 
     #[test]
     fn walls() {
         let (min, max) = (DVec3::ZERO, DVec3::splat(10.0));
         let at = |p: DVec3, v: DVec3| Motion { position: p, since: 0.0, velocity: v };
-        let r = wall_contact_time(&at(DVec3::new(1.0, 5.0, 5.0), DVec3::new(-1.0, 0.0, 0.0)), 1.0, min, max);
+        let r =
+            wall_contact_time(&at(DVec3::new(1.0, 5.0, 5.0), DVec3::new(-1.0, 0.0, 0.0)), 1.0, min, max, DVec3::ZERO);
         assert_eq!(r, Some((0.0, Wall::MinX)));
-        let r = wall_contact_time(&at(DVec3::new(5.0, 5.0, 8.0), DVec3::new(0.0, 0.0, 2.0)), 1.0, min, max);
+        let r =
+            wall_contact_time(&at(DVec3::new(5.0, 5.0, 8.0), DVec3::new(0.0, 0.0, 2.0)), 1.0, min, max, DVec3::ZERO);
         assert_eq!(r, Some((0.5, Wall::MaxZ)));
-        assert_eq!(wall_contact_time(&at(DVec3::splat(5.0), DVec3::ZERO), 1.0, min, max), None);
+        assert_eq!(wall_contact_time(&at(DVec3::splat(5.0), DVec3::ZERO), 1.0, min, max, DVec3::ZERO), None);
         assert_eq!(Wall::MaxY.outward_normal(), DVec3::Y);
         assert_eq!(Wall::new(2, false), Wall::MinZ);
         assert_eq!(Wall::MinZ.to_string(), "min-z");

@@ -384,14 +384,14 @@ impl<B: BroadPhase> Pipeline<B> {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let before_j = bodies.velocity(j);
+        let before_j = bodies.velocity_at(j, t);
         let resolution = self.impacts.pair(bodies, physics, (a, b), t, (point, normal), out.stats);
         // Impacts with static bodies are the level's pressure, as the walls' are: not the virial.
         let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
         let mut impulse = 0.0;
         match resolution {
             Resolution::Jammed { by_rule } => {
-                let before = bodies.velocity(i);
+                let before = bodies.velocity_at(i, t);
                 let virial = self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
                 if between_moving {
                     out.stats.pair_virial += virial;
@@ -511,7 +511,7 @@ impl<B: BroadPhase> Pipeline<B> {
         for &k in stuck {
             let i = k as usize;
             if !bodies.is_fixed(i) {
-                bodies.set_motion_at(i, t, bodies.velocity(i), bodies.angular_velocity_at(i, t));
+                bodies.set_motion_at(i, t, bodies.velocity_at(i, t), bodies.angular_velocity_at(i, t));
             }
         }
         match *stuck {
@@ -551,7 +551,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let (point, normal) = contacts::wall_geometry(bodies, i, wall, &physics.bounds, t);
         let impulse = match self.impacts.wall(bodies, physics, (a, wall), t, (point, normal), out.stats) {
             Resolution::Jammed { by_rule: true } => {
-                let before = bodies.velocity(i);
+                let before = bodies.velocity_at(i, t);
                 self.freeze_cluster(bodies, physics, &[a], t, out.stats);
                 bodies.mass[i] * (before - bodies.velocity(i)).length()
             }
@@ -613,7 +613,7 @@ impl<B: BroadPhase> Pipeline<B> {
             k += 1;
             let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
             mass += bodies.mass[m];
-            momentum += bodies.mass[m] * bodies.velocity(m);
+            momentum += bodies.mass[m] * bodies.velocity_at(m, t);
             for axis in 0..3 {
                 let slack = 4.0 * CONTACT_TOLERANCE * rm;
                 touches_min[axis] |= pm[axis] - rm <= physics.bounds.min[axis] + slack;
@@ -645,7 +645,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let origin = cluster.first().map_or(DVec3::ZERO, |&m| bodies.position_at(m as usize, t));
         for &m in &cluster {
             let m = m as usize;
-            let gained = bodies.mass[m] * (velocity - bodies.velocity(m));
+            let gained = bodies.mass[m] * (velocity - bodies.velocity_at(m, t));
             virial += (bodies.position_at(m, t) - origin).dot(gained);
             self.impacts.rules.freeze(m as u32, t);
             bodies.set_motion_at(m, t, velocity, DVec3::ZERO);

@@ -127,9 +127,13 @@ impl PseudoDynamic {
             if !bodies.alive[i] {
                 continue;
             }
-            while let Some((t, wall)) =
-                wall_contact_time(&bodies.motion(i), bodies.radius(i), physics.bounds.min, physics.bounds.max)
-            {
+            while let Some((t, wall)) = wall_contact_time(
+                &bodies.motion(i),
+                bodies.radius(i),
+                physics.bounds.min,
+                physics.bounds.max,
+                bodies.gravity_on(i),
+            ) {
                 if !(t < t1) {
                     break;
                 }
@@ -138,7 +142,7 @@ impl PseudoDynamic {
                     // A body alone: its cluster is itself, stopped at the wall.
                     Rule::Jam => {
                         out.stats.jam_contacts += 1;
-                        let v = bodies.velocity(i);
+                        let v = bodies.velocity_at(i, t);
                         let stopped = v - v.dot(wall.outward_normal()).max(0.0) * wall.outward_normal();
                         bodies.set_velocity_at(i, t, stopped);
                         bodies.mass[i] * (v - stopped).length()
@@ -167,7 +171,7 @@ impl PseudoDynamic {
             let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
             let mut impulse = 0.0;
             if physics.mode == Mode::Simulate {
-                let before_j = bodies.velocity(j);
+                let before_j = bodies.velocity_at(j, t1);
                 impulse = push_spheres(bodies, (i, j), t1, normal, physics.restitution);
                 if impulse == 0.0 {
                     continue;

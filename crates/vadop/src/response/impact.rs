@@ -47,7 +47,7 @@ pub(crate) fn impacted(bodies: &Bodies, i: usize, t: f64) -> Impacted {
     let rotation = DMat3::from_quat(bodies.orientation_at(i, t));
     let inverse = DMat3::from_diagonal(bodies.principal_inertia(i).recip());
     Impacted {
-        velocity: bodies.velocity(i),
+        velocity: bodies.velocity_at(i, t),
         angular_velocity: bodies.angular_velocity_at(i, t),
         inverse_mass: bodies.inverse_mass(i),
         inverse_inertia: rotation * inverse * rotation.transpose(),
@@ -64,7 +64,7 @@ pub(crate) fn push_spheres(
     normal: DVec3,
     restitution: f64,
 ) -> f64 {
-    let (vi, vj) = (bodies.velocity(i), bodies.velocity(j));
+    let (vi, vj) = (bodies.velocity_at(i, t), bodies.velocity_at(j, t));
     let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
     let impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
     if impulse > 0.0 {
@@ -76,7 +76,7 @@ pub(crate) fn push_spheres(
 
 /// The collisional virial of an impact of bodies `i` and `j` at `t`: the separation of their
 /// centres (`j`'s minus `i`'s) dotted with the momentum `j` gained, `before` being `j`'s velocity
-/// before the impact. An impact conserves momentum, so taking `i` as the second body gives the same.
+/// at `t` before the impact (the impact has just set its motion at `t`). An impact conserves momentum, so taking `i` as the second body gives the same.
 pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, before: DVec3) -> f64 {
     let separation = bodies.position_at(j, t) - bodies.position_at(i, t);
     separation.dot(bodies.mass[j] * (bodies.velocity(j) - before))
@@ -84,7 +84,7 @@ pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, b
 
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
 pub(crate) fn bounce_off_wall(bodies: &mut Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> f64 {
-    let v = bodies.velocity(i);
+    let v = bodies.velocity_at(i, t);
     let bounced = wall_bounce(v, wall.axis(), restitution);
     bodies.set_velocity_at(i, t, bounced);
     bodies.mass[i] * (v - bounced).length()

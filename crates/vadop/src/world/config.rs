@@ -4,6 +4,7 @@
 
 use crate::frame::Mode;
 use crate::response::DEFAULT_CONTACT_DURATION;
+use glam::DVec3;
 
 /// A body moving more box lengths than this in one frame is rejected: it would bounce off the
 /// walls that many times per frame, which is never a meaningful simulation.
@@ -120,6 +121,12 @@ pub struct WorldConfig {
     /// Off by default: it costs a prediction and a list entry per contact.
     #[serde(default)]
     pub contact_ends: bool,
+    /// Uniform acceleration of every moving body (e.g. `[0, 0, -9.81]`); zero by default. Paths
+    /// are then parabolas, exact in both modes and for every method; this first version takes
+    /// spheres only (no other shapes, no static bodies) and, in simulate mode, restitution 1,
+    /// for a ball coming to rest on a floor needs a resting state that is not built yet.
+    #[serde(default)]
+    pub gravity: DVec3,
 }
 
 fn default_contact_duration() -> f64 {
@@ -138,6 +145,7 @@ impl Default for WorldConfig {
             contact_duration: DEFAULT_CONTACT_DURATION,
             threads: None,
             contact_ends: false,
+            gravity: DVec3::ZERO,
         }
     }
 }

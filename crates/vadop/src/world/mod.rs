@@ -105,12 +105,18 @@ impl World {
         if config.contact_ends && config.mode != Mode::Detect {
             return Err(VadopError::ContactEndsNeedDetectMode);
         }
+        if !config.gravity.is_finite() {
+            return Err(VadopError::BadGravity(config.gravity.to_array()));
+        }
+        if config.gravity != DVec3::ZERO && config.mode == Mode::Simulate && config.restitution < 1.0 {
+            return Err(VadopError::GravityUnsupported("restitution below 1"));
+        }
         let pool = AxisPool::new(config.pool_axes.unwrap_or(AUTO_POOL_AXES))?;
         check_phi(config.phi.unwrap_or(pool.covering_radius()), &pool)?;
         Ok(World {
             config,
             bounds,
-            bodies: Bodies::default(),
+            bodies: Bodies::under(config.gravity),
             live: 0,
             free_slots: Vec::new(),
             unplaced: Vec::new(),
@@ -346,11 +352,30 @@ impl World {
     /// ```
     pub fn translational_kinetic_energy(&self) -> f64 {
         let b = &self.bodies;
-        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity(i).length_squared()).sum()
+        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity_at(i, self.time).length_squared()).sum()
+    }
+    /// Potential energy of the moving bodies in the world's gravity, `-sum m g . p`, zero at the
+    /// origin (0 without gravity): kinetic plus potential is what an elastic run keeps.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BoxBounds, Sphere, World, WorldConfig};
+    /// let config = WorldConfig { gravity: DVec3::new(0.0, 0.0, -2.0), ..WorldConfig::default() };
+    /// let mut world = World::new(BoxBounds::cube(10.0)?, config)?;
+    /// world.add_sphere(Sphere { position: DVec3::splat(5.0), velocity: DVec3::ZERO, radius: 0.5, mass: 3.0 })?;
+    /// assert_eq!(world.potential_energy(), 30.0);
+    /// world.step(0.5)?;
+    /// // It fell 1/4 and turned 1.5 of potential energy into kinetic.
+    /// assert!((world.potential_energy() - 28.5).abs() < 1e-12 && (world.kinetic_energy() - 1.5).abs() < 1e-12);
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn potential_energy(&self) -> f64 {
+        let (b, g) = (&self.bodies, self.config.gravity);
+        self.moving_ids().map(|i| -b.mass[i] * g.dot(b.position_at(i, self.time))).sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
-        self.moving_ids().map(|i| self.bodies.mass[i] * self.bodies.velocity(i)).sum()
+        self.moving_ids().map(|i| self.bodies.mass[i] * self.bodies.velocity_at(i, self.time)).sum()
     }
 
     /// Advances the world by `dt` and returns the frame's contacts in time order: every contact

@@ -197,7 +197,7 @@ impl World {
         let t = self.time;
         self.moving_ids()
             .map(|i| {
-                let p = self.bodies.position_at(i, t).cross(self.bodies.mass[i] * self.bodies.velocity(i));
+                let p = self.bodies.position_at(i, t).cross(self.bodies.mass[i] * self.bodies.velocity_at(i, t));
                 p + self.bodies.spin_momentum(i)
             })
             .sum()
@@ -218,6 +218,14 @@ impl World {
     /// The store's form of `body`, validated: the centre of mass and principal axes from the
     /// shape's frame.
     fn rigid_state(&self, body: &Body, fixed: bool) -> Result<RigidState> {
+        if self.config.gravity != DVec3::ZERO {
+            if fixed {
+                return Err(VadopError::GravityUnsupported("a static body"));
+            }
+            if !matches!(body.shape, BodyShape::Sphere { .. }) {
+                return Err(VadopError::GravityUnsupported("a body that is not a sphere"));
+            }
+        }
         check_vector("position", body.position)?;
         check_vector("velocity", body.velocity)?;
         check_vector("angular velocity", body.angular_velocity)?;
@@ -318,7 +326,7 @@ impl World {
             shape,
             position,
             orientation,
-            velocity: b.velocity(i),
+            velocity: b.velocity_at(i, t),
             angular_velocity: b.angular_velocity_at(i, t),
             mass: b.mass[i],
         }

@@ -22,6 +22,7 @@ use super::{BoxBounds, Mode, World, WorldConfig};
 use crate::bodies::{RigidState, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
+use crate::motion::Motion;
 use crate::shape::{Shape, ShapeGeometry};
 use glam::{DQuat, DVec3};
 use std::io::Write;
@@ -219,7 +220,8 @@ impl World {
             }
             // A removed body's slot only keeps its place and generation; a live one must be where
             // stepping put it.
-            let now = slot.position + (time - slot.since) * slot.velocity;
+            let motion = Motion { position: slot.position, since: slot.since, velocity: slot.velocity };
+            let now = motion.at_under(time, world.config.gravity);
             let checked = match &slot.spin {
                 None => world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
                     true => world.check_sphere(&at(now)),
