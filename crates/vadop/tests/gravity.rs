@@ -152,4 +152,14 @@ fn unsupported_gravity_is_refused_clearly() {
     };
     let refused = world.add_body(body).unwrap_err();
     assert!(refused.to_string().contains("spheres only"), "{refused}");
+    // A ball at rest on the floor would bounce ever faster without a resting state: refused,
+    // the world left as it was.
+    let ball = |z: f64| Sphere { position: DVec3::new(2.0, 2.0, z), velocity: DVec3::ZERO, radius: 0.5, mass: 1.0 };
+    let resting = world.add_sphere(ball(0.5)).unwrap();
+    let error = world.step(0.1).unwrap_err();
+    assert!(matches!(error, VadopError::RestingUnderGravity { body, .. } if body == resting), "{error}");
+    assert_eq!(world.time(), 0.0);
+    world.remove_sphere(resting).unwrap();
+    world.add_sphere(ball(1.5)).unwrap();
+    assert!(world.step(0.1).is_ok(), "a ball a radius above the floor falls");
 }

@@ -562,6 +562,32 @@ impl World {
         Ok(())
     }
 
+    /// Under gravity, no body may rest on a wall it is pulled towards: with no resting state its
+    /// bounces would rise ever less and come ever faster, without end. The height a body's
+    /// bounce reaches above touching is its distance plus v^2 / 2g along each pulled axis.
+    fn check_not_resting(&self) -> Result<()> {
+        let g = self.config.gravity;
+        if g == DVec3::ZERO {
+            return Ok(());
+        }
+        for i in self.moving_ids() {
+            let (p, v, r) =
+                (self.bodies.position_at(i, self.time), self.bodies.velocity_at(i, self.time), self.bodies.radius(i));
+            for axis in (0..3).filter(|&axis| g[axis] != 0.0) {
+                let distance = if g[axis] < 0.0 {
+                    p[axis] - (self.bounds.min[axis] + r)
+                } else {
+                    self.bounds.max[axis] - r - p[axis]
+                };
+                let height = distance.max(0.0) + v[axis] * v[axis] / (2.0 * g[axis].abs());
+                if !(height > 1e-6 * r) {
+                    return Err(VadopError::RestingUnderGravity { body: self.bodies.handle(i), height });
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn check_step(&mut self, dt: f64) -> Result<()> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(VadopError::BadTimeStep(dt));
@@ -569,6 +595,7 @@ impl World {
         if self.live == 0 {
             return Err(VadopError::EmptyWorld);
         }
+        self.check_not_resting()?;
         if !(self.time + dt).is_finite() {
             return Err(VadopError::TimeOverflow { time: self.time, dt });
         }
