@@ -353,3 +353,26 @@ def test_contact_ends_and_touching_pairs() -> None:
     assert len(plain.contact_ends()) == 0 and plain.touching().shape == (0, 2)
     with pytest.raises(ValueError, match="detect mode"):
         vadop.World([[5.0, 5, 5]], [[0.0, 0, 0]], [0.5], box=10.0, contact_ends=True)
+
+
+def test_gravity_bends_paths_and_keeps_the_energy() -> None:
+    g = 9.81
+    w = vadop.World([[5.0, 5, 4.5]], [[0.0, 0, 0]], [0.5], box=10.0, gravity=(0, 0, -g))
+    # Dropped 4 above the floor: lands after sqrt(8 / g), back at the top twice that later.
+    fall = (8.0 / g) ** 0.5
+    contacts = w.step(2.0 * fall)
+    assert len(contacts) == 1 and abs(float(contacts.time[0]) - fall) < 1e-12
+    assert abs(w.positions()[0, 2] - 4.5) < 1e-12 and abs(w.velocities()[0, 2]) < 1e-9
+    assert abs(w.translational_kinetic_energy()) < 1e-12
+
+
+def test_bad_gravity_is_refused() -> None:
+    with pytest.raises(ValueError, match="gravity must be a finite vector"):
+        vadop.World(box=10.0, gravity=(0, float("nan"), 0))
+    with pytest.raises(ValueError, match="restitution 1"):
+        vadop.World(box=10.0, gravity=(0, 0, -1), restitution=0.5)
+    with pytest.raises(TypeError):
+        vadop.World(box=10.0, gravity=(0, -1))  # type: ignore[arg-type]
+    w = vadop.World([[5.0, 5, 0.5]], [[0.0, 0, 0]], [0.5], box=10.0, gravity=(0, 0, -1))
+    with pytest.raises(ValueError, match="rests on a wall under gravity"):
+        w.step(0.1)

@@ -162,6 +162,8 @@ pub struct Simulation {
     /// `--threads`: one for a run pinned to one core, more for a run on the whole machine;
     /// `None` leaves the flag out (an older binary without it is single-threaded).
     pub threads: Option<usize>,
+    /// `--gravity` as x,y,z; `None` leaves the flag out.
+    pub gravity: Option<[f64; 3]>,
 }
 
 impl Simulation {
@@ -180,6 +182,7 @@ impl Simulation {
             dt: None,
             pool: None,
             threads: Some(1),
+            gravity: None,
         }
     }
 
@@ -207,6 +210,7 @@ impl Simulation {
         flags.extend(self.dt.map(|dt| ("--dt", dt.to_string())));
         flags.extend(self.pool.map(|m| ("--pool", m.to_string())));
         flags.extend(self.threads.map(|t| ("--threads", t.to_string())));
+        flags.extend(self.gravity.map(|[x, y, z]| ("--gravity", format!("{x},{y},{z}"))));
         flags.into_iter().flat_map(|(flag, value)| [flag.to_string(), value]).collect()
     }
 }

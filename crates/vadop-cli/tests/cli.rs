@@ -405,3 +405,18 @@ fn help_explains_every_summary_line_and_csv_column() {
     assert!(about.contains("spheres and spinning rigid shapes") && about.contains("--method vadop"), "{about}");
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// `--gravity` bends the paths, keeps the oracle's contacts and counts the potential energy; a
+/// bad vector is a clear error.
+#[test]
+fn gravity_runs_exact_and_counts_the_potential_energy() {
+    let output = vadop(&["simulate", "--bodies", "300", "--frames", "30", "--gravity", "0,0,-9.81"]);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = stdout(&output);
+    assert!(summary.contains("0 missed, 0 extra"), "{summary}");
+    assert!(summary.contains("kinetic energy plus potential relative drift"), "{summary}");
+    assert!(!summary.contains("pressure"), "no gas pressure under gravity: {summary}");
+    let bad = vadop(&["simulate", "--frames", "1", "--gravity", "0,-9.81"]);
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("expected three numbers x,y,z"), "{}", stderr(&bad));
+}

@@ -4,7 +4,8 @@
 //! peers ([`detect`]); narrow tests against the pairs whose swept boxes overlap ([`candidates`]);
 //! the cost of a velocity change ([`retest`]); simulate-mode collisions per second and their
 //! independence of the frame length ([`throughput`]); memory per body ([`memory`]); where
-//! each broad phase wins ([`methods`]); and all cores against one ([`cores`]).
+//! each broad phase wins ([`methods`]); all cores against one ([`cores`]); and what gravity
+//! costs ([`gravity`]).
 //!
 //! Every run is a child pinned to one core, but the all-cores runs; timed runs are repeated and the tables show the
 //! median of the repeats; ratios compare runs of this same command. Times are means over frames
@@ -16,6 +17,7 @@
 pub mod candidates;
 mod cores;
 mod detect;
+mod gravity;
 mod memory;
 mod methods;
 pub mod retest;
@@ -37,7 +39,7 @@ use std::rc::Rc;
 #[command(after_help = "Sizes: detect at n = 10^4, 10^5 and 10^6 x max speeds 0.05, 0.5 and 5 diameters per frame \
 (candidates up to 10^5), retest at n = 10^5 with 10,000 calls, throughput at n = 10^4 and 10^5, memory at n = 10^4 to \
 10^6, methods at n = 10^4 and 10^5, cores at the detect and throughput sizes on one thread and on every core \
-and at n = 10^7 on every core; with --quick every section at n = 10^4 only, with fewer frames and calls and one \
+and at n = 10^7 on every core, gravity at n = 10^4 and 10^5; with --quick every section at n = 10^4 only, with fewer frames and calls and one \
 run each (a minute or two). Frames cover several broad-phase windows. --timeout defaults to 900 s per child run. The \
 full suite takes hours: run it on a quiet machine.")]
 pub struct SpeedArgs {
@@ -66,6 +68,7 @@ enum Section {
     Memory,
     Methods,
     Cores,
+    Gravity,
 }
 
 /// The sizes of every section.
@@ -92,6 +95,8 @@ struct Plan {
     methods_bodies: Vec<usize>,
     /// Body counts run only on every core, at the lowest speed.
     huge_bodies: Vec<usize>,
+    /// Body counts of the gravity section.
+    gravity_bodies: Vec<usize>,
 }
 
 impl Plan {
@@ -113,6 +118,7 @@ impl Plan {
                 memory_bodies: vec![10_000],
                 methods_bodies: vec![10_000],
                 huge_bodies: vec![],
+                gravity_bodies: vec![10_000],
             }
         } else {
             Plan {
@@ -131,6 +137,7 @@ impl Plan {
                 memory_bodies: vec![10_000, 100_000, 1_000_000],
                 methods_bodies: vec![10_000, 100_000],
                 huge_bodies: vec![10_000_000],
+                gravity_bodies: vec![10_000, 100_000],
             }
         }
     }
@@ -302,6 +309,7 @@ pub fn run(args: &SpeedArgs) -> CliResult<()> {
             Section::Memory => memory::run(&context)?,
             Section::Methods => methods::run(&context)?,
             Section::Cores => cores::run(&context)?,
+            Section::Gravity => gravity::run(&context)?,
         }
     }
     crate::common::print(&format!("wrote {} and {}\n", context.markdown.display(), context.results.display()))
@@ -318,6 +326,7 @@ impl Section {
                 Section::Memory => "speed-memory",
                 Section::Methods => "speed-methods",
                 Section::Cores => "speed-cores",
+                Section::Gravity => "speed-gravity",
             },
         }
     }
