@@ -98,9 +98,9 @@ pub enum VadopError {
     /// Gravity that is not a finite vector.
     #[error("gravity must be a finite vector, got {0:?}")]
     BadGravity([f64; 3]),
-    /// A body that would rest on a wall under gravity: its bounces would come ever faster.
-    #[error("body {body} rests on a wall under gravity (its bounces rise {height:e}, below a millionth of its radius): resting contact is not built yet, so such a body is refused rather than left to sink or to bounce forever")]
-    RestingUnderGravity { body: BodyHandle, height: f64 },
+    /// A body that (nearly) rests on a wall under gravity: it would bounce without end.
+    #[error("body {body} rests on a wall under gravity: its bounces rise {height:e}, so it would bounce more than {limit:e} times in this step; resting contact is not built yet, so such a body is refused rather than left to sink or to bounce without end")]
+    RestingUnderGravity { body: BodyHandle, height: f64, limit: f64 },
     /// Gravity with what it does not support yet.
     #[error("gravity is supported for spheres only, without static bodies, and in simulate mode with restitution 1 (a ball coming to rest on a floor needs a resting state, not built yet): {0}")]
     GravityUnsupported(&'static str),

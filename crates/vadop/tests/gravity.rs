@@ -82,8 +82,15 @@ fn assert_same_as_oracle(scene: &vadop::scene::Scene, gravity: DVec3, method: Me
     let energy = |w: &World| w.kinetic_energy() + w.potential_energy();
     let start = energy(&oracle);
     for frame in 0..frames {
-        let contacts = found.step(DT).unwrap().to_vec();
-        let expected = oracle.step(DT).unwrap();
+        // A body that came to rest on a floor is refused (no resting state yet), by both alike.
+        let (contacts, expected) = match (found.step(DT).map(<[Contact]>::to_vec), oracle.step(DT)) {
+            (Ok(contacts), Ok(expected)) => (contacts, expected),
+            (Err(e), Err(o)) if matches!(e, VadopError::RestingUnderGravity { .. }) => {
+                assert_eq!(e.to_string(), o.to_string(), "frame {frame}: both refuse the same body");
+                break;
+            }
+            (found, expected) => panic!("frame {frame}: {method:?} gave {found:?}, the oracle {expected:?}"),
+        };
         assert_eq!(common::contact_bits(&contacts), common::contact_bits(expected), "frame {frame}: {method:?}");
         if mode == Mode::Simulate {
             let scale = start.abs() + oracle.kinetic_energy();
