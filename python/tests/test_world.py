@@ -364,6 +364,7 @@ def test_gravity_bends_paths_and_keeps_the_energy() -> None:
     assert len(contacts) == 1 and abs(float(contacts.time[0]) - fall) < 1e-12
     assert abs(w.positions[0, 2] - 4.5) < 1e-12 and abs(w.velocities[0, 2]) < 1e-9
     assert abs(w.translational_kinetic_energy()) < 1e-12
+    assert abs(w.potential_energy() - 4.5 * g) < 1e-12
 
 
 def test_bad_gravity_is_refused() -> None:

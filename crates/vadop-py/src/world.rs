@@ -624,6 +624,17 @@ impl PyWorld {
         Ok(self.lock(py)?.translational_kinetic_energy())
     }
 
+    /// Potential energy of the moving bodies in the world's gravity, ``-sum m g . p`` (0 without
+    /// gravity): kinetic plus potential is what an elastic run keeps.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 5]], [[0.0, 0, 0]], [0.5], [3.0], box=10.0, gravity=(0, 0, -2.0))
+    /// >>> w.potential_energy()
+    /// 30.0
+    fn potential_energy(&self, py: Python<'_>) -> PyResult<f64> {
+        Ok(self.lock(py)?.potential_energy())
+    }
+
     /// Total linear momentum, float64 (3,).
     ///
     /// >>> import vadop
