@@ -113,7 +113,17 @@ pub struct RunInfo {
     /// Coulomb friction coefficient of every impact.
     #[serde(default)]
     pub friction: f64,
+    /// Uniform acceleration of every moving body (zero: none).
+    #[serde(default)]
+    pub gravity: [f64; 3],
     pub frames_requested: u64,
+}
+
+impl RunInfo {
+    /// True when bodies moved under gravity: the energy kept then includes the potential.
+    pub fn has_gravity(&self) -> bool {
+        self.gravity != [0.0; 3]
+    }
 }
 
 /// The axis pool of a VADOP run.
@@ -178,8 +188,8 @@ impl Motion {
 pub struct Conservation {
     pub kinetic_start: f64,
     pub kinetic_end: f64,
-    /// (end - start) / start of the kinetic energy, plus the potential energy under gravity
-    /// (then relative to the start's kinetic plus |potential|); absent when nothing moves.
+    /// (end - start) / start of the kinetic plus the potential energy (0 without gravity), the
+    /// start taken as kinetic plus |potential|; absent when nothing moves.
     pub kinetic_relative_drift: Option<f64>,
     /// Potential energy in the world's gravity at the start and the end (0 without gravity).
     #[serde(default)]
@@ -239,15 +249,13 @@ impl Conservation {
     /// From `start` to `end`, with angular momentum when `spins`.
     pub fn new(start: &Motion, end: &Motion, spins: bool) -> Conservation {
         let angular = |value: DVec3| spins.then_some(value.to_array());
+        // Without gravity the potential is 0 and this is the kinetic energy's drift, to the bit.
+        let scale = start.kinetic + start.potential.abs();
         Conservation {
             kinetic_start: start.kinetic,
             kinetic_end: end.kinetic,
-            kinetic_relative_drift: if start.potential == 0.0 && end.potential == 0.0 {
-                (start.kinetic > 0.0).then(|| (end.kinetic - start.kinetic) / start.kinetic)
-            } else {
-                let scale = start.kinetic + start.potential.abs();
-                Some((end.kinetic + end.potential - start.kinetic - start.potential) / scale)
-            },
+            kinetic_relative_drift: (scale > 0.0)
+                .then(|| (end.kinetic + end.potential - start.kinetic - start.potential) / scale),
             potential_start: start.potential,
             potential_end: end.potential,
             momentum_start: start.momentum.to_array(),
@@ -432,9 +440,7 @@ impl Summary {
         // Only an elastic, frictionless gas keeps the temperature that Z is measured against.
         let pressure = conservation
             .as_ref()
-            .filter(|c| {
-                run.restitution == 1.0 && run.friction == 0.0 && c.potential_start == 0.0 && c.potential_end == 0.0
-            })
+            .filter(|_| run.restitution == 1.0 && run.friction == 0.0 && !run.has_gravity())
             .and_then(|c| Pressure::new(frames.pair_virial, c, simulated_seconds, pairs));
         Summary {
             pressure,

@@ -181,11 +181,7 @@ impl fmt::Display for Summary {
                 losses.push(format!("friction {}", run.friction));
             }
             // Under gravity the energy kept is the kinetic plus the potential.
-            let spin = if c.potential_start != 0.0 || c.potential_end != 0.0 {
-                format!("{spin} plus potential")
-            } else {
-                spin.to_string()
-            };
+            let spin = if run.has_gravity() { format!("{spin} plus potential") } else { spin.to_string() };
             let energy = match c.kinetic_relative_drift {
                 None => "kinetic energy n/a (nothing moves)".to_string(),
                 Some(drift) if losses.is_empty() => {

@@ -260,6 +260,7 @@ fn run_world(
         dt: args.dt,
         restitution: config.restitution,
         friction: config.friction,
+        gravity: config.gravity.to_array(),
         frames_requested: args.frames,
     };
     let start = Motion::of(&world);

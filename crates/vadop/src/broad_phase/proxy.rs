@@ -343,6 +343,8 @@ impl ProxyTable {
             reach: 2.0 * self.typical_radius * self.reach,
             gravity: self.gravity,
             bend: self.bend,
+            // Within a proxy the path stays within the bend of its tangent: |g| tau^2 / 2 <= bend.
+            longest: if self.bend > 0.0 { (2.0 * self.bend / self.gravity.length()).sqrt() } else { f64::INFINITY },
         }
     }
 
@@ -423,8 +425,10 @@ struct ProxyRule {
     /// Longest path a proxy may cover.
     reach: f64,
     gravity: DVec3,
-    /// How far a path may bend off its tangent within a proxy.
+    /// How far a path may bend off its tangent within a proxy, and the longest a proxy may last
+    /// for that (infinite without gravity).
     bend: f64,
+    longest: f64,
 }
 
 impl ProxyRule {
@@ -448,11 +452,7 @@ impl ProxyRule {
             Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let mut reached = start + self.reach / velocity.length();
-        if self.bend > 0.0 {
-            // Within the proxy the path stays within the bend of its tangent: |g| tau^2 / 2 <= bend.
-            reached = reached.min(start + (2.0 * self.bend / self.gravity.length()).sqrt());
-        }
+        let reached = (start + self.reach / velocity.length()).min(start + self.longest);
         let expires = reached < end && reached > start;
         if expires {
             end = reached;
