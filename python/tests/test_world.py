@@ -367,6 +367,37 @@ def test_gravity_bends_paths_and_keeps_the_energy() -> None:
     assert abs(w.potential_energy() - 4.5 * g) < 1e-12
 
 
+def test_a_periodic_box_wraps_and_counts_crossings() -> None:
+    # Periodic in x: the ball at 9 meets the partner at 0.8 through the face, 0.8 / 3 later.
+    w = vadop.World([[9.0, 5, 5], [0.8, 5, 5]], [[3.0, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10.0, periodic="x")
+    contacts = w.step(0.5)
+    assert len(contacts) == 1 and abs(float(contacts.time[0]) - 0.8 / 3) < 1e-12
+    assert contacts.normal[0].tolist() == pytest.approx([1.0, 0, 0])
+    assert w.crossings.dtype == np.int64 and w.crossings.shape == (2, 3)
+    assert w.crossings.tolist() == [[0, 0, 0], [0, 0, 0]]
+    # Equal masses: the partner took the velocity, went round the box and hit the thrown ball
+    # from behind after 8 / 3 more; that one left through x = 10 and is at 4.5 at t = 4.5.
+    later = w.step(4.0)
+    assert len(later) == 1 and abs(float(later.time[0]) - (0.8 / 3 + 8 / 3)) < 1e-12
+    assert w.crossings.tolist() == [[1, 0, 0], [0, 0, 0]]
+    assert w.positions[:, 0].tolist() == pytest.approx([4.5, 8.8])
+    unwrapped = w.positions[0, 0] + w.crossings[0, 0] * 10.0
+    assert abs(unwrapped - 14.5) < 1e-9
+
+
+def test_bad_periodic_axes_are_refused() -> None:
+    with pytest.raises(ValueError, match="among 'x', 'y' and 'z'"):
+        vadop.World(box=10.0, periodic="xw")
+    with pytest.raises(ValueError, match="twice"):
+        vadop.World(box=10.0, periodic="xx")
+    with pytest.raises(ValueError, match="at least 8 times|8 times the diameter"):
+        vadop.World([[5.0, 5, 5]], [[0.0, 0, 0]], [0.7], box=10.0, periodic="y")
+    with pytest.raises(ValueError, match="inside the box"):
+        vadop.World([[10.5, 5, 5]], [[0.0, 0, 0]], [0.5], box=10.0, periodic="x")
+    # On a periodic axis only the centre must lie inside.
+    assert len(vadop.World([[0.1, 5, 5]], [[0.0, 0, 0]], [0.5], box=10.0, periodic="x").ids) == 1
+
+
 def test_bad_gravity_is_refused() -> None:
     with pytest.raises(ValueError, match="gravity must be a finite vector"):
         vadop.World(box=10.0, gravity=(0, float("nan"), 0))

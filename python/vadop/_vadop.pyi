@@ -84,6 +84,7 @@ class World:
         threads: Optional[int] = None,
         contact_ends: bool = False,
         gravity: tuple[float, float, float] | list[float] | None = None,
+        periodic: str | None = None,
     ) -> World: ...
     def add(
         self,
@@ -149,6 +150,8 @@ class World:
     def ids(self) -> _Int64Array: ...
     @property
     def positions(self) -> _Float64Array: ...
+    @property
+    def crossings(self) -> _Int64Array: ...
     @property
     def velocities(self) -> _Float64Array: ...
     @property

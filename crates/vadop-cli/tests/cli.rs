@@ -409,6 +409,23 @@ fn help_explains_every_summary_line_and_csv_column() {
 /// `--gravity` bends the paths, keeps the oracle's contacts and counts the potential energy; a
 /// bad vector is a clear error.
 #[test]
+fn a_periodic_gas_runs_exact_with_its_pressure() {
+    let args =
+        ["simulate", "--kind", "gas", "--bodies", "500", "--packing", "0.2", "--frames", "20", "--periodic", "xyz"];
+    let output = vadop(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = stdout(&output);
+    assert!(summary.contains("(periodic in xyz)"), "{summary}");
+    assert!(summary.contains("0 missed, 0 extra"), "{summary}");
+    assert!(summary.contains("0 with walls"), "{summary}");
+    assert!(summary.contains("a periodic box has no walls"), "{summary}");
+    assert!(summary.contains("Z = PV/NkT"), "{summary}");
+    let bad = vadop(&["simulate", "--frames", "1", "--periodic", "xq"]);
+    assert!(!bad.status.success());
+    assert!(stderr(&bad).contains("expected axes among x, y and z"), "{}", stderr(&bad));
+}
+
+#[test]
 fn gravity_runs_exact_and_counts_the_potential_energy() {
     let output = vadop(&["simulate", "--bodies", "300", "--frames", "30", "--gravity", "0,0,-9.81"]);
     assert!(output.status.success(), "{}", stderr(&output));

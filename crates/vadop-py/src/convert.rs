@@ -254,9 +254,9 @@ pub(crate) fn spheres(
     let mut out = Vec::with_capacity(n);
     for i in 0..n {
         let (p, r) = (positions[i], radii[i]);
-        if !((p - r).cmpge(bounds.min).all() && (p + r).cmple(bounds.max).all()) {
+        if !bounds.contains(p, r) {
             return Err(PyValueError::new_err(format!(
-                "positions[{i}] = {:?} with radii[{i}] = {r} must lie inside the box {:?}..{:?}",
+                "positions[{i}] = {:?} with radii[{i}] = {r} must lie inside the box {:?}..{:?} (on a periodic axis its centre must)",
                 p.to_array(),
                 bounds.min.to_array(),
                 bounds.max.to_array()
@@ -265,6 +265,24 @@ pub(crate) fn spheres(
         out.push(Sphere { position: p, velocity: velocities[i], radius: r, mass: masses[i] });
     }
     Ok(out)
+}
+
+/// The periodic axes named by `axes`, letters among x, y and z (`"xyz"`, `"xy"`; `None` or `""`:
+/// none).
+pub(crate) fn periodic_axes(axes: Option<&str>) -> PyResult<[bool; 3]> {
+    let mut periodic = [false; 3];
+    for letter in axes.unwrap_or("").chars() {
+        let Some(axis) = "xyz".find(letter) else {
+            return Err(PyValueError::new_err(format!(
+                "periodic must name axes among 'x', 'y' and 'z' (e.g. 'xyz'), got {:?}",
+                axes.unwrap_or("")
+            )));
+        };
+        if std::mem::replace(&mut periodic[axis], true) {
+            return Err(PyValueError::new_err(format!("periodic names axis {letter:?} twice")));
+        }
+    }
+    Ok(periodic)
 }
 
 fn parse_method(method: &str) -> PyResult<Method> {

@@ -5,8 +5,8 @@
 
 use crate::contacts::Contacts;
 use crate::convert::{
-    bounds, check_world_memory, config, finite_row, mode_name, positive_values, quaternions, spheres, value_error,
-    vectors, vectors_array, IntArg,
+    bounds, check_world_memory, config, finite_row, mode_name, periodic_axes, positive_values, quaternions, spheres,
+    value_error, vectors, vectors_array, IntArg,
 };
 use crate::handles::{handle_id, ids_of, live_handles, moving_handles};
 use crate::interrupt::interruptible;
@@ -46,7 +46,20 @@ use vadop::{Body, BodyHandle, BodyShape, VadopError, World};
 /// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
 /// ``touching()`` — started and stopped events) and ``gravity`` (x, y, z: the uniform
 /// acceleration of every moving body; None: none; spheres only, and restitution 1 in simulate
-/// mode, for now).
+/// mode, for now) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
+/// ``'xy'``; the others keep their walls: a body leaving through one face comes back through the
+/// opposite one, bodies meet across the faces, and ``crossings`` counts each body's passages;
+/// spheres only, and each periodic side at least 8 largest diameters, for now).
+///
+/// >>> import vadop
+/// >>> w = vadop.World([[9.0, 5, 5], [0.8, 5, 5]], [[3.0, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10.0,
+/// ...                 periodic='x')
+/// >>> c = w.step(0.5)  # they meet through the face at x = 10
+/// >>> round(float(c.time[0]), 9)
+/// 0.266666667
+/// >>> c = w.step(4.0)  # the partner went round and hit it back through the face
+/// >>> round(float(c.time[0]), 9), w.crossings.tolist()
+/// (2.933333333, [[1, 0, 0], [0, 0, 0]])
 ///
 /// >>> import vadop
 /// >>> w = vadop.World([[5.0, 5, 4.5]], [[0.0, 0, 0]], [0.5], box=10.0, gravity=(0, 0, -2.0))
@@ -84,7 +97,7 @@ pub(crate) struct PyWorld {
 #[pymethods]
 impl PyWorld {
     #[new]
-    #[pyo3(signature = (positions = None, velocities = None, radii = None, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, friction = 0.0, contact_duration = 1e-5, threads = None, contact_ends = false, gravity = None))]
+    #[pyo3(signature = (positions = None, velocities = None, radii = None, masses = None, *, r#box, method = "auto", mode = "simulate", pool_axes = None, phi = None, restitution = 1.0, friction = 0.0, contact_duration = 1e-5, threads = None, contact_ends = false, gravity = None, periodic = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         positions: Option<&Bound<'_, PyAny>>,
@@ -102,8 +115,9 @@ impl PyWorld {
         threads: Option<IntArg>,
         contact_ends: bool,
         gravity: Option<[f64; 3]>,
+        periodic: Option<&str>,
     ) -> PyResult<PyWorld> {
-        let bounds = bounds(r#box)?;
+        let bounds = bounds(r#box)?.with_periodic(periodic_axes(periodic)?);
         let config = config(
             method,
             mode,
@@ -465,6 +479,22 @@ impl PyWorld {
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         Ok(vectors_array(py, &self.per_body(py, |_, _, body| body.position)?))
+    }
+
+    /// Each body's crossings of the periodic faces, int64 (n, 3): per axis x, y, z, +1 for each
+    /// passage out through the face at the box's maximum, -1 through the minimum (zeros on
+    /// walled axes). ``positions + crossings * side`` is the path unwrapped.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 5]], [[4.0, 0, -3.0]], [0.5], box=10.0, periodic="xz")
+    /// >>> _ = w.step(2.0)
+    /// >>> w.crossings.tolist(), w.positions.round(9).tolist()
+    /// ([[1, 0, -1]], [[3.0, 5.0, 9.0]])
+    #[getter]
+    fn crossings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<i64>>> {
+        let rows = self.per_body(py, |world, handle, _| world.crossings(handle).unwrap_or_default())?;
+        let flat: Vec<i64> = rows.into_iter().flatten().collect();
+        Ok(Array2::from_shape_vec((flat.len() / 3, 3), flat).expect("3 values per row").into_pyarray(py))
     }
 
     /// Velocities of the centres of mass now, float64 (n, 3).

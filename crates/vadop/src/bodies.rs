@@ -19,6 +19,7 @@ use crate::motion::free_rotation::FreeRotation;
 use crate::motion::Motion;
 use crate::motion::{RigidMotion, Spin};
 use crate::shape::ShapeGeometry;
+use crate::walls::{Periodic, Wall};
 use glam::{DQuat, DVec3};
 
 /// One sphere as users see it.
@@ -68,6 +69,12 @@ pub struct Bodies {
     /// The world's uniform acceleration: every moving body's path is a parabola under it (static
     /// bodies stay put), so two moving bodies keep a straight relative motion.
     pub gravity: DVec3,
+    /// The box's periodic axes: pairs meet through their nearest image across them.
+    pub periodic: Periodic,
+    /// Per slot, in a periodic box: how many times the body's centre crossed each periodic
+    /// axis's faces (+1 out through the max face, -1 through the min face), so its unwrapped
+    /// position is its position plus these times the sides. Empty until a first crossing.
+    pub crossings: Vec<[i64; 3]>,
     /// Shapes, spins and static bodies: empty in a world of plain spheres.
     pub rigid: Rigid,
     /// While a step that may be interrupted runs: each motion it overwrote, oldest first, so
@@ -80,6 +87,8 @@ pub struct Bodies {
 struct Overwritten {
     slot: usize,
     state: BodyState,
+    /// The crossing a wrap counted, on its axis, `+1` or `-1`.
+    crossed: Option<(usize, i64)>,
     spin: Option<(FreeRotation, (DQuat, DVec3))>,
 }
 
@@ -196,9 +205,68 @@ pub fn speed(velocity: DVec3) -> f64 {
 }
 
 impl Bodies {
-    /// An empty store whose moving bodies fall under `gravity`.
-    pub(crate) fn under(gravity: DVec3) -> Bodies {
-        Bodies { gravity, ..Bodies::default() }
+    /// An empty store whose moving bodies fall under `gravity` in a box of `periodic` axes.
+    pub(crate) fn new(gravity: DVec3, periodic: Periodic) -> Bodies {
+        Bodies { gravity, periodic, ..Bodies::default() }
+    }
+
+    /// Centre of body `j` minus centre of body `i` at `t`, through the nearest image in a
+    /// periodic box.
+    #[inline]
+    pub fn offset_at(&self, i: usize, j: usize, t: f64) -> DVec3 {
+        let offset = self.position_at(j, t) - self.position_at(i, t);
+        if self.periodic.any() {
+            self.periodic.nearest(offset)
+        } else {
+            offset
+        }
+    }
+
+    /// Body `i`'s centre at `t` unwrapped: its position plus its crossings times the sides.
+    #[inline]
+    pub fn unwrapped_at(&self, i: usize, t: f64) -> DVec3 {
+        let crossed = self.crossings_of(i);
+        self.position_at(i, t) + DVec3::from_array(std::array::from_fn(|a| crossed[a] as f64)) * self.periodic.side
+    }
+
+    /// What takes body `j`'s centre to its nearest image from body `i`'s at `t`: whole sides
+    /// on the periodic axes (zero in a box without).
+    #[inline]
+    pub fn image_shift(&self, i: usize, j: usize, t: f64) -> DVec3 {
+        if !self.periodic.any() {
+            return DVec3::ZERO;
+        }
+        self.periodic.shift(self.position_at(j, t) - self.position_at(i, t))
+    }
+
+    /// Body `i`'s crossings of the periodic faces (see [`Bodies::crossings`]).
+    #[inline]
+    pub fn crossings_of(&self, i: usize) -> [i64; 3] {
+        self.crossings.get(i).copied().unwrap_or([0; 3])
+    }
+
+    /// Body `i`'s centre reached periodic face `face` at `t`: it comes back through the
+    /// opposite face, on the same path, and the crossing is counted. Its motion starts afresh
+    /// from `t` (voiding its predictions, as a velocity change does), so every method wraps it
+    /// at the same canonical instant.
+    pub(crate) fn wrap(&mut self, i: usize, face: Wall, t: f64) {
+        let (axis, out) = (face.axis(), if face.is_max() { 1 } else { -1 });
+        let velocity = self.velocity_at(i, t);
+        let mut position = self.position_at(i, t);
+        let (low, high) = (self.periodic.min[axis], self.periodic.min[axis] + self.periodic.side[axis]);
+        position[axis] = (position[axis] - out as f64 * self.periodic.side[axis]).clamp(low, high);
+        let spin = self.has_rigid().then(|| (self.orientation_at(i, t), self.angular_velocity_at(i, t)));
+        self.log_overwrite(i, Some((axis, out)));
+        self.state[i].motion = Motion { position, since: t, velocity };
+        self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.new_motion(i);
+        if let Some((orientation, angular_velocity)) = spin {
+            self.start_spin(i, orientation, angular_velocity);
+        }
+        if self.crossings.len() < self.slots() {
+            self.crossings.resize(self.slots(), [0; 3]);
+        }
+        self.crossings[i][axis] += out;
     }
 
     /// Number of slots, removed ones included.
@@ -458,6 +526,9 @@ impl Bodies {
             self.stamp[i] = self.stamp[i].wrapping_add(1);
             self.new_motion(i);
             self.alive[i] = true;
+            if let Some(crossed) = self.crossings.get_mut(i) {
+                *crossed = [0; 3];
+            }
         }
     }
 
@@ -527,6 +598,9 @@ impl Bodies {
         for o in self.undo.take().unwrap_or_default().into_iter().rev() {
             self.state[o.slot] = o.state;
             self.new_motion(o.slot);
+            if let Some((axis, out)) = o.crossed {
+                self.crossings[o.slot][axis] -= out;
+            }
             if self.has_rigid() {
                 let (spin, start) = o.spin.unwrap_or_else(|| (steady(), (DQuat::IDENTITY, DVec3::ZERO)));
                 (self.rigid.spin[o.slot], self.rigid.spin_start[o.slot]) = (spin, start);
@@ -538,17 +612,23 @@ impl Bodies {
     /// Moves body `i`'s centre to time `t` with a new velocity, voiding its predictions.
     #[inline]
     fn move_to(&mut self, i: usize, t: f64, velocity: DVec3) {
-        if self.undo.is_some() {
-            let spin = self.has_rigid().then(|| (self.rigid.spin[i], self.rigid.spin_start[i]));
-            let overwritten = Overwritten { slot: i, state: self.state[i], spin };
-            if let Some(log) = &mut self.undo {
-                log.push(overwritten);
-            }
-        }
+        self.log_overwrite(i, None);
         self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
         self.stamp[i] = self.stamp[i].wrapping_add(1);
         self.new_motion(i);
         self.speed_bound = self.speed_bound.max(speed(velocity));
+    }
+
+    /// Keeps body `i`'s motion for [`Bodies::undo`] while a step that may be undone runs.
+    #[inline]
+    fn log_overwrite(&mut self, i: usize, crossed: Option<(usize, i64)>) {
+        if self.undo.is_some() {
+            let spin = self.has_rigid().then(|| (self.rigid.spin[i], self.rigid.spin_start[i]));
+            let overwritten = Overwritten { slot: i, state: self.state[i], spin, crossed };
+            if let Some(log) = &mut self.undo {
+                log.push(overwritten);
+            }
+        }
     }
 
     /// Sets the speed bound to the speed of the fastest live body, and returns it.

@@ -104,6 +104,12 @@ pub enum VadopError {
     /// Gravity with what it does not support yet.
     #[error("gravity is supported for spheres only, without static bodies, and in simulate mode with restitution 1 (a ball coming to rest on a floor needs a resting state, not built yet): {0}")]
     GravityUnsupported(&'static str),
+    /// A periodic box with what it does not support yet.
+    #[error("periodic boxes are supported for spheres only, without static bodies: {0}")]
+    PeriodicUnsupported(&'static str),
+    /// A body too large for a periodic side: it would meet a neighbour through two images.
+    #[error("the box's periodic side along {axis} is {side}, less than {minimum} times the diameter {diameter} of a body: a periodic side must hold that many of the largest diameter, so two bodies meet through one image at a time")]
+    PeriodicSideTooShort { axis: char, side: f64, diameter: f64, minimum: f64 },
     /// A length (radius, box side) below the supported range.
     #[error(
         "{what} {value:e} is out of range: radii, box sides and shape sizes must be at least 1e-50 (and at most 1e50)"

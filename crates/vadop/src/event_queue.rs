@@ -2,7 +2,7 @@
 //!
 //! It owns the min-heap and the rule that makes its order total and deterministic: earlier time
 //! first, then the lower body id, then the partner (contacts with bodies, then ends of contacts,
-//! then stalled searches, then walls and stalled wall searches, then renewals, lower ids first;
+//! then stalled searches, then walls and stalled wall searches, then crossings of periodic faces, then renewals, lower ids first;
 //! see `Partner::key`). Events
 //! carry the velocity stamps their bodies had when they were predicted; an event whose stamps no
 //! longer match is void and is dropped when it reaches the top, so invalidating a body's contacts
@@ -31,13 +31,16 @@ pub enum Partner {
     Wall(Wall),
     /// The search for the body's wall contact could not decide before this time.
     WallStalled,
+    /// No contact: the body's centre reaches this periodic face of the box, and the body comes
+    /// back through the opposite face.
+    Cross(Wall),
     /// No contact: the body's proxy ends here and must be renewed (see [`crate::broad_phase::proxy`]).
     Renew,
 }
 
 impl Partner {
     /// Sort key: bodies, then contact ends, then stalled searches, then walls (and a stalled wall
-    /// search), lower ids first, renewals last (every
+    /// search), then crossings of periodic faces, lower ids first, renewals last (every
     /// contact at the same instant is handled with the proxy it was predicted from, and a contact
     /// that ends as the body bounces ends before the bounce).
     fn key(self) -> u64 {
@@ -47,6 +50,7 @@ impl Partner {
             Partner::Stalled(id) => (2u64 << 32) + id as u64,
             Partner::Wall(wall) => (3u64 << 32) + wall as u64,
             Partner::WallStalled => 4u64 << 32,
+            Partner::Cross(face) => (5u64 << 32) + face as u64,
             Partner::Renew => u64::MAX,
         }
     }
@@ -152,25 +156,41 @@ impl EventQueue {
         // It is not a repeat of itself.
         self.last = None;
     }
-    /// Time of the earliest event (valid or not).
+    /// Time of the earliest event (valid or not) but repeats of the event popped last, which it
+    /// drops: what [`Self::pop`] returns next is this one.
     #[inline]
-    pub fn peek_time(&self) -> Option<f64> {
-        self.peek().map(|e| e.time)
+    pub fn peek_time(&mut self) -> Option<f64> {
+        while let Some(&event) = self.peek() {
+            if self.last != Some(event) {
+                return Some(event.time);
+            }
+            self.take();
+        }
+        None
     }
     /// Removes and returns the earliest event (valid or not: the caller checks stamps), dropping
     /// repeats of the event popped before it.
     #[inline]
     pub fn pop(&mut self) -> Option<Event> {
         loop {
-            let from_heap = match (self.heap.peek(), self.bulk.last()) {
-                (Some(h), Some(b)) => h > b,
-                (h, _) => h.is_some(),
-            };
-            let event = if from_heap { self.heap.pop() } else { self.bulk.pop() }?;
+            let event = self.take()?;
             if self.last != Some(event) {
                 self.last = Some(event);
                 return Some(event);
             }
+        }
+    }
+    /// Removes the earliest event, from whichever part holds it.
+    #[inline]
+    fn take(&mut self) -> Option<Event> {
+        let from_heap = match (self.heap.peek(), self.bulk.last()) {
+            (Some(h), Some(b)) => h > b,
+            (h, _) => h.is_some(),
+        };
+        if from_heap {
+            self.heap.pop()
+        } else {
+            self.bulk.pop()
         }
     }
     /// Drops every event, keeping the allocation.

@@ -29,6 +29,9 @@ pub struct SceneInfo {
     pub static_bodies: Vec<KindCount>,
     /// Side lengths of the box.
     pub extent: [f64; 3],
+    /// The box's periodic axes (x, y, z).
+    #[serde(default)]
+    pub periodic: [bool; 3],
     /// Fraction of the box volume the moving bodies fill.
     pub packing: f64,
     /// Speed of the fastest body in its own diameters per frame (a shape's diameter is its
@@ -87,6 +90,7 @@ impl SceneInfo {
             kinds: by_kind(moving),
             static_bodies: by_kind(fixed),
             extent: extent.to_array(),
+            periodic: world.bounds().periodic,
             packing: volume / extent.element_product(),
             max_speed,
             max_spin,

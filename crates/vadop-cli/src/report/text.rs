@@ -25,8 +25,12 @@ impl fmt::Display for Summary {
         let run = &self.run;
         let scene = &run.scene;
         let [x, y, z] = scene.extent;
-        let shape =
+        let mut shape =
             if x == y && y == z { format!("cube of side {x:.4}") } else { format!("box {x:.4} x {y:.4} x {z:.4}") };
+        let periodic: String = scene.periodic.iter().zip("xyz".chars()).filter(|(p, _)| **p).map(|(_, a)| a).collect();
+        if !periodic.is_empty() {
+            shape.push_str(&format!(" (periodic in {periodic})"));
+        }
         writeln!(f, "scene       {}", scene.source)?;
         let bodies = format!("{} {}", scene.bodies, if scene.bodies == 1 { "body" } else { "bodies" });
         if scene.may_spin() {
@@ -202,11 +206,12 @@ impl fmt::Display for Summary {
                 String::new()
             };
             let statics = if scene.static_bodies.is_empty() { "" } else { " and static bodies" };
-            writeln!(
-                f,
-                "energy      {energy}; momentum change {:.3e}{scale}{angular} (walls{statics} exchange momentum{exchanged} with the bodies)",
-                c.momentum_change
-            )?;
+            let why = if scene.periodic == [true; 3] && statics.is_empty() && !run.has_gravity() {
+                "a periodic box has no walls: 0 up to rounding".to_string()
+            } else {
+                format!("walls{statics} exchange momentum{exchanged} with the bodies")
+            };
+            writeln!(f, "energy      {energy}; momentum change {:.3e}{scale}{angular} ({why})", c.momentum_change)?;
         }
         if let Some(p) = &self.pressure {
             writeln!(

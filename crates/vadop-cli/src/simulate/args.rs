@@ -181,6 +181,11 @@ pub struct SimulateArgs {
     /// exact for every method; spheres only, and restitution 1 in simulate mode, for now
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_negative_numbers = true, help_heading = "World")]
     pub(super) gravity: Option<glam::DVec3>,
+    /// Periodic axes of the box, e.g. xyz or xy (the others keep their walls): a body leaving
+    /// through one face comes back through the opposite one, and bodies meet across the faces;
+    /// spheres only, for now
+    #[arg(long, value_name = "AXES", value_parser = parse_axes, help_heading = "World")]
+    pub(super) periodic: Option<[bool; 3]>,
     /// Detect mode: also report when each contact between bodies ends (rows `body-end` in
     /// --contacts, counted in the summary), as started and stopped events
     #[arg(long, help_heading = "World")]
@@ -268,6 +273,26 @@ impl FromStr for PoolSize {
 }
 
 /// A vector written as three comma-separated numbers.
+/// Axes named by letters, as `xyz`, `xz` or `none`.
+fn parse_axes(text: &str) -> Result<[bool; 3], String> {
+    let mut axes = [false; 3];
+    if text == "none" {
+        return Ok(axes);
+    }
+    for letter in text.chars() {
+        let axis = "xyz"
+            .find(letter)
+            .ok_or_else(|| format!("expected axes among x, y and z (e.g. xyz, xy) or none, got {text:?}"))?;
+        if std::mem::replace(&mut axes[axis], true) {
+            return Err(format!("axis {letter} named twice in {text:?}"));
+        }
+    }
+    if axes == [false; 3] {
+        return Err("name at least one axis (e.g. xyz), or none".to_string());
+    }
+    Ok(axes)
+}
+
 fn parse_vector(text: &str) -> Result<glam::DVec3, String> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     let [x, y, z] = parts[..] else { return Err(format!("expected three numbers x,y,z, got {text:?}")) };

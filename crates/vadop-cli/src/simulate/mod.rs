@@ -89,6 +89,10 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
             generate(args)?
         }
     };
+    let mut scene = scene;
+    if let Some(periodic) = args.periodic {
+        scene.bounds = scene.bounds.with_periodic(periodic);
+    }
     let layout = scene.layout();
     let reference = reference_method(args, &layout, config.method);
     let world = scene.world(config).map_err(describe)?;

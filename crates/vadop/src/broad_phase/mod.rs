@@ -18,6 +18,7 @@
 pub mod box_columns;
 pub mod brute_force;
 pub(crate) mod coherent_sort;
+pub(crate) mod ghosts;
 pub mod grid;
 pub mod proxy;
 pub mod sweep_prune;

@@ -14,11 +14,18 @@
 //! from an older motion is stale and its predictions void. The table never decides what is a
 //! candidate and never moves a body; the pipeline refreshes every proxy at a window's start and
 //! a body's proxy when it changes velocity.
+//!
+//! In a box with periodic axes a proxy ends where its body's centre crosses a periodic face (the
+//! body then comes back through the opposite face, on a fresh motion), proxies near the faces get
+//! ghosts, their images across the faces, in slots past the bodies' ([`crate::broad_phase::ghosts`]), and
+//! no proxy covers more than the ghost width allows: a broad phase reads a ghost as one more proxy.
 
 use crate::bodies::{Bodies, BodyState};
+use crate::broad_phase::ghosts::Ghosts;
 use crate::memory::prefetch;
 use crate::narrow_phase::spheres::wall_contact_time;
 use crate::parallel::Workers;
+use crate::walls::BoxBounds;
 use crate::window::Window;
 use glam::DVec3;
 
@@ -54,8 +61,7 @@ pub struct ProxyTable {
     /// The broad-phase window every proxy lies in.
     window: Window,
     /// The box the bodies live in.
-    box_min: DVec3,
-    box_max: DVec3,
+    bounds: BoxBounds,
     /// Longest path a proxy may cover before it must be renewed, in typical diameters.
     reach: f64,
     /// Median bounding radius of the live bodies at the window's start.
@@ -79,6 +85,10 @@ pub struct ProxyTable {
     /// see straight paths whatever the gravity (0 and no limit without it).
     gravity: DVec3,
     bend: f64,
+    /// The periodic images of the proxies near periodic faces, and the largest bounding radius
+    /// of the live bodies at the window's start, which the ghost width is sized for.
+    ghosts: Ghosts,
+    largest_radius: f64,
 }
 
 /// A box in single precision relative to an origin, rounded outwards: it only ever grows, so it
@@ -184,9 +194,14 @@ pub fn swept_box(a: DVec3, b: DVec3, radius: f64) -> (DVec3, DVec3) {
 }
 
 impl ProxyTable {
-    /// An empty table for bodies in the box `[min, max]`.
-    pub fn new(min: DVec3, max: DVec3) -> ProxyTable {
-        ProxyTable { box_min: min, box_max: max, reach: f64::INFINITY, ..ProxyTable::default() }
+    /// An empty table for bodies in the box `bounds`.
+    pub fn new(bounds: &BoxBounds) -> ProxyTable {
+        ProxyTable {
+            bounds: *bounds,
+            reach: f64::INFINITY,
+            ghosts: Ghosts::new(bounds.periodic_part()),
+            ..ProxyTable::default()
+        }
     }
 
     /// Sets how far a proxy may reach, in typical diameters (infinity: to the window's end).
@@ -217,7 +232,7 @@ impl ProxyTable {
     /// The corner of the box the bodies live in: the origin of compact boxes.
     #[inline]
     pub fn box_min(&self) -> DVec3 {
-        self.box_min
+        self.bounds.min
     }
 
     /// A swept box of a sphere of `radius` from `a` to `b` as a compact box relative to
@@ -225,7 +240,7 @@ impl ProxyTable {
     #[inline]
     pub fn compact_swept_box(&self, a: DVec3, b: DVec3, radius: f64) -> CompactBox {
         let (low, high) = swept_box(a, b, radius);
-        CompactBox::new(low, high, self.box_min)
+        CompactBox::new(low, high, self.bounds.min)
     }
 
     /// The current window.
@@ -238,6 +253,12 @@ impl ProxyTable {
     #[inline]
     pub fn slots(&self) -> usize {
         self.spans.len()
+    }
+
+    /// Number of the bodies' slots (live or not), ghosts' left out.
+    #[inline]
+    pub fn body_slots(&self) -> usize {
+        self.spans.len().min(self.ghosts.base())
     }
 
     /// The window proxy `i` bounds its body over.
@@ -272,16 +293,19 @@ impl ProxyTable {
 
     /// True when a broad-phase entry of body `i` made with `stamp` is current. One load: a
     /// removed body's stamp has moved on (see [`Self::remove`]), so liveness needs no check of
-    /// its own, and a query's stale-entry test costs one memory access instead of two.
+    /// its own, and a query's stale-entry test costs one memory access instead of two. An entry
+    /// of a ghost slot the table no longer holds (one of an earlier window) is stale.
     #[inline]
     pub fn is_current(&self, i: usize, stamp: u32) -> bool {
-        self.stamps[i] == stamp
+        self.stamps.get(i) == Some(&stamp)
     }
 
     /// Asks for the cache line of body `i`'s stamp ahead of an [`Self::is_current`] check.
     #[inline(always)]
     pub fn prefetch_stamp(&self, i: usize) {
-        prefetch(&self.stamps[i]);
+        if let Some(stamp) = self.stamps.get(i) {
+            prefetch(stamp);
+        }
     }
 
     /// The table paired with `bodies`, the bodies its proxies bound, for a broad phase to read.
@@ -294,8 +318,14 @@ impl ProxyTable {
     /// start; shared among `workers`.
     pub fn refresh_all(&mut self, bodies: &Bodies, window: Window, workers: &Workers) {
         self.window = window;
+        // The last window's ghosts are gone: their slots are handed out afresh below.
+        self.truncate(bodies.slots());
         self.resize(bodies.slots());
         let live = &self.live;
+        if self.ghosts.active() {
+            self.largest_radius =
+                (0..bodies.slots()).filter(|&i| live[i]).map(|i| bodies.bounding_radius(i)).fold(0.0, f64::max);
+        }
         if let Some(median) =
             sampled_quantile(bodies.slots(), 0.5, |i| live[i].then(|| bodies.bounding_radius(i)), &mut self.radii)
         {
@@ -305,6 +335,9 @@ impl ProxyTable {
         // it takes gravity to bend a path that far (about 0.1 s for unit spheres under 9.81).
         self.gravity = bodies.gravity;
         self.bend = if self.gravity == DVec3::ZERO { 0.0 } else { 0.25 * self.typical_radius };
+        if self.ghosts.active() {
+            self.ghosts.clear(bodies.slots());
+        }
         let rule = self.rule();
         workers.zip_chunks(&mut self.spans, &mut self.expires, |offset, spans, expires| {
             for (k, (span, expires)) in spans.iter_mut().zip(expires).enumerate() {
@@ -316,14 +349,27 @@ impl ProxyTable {
         // A removed body's stamp moved on at its removal, so its entries stay stale.
         let n = self.stamps.len().min(bodies.stamp.len());
         self.stamps[..n].copy_from_slice(&bodies.stamp[..n]);
+        if self.ghosts.active() {
+            for i in 0..bodies.slots() {
+                if self.live[i] {
+                    self.make_ghosts(i, bodies);
+                }
+            }
+        }
     }
 
-    /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on.
+    /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on,
+    /// with fresh ghosts (see [`Self::ghosts_of`]).
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
+        debug_assert!(self.fits(i, bodies), "a body the window's ghosts are not sized for");
         self.resize(bodies.slots());
         (self.spans[i], self.expires[i]) = self.rule().span(i, bodies, t);
         self.stamps[i] = bodies.stamp[i];
         self.live[i] = true;
+        if self.ghosts.active() {
+            self.retire_ghosts(i);
+            self.make_ghosts(i, bodies);
+        }
     }
 
     /// Drops body `i` (removed): its broad-phase entries become stale, for its stamp moves on.
@@ -331,21 +377,86 @@ impl ProxyTable {
         if let Some(live) = self.live.get_mut(i) {
             *live = false;
             self.stamps[i] = self.stamps[i].wrapping_add(1);
+            self.retire_ghosts(i);
         }
+    }
+
+    /// True when body `i` may enter the window under way: always, but in a periodic box a body
+    /// in a slot past the window's ghost base, or wider than the bodies its ghost width was sized
+    /// for, needs a new window.
+    pub fn fits(&self, i: usize, bodies: &Bodies) -> bool {
+        !self.ghosts.active() || (i < self.ghosts.base() && bodies.bounding_radius(i) <= self.largest_radius)
+    }
+
+    /// The ghost slots of body `i`'s proxy (none outside a periodic box): each must be entered
+    /// into the broad phase, as the proxy is.
+    #[inline]
+    pub fn ghosts_of(&self, i: usize) -> std::ops::Range<usize> {
+        self.ghosts.of(i)
+    }
+
+    /// The body a report from slot `slot` is of, the stamp of the motion its state was made
+    /// from, and the whole sides its state is shifted by (zero but for a ghost); `None` for a
+    /// ghost retired since `stamp` was entered.
+    #[inline]
+    pub fn owner(&self, slot: u32, stamp: u32) -> Option<(u32, u32, DVec3)> {
+        let k = slot as usize;
+        if k < self.ghosts.base() {
+            return Some((slot, stamp, DVec3::ZERO));
+        }
+        if !self.is_current(k, stamp) {
+            return None;
+        }
+        Some(self.ghosts.owner(k))
+    }
+
+    /// Body `i`'s ghosts from its proxy, into fresh slots.
+    fn make_ghosts(&mut self, i: usize, bodies: &Bodies) {
+        let (spans, stamps, live, expires) = (&mut self.spans, &mut self.stamps, &mut self.live, &mut self.expires);
+        let own = spans[i];
+        let (low, high) = own.bbox.corners();
+        self.ghosts.make(i, (low, high), &bodies.state[i], bodies.stamp[i], |shift, stamp| {
+            spans.push(Span { bbox: CompactBox::new(low + shift, high + shift, DVec3::ZERO), ..own });
+            stamps.push(stamp);
+            live.push(true);
+            expires.push(false);
+        });
+    }
+
+    /// Body `i`'s ghosts leave: their slots' entries become stale.
+    fn retire_ghosts(&mut self, i: usize) {
+        for slot in self.ghosts.of(i) {
+            self.live[slot] = false;
+            self.stamps[slot] = self.ghosts.fresh_stamp();
+        }
+        self.ghosts.forget(i);
     }
 
     /// What a proxy is made by, copied so workers can share it.
     fn rule(&self) -> ProxyRule {
+        let mut reach = 2.0 * self.typical_radius * self.reach;
+        if self.ghosts.active() {
+            reach = reach.min(self.ghosts.longest_path(self.largest_radius + self.bend));
+        }
         ProxyRule {
             window: self.window,
-            box_min: self.box_min,
-            box_max: self.box_max,
-            reach: 2.0 * self.typical_radius * self.reach,
+            box_min: self.bounds.min,
+            walls: self.bounds.walls(),
+            faces: self.bounds.is_periodic().then(|| self.bounds.faces()),
+            reach,
             gravity: self.gravity,
             bend: self.bend,
             // Within a proxy the path stays within the bend of its tangent: |g| tau^2 / 2 <= bend.
             longest: if self.bend > 0.0 { (2.0 * self.bend / self.gravity.length()).sqrt() } else { f64::INFINITY },
         }
+    }
+
+    /// Drops every slot from `slots` on: the ghosts' of the last window.
+    fn truncate(&mut self, slots: usize) {
+        self.spans.truncate(slots);
+        self.stamps.truncate(slots);
+        self.live.truncate(slots);
+        self.expires.truncate(slots);
     }
 
     fn resize(&mut self, slots: usize) {
@@ -364,6 +475,7 @@ impl ProxyTable {
             + self.live.capacity()
             + self.expires.capacity()
             + self.radii.capacity() * 8
+            + self.ghosts.memory_bytes()
     }
 }
 
@@ -384,35 +496,39 @@ impl std::ops::Deref for Proxies<'_> {
 }
 
 impl<'a> Proxies<'a> {
-    /// Body `i`'s motion and bounding radius.
+    /// Proxy `i`'s motion and bounding radius: its body's, or a ghost's (shifted by whole sides).
     #[inline]
     pub fn state(&self, i: usize) -> &'a BodyState {
-        &self.states[i]
+        if i < self.table.ghosts.base() {
+            &self.states[i]
+        } else {
+            self.table.ghosts.state(i)
+        }
     }
 
-    /// Body `i` as a broad phase reports it from this table.
+    /// Proxy `i` as a broad phase reports it from this table.
     #[inline]
     pub fn reported(&self, i: usize) -> Reported<'a> {
-        Reported { body: i as u32, stamp: self.table.stamp(i), state: &self.states[i] }
+        Reported { body: i as u32, stamp: self.table.stamp(i), state: self.state(i) }
     }
 
-    /// Bounding radius of body `i`'s proxy: the body's, widened by the bend gravity may give
-    /// its path within the proxy.
+    /// Bounding radius of proxy `i`: the body's, widened by the bend gravity may give its path
+    /// within the proxy.
     #[inline]
     pub fn radius(&self, i: usize) -> f64 {
-        self.states[i].radius + self.table.bend
+        self.state(i).radius + self.table.bend
     }
 
-    /// Velocity of body `i` at its proxy's start.
+    /// Velocity of proxy `i` at its start.
     #[inline]
     pub fn velocity(&self, i: usize) -> DVec3 {
-        self.states[i].motion.velocity_under(self.table.spans[i].start, self.table.gravity)
+        self.state(i).motion.velocity_under(self.table.spans[i].start, self.table.gravity)
     }
 
-    /// Centre of body `i` at its proxy's start.
+    /// Centre of proxy `i` at its start.
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
-        self.states[i].motion.at_under(self.table.spans[i].start, self.table.gravity)
+        self.state(i).motion.at_under(self.table.spans[i].start, self.table.gravity)
     }
 }
 
@@ -421,7 +537,10 @@ impl<'a> Proxies<'a> {
 struct ProxyRule {
     window: Window,
     box_min: DVec3,
-    box_max: DVec3,
+    /// The walls (at infinity on periodic axes) and, in a periodic box, the periodic faces (at
+    /// infinity on walled axes).
+    walls: (DVec3, DVec3),
+    faces: Option<(DVec3, DVec3)>,
     /// Longest path a proxy may cover.
     reach: f64,
     gravity: DVec3,
@@ -446,10 +565,17 @@ impl ProxyRule {
         // on to the window's end, and its own wall contact changes its velocity.
         let wall = bodies
             .is_sphere(i)
-            .then(|| wall_contact_time(&motion, body_radius, self.box_min, self.box_max, self.gravity))
+            .then(|| wall_contact_time(&motion, body_radius, self.walls.0, self.walls.1, self.gravity))
             .flatten();
-        let mut end = match wall {
-            Some((wall, _)) if wall < self.window.end => wall.max(start).next_up().min(self.window.end),
+        // Up to and including the crossing of a periodic face too, where the body comes back
+        // through the opposite face on a fresh motion.
+        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(&motion, 0.0, low, high, self.gravity));
+        let first = match (wall, crossing) {
+            (Some((a, _)), Some((b, _))) => Some(a.min(b)),
+            (a, b) => a.or(b).map(|(t, _)| t),
+        };
+        let mut end = match first {
+            Some(time) if time < self.window.end => time.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
         let reached = (start + self.reach / velocity.length()).min(start + self.longest);

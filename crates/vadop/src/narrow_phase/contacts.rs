@@ -114,12 +114,10 @@ pub(crate) fn pair_start_after(
 /// contact since `since`, part.
 pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: Window) -> Found {
     if bodies.are_spheres(a, b) {
-        let time = pair_separation_time(
-            &bodies.motion(a),
-            &bodies.motion(b),
-            bodies.radius(a) + bodies.radius(b),
-            bodies.gravity,
-        )?;
+        // Touching, so through their nearest image, which they keep until they part.
+        let (ma, mut mb) = (bodies.motion(a), bodies.motion(b));
+        mb.position += bodies.image_shift(a, b, ma.since.max(mb.since));
+        let time = pair_separation_time(&ma, &mb, bodies.radius(a) + bodies.radius(b), bodies.gravity)?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
@@ -141,7 +139,8 @@ pub(crate) fn wall_start(
     let shape = if bodies.is_sphere(i) { None } else { bodies.geometry(i) };
     let found = match shape {
         None => {
-            Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), bounds.min, bounds.max, bodies.gravity_on(i))?)
+            let (min, max) = bounds.walls();
+            Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), min, max, bodies.gravity_on(i))?)
         }
         Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), bounds.min, bounds.max, window) {
             Ok(found) => Ok(found?),
@@ -166,9 +165,9 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
             }
         }
     }
-    let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
+    let pi = bodies.position_at(i, t);
     // Coincident centres have no normal; the relative velocity gives one.
-    let normal = direction(pj - pi)
+    let normal = direction(bodies.offset_at(i, j, t))
         .or_else(|| direction(bodies.velocity_at(i, t) - bodies.velocity_at(j, t)))
         .unwrap_or(DVec3::X);
     (pi + normal * bodies.radius(i), normal)
@@ -193,7 +192,7 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
     if bodies.are_spheres(i, j) {
         let reach = (bodies.radius(i) + bodies.radius(j)) * (1.0 + 4.0 * CONTACT_TOLERANCE);
         let scale = unit_scale(reach);
-        let offset = (bodies.position_at(j, t) - bodies.position_at(i, t)) * scale;
+        let offset = bodies.offset_at(i, j, t) * scale;
         let separating = (bodies.velocity_at(j, t) - bodies.velocity_at(i, t)).dot(offset) > 0.0;
         return offset.length_squared() <= (reach * scale) * (reach * scale) && !separating;
     }
@@ -211,7 +210,8 @@ pub(crate) fn touches_a_wall(bodies: &Bodies, i: usize, bounds: &BoxBounds, t: f
     let Some(g) = bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) else {
         let (p, r) = (bodies.position_at(i, t), bodies.radius(i));
         let slack = 2.0 * CONTACT_TOLERANCE * r;
-        return (p - r - bounds.min).min_element() <= slack || (bounds.max - p - r).min_element() <= slack;
+        let (min, max) = bounds.walls();
+        return (p - r - min).min_element() <= slack || (max - p - r).min_element() <= slack;
     };
     let (motion, tol) = (bodies.rigid_motion(i), SHAPE_CONTACT_TOLERANCE * g.size());
     Wall::ALL.into_iter().any(|wall| {
@@ -226,7 +226,7 @@ pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option
         let reach = bodies.radius(i) + bodies.radius(j);
         // Scaled so the square neither underflows nor overflows at any scale.
         let scale = unit_scale(reach);
-        let distance = ((bodies.position_at(i, t) - bodies.position_at(j, t)) * scale).length() / scale;
+        let distance = (bodies.offset_at(i, j, t) * scale).length() / scale;
         let depth = reach - distance;
         return (depth > CONTACT_TOLERANCE * reach).then_some(depth);
     }

@@ -22,12 +22,13 @@
 //! internals and never computes an impulse.
 
 mod pass_through;
+mod predict;
 pub(crate) mod pseudo_dynamic;
 mod retest;
 pub(crate) mod touching;
 
 use crate::bodies::Bodies;
-use crate::broad_phase::proxy::{sampled_quantile, Proxies, ProxyTable, Reported};
+use crate::broad_phase::proxy::{sampled_quantile, ProxyTable};
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::frame::{Contact, FrameStats, Mode, Touched};
@@ -44,6 +45,8 @@ use crate::walls::Wall;
 use crate::window::Window;
 use glam::DVec3;
 use pass_through::Searched;
+use predict::{for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_pair};
+use predict::{predict_wall, renewal, sort_predictions, Prediction};
 use std::collections::VecDeque;
 use std::time::Instant;
 
@@ -124,7 +127,7 @@ pub(crate) struct Pipeline<B: BroadPhase> {
 
 impl<B: BroadPhase> Pipeline<B> {
     pub(crate) fn new(broad: B, rule: WindowRule, bounds: &BoxBounds, workers: Workers) -> Pipeline<B> {
-        let mut proxies = ProxyTable::new(bounds.min, bounds.max);
+        let mut proxies = ProxyTable::new(bounds);
         if rule == WindowRule::Adaptive {
             proxies.set_reach_diameters(REACH_DIAMETERS);
         }
@@ -179,6 +182,10 @@ impl<B: BroadPhase> Pipeline<B> {
     /// under way (if any) with its candidates predicted; otherwise the next window takes it.
     pub(crate) fn enter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
         self.impacts.rules.resize(bodies.slots());
+        if self.window.end > t && !self.proxies.fits(i as usize, bodies) {
+            // Past the slots or the widths the window's ghosts were made for: a new window now.
+            self.window.end = t;
+        }
         if self.window.end > t {
             self.retest(i, None, bodies, physics, t, stats);
         } else {
@@ -285,20 +292,22 @@ impl<B: BroadPhase> Pipeline<B> {
             // Shape searches park where they stop; the store is read by every worker and
             // written once they are done, in an order that does not depend on their number.
             let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
+            let table = &self.proxies;
             let candidates = self.broad.find_pairs(
                 self.proxies.view(bodies),
                 &self.workers,
-                |a, b, window, out| predict_into(bodies, (a, b, window), parked, out),
+                |a, b, window, out| predict_into(bodies, table, (a, b, window), parked, out),
                 &mut found,
             );
             sort_predictions(&mut found, &mut self.parked, self.window.start, |event| predicted.push(event));
             self.predictions = found;
             candidates
         } else {
+            let table = &self.proxies;
             self.broad.find_pairs(
                 self.proxies.view(bodies),
                 &self.workers,
-                |a, b, window, out| out.extend(predict_pair(bodies, a, b, window)),
+                |a, b, window, out| out.extend(predict_pair(bodies, table, a, b, window)),
                 &mut predicted,
             )
         };
@@ -306,6 +315,7 @@ impl<B: BroadPhase> Pipeline<B> {
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
                 found.extend(predict_wall(bodies, &physics.bounds, i as u32, window));
+                found.extend(predict_crossing(bodies, &physics.bounds, i as u32, window));
                 for_each_static_event(bodies, proxies, statics, i, window, |event| found.push(event));
                 if proxies.expires(i) {
                     found.push(renewal(bodies, &proxies, i as u32));
@@ -342,7 +352,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) => {
                     bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp
                 }
-                Partner::Wall(_) | Partner::WallStalled | Partner::Renew => true,
+                Partner::Wall(_) | Partner::WallStalled | Partner::Cross(_) | Partner::Renew => true,
             };
             let i = event.body as usize;
             if !(bodies.alive[i] && bodies.stamp[i] == event.body_stamp && partner_current) {
@@ -358,6 +368,10 @@ impl<B: BroadPhase> Pipeline<B> {
                 Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
                 Partner::Wall(wall) => self.wall_contact(bodies, physics, event.body, wall, event.time, out),
                 Partner::WallStalled => self.stalled(bodies, physics, &[event.body], event.time, out),
+                Partner::Cross(face) => {
+                    bodies.wrap(i, face, event.time);
+                    self.retest(event.body, None, bodies, physics, event.time, out.stats);
+                }
                 Partner::Renew => {
                     bodies.renew(i);
                     self.retest(event.body, None, bodies, physics, event.time, out.stats);
@@ -365,7 +379,7 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             // Too many fresh proxies: start afresh at the next event's time, strictly after this
             // one, so nothing already handled is predicted again.
-            if self.updates > UPDATES_PER_BODY * self.proxies.slots().max(64) {
+            if self.updates > UPDATES_PER_BODY * self.proxies.body_slots().max(64) {
                 if let Some(next) = self.queue.peek_time() {
                     if next > event.time && next < self.window.end {
                         self.window.end = next;
@@ -375,7 +389,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 }
             }
         }
-        if self.updates * 4 < UPDATES_PER_BODY * self.proxies.slots().max(64) {
+        if self.updates * 4 < UPDATES_PER_BODY * self.proxies.body_slots().max(64) {
             self.shrink = (self.shrink * 2.0).min(1.0);
         }
     }
@@ -614,13 +628,20 @@ impl<B: BroadPhase> Pipeline<B> {
             let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
             mass += bodies.mass[m];
             momentum += bodies.mass[m] * bodies.velocity_at(m, t);
+            let (walls_min, walls_max) = physics.bounds.walls();
             for axis in 0..3 {
                 let slack = 4.0 * CONTACT_TOLERANCE * rm;
-                touches_min[axis] |= pm[axis] - rm <= physics.bounds.min[axis] + slack;
-                touches_max[axis] |= pm[axis] + rm >= physics.bounds.max[axis] - slack;
+                touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
+                touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
             }
             near.clear();
-            self.broad.query(m as u32, self.proxies.view(bodies), None, |o, _| near.push(o.body));
+            // Its neighbours through its own proxy and, across periodic faces, its ghosts.
+            let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
+            for slot in std::iter::once(m).chain(table.ghosts_of(m)) {
+                self.broad.query(slot as u32, proxies, None, |o, _| {
+                    near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
+                });
+            }
             for &o in &near {
                 let o = o as usize;
                 if self.cluster_mark[o] != self.cluster_epoch && contacts::pressed_together(bodies, m, o, t) {
@@ -642,11 +663,12 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         // One rigid motion for all: no spin, or members would turn into each other.
         let mut virial = 0.0;
-        let origin = cluster.first().map_or(DVec3::ZERO, |&m| bodies.position_at(m as usize, t));
+        let first = cluster.first().map_or(0, |&m| m as usize);
         for &m in &cluster {
             let m = m as usize;
             let gained = bodies.mass[m] * (velocity - bodies.velocity_at(m, t));
-            virial += (bodies.position_at(m, t) - origin).dot(gained);
+            // A cluster spans less than half a periodic side: its members' nearest images.
+            virial += bodies.offset_at(first, m, t).dot(gained);
             self.impacts.rules.freeze(m as u32, t);
             bodies.set_motion_at(m, t, velocity, DVec3::ZERO);
         }
@@ -657,145 +679,4 @@ impl<B: BroadPhase> Pipeline<B> {
         self.near = near;
         virial
     }
-}
-
-/// The end of the contact of bodies `a` and `b`, touching since `since`, if its canonical time
-/// lies in `window`, stamped with their current stamps: a velocity change of either voids it.
-#[inline]
-fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: Window) -> Option<Event> {
-    let (a, b) = (a.min(b), a.max(b));
-    let (i, j) = (a as usize, b as usize);
-    let (time, stalled) = contacts::pair_end(bodies, i, j, since, window)?;
-    Some(Event {
-        time,
-        body: a,
-        partner: if stalled { Partner::Stalled(b) } else { Partner::End(b) },
-        body_stamp: bodies.stamp[i],
-        partner_stamp: bodies.stamp[j],
-    })
-}
-
-/// The contact of two reported bodies if its canonical time lies in `window`, from the motions
-/// the broad phase reported (the bodies' own), stamped with the stamps of the proxies they came
-/// from: a prediction made from a proxy not yet refreshed after a velocity change is void when
-/// it pops.
-#[inline]
-fn predict_pair(bodies: &Bodies, x: Reported, y: Reported, window: Window) -> Option<Event> {
-    // Always the lower id first, so every method does bit-identical arithmetic for a pair.
-    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    let found = contacts::pair_start(bodies, (a.body as usize, a.state), (b.body as usize, b.state), window)?;
-    Some(pair_event((a.body, a.stamp), (b.body, b.stamp), found))
-}
-
-/// What predicting a pair in a world of shapes gives: an event for the queue, or where a shape
-/// search parked, for [`ParkedSearches`].
-#[derive(Debug)]
-enum Prediction {
-    Event(Event),
-    Parked(Parking),
-}
-
-/// [`predict_pair`] in a world of shapes: a shape pair's search taken up where `parked` holds it,
-/// with where it parks now.
-#[inline]
-fn predict_pair_parked(
-    bodies: &Bodies,
-    x: Reported,
-    y: Reported,
-    window: Window,
-    parked: &ParkedSearches,
-) -> (Option<Event>, Option<Parking>) {
-    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    if bodies.are_spheres(a.body as usize, b.body as usize) {
-        return (predict_pair(bodies, a, b, window), None);
-    }
-    let (found, parks) = contacts::pair_start_parked(bodies, a.body as usize, b.body as usize, window, Some(parked));
-    (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
-}
-
-/// [`predict_pair_parked`] for `(x, y, window)` into `out`, for [`sort_predictions`].
-#[inline]
-fn predict_into(
-    bodies: &Bodies,
-    (x, y, window): (Reported, Reported, Window),
-    parked: &ParkedSearches,
-    out: &mut Vec<Prediction>,
-) {
-    let (event, parks) = predict_pair_parked(bodies, x, y, window, parked);
-    out.extend(event.map(Prediction::Event));
-    out.extend(parks.map(Prediction::Parked));
-}
-
-/// Empties `found` in its order: each event to `event`, each parked search into `parked` (pairs
-/// not searched since `window_start` are dropped from the store).
-fn sort_predictions(
-    found: &mut Vec<Prediction>,
-    parked: &mut ParkedSearches,
-    window_start: f64,
-    mut event: impl FnMut(Event),
-) {
-    for prediction in found.drain(..) {
-        match prediction {
-            Prediction::Event(e) => event(e),
-            Prediction::Parked(((a, b), epochs, resume)) => parked.keep(a, b, epochs, resume, window_start),
-        }
-    }
-}
-
-/// The event of bodies `a < b` (each with its stamp) starting to touch, or of their search
-/// stalling, at the time found.
-#[inline]
-fn pair_event((a, stamp_a): (u32, u32), (b, stamp_b): (u32, u32), (time, stalled): (f64, bool)) -> Event {
-    let partner = if stalled { Partner::Stalled(b) } else { Partner::Body(b) };
-    Event { time, body: a, partner, body_stamp: stamp_a, partner_stamp: stamp_b }
-}
-
-/// Calls `found` with body `i`'s contact with every static body its proxy's box meets, inside
-/// the proxy's window and `window`. Static bodies have no proxy; their stamps never change.
-#[inline]
-fn for_each_static_event(
-    bodies: &Bodies,
-    proxies: Proxies,
-    statics: &StaticGeometry,
-    i: usize,
-    window: Window,
-    mut found: impl FnMut(Event),
-) {
-    if statics.is_empty() {
-        return;
-    }
-    let (low, high) = proxies.bbox(i).corners();
-    let window = proxies.window_of(i).intersect(window);
-    let own = proxies.reported(i);
-    statics.for_each_near(proxies.box_min() + low, proxies.box_min() + high, |s| {
-        let fixed = Reported { body: s, stamp: bodies.stamp[s as usize], state: &bodies.state[s as usize] };
-        if let Some(event) = predict_pair(bodies, own, fixed, window) {
-            found(event);
-        }
-    });
-}
-
-/// The renewal of body `body`'s proxy at its end.
-#[inline]
-fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
-    let i = body as usize;
-    Event {
-        time: proxies.window_of(i).end,
-        body,
-        partner: Partner::Renew,
-        body_stamp: bodies.stamp[i],
-        partner_stamp: 0,
-    }
-}
-
-/// Body `body`'s wall contact if its canonical time lies in `window` (or where an undecided
-/// search stalled).
-#[inline]
-fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
-    let i = body as usize;
-    let (time, partner) = match contacts::wall_start(bodies, i, bounds, window)? {
-        Ok((time, wall)) => (time, Partner::Wall(wall)),
-        Err(time) => (time, Partner::WallStalled),
-    };
-    Some(Event { time, body, partner, body_stamp: bodies.stamp[i], partner_stamp: 0 })
 }

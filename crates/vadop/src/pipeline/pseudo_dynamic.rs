@@ -9,7 +9,9 @@
 //! times, so an overlap is stamped with the instant it was seen — the frame's end — and reported
 //! with the frame just stepped: the one exception to the rule that a contact belongs to the frame
 //! holding its time. It never predicts pair contacts: whatever touches and separates between two
-//! instants is missed, which is exactly what the accuracy comparison measures.
+//! instants is missed, which is exactly what the accuracy comparison measures. In a periodic box a
+//! body comes back through the opposite face at the instant its centre crosses one, and the
+//! bodies near a face are swept a second time as images one side away, against the list.
 
 use crate::bodies::Bodies;
 use crate::broad_phase::coherent_sort::coherent_sort;
@@ -34,6 +36,9 @@ pub(crate) struct PseudoDynamic {
     previous: Vec<(u32, u32)>,
     /// Pairs overlapping now, ascending.
     current: Vec<(u32, u32)>,
+    /// In a periodic box, images of the bodies near a face, one side away: the body, its centre
+    /// and the low end of its x extent, sorted by that low end.
+    images: Vec<(u32, DVec3, f64)>,
     /// The jam rule, for a body exactly as wide as the box.
     pub(crate) rules: ContactRules,
 }
@@ -66,6 +71,7 @@ impl PseudoDynamic {
             + self.centre.capacity() * 24
             + self.low_x.capacity() * 8
             + (self.previous.capacity() + self.current.capacity()) * 8
+            + self.images.capacity() * std::mem::size_of::<(u32, DVec3, f64)>()
             + self.rules.memory_bytes()
     }
 
@@ -98,22 +104,71 @@ impl PseudoDynamic {
                 if self.low_x[j as usize] > high_x {
                     break;
                 }
-                let (pj, rj) = (self.centre[j as usize], bodies.radius(j as usize));
-                let reach = ri + rj;
-                if (pi.y - pj.y).abs() > reach || (pi.z - pj.z).abs() > reach {
-                    continue;
-                }
-                out.stats.candidate_pairs += 1;
-                out.stats.narrow_tests += 1;
-                // Scaled so the squares neither underflow nor overflow at any scale.
-                let scale = crate::numeric::unit_scale(reach);
-                if ((pi - pj) * scale).length_squared() < (reach * scale) * (reach * scale) {
-                    self.current.push(if i < j { (i, j) } else { (j, i) });
-                }
+                test_pair(&mut self.current, bodies, (i, pi), (j, self.centre[j as usize]), out);
             }
+        }
+        if bodies.periodic.any() {
+            self.test_images(bodies, out);
         }
         self.current.sort_unstable();
         out.stats.test_seconds += start.elapsed().as_secs_f64();
+    }
+
+    /// In a periodic box: the images of the bodies within a largest diameter of a face, one side
+    /// away (one per combination of the faces a body is near), swept against the list; a pair is
+    /// kept from the lower id's centre against the higher id's image only, so each is found once.
+    fn test_images(&mut self, bodies: &Bodies, out: &mut Output) {
+        let periodic = bodies.periodic;
+        let near = 2.0 * self.order.iter().map(|&b| bodies.radius(b as usize)).fold(0.0, f64::max);
+        let mut images = std::mem::take(&mut self.images);
+        images.clear();
+        for &b in &self.order {
+            let (p, r) = (self.centre[b as usize], bodies.radius(b as usize));
+            let mut shifts = [0.0; 3];
+            for (a, shift) in shifts.iter_mut().enumerate().filter(|(a, _)| periodic.axes[*a]) {
+                let (low, high) = (periodic.min[a], periodic.min[a] + periodic.side[a]);
+                if p[a] < low + near {
+                    *shift = periodic.side[a];
+                } else if p[a] > high - near {
+                    *shift = -periodic.side[a];
+                }
+            }
+            for mask in 1..8usize {
+                if (0..3).all(|a| mask & (1 << a) == 0 || shifts[a] != 0.0) {
+                    let shift =
+                        DVec3::from_array(std::array::from_fn(|a| if mask & (1 << a) != 0 { shifts[a] } else { 0.0 }));
+                    images.push((b, p + shift, p.x + shift.x - r));
+                }
+            }
+        }
+        images.sort_unstable_by(|x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)));
+        // Every body against the images whose low x lies in its x extent, and every image against
+        // the bodies whose low x lies in its own (ties to the first): each overlap in x once.
+        for k in 0..self.order.len() {
+            let i = self.order[k];
+            let (pi, low) = (self.centre[i as usize], self.low_x[i as usize]);
+            let high = pi.x + bodies.radius(i as usize);
+            let first = images.partition_point(|image| image.2 < low);
+            for &(j, pj, _) in images[first..].iter().take_while(|image| image.2 <= high) {
+                if i < j {
+                    test_pair(&mut self.current, bodies, (i, pi), (j, pj), out);
+                }
+            }
+        }
+        for &(j, pj, low) in &images {
+            let high = pj.x + bodies.radius(j as usize);
+            let first = self.order.partition_point(|&b| self.low_x[b as usize] <= low);
+            for k in first..self.order.len() {
+                let i = self.order[k];
+                if self.low_x[i as usize] > high {
+                    break;
+                }
+                if i < j {
+                    test_pair(&mut self.current, bodies, (i, self.centre[i as usize]), (j, pj), out);
+                }
+            }
+        }
+        self.images = images;
     }
 
     /// Steps from `t0` to `t1`: straight motion with exact wall bounces, then the overlaps at `t1`.
@@ -127,16 +182,20 @@ impl PseudoDynamic {
             if !bodies.alive[i] {
                 continue;
             }
-            while let Some((t, wall)) = wall_contact_time(
-                &bodies.motion(i),
-                bodies.radius(i),
-                physics.bounds.min,
-                physics.bounds.max,
-                bodies.gravity_on(i),
-            ) {
-                if !(t < t1) {
-                    break;
+            let (walls, faces) = (physics.bounds.walls(), physics.bounds.faces());
+            loop {
+                let (motion, gravity) = (bodies.motion(i), bodies.gravity_on(i));
+                let wall = wall_contact_time(&motion, bodies.radius(i), walls.0, walls.1, gravity);
+                let crossing = match physics.bounds.is_periodic() {
+                    true => wall_contact_time(&motion, 0.0, faces.0, faces.1, gravity),
+                    false => None,
+                };
+                // A crossing first (at a tie too): the body comes back through the other face.
+                if let Some((t, face)) = crossing.filter(|&(t, _)| t < t1 && wall.is_none_or(|(w, _)| t <= w)) {
+                    bodies.wrap(i, face, t);
+                    continue;
                 }
+                let Some((t, wall)) = wall.filter(|&(t, _)| t < t1) else { break };
                 // Frame instants have no contact times to run the TC model on: only the jam rule.
                 let impulse = match self.rules.wall(body, t, physics.restitution, 0.0) {
                     // A body alone: its cluster is itself, stopped at the wall.
@@ -168,7 +227,7 @@ impl PseudoDynamic {
         for k in 0..self.current.len() {
             let (a, b) = self.current[k];
             let (i, j) = (a as usize, b as usize);
-            let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
+            let normal = direction(bodies.periodic.nearest(self.centre[j] - self.centre[i])).unwrap_or(DVec3::X);
             let mut impulse = 0.0;
             if physics.mode == Mode::Simulate {
                 let before_j = bodies.velocity_at(j, t1);
@@ -192,7 +251,7 @@ impl PseudoDynamic {
                 if self.current.binary_search(&(a, b)).is_ok() {
                     continue;
                 }
-                let normal = direction(self.centre[j] - self.centre[i]).unwrap_or(DVec3::X);
+                let normal = direction(bodies.periodic.nearest(self.centre[j] - self.centre[i])).unwrap_or(DVec3::X);
                 out.stats.contact_ends += 1;
                 out.ends.push(self.contact(bodies, (i, j), normal, t1, 0.0));
             }
@@ -211,5 +270,28 @@ impl PseudoDynamic {
             normal,
             impulse,
         }
+    }
+}
+
+/// Tests bodies `i` and `j` with centres `pi` and `pj` (`j`'s, or its image's) for overlap, into
+/// `current`.
+#[inline]
+fn test_pair(
+    current: &mut Vec<(u32, u32)>,
+    bodies: &Bodies,
+    (i, pi): (u32, DVec3),
+    (j, pj): (u32, DVec3),
+    out: &mut Output,
+) {
+    let reach = bodies.radius(i as usize) + bodies.radius(j as usize);
+    if (pi.y - pj.y).abs() > reach || (pi.z - pj.z).abs() > reach {
+        return;
+    }
+    out.stats.candidate_pairs += 1;
+    out.stats.narrow_tests += 1;
+    // Scaled so the squares neither underflow nor overflow at any scale.
+    let scale = crate::numeric::unit_scale(reach);
+    if ((pi - pj) * scale).length_squared() < (reach * scale) * (reach * scale) {
+        current.push(if i < j { (i, j) } else { (j, i) });
     }
 }

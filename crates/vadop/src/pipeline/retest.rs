@@ -7,7 +7,7 @@
 //! their events and parked searches are kept in the partners' order, as one worker would: the
 //! queue and the store come out the same for every thread count. It never handles an event.
 
-use super::{for_each_static_event, predict_end, predict_into, predict_pair, predict_wall, renewal};
+use super::{for_each_static_event, predict_crossing, predict_end, predict_into, predict_pair, predict_wall, renewal};
 use super::{sort_predictions, Pipeline, Prediction};
 use crate::bodies::Bodies;
 use crate::broad_phase::proxy::Reported;
@@ -34,49 +34,18 @@ impl<B: BroadPhase> Pipeline<B> {
         self.updates += 1;
         stats.retests += 1;
         let window = self.window.from(t);
-        let proxies = self.proxies.view(bodies);
-        // The body as the broad phase reports it, its state borrowed from the store alone.
-        let own = Reported { body, stamp: proxies.reported(body as usize).stamp, state: &bodies.state[body as usize] };
-        if !bodies.has_rigid() {
-            let (queue, mut tests) = (&mut self.queue, 0u64);
-            self.broad.update(body, proxies, skip, |other, bounds| {
-                tests += 1;
-                if let Some(event) = predict_pair(bodies, own, other, bounds.intersect(window)) {
-                    queue.push(event);
-                }
-            });
-            stats.narrow_tests += tests;
-        } else {
-            let mut partners = std::mem::take(&mut self.partners);
-            partners.clear();
-            self.broad.update(body, proxies, skip, |other, bounds| {
-                partners.push((other.body, other.stamp, bounds.intersect(window)));
-            });
-            stats.narrow_tests += partners.len() as u64;
-            let reported = |(other, stamp, _): (u32, u32, Window)| Reported {
-                body: other,
-                stamp,
-                state: &bodies.state[other as usize],
-            };
-            let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
-            found.clear();
-            let predict = |range: std::ops::Range<usize>, out: &mut Vec<Prediction>| {
-                for &partner in &partners[range] {
-                    predict_into(bodies, (own, reported(partner), partner.2), parked, out);
-                }
-            };
-            if self.workers.threads() > 1 && partners.len() >= SHARED_PARTNERS {
-                self.workers.extend_ranges(partners.len(), &mut found, predict);
-            } else {
-                predict(0..partners.len(), &mut found);
-            }
-            let queue = &mut self.queue;
-            sort_predictions(&mut found, &mut self.parked, self.window.start, |event| queue.push(event));
-            self.predictions = found;
-            self.partners = partners;
+        // The body's own proxy, then (in a periodic box) its ghosts: each meets the bodies near
+        // it. `skip` names a body, which a ghost's partners are told apart by.
+        let ghosts = self.proxies.ghosts_of(body as usize);
+        for slot in std::iter::once(body).chain(ghosts.map(|g| g as u32)) {
+            let (skip_slot, skip_body) = if slot == body { (skip, None) } else { (None, skip) };
+            self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
         }
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
         if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
+            queue.push(event);
+        }
+        if let Some(event) = predict_crossing(bodies, &physics.bounds, body, window) {
             queue.push(event);
         }
         for_each_static_event(bodies, proxies, &self.statics, body as usize, window, |event| queue.push(event));
@@ -89,6 +58,67 @@ impl<B: BroadPhase> Pipeline<B> {
                     queue.push(event);
                 }
             }
+        }
+    }
+
+    /// Enters proxy `slot` (a body's, or one of its ghosts) into the broad phase, predicting its
+    /// contacts with its candidate partners in `window`, but for the proxy `skip.0` and the
+    /// proxies of body `skip.1`.
+    fn retest_slot(
+        &mut self,
+        slot: u32,
+        (skip_slot, skip_body): (Option<u32>, Option<u32>),
+        bodies: &Bodies,
+        window: Window,
+        stats: &mut FrameStats,
+    ) {
+        let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
+        let skipped =
+            |other: &Reported| skip_body.is_some_and(|b| table.owner(other.body, other.stamp).map(|o| o.0) == Some(b));
+        // The slot as the broad phase reports it, its state borrowed from the store alone.
+        let own = proxies.reported(slot as usize);
+        if !bodies.has_rigid() {
+            let (queue, mut tests) = (&mut self.queue, 0u64);
+            self.broad.update(slot, proxies, skip_slot, |other, bounds| {
+                if skipped(&other) {
+                    return;
+                }
+                tests += 1;
+                if let Some(event) = predict_pair(bodies, table, own, other, bounds.intersect(window)) {
+                    queue.push(event);
+                }
+            });
+            stats.narrow_tests += tests;
+        } else {
+            let mut partners = std::mem::take(&mut self.partners);
+            partners.clear();
+            self.broad.update(slot, proxies, skip_slot, |other, bounds| {
+                if !skipped(&other) {
+                    partners.push((other.body, other.stamp, bounds.intersect(window)));
+                }
+            });
+            stats.narrow_tests += partners.len() as u64;
+            let reported = |(other, stamp, _): (u32, u32, Window)| Reported {
+                body: other,
+                stamp,
+                state: proxies.state(other as usize),
+            };
+            let (mut found, parked) = (std::mem::take(&mut self.predictions), &self.parked);
+            found.clear();
+            let predict = |range: std::ops::Range<usize>, out: &mut Vec<Prediction>| {
+                for &partner in &partners[range] {
+                    predict_into(bodies, table, (own, reported(partner), partner.2), parked, out);
+                }
+            };
+            if self.workers.threads() > 1 && partners.len() >= SHARED_PARTNERS {
+                self.workers.extend_ranges(partners.len(), &mut found, predict);
+            } else {
+                predict(0..partners.len(), &mut found);
+            }
+            let queue = &mut self.queue;
+            sort_predictions(&mut found, &mut self.parked, self.window.start, |event| queue.push(event));
+            self.predictions = found;
+            self.partners = partners;
         }
     }
 }

@@ -78,7 +78,7 @@ pub(crate) fn push_spheres(
 /// centres (`j`'s minus `i`'s) dotted with the momentum `j` gained, `before` being `j`'s velocity
 /// at `t` before the impact (the impact has just set its motion at `t`). An impact conserves momentum, so taking `i` as the second body gives the same.
 pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, before: DVec3) -> f64 {
-    let separation = bodies.position_at(j, t) - bodies.position_at(i, t);
+    let separation = bodies.offset_at(i, j, t);
     separation.dot(bodies.mass[j] * (bodies.velocity(j) - before))
 }
 
@@ -140,6 +140,8 @@ impl Impacts {
             Rule::Impulse { restitution, changed } => {
                 contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
                 let [mut body_i, mut body_j] = [impacted(bodies, i, t), impacted(bodies, j, t)];
+                // Across a periodic face the contact lies by j's nearest image.
+                body_j.centre += bodies.image_shift(i, j, t);
                 let clearance = contacts::clearance(bodies, i, j);
                 let points = &self.manifold.points;
                 match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {

@@ -70,6 +70,8 @@ pub struct Scene {
 pub(super) struct StrictBounds {
     pub(super) min: DVec3,
     pub(super) max: DVec3,
+    #[serde(default)]
+    pub(super) periodic: [bool; 3],
 }
 
 /// A scene file's sphere entry, read as [`Sphere`] is but refusing unknown keys.

@@ -19,6 +19,9 @@
 //!  "spheres": [{"position": [2, 5, 5], "velocity": [1, 0, 0], "radius": 0.5, "mass": 1}]}
 //! ```
 //!
+//! A box may have periodic axes: `"bounds": {"min": ..., "max": ..., "periodic": [true, true,
+//! false]}` (x, y, z; left out: all walled, see [`BoxBounds::with_periodic`](crate::BoxBounds::with_periodic)).
+//!
 //! Bodies of other shapes take three more lists, each optional (`spheres` too):
 //!
 //! - `shapes`, the table of named shapes: `{"name": "brick", "shape": {"cuboid": {"half_extents":

@@ -17,7 +17,7 @@ use crate::frame::{Output, Physics};
 use crate::handle::BodyHandle;
 use crate::parallel::Workers;
 use crate::response::rules::ContactRules;
-use crate::walls::BoxBounds;
+use crate::walls::{BoxBounds, MIN_PERIODIC_DIAMETERS};
 use glam::DVec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -95,7 +95,7 @@ struct BeforeStep {
 impl World {
     /// An empty world. Fails on a bad box, restitution, contact duration, pool size or phi.
     pub fn new(bounds: BoxBounds, config: WorldConfig) -> Result<World> {
-        let bounds = BoxBounds::new(bounds.min, bounds.max)?;
+        let bounds = BoxBounds::new(bounds.min, bounds.max)?.with_periodic(bounds.periodic);
         if !(0.0..=1.0).contains(&config.restitution) {
             return Err(VadopError::BadRestitution(config.restitution));
         }
@@ -122,7 +122,7 @@ impl World {
         Ok(World {
             config,
             bounds,
-            bodies: Bodies::under(config.gravity),
+            bodies: Bodies::new(config.gravity, bounds.periodic_part()),
             live: 0,
             free_slots: Vec::new(),
             unplaced: Vec::new(),
@@ -240,6 +240,27 @@ impl World {
             return Err(VadopError::NotASphere(handle));
         }
         Ok(self.bodies.sphere_at(i, self.time))
+    }
+
+    /// How many times body `handle`'s centre crossed the faces of each periodic axis (x, y, z):
+    /// +1 for each crossing out through the face at the box's maximum, -1 through the minimum
+    /// (zero on walled axes). Positions stay inside the box; the body's path unwrapped is its
+    /// position plus these times the box's sides.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BoxBounds, Sphere, World, WorldConfig};
+    /// let periodic = BoxBounds::cube(10.0)?.with_periodic([true, false, false]);
+    /// let mut world = World::new(periodic, WorldConfig::default())?;
+    /// let ball = world.add_sphere(Sphere { position: DVec3::splat(5.0), velocity: DVec3::new(4.0, 0.0, 0.0), radius: 0.5, mass: 1.0 })?;
+    /// world.step(2.0)?;
+    /// // It left through x = 10 after 1.25 and came back in at x = 0: now at x = 3.
+    /// assert!((world.sphere(ball)?.position.x - 3.0).abs() < 1e-12);
+    /// assert_eq!(world.crossings(ball)?, [1, 0, 0]);
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn crossings(&self, handle: BodyHandle) -> Result<[i64; 3]> {
+        Ok(self.bodies.crossings_of(self.live_slot(handle)?))
     }
 
     /// The live bodies that are moving spheres, with their handles, in ascending order of handle
@@ -377,7 +398,8 @@ impl World {
     /// ```
     pub fn potential_energy(&self) -> f64 {
         let (b, g) = (&self.bodies, self.config.gravity);
-        self.moving_ids().map(|i| -b.mass[i] * g.dot(b.position_at(i, self.time))).sum()
+        // Along a periodic axis a body falls on through the faces: its height unwrapped.
+        self.moving_ids().map(|i| -b.mass[i] * g.dot(b.unwrapped_at(i, self.time))).sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
@@ -557,13 +579,26 @@ impl World {
         check_length("radius", s.radius)?;
         check_magnitude("mass", s.mass)?;
         check_magnitude("inverse mass", 1.0 / s.mass)?;
-        if !self.bounds.contains(s.position, s.radius) {
+        self.check_in_box(s.position, s.radius)
+    }
+
+    /// Fails when a sphere of `radius` at `position` is not inside the box (see
+    /// [`BoxBounds::contains`]) or too large for a periodic side of it.
+    pub(crate) fn check_in_box(&self, position: DVec3, radius: f64) -> Result<()> {
+        if !self.bounds.contains(position, radius) {
             return Err(VadopError::OutsideBox {
-                position: s.position.to_array(),
-                radius: s.radius,
+                position: position.to_array(),
+                radius,
                 min: self.bounds.min.to_array(),
                 max: self.bounds.max.to_array(),
             });
+        }
+        for axis in (0..3).filter(|&a| self.bounds.periodic[a]) {
+            let (side, diameter) = (self.bounds.side()[axis], 2.0 * radius);
+            if !(diameter * MIN_PERIODIC_DIAMETERS <= side) {
+                let (axis, minimum) = (['x', 'y', 'z'][axis], MIN_PERIODIC_DIAMETERS);
+                return Err(VadopError::PeriodicSideTooShort { axis, side, diameter, minimum });
+            }
         }
         Ok(())
     }
@@ -580,7 +615,8 @@ impl World {
         for i in self.moving_ids() {
             let (p, v, r) =
                 (self.bodies.position_at(i, self.time), self.bodies.velocity_at(i, self.time), self.bodies.radius(i));
-            for axis in (0..3).filter(|&axis| g[axis] != 0.0) {
+            // A periodic axis has no floor to rest on.
+            for axis in (0..3).filter(|&axis| g[axis] != 0.0 && !self.bounds.periodic[axis]) {
                 let distance = if g[axis] < 0.0 {
                     p[axis] - (self.bounds.min[axis] + r)
                 } else {

@@ -218,6 +218,14 @@ impl World {
     /// The store's form of `body`, validated: the centre of mass and principal axes from the
     /// shape's frame.
     fn rigid_state(&self, body: &Body, fixed: bool) -> Result<RigidState> {
+        if self.bounds.is_periodic() {
+            if fixed {
+                return Err(VadopError::PeriodicUnsupported("a static body"));
+            }
+            if !matches!(body.shape, BodyShape::Sphere { .. }) {
+                return Err(VadopError::PeriodicUnsupported("a body that is not a sphere"));
+            }
+        }
         if self.config.gravity != DVec3::ZERO {
             if fixed {
                 return Err(VadopError::GravityUnsupported("a static body"));
@@ -293,6 +301,11 @@ impl World {
         position: DVec3,
     ) -> Result<()> {
         let aabb = geometry.parry_shape().compute_aabb(&geometry.pose_of_shape(centre, principal));
+        if self.bounds.is_periodic() {
+            // Only spheres (see `rigid_state`): the centre inside, and short of the sides.
+            let radius = 0.5 * (aabb.maxs - aabb.mins).max_element();
+            return self.check_in_box(centre, radius);
+        }
         if !(aabb.mins.cmpge(self.bounds.min).all() && aabb.maxs.cmple(self.bounds.max).all()) {
             return Err(VadopError::ShapeOutsideBox {
                 position: position.to_array(),

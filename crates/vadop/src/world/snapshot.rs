@@ -7,7 +7,7 @@
 //! last contact (the TC model depends on it), the free slots, the bodies added since the last
 //! step, and the pairs in contact (for the pseudo-dynamic method the pairs it saw overlapping,
 //! for a world that reports contact ends its touching pairs and when each contact started, where
-//! the search for its end starts). What is not: the broad phase, the proxies and the queue, which are rebuilt. That
+//! the search for its end starts), and in a periodic box each body's crossings. What is not: the broad phase, the proxies and the queue, which are rebuilt. That
 //! cannot change a contact, because contact times are canonical and candidate generation only
 //! decides which pairs are tested, never what a test finds. Numbers are written in the shortest
 //! form that reads back to the same bits.
@@ -96,6 +96,13 @@ struct Slot {
     /// A world with rigid bodies: the slot's shape and spin.
     #[serde(default)]
     spin: Option<SlotSpin>,
+    /// In a periodic box: the body's crossings of each periodic axis's faces.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    crossings: [i64; 3],
+}
+
+fn is_zero(crossings: &[i64; 3]) -> bool {
+    *crossings == [0; 3]
 }
 
 impl Slot {
@@ -129,6 +136,7 @@ impl World {
                 alive: b.alive[i],
                 generation: b.generation[i],
                 last_contact: history.get(i).copied().filter(|t| t.is_finite()),
+                crossings: b.crossings_of(i),
                 spin: b.has_rigid().then(|| SlotSpin {
                     shape: b.rigid.shape[i],
                     orientation: b.rigid.spin_start[i].0,
@@ -186,7 +194,7 @@ impl World {
         let exact = world.bounds;
         let slack = 1e-9 * (exact.max - exact.min).max_element()
             + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
-        world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack };
+        world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack, periodic: exact.periodic };
         let shapes = snapshot
             .shapes
             .iter()
@@ -261,6 +269,13 @@ impl World {
             }
             world.bodies.alive[i] = slot.alive;
             world.bodies.generation[i] = generation;
+            if slot.crossings != [0; 3] {
+                if !world.bounds.is_periodic() {
+                    return Err(bad(format!("slot {i}: crossings are counted in a periodic box only")));
+                }
+                world.bodies.crossings.resize(world.bodies.slots(), [0; 3]);
+                world.bodies.crossings[i] = slot.crossings;
+            }
         }
         world.bounds = exact;
         let slots = snapshot.slots.len();

@@ -1,0 +1,207 @@
+//! What the pipeline predicts into its queue: a pair's contact (or its end) from the proxies a
+//! broad phase reported, a body's contact with the walls and the static geometry, its crossing of
+//! a periodic face and its proxy's renewal, each as an event stamped with the motions it was
+//! predicted from.
+//!
+//! It owns how a reported pair is tested: as the lower id's motion against the higher id's, the
+//! latter shifted by whole sides when the pair meets across periodic faces, so the same contact
+//! reported twice (through either body's ghost) is the same event, which the queue pops once. It
+//! never schedules or handles an event.
+
+use crate::bodies::Bodies;
+use crate::broad_phase::proxy::{Proxies, ProxyTable, Reported};
+use crate::event_queue::{Event, Partner};
+use crate::narrow_phase::contacts::{self, Parking};
+use crate::narrow_phase::parked::ParkedSearches;
+use crate::narrow_phase::spheres::wall_contact_time;
+use crate::narrow_phase::static_geometry::StaticGeometry;
+use crate::walls::BoxBounds;
+use crate::window::Window;
+use glam::DVec3;
+
+/// The end of the contact of bodies `a` and `b`, touching since `since`, if its canonical time
+/// lies in `window`, stamped with their current stamps: a velocity change of either voids it.
+#[inline]
+pub(super) fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: Window) -> Option<Event> {
+    let (a, b) = (a.min(b), a.max(b));
+    let (i, j) = (a as usize, b as usize);
+    let (time, stalled) = contacts::pair_end(bodies, i, j, since, window)?;
+    Some(Event {
+        time,
+        body: a,
+        partner: if stalled { Partner::Stalled(b) } else { Partner::End(b) },
+        body_stamp: bodies.stamp[i],
+        partner_stamp: bodies.stamp[j],
+    })
+}
+
+/// The contact of two reported proxies if its canonical time lies in `window`, from the motions
+/// the broad phase reported (the bodies' own), stamped with the stamps of the motions they came
+/// from: a prediction made from a proxy not yet refreshed after a velocity change is void when
+/// it pops. Across a periodic face (a ghost reported) it is the lower id's own motion against the
+/// higher id's shifted by the difference of the two shifts: the same arithmetic through whichever
+/// ghost the pair was reported (see [`crate::broad_phase::ghosts`]).
+#[inline]
+pub(super) fn predict_pair(
+    bodies: &Bodies,
+    proxies: &ProxyTable,
+    x: Reported,
+    y: Reported,
+    window: Window,
+) -> Option<Event> {
+    let (x, y) = (own_or_image(proxies, x)?, own_or_image(proxies, y)?);
+    // Always the lower id first, so every method does bit-identical arithmetic for a pair.
+    let ((a, shift_a), (b, shift_b)) = if x.0.body < y.0.body { (x, y) } else { (y, x) };
+    if a.body == b.body {
+        return None;
+    }
+    let (i, j) = (a.body as usize, b.body as usize);
+    let found = if shift_a == DVec3::ZERO && shift_b == DVec3::ZERO {
+        contacts::pair_start(bodies, (i, a.state), (j, b.state), window)?
+    } else {
+        // Two ghosts of one shift are the bodies themselves.
+        let mut image = bodies.state[j];
+        if shift_a != shift_b {
+            image.motion.position += shift_b - shift_a;
+        }
+        contacts::pair_start(bodies, (i, &bodies.state[i]), (j, &image), window)?
+    };
+    Some(pair_event((a.body, a.stamp), (b.body, b.stamp), found))
+}
+
+/// A report as the body it is of, with the stamp its motion was made with, and the whole sides
+/// its state is shifted by; `None` for a ghost retired since it was entered.
+#[inline]
+fn own_or_image<'a>(proxies: &ProxyTable, r: Reported<'a>) -> Option<(Reported<'a>, DVec3)> {
+    let (body, stamp, shift) = proxies.owner(r.body, r.stamp)?;
+    Some((Reported { body, stamp, state: r.state }, shift))
+}
+
+/// What predicting a pair in a world of shapes gives: an event for the queue, or where a shape
+/// search parked, for [`ParkedSearches`].
+#[derive(Debug)]
+pub(super) enum Prediction {
+    Event(Event),
+    Parked(Parking),
+}
+
+/// [`predict_pair`] in a world of shapes: a shape pair's search taken up where `parked` holds it,
+/// with where it parks now.
+#[inline]
+pub(super) fn predict_pair_parked(
+    bodies: &Bodies,
+    proxies: &ProxyTable,
+    x: Reported,
+    y: Reported,
+    window: Window,
+    parked: &ParkedSearches,
+) -> (Option<Event>, Option<Parking>) {
+    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
+    if bodies.are_spheres(a.body as usize, b.body as usize) {
+        return (predict_pair(bodies, proxies, a, b, window), None);
+    }
+    let (found, parks) = contacts::pair_start_parked(bodies, a.body as usize, b.body as usize, window, Some(parked));
+    (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
+}
+
+/// [`predict_pair_parked`] for `(x, y, window)` into `out`, for [`sort_predictions`].
+#[inline]
+pub(super) fn predict_into(
+    bodies: &Bodies,
+    proxies: &ProxyTable,
+    (x, y, window): (Reported, Reported, Window),
+    parked: &ParkedSearches,
+    out: &mut Vec<Prediction>,
+) {
+    let (event, parks) = predict_pair_parked(bodies, proxies, x, y, window, parked);
+    out.extend(event.map(Prediction::Event));
+    out.extend(parks.map(Prediction::Parked));
+}
+
+/// Empties `found` in its order: each event to `event`, each parked search into `parked` (pairs
+/// not searched since `window_start` are dropped from the store).
+pub(super) fn sort_predictions(
+    found: &mut Vec<Prediction>,
+    parked: &mut ParkedSearches,
+    window_start: f64,
+    mut event: impl FnMut(Event),
+) {
+    for prediction in found.drain(..) {
+        match prediction {
+            Prediction::Event(e) => event(e),
+            Prediction::Parked(((a, b), epochs, resume)) => parked.keep(a, b, epochs, resume, window_start),
+        }
+    }
+}
+
+/// The event of bodies `a < b` (each with its stamp) starting to touch, or of their search
+/// stalling, at the time found.
+#[inline]
+pub(super) fn pair_event((a, stamp_a): (u32, u32), (b, stamp_b): (u32, u32), (time, stalled): (f64, bool)) -> Event {
+    let partner = if stalled { Partner::Stalled(b) } else { Partner::Body(b) };
+    Event { time, body: a, partner, body_stamp: stamp_a, partner_stamp: stamp_b }
+}
+
+/// Calls `found` with body `i`'s contact with every static body its proxy's box meets, inside
+/// the proxy's window and `window`. Static bodies have no proxy; their stamps never change.
+#[inline]
+pub(super) fn for_each_static_event(
+    bodies: &Bodies,
+    proxies: Proxies,
+    statics: &StaticGeometry,
+    i: usize,
+    window: Window,
+    mut found: impl FnMut(Event),
+) {
+    if statics.is_empty() {
+        return;
+    }
+    let (low, high) = proxies.bbox(i).corners();
+    let window = proxies.window_of(i).intersect(window);
+    let own = proxies.reported(i);
+    statics.for_each_near(proxies.box_min() + low, proxies.box_min() + high, |s| {
+        let fixed = Reported { body: s, stamp: bodies.stamp[s as usize], state: &bodies.state[s as usize] };
+        if let Some(event) = predict_pair(bodies, &proxies, own, fixed, window) {
+            found(event);
+        }
+    });
+}
+
+/// The renewal of body `body`'s proxy at its end.
+#[inline]
+pub(super) fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event {
+    let i = body as usize;
+    Event {
+        time: proxies.window_of(i).end,
+        body,
+        partner: Partner::Renew,
+        body_stamp: bodies.stamp[i],
+        partner_stamp: 0,
+    }
+}
+
+/// Body `body`'s wall contact if its canonical time lies in `window` (or where an undecided
+/// search stalled).
+#[inline]
+pub(super) fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+    let i = body as usize;
+    let (time, partner) = match contacts::wall_start(bodies, i, bounds, window)? {
+        Ok((time, wall)) => (time, Partner::Wall(wall)),
+        Err(time) => (time, Partner::WallStalled),
+    };
+    Some(Event { time, body, partner, body_stamp: bodies.stamp[i], partner_stamp: 0 })
+}
+
+/// Body `body`'s crossing of a periodic face of `bounds` if its canonical time lies in `window`:
+/// when its centre reaches the face (the body then comes back through the opposite one).
+#[inline]
+pub(super) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+    if !bounds.is_periodic() {
+        return None;
+    }
+    let i = body as usize;
+    let (low, high) = bounds.faces();
+    let (time, face) = wall_contact_time(&bodies.motion(i), 0.0, low, high, bodies.gravity_on(i))?;
+    let event = Event { time, body, partner: Partner::Cross(face), body_stamp: bodies.stamp[i], partner_stamp: 0 };
+    window.contains(time).then_some(event)
+}

@@ -1,0 +1,333 @@
+//! Periodic boxes: bodies leave through one face and come back through the other, meet across
+//! the faces through their nearest images, exactly as the brute-force oracle says, and an elastic
+//! gas in a periodic box has the hard-sphere pressure.
+
+mod common;
+
+use glam::DVec3;
+use proptest::prelude::*;
+use vadop::scene::{GeneratedScene, PaperScene, Scene, Velocities, FRAMES_PER_SECOND};
+use vadop::{BoxBounds, Contact, Method, Mode, Sphere, Touched, VadopError, World, WorldConfig};
+
+const DT: f64 = 1.0 / FRAMES_PER_SECOND;
+
+fn config(method: Method, mode: Mode) -> WorldConfig {
+    WorldConfig { method, mode, ..WorldConfig::default() }
+}
+
+fn ball(position: DVec3, velocity: DVec3) -> Sphere {
+    Sphere { position, velocity, radius: 0.5, mass: 1.0 }
+}
+
+/// What is wrong at a frame end in a periodic box, if anything: a centre outside the faces of a
+/// periodic axis, a body through a wall of a walled one, or (simulate mode) two bodies
+/// overlapping through their nearest images beyond the contact tolerance.
+fn periodic_violation(world: &World) -> Option<String> {
+    let bounds = world.bounds();
+    let spheres: Vec<_> = world.spheres().collect();
+    for (id, s) in &spheres {
+        for a in 0..3 {
+            let reach = if bounds.periodic[a] { 0.0 } else { s.radius };
+            let slack = 1e-9 * s.radius;
+            if s.position[a] - reach < bounds.min[a] - slack || s.position[a] + reach > bounds.max[a] + slack {
+                return Some(format!("body {id} left the box on axis {a}: {s:?}"));
+            }
+        }
+    }
+    if world.config().mode == Mode::Simulate {
+        for (k, (i, a)) in spheres.iter().enumerate() {
+            for (j, b) in &spheres[k + 1..] {
+                let reach = a.radius + b.radius;
+                let distance = bounds.nearest_image(b.position - a.position).length();
+                if distance < reach * (1.0 - 1e-8) {
+                    return Some(format!("bodies {i} and {j} overlap by {:e}", reach - distance));
+                }
+            }
+        }
+    }
+    None
+}
+
+/// A ball thrown across a periodic face meets a partner on the other side at the instant it meets
+/// it in the same scene with the box shifted by half a side, where the meeting is inside the box.
+#[test]
+fn a_ball_thrown_across_a_face_meets_its_partner_as_in_a_shifted_box() {
+    for method in Method::ALL.into_iter().filter(|&m| m != Method::Discrete) {
+        for mode in [Mode::Detect, Mode::Simulate] {
+            let mut times = Vec::new();
+            for shift in [0.0, 5.0] {
+                // Periodic in x and y, walls in z; the ball at x = 9 flies towards x = 10 and
+                // meets the partner at x = 0.8, one diameter away through the face, after 0.8 / 3.
+                let bounds = BoxBounds::new(DVec3::new(shift, 0.0, 0.0), DVec3::new(10.0 + shift, 10.0, 10.0))
+                    .unwrap()
+                    .with_periodic([true, true, false]);
+                let wrap = |x: f64| if x < shift { x + 10.0 } else { x };
+                let mut world = World::new(bounds, config(method, mode)).unwrap();
+                let thrown =
+                    world.add_sphere(ball(DVec3::new(wrap(9.0), 5.0, 5.0), DVec3::new(3.0, 0.0, 0.0))).unwrap();
+                let partner = world.add_sphere(ball(DVec3::new(wrap(0.8), 5.0, 5.0), DVec3::ZERO)).unwrap();
+                let contacts = world.step(1.0).unwrap().to_vec();
+                let pair: Vec<&Contact> = contacts.iter().filter(|c| matches!(c.touched, Touched::Body(_))).collect();
+                assert_eq!(pair.len(), 1, "{method:?} {mode:?} shift {shift}: {contacts:?}");
+                assert_eq!((pair[0].body, pair[0].touched), (thrown, Touched::Body(partner)));
+                assert!((pair[0].normal - DVec3::X).length() < 1e-12, "{:?}", pair[0].normal);
+                // The contact point lies by the thrown ball, still short of x = 10, so across the face.
+                let point = pair[0].point.x;
+                assert!((point - 10.3).abs() < 1e-9, "point {point}");
+                times.push(pair[0].time);
+                if mode == Mode::Simulate {
+                    // Equal masses: the thrown ball stopped, the partner took its velocity.
+                    assert!(world.sphere(thrown).unwrap().velocity.length() < 1e-12);
+                    assert!((world.sphere(partner).unwrap().velocity.x - 3.0).abs() < 1e-12);
+                }
+            }
+            let expected = 0.8 / 3.0;
+            assert!(times.iter().all(|t| (t - expected).abs() < 1e-12), "{method:?} {mode:?}: {times:?}");
+        }
+    }
+}
+
+/// A body crossing faces keeps its path: its position wraps into the box, its crossings count,
+/// and its position unwrapped is where a straight path takes it.
+#[test]
+fn crossings_are_counted_and_unwrap_the_path() {
+    let bounds = BoxBounds::cube(10.0).unwrap().with_periodic([true, true, true]);
+    let mut world = World::new(bounds, WorldConfig::default()).unwrap();
+    let start = DVec3::new(5.0, 5.0, 5.0);
+    let velocity = DVec3::new(7.3, -4.1, 2.9);
+    let body = world.add_sphere(ball(start, velocity)).unwrap();
+    for _ in 0..300 {
+        world.step(DT).unwrap();
+    }
+    let s = world.sphere(body).unwrap();
+    assert!(s.position.cmpge(DVec3::ZERO).all() && s.position.cmple(DVec3::splat(10.0)).all(), "{s:?}");
+    let crossed = world.crossings(body).unwrap();
+    let unwrapped = s.position + DVec3::new(crossed[0] as f64, crossed[1] as f64, crossed[2] as f64) * 10.0;
+    let expected = start + velocity * world.time();
+    assert!((unwrapped - expected).length() < 1e-9, "unwrapped {unwrapped} vs {expected}");
+    assert_eq!(crossed, [7, -4, 3]);
+}
+
+fn assert_same_as_oracle(scene: &Scene, method: Method, mode: Mode, frames: usize) {
+    let mut found = scene.world(config(method, mode)).unwrap();
+    let mut oracle = scene.world(config(Method::Brute, mode)).unwrap();
+    let start = oracle.kinetic_energy();
+    for frame in 0..frames {
+        let contacts = found.step(DT).unwrap().to_vec();
+        let expected = oracle.step(DT).unwrap();
+        assert_eq!(common::contact_bits(&contacts), common::contact_bits(expected), "frame {frame}: {method:?}");
+        if mode == Mode::Simulate {
+            assert!((oracle.kinetic_energy() - start).abs() <= 1e-12 * start, "frame {frame}: energy drift");
+        }
+        assert_eq!(periodic_violation(&oracle), None, "frame {frame}");
+    }
+    assert_eq!(common::state_bits(&found), common::state_bits(&oracle), "{method:?}: final states differ");
+    let crossings = |w: &World| w.spheres().map(|(h, _)| w.crossings(h).unwrap()).collect::<Vec<_>>();
+    assert_eq!(crossings(&found), crossings(&oracle), "{method:?}: crossings differ");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Every continuous method reports the oracle's contacts to the bit, in both modes, with any
+    /// mix of periodic and walled axes, slow, fast and grazing.
+    #[test]
+    fn every_method_matches_brute_force_in_a_periodic_box(
+        bodies in 2usize..250,
+        packing_fraction in 0.01f64..0.35,
+        max_speed in prop_oneof![0.01f64..0.1, 0.1f64..2.0, 2.0f64..10.0],
+        axes in (any::<bool>(), any::<bool>(), any::<bool>()),
+        method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::Grid), Just(Method::SweptAabb), Just(Method::SweptKdop)],
+        simulate in any::<bool>(),
+        seed in any::<u64>(),
+    ) {
+        let periodic = [axes.0, axes.1, axes.2];
+        prop_assume!(periodic.contains(&true));
+        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build();
+        prop_assume!(scene.is_ok());
+        let mut scene = scene.unwrap();
+        prop_assume!(scene.bounds.side().min_element() >= 8.0);
+        scene.bounds = scene.bounds.with_periodic(periodic);
+        assert_same_as_oracle(&scene, method, if simulate { Mode::Simulate } else { Mode::Detect }, 15);
+    }
+}
+
+/// A fast crowd in a small periodic box: paths of many box lengths a frame, all through faces.
+#[test]
+fn a_fast_crowd_crossing_faces_matches_brute_force() {
+    let mut scene =
+        PaperScene { bodies: 120, packing_fraction: 0.02, max_speed: 40.0, radius: 0.5, seed: 3 }.build().unwrap();
+    scene.bounds = scene.bounds.with_periodic([true, true, true]);
+    for method in [Method::Auto, Method::Vadop, Method::SweptAabb] {
+        for mode in [Mode::Detect, Mode::Simulate] {
+            assert_same_as_oracle(&scene, method, mode, 20);
+        }
+    }
+}
+
+/// The discrete method finds the overlaps across the faces at frame instants, as it does inside.
+#[test]
+fn the_discrete_method_sees_overlaps_across_faces() {
+    let bounds = BoxBounds::cube(10.0).unwrap().with_periodic([true, false, true]);
+    let mut world = World::new(bounds, config(Method::Discrete, Mode::Detect)).unwrap();
+    let a = world.add_sphere(ball(DVec3::new(9.6, 5.0, 0.2), DVec3::ZERO)).unwrap();
+    let b = world.add_sphere(ball(DVec3::new(0.2, 5.0, 9.7), DVec3::ZERO)).unwrap();
+    let contacts = world.step(DT).unwrap();
+    assert_eq!(contacts.len(), 1, "{contacts:?}");
+    assert_eq!((contacts[0].body, contacts[0].touched), (a, Touched::Body(b)));
+    let normal = contacts[0].normal;
+    assert!((normal - DVec3::new(0.6, 0.0, -0.5).normalize()).length() < 1e-12, "{normal}");
+}
+
+/// A saved periodic world resumes to the bit, crossings included.
+#[test]
+fn a_periodic_world_resumes_bit_exactly() {
+    let mut scene =
+        PaperScene { bodies: 200, packing_fraction: 0.1, max_speed: 3.0, radius: 0.5, seed: 11 }.build().unwrap();
+    scene.bounds = scene.bounds.with_periodic([true, true, false]);
+    let mut first = scene.world(config(Method::Auto, Mode::Simulate)).unwrap();
+    for _ in 0..10 {
+        first.step(DT).unwrap();
+    }
+    let path = std::env::temp_dir().join(format!("vadop-periodic-{}.json", std::process::id()));
+    first.save(&path).unwrap();
+    let mut resumed = World::load(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    assert_eq!(resumed.bounds().periodic, [true, true, false]);
+    let crossed = |w: &World| w.spheres().map(|(h, _)| w.crossings(h).unwrap()).collect::<Vec<_>>();
+    assert_eq!(crossed(&first), crossed(&resumed));
+    assert!(crossed(&first).iter().any(|c| *c != [0; 3]), "some body crossed a face");
+    for frame in 0..10 {
+        let a = first.step(DT).unwrap().to_vec();
+        assert_eq!(common::contact_bits(&a), common::contact_bits(resumed.step(DT).unwrap()), "frame {frame}");
+    }
+    assert_eq!(common::state_bits(&first), common::state_bits(&resumed));
+    assert_eq!(crossed(&first), crossed(&resumed));
+}
+
+/// What a periodic box does not take yet is refused with the reason.
+#[test]
+fn unsupported_periodic_worlds_are_refused_clearly() {
+    let bounds = BoxBounds::cube(10.0).unwrap().with_periodic([false, true, false]);
+    let mut world = World::new(bounds, WorldConfig::default()).unwrap();
+    // Ten diameters of 1.25 fit a side of 10 no more than eight times.
+    let big = Sphere { position: DVec3::splat(5.0), velocity: DVec3::ZERO, radius: 0.7, mass: 1.0 };
+    let error = world.add_sphere(big).unwrap_err();
+    assert!(matches!(error, VadopError::PeriodicSideTooShort { axis: 'y', .. }), "{error}");
+    // The centre must lie inside on a periodic axis; the body may reach across the face.
+    assert!(world.add_sphere(ball(DVec3::new(5.0, 10.2, 5.0), DVec3::ZERO)).is_err());
+    assert!(world.add_sphere(ball(DVec3::new(5.0, 0.1, 5.0), DVec3::ZERO)).is_ok());
+    assert!(world.add_sphere(ball(DVec3::new(0.1, 5.0, 5.0), DVec3::ZERO)).is_err(), "x is walled");
+    let cube = world.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
+    let body = vadop::Body {
+        shape: vadop::BodyShape::Shape(cube),
+        position: DVec3::splat(5.0),
+        orientation: glam::DQuat::IDENTITY,
+        velocity: DVec3::ZERO,
+        angular_velocity: DVec3::ZERO,
+        mass: 1.0,
+    };
+    let refused = world.add_body(body).unwrap_err();
+    assert!(matches!(refused, VadopError::PeriodicUnsupported(_)), "{refused}");
+    let error = world.add_static(cube, DVec3::splat(5.0), glam::DQuat::IDENTITY).unwrap_err();
+    assert!(matches!(error, VadopError::PeriodicUnsupported(_)), "{error}");
+}
+
+/// Carnahan-Starling's compressibility factor Z = PV/NkT of the hard-sphere fluid at packing eta.
+fn carnahan_starling(eta: f64) -> f64 {
+    (1.0 + eta + eta * eta - eta * eta * eta) / (1.0 - eta).powi(3)
+}
+
+/// An elastic gas of 2000 spheres at packing 0.3 in a periodic box: the pressure from the
+/// collisional virial, Z = 1 + W / (3 N kT t), within 1 % of Carnahan-Starling, energy kept.
+#[test]
+fn a_periodic_gas_has_the_carnahan_starling_pressure() {
+    let generated = GeneratedScene {
+        bodies: 2000,
+        packing_fraction: 0.3,
+        velocities: Velocities::Maxwell { rms_speed: 0.2 },
+        radius: 0.5,
+        seed: 5,
+    };
+    let mut scene = generated.build().unwrap();
+    scene.bounds = scene.bounds.with_periodic([true, true, true]);
+    let mut world = scene.world(config(Method::Auto, Mode::Simulate)).unwrap();
+    let n = world.len() as f64;
+    let energy = world.kinetic_energy();
+    let kt = 2.0 * world.translational_kinetic_energy() / (3.0 * n);
+    // Enskog's collision rate per sphere, 24 eta g(sigma) sqrt(kT / pi m) with the contact value
+    // g(sigma) = (Z - 1) / 4 eta: frames of half a mean free time; about 37 collisions per sphere
+    // to forget the lattice, then 75 measured (75,000 pair collisions).
+    let rate = 6.0 * (carnahan_starling(0.3) - 1.0) * (kt / std::f64::consts::PI).sqrt();
+    let frame = 0.5 / rate;
+    let (mut virial, mut time) = (0.0, 0.0);
+    let (mut frames, mut measured) = (0, 0);
+    while measured < 150 {
+        world.step(frame).unwrap();
+        frames += 1;
+        if frames > 75 {
+            virial += world.stats().pair_virial;
+            time += frame;
+            measured += 1;
+        }
+    }
+    let drift = (world.kinetic_energy() - energy).abs() / energy;
+    assert!(drift <= 1e-12, "energy drift {drift:e}");
+    assert_eq!(periodic_violation(&world), None);
+    let z = 1.0 + virial / (3.0 * n * kt * time);
+    let expected = carnahan_starling(0.3);
+    eprintln!("Z {z} from the virial, Carnahan-Starling {expected}");
+    assert!((z / expected - 1.0).abs() < 0.01, "Z {z} vs Carnahan-Starling {expected}");
+}
+
+/// An independent oracle for a fully periodic box in detect mode, where every path is straight
+/// forever: each pair, through every image `k` its relative path passes near, starts to touch
+/// where the closed form of two spheres on lines says. Every method's contacts are those, to
+/// 1e-9, fast and grazing pairs included, and none besides.
+#[test]
+fn every_method_finds_the_closed_form_contacts_through_every_image() {
+    use vadop::narrow_phase::spheres::sphere_sphere_time;
+    let mut scene =
+        PaperScene { bodies: 150, packing_fraction: 0.05, max_speed: 6.0, radius: 0.5, seed: 21 }.build().unwrap();
+    scene.bounds = scene.bounds.with_periodic([true, true, true]);
+    let side = scene.bounds.side();
+    let frames = 20;
+    let duration = frames as f64 * DT;
+    let mut expected = Vec::new();
+    for (i, a) in scene.spheres.iter().enumerate() {
+        for (j, b) in scene.spheres.iter().enumerate().skip(i + 1) {
+            let (offset, w, reach) = (b.position - a.position, b.velocity - a.velocity, a.radius + b.radius);
+            let (low, high) = (offset.min(offset + w * duration) - reach, offset.max(offset + w * duration) + reach);
+            let range = |a: usize| (low[a] / side[a]).floor() as i64..=(high[a] / side[a]).ceil() as i64;
+            for kx in range(0) {
+                for ky in range(1) {
+                    for kz in range(2) {
+                        let shift = DVec3::new(kx as f64, ky as f64, kz as f64) * side;
+                        if let Some(t) = sphere_sphere_time(offset - shift, w, reach) {
+                            if t < duration {
+                                expected.push((i as u32, j as u32, t));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    expected.sort_by(|x, y| x.2.total_cmp(&y.2));
+    assert!(expected.len() > 100, "{} contacts", expected.len());
+    for method in Method::ALL.into_iter().filter(|&m| m != Method::Discrete) {
+        let mut world = scene.world(config(method, Mode::Detect)).unwrap();
+        let mut found = Vec::new();
+        for _ in 0..frames {
+            for c in world.step(DT).unwrap() {
+                if let Touched::Body(other) = c.touched {
+                    found.push((c.body.index(), other.index(), c.time));
+                }
+            }
+        }
+        assert_eq!(found.len(), expected.len(), "{method:?}");
+        for (f, e) in found.iter().zip(&expected) {
+            assert!(f.0 == e.0 && f.1 == e.1 && (f.2 - e.2).abs() <= 1e-9, "{method:?}: found {f:?}, expected {e:?}");
+        }
+    }
+}
