@@ -160,6 +160,17 @@ def test_a_mixed_shape_screenshot_shows_solids_and_level_geometry(mixed_page: Pa
     assert moving.sum() > 2000 and selected.sum() > 50 and level.sum() > 5000
 
 
+def test_a_periodic_box_draws_a_sphere_on_both_sides_of_its_face(tmp_path: Path) -> None:
+    # The first sphere reaches across the face at x = 0: it shows there and by x = 10.
+    world = vadop.World([[0.2, 5, 5], [5.0, 5, 5]], np.zeros((2, 3)), [0.5, 0.5], box=10.0, periodic="x")
+    run = record(world, frames=2)
+    assert run["periodic"] == [True, False, False]
+    page = write_html(run, tmp_path / "periodic.html")
+    dom = browse(page, "frame=1&pause", "--dump-dom")
+    status = json.loads(html.unescape(dom.split('data-status="', 1)[1].split('"', 1)[0]))
+    assert status["error"] == "" and status["spheres"] == 2 and status["images"] == 1
+
+
 def screenshot(page: Path, fragment: str, path: Path) -> npt.NDArray[np.float32]:
     browse(page, fragment, f"--screenshot={path}")
     return imread(path)[:, :, :3]

@@ -146,6 +146,8 @@ def record(
 
     run: dict[str, Any] = {
         "box": world.box.tolist(),
+        # Spheres reaching across a periodic face are drawn on both sides.
+        "periodic": [axis in world.periodic for axis in "xyz"],
         "dt": dt,
         "ids": ids.tolist(),
         # JSON has no infinity: level geometry's radius is None.

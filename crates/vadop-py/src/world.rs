@@ -481,6 +481,17 @@ impl PyWorld {
         Ok(vectors_array(py, &self.per_body(py, |_, _, body| body.position)?))
     }
 
+    /// The box's periodic axes as letters, e.g. ``'xyz'`` (``''``: every axis walled).
+    ///
+    /// >>> import vadop
+    /// >>> vadop.World(box=10.0, periodic="zx").periodic
+    /// 'xz'
+    #[getter]
+    fn periodic(&self, py: Python<'_>) -> PyResult<String> {
+        let periodic = self.lock(py)?.bounds().periodic;
+        Ok("xyz".chars().zip(periodic).filter(|(_, p)| *p).map(|(a, _)| a).collect())
+    }
+
     /// Each body's crossings of the periodic faces, int64 (n, 3): per axis x, y, z, +1 for each
     /// passage out through the face at the box's maximum, -1 through the minimum (zeros on
     /// walled axes). ``positions + crossings * side`` is the path unwrapped.

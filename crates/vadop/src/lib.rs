@@ -77,7 +77,7 @@ pub use frame::{Contact, FrameStats, Mode, Touched};
 /// ```
 pub use glam;
 pub use handle::BodyHandle;
-pub use walls::{BoxBounds, Wall};
+pub use walls::{BoxBounds, Periodic, Wall, MIN_PERIODIC_DIAMETERS};
 pub use window::Window;
 pub use world::{Body, BodyShape, Method, ShapeId, World, WorldConfig};
 

@@ -17,7 +17,7 @@
 //!
 //! In a box with periodic axes a proxy ends where its body's centre crosses a periodic face (the
 //! body then comes back through the opposite face, on a fresh motion), proxies near the faces get
-//! ghosts, their images across the faces, in slots past the bodies' ([`crate::broad_phase::ghosts`]), and
+//! ghosts, their images across the faces, in slots past the bodies' (`broad_phase::ghosts`), and
 //! no proxy covers more than the ghost width allows: a broad phase reads a ghost as one more proxy.
 
 use crate::bodies::{Bodies, BodyState};
