@@ -2,7 +2,7 @@
 //! its own so that its time, core and peak memory are its own. The suites start these through
 //! the runner; each job prints its result on stdout (one JSON line, or the peers' contacts file).
 
-use crate::peers::{shapes, trajectory, Scene};
+use crate::peers::{plain_grid, shapes, trajectory, Scene};
 use crate::speed::{candidates, retest};
 use crate::CliResult;
 use clap::{Args, ValueEnum};
@@ -28,9 +28,13 @@ pub struct ChildArgs {
     /// The method stepped (peers-time, retest)
     #[arg(long, default_value = "auto")]
     method: String,
-    /// peers-export: the folder of the trajectory and reference files; peers-time: the contacts file
+    /// peers-export: the folder of the trajectory and reference files; peers-time and
+    /// peers-plain-grid: the contacts file
     #[arg(long)]
     out: Option<PathBuf>,
+    /// peers-plain-grid: the trajectory file it reads
+    #[arg(long)]
+    trajectory: Option<PathBuf>,
     /// peers-export: the reference comes from brute force
     #[arg(long)]
     brute: bool,
@@ -45,6 +49,8 @@ enum Job {
     PeersExport,
     /// Time one of vadop's methods on the peers' scene and write its contacts.
     PeersTime,
+    /// Run the reference plain grid over the peers' trajectory file and write its contacts.
+    PeersPlainGrid,
     /// Count the body pairs whose swept boxes overlap, per frame.
     Candidates,
     /// Time `World::set_velocity` between frames.
@@ -60,6 +66,10 @@ pub fn run(args: &ChildArgs) -> CliResult<()> {
             Scene::Shapes => shapes::export(args.bodies, args.speed, args.frames, args.brute, &out()?),
         },
         Job::PeersTime => trajectory::time_method(args.scene, args.bodies, args.speed, args.frames, method, &out()?),
+        Job::PeersPlainGrid => {
+            let trajectory = args.trajectory.clone().ok_or("this job needs --trajectory")?;
+            plain_grid::time(&trajectory, &out()?)
+        }
         Job::Candidates => candidates::count(args.bodies, args.speed, args.frames),
         Job::Retest => retest::measure(args.bodies, args.speed, args.frames, method, args.calls),
     }

@@ -186,6 +186,8 @@ fn peers_render_their_table_and_plot_from_a_csv() {
                 ("vadop", "continuous", 5.0),
                 ("parry-ccd", "continuous", 3.0),
                 ("fcl-dtree", "discrete", 1.0),
+                // The reference grid, faster than auto here, is not a peer: the goal check names it apart.
+                ("plain-grid", "continuous", 1.6),
             ] {
                 csv.push_str(&format!(
                     "{n},{speed},{pipeline},{kind},10,ok,{},100,0,0,100,20.0,\n",
@@ -200,10 +202,14 @@ fn peers_render_their_table_and_plot_from_a_csv() {
     assert!(output.status.success(), "{}", stderr(&output));
     let text = read(&dir.join("B.md"));
     assert!(text.contains("<!-- peers:begin -->") && text.contains("<!-- peers:end -->"), "{text}");
-    assert_eq!(table_after(&text, "| n | speed | pipeline").len(), 17, "{text}");
+    assert_eq!(table_after(&text, "| n | speed | pipeline").len(), 21, "{text}");
     assert!(text.contains("| timed out after 120 s |"), "{text}");
     assert!(
         text.contains("- n=100000, speed 5: auto 120.000 ms, exact; faster than every continuous peer that finished"),
+        "{text}"
+    );
+    assert!(
+        text.contains("auto ÷ plain-grid 1.25 (96.000 ms).") && text.contains("plain-grid is a reference"),
         "{text}"
     );
     assert_png(&dir.join("results/peers/peers.png"));
@@ -270,6 +276,26 @@ fn peers_run_the_mixed_shape_scene_in_its_own_section() {
     // vadop's discrete method takes spheres only: asking for it is a usage error.
     let refused = bench(&dir, &["peers", "--scene", "shapes", "--pipelines", "vadop-discrete"]);
     assert_usage_error(&refused, "handles spheres only");
+    let refused = bench(&dir, &["peers", "--scene", "shapes", "--pipelines", "plain-grid"]);
+    assert_usage_error(&refused, "a reference for spheres");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// The reference grid on the sphere scene, end to end beside the default method: both exact
+/// against the brute-force reference, fast bodies bouncing several times a frame.
+#[test]
+fn peers_run_the_plain_grid_exactly_on_the_sphere_scene() {
+    let dir = scratch("peers-plain-grid");
+    let args = ["peers", "--quick", "--bodies", "300", "--speeds", "5", "--frames", "4"];
+    let output = bench(&dir, &[&args[..], &["--pipelines", "vadop-auto,plain-grid", "--output", "B.md"]].concat());
+    assert!(output.status.success(), "{}", stderr(&output));
+    let text = read(&dir.join("B.md"));
+    let rows = table_after(&text, "| n | speed | pipeline");
+    assert_eq!(rows.len(), 2, "{text}");
+    for row in &rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert!(cells[7].parse::<u64>().is_ok_and(|f| f > 0) && (cells[8], cells[9]) == ("0", "0"), "{row}");
+    }
     std::fs::remove_dir_all(dir).ok();
 }
 

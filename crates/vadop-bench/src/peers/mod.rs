@@ -7,12 +7,15 @@
 //! to `--brute-max` bodies and above that by the default method (which the core test suite proves
 //! bit-identical to brute force). Every pipeline, vadop's own included, then runs in its own
 //! child pinned to one core with a timeout, and its contacts are compared with the reference:
-//! found, missed, false.
+//! found, missed, false. Beside the libraries runs [`plain_grid`], a reference of a few hundred
+//! lines (a uniform grid rebuilt every frame), so the table shows what the plainest exact broad
+//! phase achieves on the same paths; it is not a product method.
 //!
 //! It owns the build of the peer programs (`bench/peers/cpp`, `bench/peers/rapier`; it only
 //! checks that Debian's libbullet-dev and libfcl-dev are present, scripts/install-peers.sh
 //! installs them), the runs, and the table, CSV and plot it writes.
 
+pub mod plain_grid;
 pub mod shapes;
 pub mod trajectory;
 
@@ -29,6 +32,10 @@ use trajectory::PACKING;
 
 /// The pipeline every other is compared with: the product's default.
 const BASELINE: &str = "vadop-auto";
+
+/// The reference pipeline: neither vadop's nor a library's, so the goal check keeps it apart
+/// from the peers.
+const REFERENCE: &str = "plain-grid";
 
 /// The scene the pipelines detect contacts in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -66,8 +73,13 @@ impl Scene {
 
     /// Why `pipeline` cannot run on this scene, if it cannot.
     fn refusal(self, pipeline: &str) -> Option<&'static str> {
-        (self == Scene::Shapes && pipeline == "vadop-discrete")
-            .then_some("vadop's discrete method handles spheres only")
+        match (self, pipeline) {
+            (Scene::Shapes, "vadop-discrete") => Some("vadop's discrete method handles spheres only"),
+            (Scene::Shapes, REFERENCE) => {
+                Some("the plain grid is a reference for spheres (its narrow phase is their closed form)")
+            }
+            _ => None,
+        }
     }
 }
 
@@ -103,6 +115,7 @@ const PIPELINES: &[(&str, bool, Program)] = &[
     ("vadop", true, Program::Vadop("vadop")),
     ("vadop-brute", true, Program::Vadop("brute")),
     ("vadop-discrete", false, Program::Vadop("discrete")),
+    (REFERENCE, true, Program::PlainGrid),
     ("bullet-dbvt", false, Program::Bullet),
     ("bullet-sap", false, Program::Bullet),
     ("bullet-ccd", true, Program::Bullet),
@@ -120,6 +133,8 @@ const PIPELINES: &[(&str, bool, Program)] = &[
 enum Program {
     /// A child job of this binary timing one of vadop's methods.
     Vadop(&'static str),
+    /// A child job of this binary running the reference grid ([`plain_grid`]) over the paths.
+    PlainGrid,
     Bullet,
     Fcl,
     Rapier,
@@ -261,6 +276,11 @@ pub fn run(args: &PeersArgs) -> CliResult<()> {
                                 job.extend(["--method".to_string(), method.to_string()]);
                                 runner.child(&job, runner.timeout)
                             }
+                            Program::PlainGrid => {
+                                let mut job = common_args("peers-plain-grid", &contacts);
+                                job.extend(["--trajectory".to_string(), trajectory.display().to_string()]);
+                                runner.child(&job, runner.timeout)
+                            }
                             other => {
                                 let arguments = [
                                     name.to_string(),
@@ -344,18 +364,18 @@ impl Programs {
         match program {
             Program::Bullet => self.bullet.clone(),
             Program::Fcl => self.fcl.clone(),
-            Program::Rapier | Program::Vadop(_) => self.rapier.clone(),
+            Program::Rapier | Program::Vadop(_) | Program::PlainGrid => self.rapier.clone(),
         }
     }
 }
 
 /// Checks that the libraries and tools of the peers among `pipelines` are present, then builds
 /// the C++ and rapier peers they need (both builds do nothing when up to date), so vadop's own
-/// pipelines run without them. Installing system packages is left to scripts/install-peers.sh,
-/// run as root: this program only says what is missing.
+/// pipelines and the reference grid run without them. Installing system packages is left to
+/// scripts/install-peers.sh, run as root: this program only says what is missing.
 fn build_peers(pipelines: &[(&str, bool, Program)]) -> CliResult<Programs> {
     let needs = |wanted: fn(&Program) -> bool| pipelines.iter().any(|p| wanted(&p.2));
-    let peers = |p: &Program| !matches!(p, Program::Vadop(_));
+    let peers = |p: &Program| !matches!(p, Program::Vadop(_) | Program::PlainGrid);
     // vadop's own pipelines run anywhere: the repository is looked for only when a peer runs.
     let root = if needs(peers) { repository_root()? } else { PathBuf::new() };
     let cpp = root.join("bench/peers/cpp");
@@ -567,14 +587,15 @@ fn write_plot(scene: Scene, rows: &[Row], png: &Path) -> CliResult<()> {
     plots::line_panels(png, Some(title), &panels)
 }
 
-/// A fixed colour per pipeline: vadop's in reds, Bullet's in blues, FCL's in greens, rapier's
-/// in purple and browns.
+/// A fixed colour per pipeline: vadop's in reds, the reference grid in cyan, Bullet's in blues,
+/// FCL's in greens, rapier's in purple and browns.
 fn colour(pipeline: &str) -> &'static str {
     match pipeline {
         "vadop-auto" => "#d62728",
         "vadop" => "#ff7f0e",
         "vadop-brute" => "#ff9896",
         "vadop-discrete" => "#e377c2",
+        REFERENCE => "#17becf",
         "bullet-dbvt" => "#1f77b4",
         "bullet-sap" => "#6baed6",
         "bullet-ccd" => "#08306b",
@@ -626,7 +647,19 @@ fn markdown_section(outputs: &Outputs, rows: &[Row], plot: Option<String>) -> St
              FCL's conservative advancement within 1e-4 of the frame in time. A pair that overlaps at the frame \
              start, separates and touches again within the frame is a contact for vadop, while the peers' casts stop \
              at the first time of impact, the frame start: they miss it. Every library has all six shapes; \
-             vadop-discrete does not run (vadop's discrete method handles spheres only).\n"
+             vadop-discrete does not run (vadop's discrete method handles spheres only), nor does plain-grid (a \
+             reference for spheres).\n"
+        );
+    } else {
+        let _ = writeln!(
+            md,
+            "plain-grid is a reference, neither a library nor a product method: about 300 lines of this benchmark \
+             (crates/vadop-bench/src/peers/plain_grid.rs) in which nothing persists between frames. Each frame it puts \
+             every body's box around its whole path in the frame (f32 bounds rounded outward) into cubic cells 1.5x \
+             the mean box edge by a counting sort, and tests each overlapping pair once with vadop's closed-form sphere \
+             time on every straight piece of the frame. It is what the plainest exact broad phase costs on these \
+             paths; the goal check below gives auto ÷ plain-grid, the default method's time over the grid's (below 1: \
+             the default is faster).\n"
         );
     }
     let _ = writeln!(
@@ -665,7 +698,9 @@ fn markdown_section(outputs: &Outputs, rows: &[Row], plot: Option<String>) -> St
             continue;
         };
         let peers = |continuous: bool| {
-            group.iter().filter(move |r| r.continuous == continuous && !r.pipeline.starts_with("vadop"))
+            group.iter().filter(move |r| {
+                r.continuous == continuous && !r.pipeline.starts_with("vadop") && r.pipeline != REFERENCE
+            })
         };
         let faster_continuous: Vec<String> = peers(true)
             .filter_map(|r| {
@@ -700,9 +735,17 @@ fn markdown_section(outputs: &Outputs, rows: &[Row], plot: Option<String>) -> St
             Some((name, ms)) => format!("{:.2}x the fastest exact peer's time, {name} ({ms:.3} ms)", auto.mean_ms / ms),
             None => "no peer was exact".to_string(),
         };
+        let versus_grid = match group.iter().find(|r| r.pipeline == REFERENCE).map(|r| &r.outcome) {
+            Some(Ok(grid)) => {
+                format!("; auto ÷ plain-grid {:.2} ({:.3} ms)", auto.mean_ms / grid.mean_ms, grid.mean_ms)
+            }
+            Some(Err(_)) => "; plain-grid did not finish".to_string(),
+            None => String::new(),
+        };
         let _ = writeln!(
             md,
-            "- n={n}, speed {speed}: auto {:.3} ms, {exact}; {versus_continuous}; {versus_discrete}; {versus_exact}.",
+            "- n={n}, speed {speed}: auto {:.3} ms, {exact}; {versus_continuous}; {versus_discrete}; \
+             {versus_exact}{versus_grid}.",
             auto.mean_ms
         );
     }

@@ -3,14 +3,15 @@
 //! velocity, its end position and its wall bounces (time and position), so a path is a polyline
 //! (the reader is `bench/peers/cpp/trajectory.h`; keep them in step). A contacts file holds
 //! (frame, i, j) u32 triples: pairs that begin touching during the frame. Every pipeline prints
-//! one JSON line, `{"frame_ms": [...], "peak_kib": K}`. The mixed-shape scene and its file are
-//! [`super::shapes`]'s.
+//! one JSON line, `{"frame_ms": [...], "peak_kib": K}` ([`report`]). [`Reader`] reads the sphere
+//! file back one frame at a time, for the pipelines of this crate that run on it
+//! ([`super::plain_grid`]). The mixed-shape scene and its file are [`super::shapes`]'s.
 
 use super::{shapes, Scene};
 use crate::common::io_error;
 use crate::markdown::peak_memory_mib;
 use crate::CliResult;
-use std::io::{BufWriter, Write as _};
+use std::io::{BufReader, BufWriter, Read as _, Write as _};
 use std::path::Path;
 use std::time::Instant;
 use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
@@ -19,19 +20,21 @@ use vadop::{Contact, Method, Mode, Touched, World, WorldConfig};
 pub const PACKING: f64 = 0.05;
 const MAGIC: &[u8; 8] = b"VADOPTR1";
 
-/// The paper scene of `n` bodies at `speed` in detect mode with `method`.
-fn detect_world(n: usize, speed: f64, method: Method) -> CliResult<(vadop::scene::Scene, World)> {
-    let scene = PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())?;
-    let world =
-        scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())?;
-    Ok((scene, world))
+/// The paper scene of `n` bodies at `speed`.
+fn paper_scene(n: usize, speed: f64) -> CliResult<vadop::scene::Scene> {
+    PaperScene::new(n, PACKING, speed).build().map_err(|e| e.to_string())
+}
+
+/// `scene` in detect mode with `method`.
+fn detect_world(scene: &vadop::scene::Scene, method: Method) -> CliResult<World> {
+    scene.world(WorldConfig { method, mode: Mode::Detect, ..WorldConfig::default() }).map_err(|e| e.to_string())
 }
 
 /// The child job of one of vadop's own pipelines: steps `scene` with `method`, writes its
 /// contacts to `out` and prints the per-frame times and the peak memory.
 pub fn time_method(scene: Scene, n: usize, speed: f64, frames: u64, method: Method, out: &Path) -> CliResult<()> {
     let mut world = match scene {
-        Scene::Spheres => detect_world(n, speed, method)?.1,
+        Scene::Spheres => detect_world(&paper_scene(n, speed)?, method)?,
         Scene::Shapes => shapes::world(n, speed, frames, method)?.0,
     };
     let mut contacts = Vec::new();
@@ -42,7 +45,13 @@ pub fn time_method(scene: Scene, n: usize, speed: f64, frames: u64, method: Meth
         frame_ms.push(started.elapsed().as_secs_f64() * 1e3);
         contacts.extend(pair_contacts(frame, step));
     }
-    write_contacts(out, &contacts)?;
+    report(out, &contacts, &frame_ms)
+}
+
+/// What every pipeline run ends with: writes its contacts to `out` and prints its per-frame
+/// times and the process's peak memory as the one JSON line the driver reads.
+pub fn report(out: &Path, contacts: &[[u32; 3]], frame_ms: &[f64]) -> CliResult<()> {
+    write_contacts(out, contacts)?;
     let peak_kib = peak_memory_mib().map_or(-1, |m| (m * 1024.0) as i64);
     let times: Vec<String> = frame_ms.iter().map(|t| format!("{t:.6}")).collect();
     crate::common::print(&format!("{{\"frame_ms\":[{}],\"peak_kib\":{peak_kib}}}\n", times.join(",")))
@@ -51,7 +60,13 @@ pub fn time_method(scene: Scene, n: usize, speed: f64, frames: u64, method: Meth
 /// The export child job: steps the paper scene in detect mode and writes `dir`/trajectory.bin and
 /// `dir`/reference.bin, the pair contacts found by brute force (`brute`) or by the default method.
 pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> CliResult<()> {
-    let (scene, mut world) = detect_world(n, speed, if brute { Method::Brute } else { Method::Auto })?;
+    export_scene(&paper_scene(n, speed)?, frames, brute, dir)
+}
+
+/// [`export`] of any scene of equal spheres (the tests' hand-made ones too).
+pub fn export_scene(scene: &vadop::scene::Scene, frames: u64, brute: bool, dir: &Path) -> CliResult<()> {
+    let mut world = detect_world(scene, if brute { Method::Brute } else { Method::Auto })?;
+    let n = scene.spheres.len();
     let dt = 1.0 / FRAMES_PER_SECOND;
     let mut contacts = Vec::new();
     let path = dir.join("trajectory.bin");
@@ -97,6 +112,104 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
     contacts.sort_unstable();
     contacts.dedup();
     write_contacts(&dir.join("reference.bin"), &contacts)
+}
+
+/// The sphere scene's trajectory file, read one frame at a time into [`Frame`] buffers that are
+/// reused from frame to frame.
+pub struct Reader {
+    file: BufReader<std::fs::File>,
+    pub n: usize,
+    pub frames: u64,
+    pub dt: f64,
+    pub radius: f64,
+    /// The box's corners.
+    pub low: [f64; 3],
+    pub high: [f64; 3],
+}
+
+/// One frame of the file. Body i's bounces are `bounce_time[k]`, `bounce_at[k]` for k in
+/// `first_bounce[i]..first_bounce[i + 1]`, in time order.
+#[derive(Default)]
+pub struct Frame {
+    pub start: Vec<[f64; 6]>,
+    pub end: Vec<[f64; 3]>,
+    pub first_bounce: Vec<usize>,
+    pub bounce_time: Vec<f64>,
+    pub bounce_at: Vec<[f64; 3]>,
+}
+
+impl Reader {
+    pub fn open(path: &Path) -> CliResult<Reader> {
+        let file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
+        let mut reader =
+            Reader { file: BufReader::new(file), n: 0, frames: 0, dt: 0.0, radius: 0.0, low: [0.0; 3], high: [0.0; 3] };
+        let mut magic = [0u8; 8];
+        reader.file.read_exact(&mut magic).map_err(|e| io_error(path, e))?;
+        if &magic != MAGIC {
+            return Err(format!("{}: not a trajectory file of the sphere scene", path.display()));
+        }
+        (reader.n, reader.frames) = (reader.word()? as usize, reader.word()?);
+        (reader.dt, reader.radius) = (reader.float()?, reader.float()?);
+        for a in 0..6 {
+            let value = reader.float()?;
+            if a < 3 {
+                reader.low[a] = value
+            } else {
+                reader.high[a - 3] = value
+            }
+        }
+        Ok(reader)
+    }
+
+    fn word(&mut self) -> CliResult<u64> {
+        let mut bytes = [0u8; 8];
+        self.file.read_exact(&mut bytes).map_err(|_| "trajectory file is truncated".to_string())?;
+        Ok(u64::from_le_bytes(bytes))
+    }
+
+    fn float(&mut self) -> CliResult<f64> {
+        self.word().map(f64::from_bits)
+    }
+
+    fn floats<const N: usize>(&mut self) -> CliResult<[f64; N]> {
+        let mut values = [0.0; N];
+        for v in &mut values {
+            *v = self.float()?;
+        }
+        Ok(values)
+    }
+
+    /// Reads the next frame into `frame`.
+    pub fn next_frame(&mut self, frame: &mut Frame) -> CliResult<()> {
+        let n = self.n;
+        frame.start.resize(n, [0.0; 6]);
+        frame.end.resize(n, [0.0; 3]);
+        for i in 0..n {
+            frame.start[i] = self.floats()?;
+        }
+        for i in 0..n {
+            frame.end[i] = self.floats()?;
+        }
+        let count = self.word()? as usize;
+        frame.first_bounce.clear();
+        frame.first_bounce.resize(n + 1, 0);
+        frame.bounce_time.clear();
+        frame.bounce_at.clear();
+        for _ in 0..count {
+            let body = self.word()? as usize;
+            if body >= n {
+                return Err(format!("a bounce of body {body} of {n}"));
+            }
+            let [tau, x, y, z] = self.floats()?;
+            frame.first_bounce[body + 1] += 1;
+            frame.bounce_time.push(tau);
+            frame.bounce_at.push([x, y, z]);
+        }
+        for i in 0..n {
+            frame.first_bounce[i + 1] += frame.first_bounce[i];
+        }
+        Ok(())
+    }
 }
 
 /// A frame's contacts between two bodies as (frame, i, j) with i < j.
