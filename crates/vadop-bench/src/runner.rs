@@ -164,6 +164,8 @@ pub struct Simulation {
     pub threads: Option<usize>,
     /// `--gravity` as x,y,z; `None` leaves the flag out.
     pub gravity: Option<[f64; 3]>,
+    /// `--periodic` axes (e.g. xyz); `None` leaves the flag out.
+    pub periodic: Option<&'static str>,
 }
 
 impl Simulation {
@@ -183,6 +185,7 @@ impl Simulation {
             pool: None,
             threads: Some(1),
             gravity: None,
+            periodic: None,
         }
     }
 
@@ -211,6 +214,7 @@ impl Simulation {
         flags.extend(self.pool.map(|m| ("--pool", m.to_string())));
         flags.extend(self.threads.map(|t| ("--threads", t.to_string())));
         flags.extend(self.gravity.map(|[x, y, z]| ("--gravity", format!("{x},{y},{z}"))));
+        flags.extend(self.periodic.map(|axes| ("--periodic", axes.to_string())));
         flags.into_iter().flat_map(|(flag, value)| [flag.to_string(), value]).collect()
     }
 }

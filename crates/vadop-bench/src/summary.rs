@@ -14,6 +14,9 @@ pub struct Report {
 #[derive(Debug, Clone, Deserialize)]
 pub struct Frame {
     pub pair_contacts: u64,
+    /// The collisional virial of the frame's impacts between moving bodies.
+    #[serde(default)]
+    pub pair_virial: f64,
     /// Wall-clock milliseconds of the step.
     pub wall_ms: f64,
 }
@@ -32,7 +35,17 @@ pub struct Summary {
     pub cost_split: CostSplit,
     pub per_frame: PerFrame,
     pub peak_memory_mib: Option<f64>,
+    /// Simulate mode: energy and momentum kept.
+    #[serde(default)]
+    pub conservation: Option<Conservation>,
     pub error: Option<String>,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+pub struct Conservation {
+    /// Kinetic energy of the centres' motion at the end: the temperature of a gas.
+    #[serde(default)]
+    pub translational_end: f64,
 }
 
 impl Summary {
@@ -46,6 +59,9 @@ impl Summary {
 pub struct Run {
     /// The method as run, `auto (grid)` for the automatic choice.
     pub method: String,
+    /// Frame length in seconds.
+    #[serde(default)]
+    pub dt: f64,
 }
 
 #[derive(Debug, Clone, Deserialize)]

@@ -4,8 +4,9 @@
 //! peers ([`detect`]); narrow tests against the pairs whose swept boxes overlap ([`candidates`]);
 //! the cost of a velocity change ([`retest`]); simulate-mode collisions per second and their
 //! independence of the frame length ([`throughput`]); memory per body ([`memory`]); where
-//! each broad phase wins ([`methods`]); all cores against one ([`cores`]); and what gravity
-//! costs ([`gravity`]).
+//! each broad phase wins ([`methods`]); all cores against one ([`cores`]); what gravity
+//! costs ([`gravity`]); and the periodic gas's pressure against its equation of state
+//! ([`periodic`]).
 //!
 //! Every run is a child pinned to one core, but the all-cores runs; timed runs are repeated and the tables show the
 //! median of the repeats; ratios compare runs of this same command. Times are means over frames
@@ -20,6 +21,7 @@ mod detect;
 mod gravity;
 mod memory;
 mod methods;
+mod periodic;
 pub mod retest;
 mod throughput;
 
@@ -39,7 +41,8 @@ use std::rc::Rc;
 #[command(after_help = "Sizes: detect at n = 10^4, 10^5 and 10^6 x max speeds 0.05, 0.5 and 5 diameters per frame \
 (candidates up to 10^5), retest at n = 10^5 with 10,000 calls, throughput at n = 10^4 and 10^5, memory at n = 10^4 to \
 10^6, methods at n = 10^4 and 10^5, cores at the detect and throughput sizes on one thread and on every core \
-and at n = 10^7 on every core, gravity at n = 10^4 and 10^5; with --quick every section at n = 10^4 only, with fewer frames and calls and one \
+and at n = 10^7 on every core, gravity at n = 10^4 and 10^5, the periodic gas at n = 10^5 (10^7 collisions measured at each of \
+three packings); with --quick every section at n = 10^4 only, with fewer frames and calls and one \
 run each (a minute or two). Frames cover several broad-phase windows. --timeout defaults to 900 s per child run. The \
 full suite takes hours: run it on a quiet machine.")]
 pub struct SpeedArgs {
@@ -69,6 +72,7 @@ enum Section {
     Methods,
     Cores,
     Gravity,
+    Periodic,
 }
 
 /// The sizes of every section.
@@ -97,6 +101,9 @@ struct Plan {
     huge_bodies: Vec<usize>,
     /// Body counts of the gravity section.
     gravity_bodies: Vec<usize>,
+    /// The periodic gas's bodies, and the pair collisions measured at each packing.
+    periodic_bodies: usize,
+    periodic_collisions: f64,
 }
 
 impl Plan {
@@ -119,6 +126,8 @@ impl Plan {
                 methods_bodies: vec![10_000],
                 huge_bodies: vec![],
                 gravity_bodies: vec![10_000],
+                periodic_bodies: 10_000,
+                periodic_collisions: 1e6,
             }
         } else {
             Plan {
@@ -138,6 +147,8 @@ impl Plan {
                 methods_bodies: vec![10_000, 100_000],
                 huge_bodies: vec![10_000_000],
                 gravity_bodies: vec![10_000, 100_000],
+                periodic_bodies: 100_000,
+                periodic_collisions: 1e7,
             }
         }
     }
@@ -310,6 +321,7 @@ pub fn run(args: &SpeedArgs) -> CliResult<()> {
             Section::Methods => methods::run(&context)?,
             Section::Cores => cores::run(&context)?,
             Section::Gravity => gravity::run(&context)?,
+            Section::Periodic => periodic::run(&context)?,
         }
     }
     crate::common::print(&format!("wrote {} and {}\n", context.markdown.display(), context.results.display()))
@@ -327,6 +339,7 @@ impl Section {
                 Section::Methods => "speed-methods",
                 Section::Cores => "speed-cores",
                 Section::Gravity => "speed-gravity",
+                Section::Periodic => "speed-periodic",
             },
         }
     }
