@@ -171,7 +171,13 @@ fn write(context: &Context, bodies: usize, rows: &[Row]) -> CliResult<()> {
                 );
             }
             Err(e) => {
-                let _ = writeln!(md, "| {} | {} | — | {} | {hg:.5} | — | — | {cs:.5} | — |", row.packing, row.equilibration_frames, crate::markdown::table_cell(e));
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | — | {} | {hg:.5} | — | — | {cs:.5} | — |",
+                    row.packing,
+                    row.equilibration_frames,
+                    crate::markdown::table_cell(e)
+                );
             }
         }
     }
