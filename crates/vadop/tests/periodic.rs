@@ -331,3 +331,79 @@ fn every_method_finds_the_closed_form_contacts_through_every_image() {
         }
     }
 }
+
+/// A simulate-mode world refuses bodies that overlap across a periodic face, as it refuses them
+/// inside the box; touching across it is allowed.
+#[test]
+fn bodies_overlapping_across_a_face_are_refused() {
+    let bounds = BoxBounds::cube(10.0).unwrap().with_periodic([false, false, true]);
+    let mut world = World::new(bounds, WorldConfig::default()).unwrap();
+    let a = world.add_sphere(ball(DVec3::new(5.0, 5.0, 0.3), DVec3::ZERO)).unwrap();
+    let b = world.add_sphere(ball(DVec3::new(5.2, 5.0, 9.6), DVec3::ZERO)).unwrap();
+    let error = world.step(DT).unwrap_err();
+    assert!(matches!(error, VadopError::Overlap { a: x, b: y, .. } if (x, y) == (a, b)), "{error}");
+    world.remove_sphere(b).unwrap();
+    world.add_sphere(ball(DVec3::new(5.0, 5.0, 9.3), DVec3::ZERO)).unwrap();
+    assert!(world.step(DT).is_ok(), "touching across the face is no overlap");
+}
+
+/// Gravity along a walled axis of a box periodic in the others: every method is the oracle to the
+/// bit, and the energy, kinetic plus potential, is kept.
+#[test]
+fn gravity_in_a_periodic_slab_matches_brute_force() {
+    let mut scene =
+        PaperScene { bodies: 200, packing_fraction: 0.1, max_speed: 2.0, radius: 0.5, seed: 8 }.build().unwrap();
+    scene.bounds = scene.bounds.with_periodic([true, true, false]);
+    let gravity = DVec3::new(0.0, 0.0, -20.0);
+    for method in [Method::Auto, Method::Vadop, Method::SweptAabb] {
+        for mode in [Mode::Detect, Mode::Simulate] {
+            let config = |method| WorldConfig { gravity, method, mode, ..WorldConfig::default() };
+            let mut found = scene.world(config(method)).unwrap();
+            let mut oracle = scene.world(config(Method::Brute)).unwrap();
+            let energy = |w: &World| w.kinetic_energy() + w.potential_energy();
+            let start = energy(&oracle);
+            for frame in 0..20 {
+                let contacts = found.step(DT).unwrap().to_vec();
+                let expected = oracle.step(DT).unwrap();
+                assert_eq!(
+                    common::contact_bits(&contacts),
+                    common::contact_bits(expected),
+                    "frame {frame}: {method:?}"
+                );
+                assert!((energy(&oracle) - start).abs() <= 1e-9 * start.abs(), "frame {frame}: energy drift");
+            }
+            assert_eq!(common::state_bits(&found), common::state_bits(&oracle), "{method:?} {mode:?}");
+        }
+    }
+}
+
+/// A body larger than any before, added between frames, gets a window sized for it: it meets a
+/// neighbour across the face as the oracle says.
+#[test]
+fn a_larger_body_added_mid_run_meets_its_neighbours_across_a_face() {
+    for method in [Method::Auto, Method::Vadop, Method::Grid] {
+        let mut worlds = [method, Method::Brute].map(|method| {
+            let bounds = BoxBounds::cube(20.0).unwrap().with_periodic([true, true, true]);
+            let mut world = World::new(bounds, config(method, Mode::Detect)).unwrap();
+            world.add_sphere(ball(DVec3::new(18.0, 10.0, 10.0), DVec3::new(-0.5, 0.0, 0.0))).unwrap();
+            world.step(DT).unwrap();
+            // Ten times as wide, just across the face from the first.
+            let big = Sphere {
+                position: DVec3::new(2.0, 10.0, 10.0),
+                velocity: DVec3::new(-60.0, 0.0, 0.0),
+                radius: 1.2,
+                mass: 8.0,
+            };
+            world.add_sphere(big).unwrap();
+            world
+        });
+        let mut all = [Vec::new(), Vec::new()];
+        for _ in 0..10 {
+            for (world, contacts) in worlds.iter_mut().zip(&mut all) {
+                contacts.extend(world.step(DT).unwrap().iter().copied());
+            }
+        }
+        assert!(all[1].iter().any(|c| matches!(c.touched, Touched::Body(_))), "they meet");
+        assert_eq!(common::contact_bits(&all[0]), common::contact_bits(&all[1]), "{method:?}");
+    }
+}

@@ -4,7 +4,8 @@
 //! be resolved between separate bodies. It bins the moving bodies into a grid of cells one
 //! largest bounding diameter wide, sorts them by cell index (an index, not a hash) and compares
 //! each new body only with the bodies in its 27 neighbouring cells, and every new body with every
-//! static one (level geometry is few bodies); the narrow phase decides. It
+//! static one (level geometry is few bodies); the narrow phase decides. On a periodic axis the
+//! cells tile the box and wrap around, so bodies touching across a face are compared too. It
 //! never changes the bodies.
 
 use crate::bodies::Bodies;
@@ -45,26 +46,52 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(
         let p = position(i);
         (lo.min(p), hi.max(p))
     });
-    // Cells at least one diameter wide, and few enough per axis to fit the key.
+    // Cells at least one diameter wide, and few enough per axis to fit the key. On a periodic
+    // axis they tile the box's side, and the neighbours of the last cell are the first ones.
     let limit = (1u64 << CELL_BITS) as f64 - 2.0;
     let cell = (2.0 * max_radius).max((hi - lo).max_element() / limit).max(f64::MIN_POSITIVE);
+    let periodic = bodies.periodic;
+    let axes: [(f64, f64, u64, bool); 3] = std::array::from_fn(|a| match periodic.axes[a] {
+        true => {
+            let count = ((periodic.side[a] / cell).floor() as u64).clamp(1, limit as u64);
+            (periodic.min[a], periodic.side[a] / count as f64, count, true)
+        }
+        false => (lo[a], cell, u64::MAX, false),
+    });
     let coords = |p: DVec3| -> [u64; 3] {
-        let c = ((p - lo) / cell).floor();
-        [c.x as u64, c.y as u64, c.z as u64]
+        std::array::from_fn(|a| {
+            let (origin, width, count, _) = axes[a];
+            (((p[a] - origin) / width).floor().max(0.0) as u64).min(count - 1)
+        })
     };
     let key = |c: [u64; 3]| c[0] | (c[1] << CELL_BITS) | (c[2] << (2 * CELL_BITS));
+    // The cells next to coordinate `c` on axis `a` (itself included), each once.
+    let near = |a: usize, c: u64| -> ([u64; 3], usize) {
+        let (_, _, count, wraps) = axes[a];
+        let mut cells = [0u64; 3];
+        let mut n = 0;
+        for step in 0..3u64 {
+            let next = match wraps {
+                true => (c + count - 1 + step) % count,
+                false if c + step == 0 => continue,
+                false => c + step - 1,
+            };
+            if !cells[..n].contains(&next) {
+                cells[n] = next;
+                n += 1;
+            }
+        }
+        (cells, n)
+    };
     let mut by_cell: Vec<(u64, u32)> = live.iter().map(|&i| (key(coords(position(i))), i)).collect();
     by_cell.sort_unstable();
     for &a in new_bodies.iter().filter(|&&a| !bodies.is_fixed(a as usize)) {
-        let pa = position(a);
-        let c = coords(pa);
-        for dz in 0..3u64 {
-            for dy in 0..3u64 {
-                for dx in 0..3u64 {
-                    if c[0] + dx < 1 || c[1] + dy < 1 || c[2] + dz < 1 {
-                        continue;
-                    }
-                    let k = key([c[0] + dx - 1, c[1] + dy - 1, c[2] + dz - 1]);
+        let c = coords(position(a));
+        let ((zs, nz), (ys, ny), (xs, nx)) = (near(2, c[2]), near(1, c[1]), near(0, c[0]));
+        for &z in &zs[..nz] {
+            for &y in &ys[..ny] {
+                for &x in &xs[..nx] {
+                    let k = key([x, y, z]);
                     let start = by_cell.partition_point(|&(ck, _)| ck < k);
                     for &(_, b) in by_cell[start..].iter().take_while(|&&(ck, _)| ck == k) {
                         if b == a {
