@@ -49,7 +49,8 @@ use vadop::{Body, BodyHandle, BodyShape, VadopError, World};
 /// mode, for now) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
 /// ``'xy'``; the others keep their walls: a body leaving through one face comes back through the
 /// opposite one, bodies meet across the faces, and ``crossings`` counts each body's passages;
-/// spheres only, and each periodic side at least 8 largest diameters, for now).
+/// bodies of any shape, no static bodies yet, and each periodic side at least 8 largest bounding
+/// diameters).
 ///
 /// >>> import vadop
 /// >>> w = vadop.World([[9.0, 5, 5], [0.8, 5, 5]], [[3.0, 0, 0], [0, 0, 0]], [0.5, 0.5], box=10.0,

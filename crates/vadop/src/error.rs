@@ -105,7 +105,9 @@ pub enum VadopError {
     #[error("gravity is supported for spheres only, without static bodies, and in simulate mode with restitution 1 (a ball coming to rest on a floor needs a resting state, not built yet): {0}")]
     GravityUnsupported(&'static str),
     /// A periodic box with what it does not support yet.
-    #[error("periodic boxes are supported for spheres only, without static bodies: {0}")]
+    #[error(
+        "periodic boxes take moving bodies of any shape but no static bodies yet (level geometry is not periodic): {0}"
+    )]
     PeriodicUnsupported(&'static str),
     /// A body too large for a periodic side: it would meet a neighbour through two images.
     #[error("the box's periodic side along {axis} is {side}, less than {minimum} times the diameter {diameter} of a body: a periodic side must hold that many of the largest diameter, so two bodies meet through one image at a time")]

@@ -183,7 +183,7 @@ pub struct SimulateArgs {
     pub(super) gravity: Option<glam::DVec3>,
     /// Periodic axes of the box, e.g. xyz or xy (the others keep their walls): a body leaving
     /// through one face comes back through the opposite one, and bodies meet across the faces;
-    /// spheres only, for now
+    /// no static bodies, for now
     #[arg(long, value_name = "AXES", value_parser = parse_axes, help_heading = "World")]
     pub(super) periodic: Option<[bool; 3]>,
     /// Detect mode: also report when each contact between bodies ends (rows `body-end` in

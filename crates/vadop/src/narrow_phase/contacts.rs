@@ -12,6 +12,7 @@
 
 use crate::bodies::{Bodies, BodyState};
 use crate::error::{Result, VadopError};
+use crate::motion::RigidMotion;
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
@@ -65,25 +66,37 @@ pub(crate) fn pair_start(
             pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, bodies.gravity)?;
         return window.contains(time).then_some((time, false));
     }
-    pair_start_parked(bodies, a, b, window, None).0
+    // Shapes across periodic faces come through `pair_start_parked`, with their shift.
+    pair_start_parked(bodies, (a, b, DVec3::ZERO), window, None).0
 }
 
 /// [`pair_start`] for a pair that is not two spheres, taking the search up where `parked` holds
 /// it (from an earlier window, on the same motions), with where it parks now.
 pub(crate) fn pair_start_parked(
     bodies: &Bodies,
-    a: usize,
-    b: usize,
+    (a, b, shift): (usize, usize, DVec3),
     window: Window,
     parked: Option<&ParkedSearches>,
 ) -> (Found, Option<Parking>) {
     let (Some(ga), Some(gb)) = (bodies.geometry(a), bodies.geometry(b)) else { return (None, None) };
-    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
+    // A pair across periodic faces is searched afresh each time: its parked search would be
+    // of one image, and it is rare.
+    let across = shift != DVec3::ZERO;
     let (key, epochs) = parking_key(bodies, a, b);
-    let resume = parked.and_then(|p| p.get(key.0, key.1, epochs));
+    let resume = parked.filter(|_| !across).and_then(|p| p.get(key.0, key.1, epochs));
     let (found, parks) =
         settled_parked(shape_contact_resumed((ga, &ma), (gb, &mb), window, resume).map(|(s, p)| (s.found, p)), window);
-    (found, parks.map(|r| (key, epochs, r)))
+    (found, parks.filter(|_| !across).map(|r| (key, epochs, r)))
+}
+
+/// A motion shifted by whole sides `shift`: a body's image across periodic faces.
+#[inline]
+fn shifted<S>(mut motion: RigidMotion<S>, shift: DVec3) -> RigidMotion<S> {
+    if shift != DVec3::ZERO {
+        motion.position += shift;
+    }
+    motion
 }
 
 /// The pair `a < b` and the motion epochs its parked searches are kept under.
@@ -104,24 +117,29 @@ pub(crate) fn pair_start_after(
     let (Some(ga), Some(gb), false) = (bodies.geometry(a), bodies.geometry(b), bodies.are_spheres(a, b)) else {
         return (None, None);
     };
-    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    // Touching at `start`: through their nearest image then.
+    let shift = bodies.image_shift(a, b, start);
+    let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
     let (key, epochs) = parking_key(bodies, a, b);
     let (found, parks) = settled_parked(shape_contact_after_parked((ga, &ma), (gb, &mb), start, window), window);
-    (found, parks.map(|r| (key, epochs, r)))
+    (found, parks.filter(|_| shift == DVec3::ZERO).map(|r| (key, epochs, r)))
 }
 
 /// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id), in
 /// contact since `since`, part.
 pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: Window) -> Found {
+    // Touching from `since` on, so through their nearest image then, which they keep until
+    // they part.
+    let (ma, mb) = (bodies.motion(a), bodies.motion(b));
+    let shift = bodies.image_shift(a, b, since.max(ma.since).max(mb.since));
     if bodies.are_spheres(a, b) {
-        // Touching, so through their nearest image, which they keep until they part.
-        let (ma, mut mb) = (bodies.motion(a), bodies.motion(b));
-        mb.position += bodies.image_shift(a, b, ma.since.max(mb.since));
+        let mut mb = mb;
+        mb.position += shift;
         let time = pair_separation_time(&ma, &mb, bodies.radius(a) + bodies.radius(b), bodies.gravity)?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
-    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
     // Searched from the contact's start, not the window's: the search's steps depend on where it
     // starts, and windows differ between runs (a resumed one starts its first at the saved time).
     settled(contact_end_time((ga, &ma), (gb, &mb), since, window.end), window)
@@ -137,12 +155,10 @@ pub(crate) fn wall_start(
     window: Window,
 ) -> Option<std::result::Result<(f64, Wall), f64>> {
     let shape = if bodies.is_sphere(i) { None } else { bodies.geometry(i) };
+    let walls = bounds.walls();
     let found = match shape {
-        None => {
-            let (min, max) = bounds.walls();
-            Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), min, max, bodies.gravity_on(i))?)
-        }
-        Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), bounds.min, bounds.max, window) {
+        None => Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), walls.0, walls.1, bodies.gravity_on(i))?),
+        Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), walls.0, walls.1, window) {
             Ok(found) => Ok(found?),
             Err(VadopError::ContactSearchStalled { time, .. }) => Err(time),
             Err(_) => return None,
@@ -159,7 +175,7 @@ pub(crate) fn wall_start(
 pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVec3, DVec3) {
     if !bodies.are_spheres(i, j) {
         if let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) {
-            let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
+            let (mi, mj) = (bodies.rigid_motion(i), shifted(bodies.rigid_motion(j), bodies.image_shift(i, j, t)));
             if let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) {
                 return (contact.point, contact.normal);
             }
@@ -197,9 +213,11 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
         return offset.length_squared() <= (reach * scale) * (reach * scale) && !separating;
     }
     let (Some(gi), Some(gj)) = (bodies.geometry(i), bodies.geometry(j)) else { return false };
-    let (mi, mj) = (bodies.rigid_motion(i), bodies.rigid_motion(j));
+    let shift = bodies.image_shift(i, j, t);
+    let (mi, mj) = (bodies.rigid_motion(i), shifted(bodies.rigid_motion(j), shift));
     let Some(contact) = contact_geometry((gi, &mi), (gj, &mj), t) else { return false };
-    let (vi, vj) = (bodies.point_velocity(i, t, contact.point), bodies.point_velocity(j, t, contact.point));
+    // j's point velocity about its own centre, not its image's.
+    let (vi, vj) = (bodies.point_velocity(i, t, contact.point), bodies.point_velocity(j, t, contact.point - shift));
     let separating = (vj - vi).dot(contact.normal) > 0.0;
     contact.distance <= 2.0 * contact_tolerance(gi, gj) && !separating
 }
@@ -214,7 +232,7 @@ pub(crate) fn touches_a_wall(bodies: &Bodies, i: usize, bounds: &BoxBounds, t: f
         return (p - r - min).min_element() <= slack || (max - p - r).min_element() <= slack;
     };
     let (motion, tol) = (bodies.rigid_motion(i), SHAPE_CONTACT_TOLERANCE * g.size());
-    Wall::ALL.into_iter().any(|wall| {
+    Wall::ALL.into_iter().filter(|wall| !bounds.periodic[wall.axis()]).any(|wall| {
         wall_contact_geometry(g, &motion, wall, bounds.min, bounds.max, t).is_some_and(|c| c.distance <= 2.0 * tol)
     })
 }
@@ -232,7 +250,7 @@ pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option
     }
     let (a, b) = (i.min(j), i.max(j));
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
-    let (ma, mb) = (bodies.rigid_motion(a), bodies.rigid_motion(b));
+    let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), bodies.image_shift(a, b, t)));
     let contact = contact_geometry((ga, &ma), (gb, &mb), t)?;
     (-contact.distance > contact_tolerance(ga, gb)).then_some(-contact.distance)
 }
@@ -310,11 +328,13 @@ pub(crate) fn pair_points(
         scratch.points.push(fallback);
         return;
     };
-    let pose = |g: &crate::shape::ShapeGeometry, k: usize| {
-        g.pose_of_shape(bodies.position_at(k, t), bodies.orientation_at(k, t))
+    // j by its nearest image, where the contact is.
+    let pose = |g: &crate::shape::ShapeGeometry, k: usize, shift: DVec3| {
+        g.pose_of_shape(bodies.position_at(k, t) + shift, bodies.orientation_at(k, t))
     };
+    let (own, image) = (pose(gi, i, DVec3::ZERO), pose(gj, j, bodies.image_shift(i, j, t)));
     let reach = 2.0 * contact_tolerance(gi, gj);
-    scratch.touch((gi.parry_shape().as_ref(), pose(gi, i)), (gj.parry_shape().as_ref(), pose(gj, j)), reach, fallback);
+    scratch.touch((gi.parry_shape().as_ref(), own), (gj.parry_shape().as_ref(), image), reach, fallback);
 }
 
 /// Every point where body `i` touches `wall` of `bounds` at `t`, each with the unit normal from

@@ -49,12 +49,38 @@ pub(super) fn predict_pair(
     y: Reported,
     window: Window,
 ) -> Option<Event> {
-    let (x, y) = (own_or_image(proxies, x)?, own_or_image(proxies, y)?);
+    let ((a, shift_a), (b, shift_b)) = resolved(proxies, x, y)?;
+    sphere_event(bodies, (a, shift_a), (b, shift_b), window)
+}
+
+/// Two reports as the bodies they are of, the lower id first, each with the stamp its motion was
+/// made with and the whole sides its state is shifted by; `None` for a ghost retired since it was
+/// entered, or a body against its own image.
+#[inline]
+fn resolved<'a>(
+    proxies: &ProxyTable,
+    x: Reported<'a>,
+    y: Reported<'a>,
+) -> Option<((Reported<'a>, DVec3), (Reported<'a>, DVec3))> {
+    let own = |r: Reported<'a>| {
+        let (body, stamp, shift) = proxies.owner(r.body, r.stamp)?;
+        Some((Reported { body, stamp, state: r.state }, shift))
+    };
+    let (x, y) = (own(x)?, own(y)?);
     // Always the lower id first, so every method does bit-identical arithmetic for a pair.
-    let ((a, shift_a), (b, shift_b)) = if x.0.body < y.0.body { (x, y) } else { (y, x) };
-    if a.body == b.body {
-        return None;
-    }
+    let (a, b) = if x.0.body < y.0.body { (x, y) } else { (y, x) };
+    (a.0.body != b.0.body).then_some((a, b))
+}
+
+/// [`predict_pair`] of two resolved spheres (or any two bodies, by their shapes' search, but
+/// without parking it).
+#[inline]
+fn sphere_event(
+    bodies: &Bodies,
+    (a, shift_a): (Reported, DVec3),
+    (b, shift_b): (Reported, DVec3),
+    window: Window,
+) -> Option<Event> {
     let (i, j) = (a.body as usize, b.body as usize);
     let found = if shift_a == DVec3::ZERO && shift_b == DVec3::ZERO {
         contacts::pair_start(bodies, (i, a.state), (j, b.state), window)?
@@ -67,14 +93,6 @@ pub(super) fn predict_pair(
         contacts::pair_start(bodies, (i, &bodies.state[i]), (j, &image), window)?
     };
     Some(pair_event((a.body, a.stamp), (b.body, b.stamp), found))
-}
-
-/// A report as the body it is of, with the stamp its motion was made with, and the whole sides
-/// its state is shifted by; `None` for a ghost retired since it was entered.
-#[inline]
-fn own_or_image<'a>(proxies: &ProxyTable, r: Reported<'a>) -> Option<(Reported<'a>, DVec3)> {
-    let (body, stamp, shift) = proxies.owner(r.body, r.stamp)?;
-    Some((Reported { body, stamp, state: r.state }, shift))
 }
 
 /// What predicting a pair in a world of shapes gives: an event for the queue, or where a shape
@@ -96,11 +114,13 @@ pub(super) fn predict_pair_parked(
     window: Window,
     parked: &ParkedSearches,
 ) -> (Option<Event>, Option<Parking>) {
-    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    if bodies.are_spheres(a.body as usize, b.body as usize) {
-        return (predict_pair(bodies, proxies, a, b, window), None);
+    let Some(((a, shift_a), (b, shift_b))) = resolved(proxies, x, y) else { return (None, None) };
+    let (i, j) = (a.body as usize, b.body as usize);
+    if bodies.are_spheres(i, j) {
+        return (sphere_event(bodies, (a, shift_a), (b, shift_b), window), None);
     }
-    let (found, parks) = contacts::pair_start_parked(bodies, a.body as usize, b.body as usize, window, Some(parked));
+    let shift = if shift_a == shift_b { DVec3::ZERO } else { shift_b - shift_a };
+    let (found, parks) = contacts::pair_start_parked(bodies, (i, j, shift), window, Some(parked));
     (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
 }
 

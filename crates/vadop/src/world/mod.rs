@@ -593,6 +593,11 @@ impl World {
                 max: self.bounds.max.to_array(),
             });
         }
+        self.check_periodic_sides(radius)
+    }
+
+    /// Fails when a body of bounding `radius` is too large for a periodic side.
+    pub(crate) fn check_periodic_sides(&self, radius: f64) -> Result<()> {
         for axis in (0..3).filter(|&a| self.bounds.periodic[a]) {
             let (side, diameter) = (self.bounds.side()[axis], 2.0 * radius);
             if !(diameter * MIN_PERIODIC_DIAMETERS <= side) {

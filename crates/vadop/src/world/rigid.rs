@@ -218,13 +218,8 @@ impl World {
     /// The store's form of `body`, validated: the centre of mass and principal axes from the
     /// shape's frame.
     fn rigid_state(&self, body: &Body, fixed: bool) -> Result<RigidState> {
-        if self.bounds.is_periodic() {
-            if fixed {
-                return Err(VadopError::PeriodicUnsupported("a static body"));
-            }
-            if !matches!(body.shape, BodyShape::Sphere { .. }) {
-                return Err(VadopError::PeriodicUnsupported("a body that is not a sphere"));
-            }
+        if self.bounds.is_periodic() && fixed {
+            return Err(VadopError::PeriodicUnsupported("a static body"));
         }
         if self.config.gravity != DVec3::ZERO {
             if fixed {
@@ -301,12 +296,18 @@ impl World {
         position: DVec3,
     ) -> Result<()> {
         let aabb = geometry.parry_shape().compute_aabb(&geometry.pose_of_shape(centre, principal));
+        // On a periodic axis the shape may reach across a face, its centre of mass inside and its
+        // bounding sphere short enough for the side; on a walled one it stays between the walls.
         if self.bounds.is_periodic() {
-            // Only spheres (see `rigid_state`): the centre inside, and short of the sides.
-            let radius = 0.5 * (aabb.maxs - aabb.mins).max_element();
-            return self.check_in_box(centre, radius);
+            self.check_periodic_sides(geometry.bounding_radius().unwrap_or(f64::INFINITY))?;
         }
-        if !(aabb.mins.cmpge(self.bounds.min).all() && aabb.maxs.cmple(self.bounds.max).all()) {
+        let (walls_min, walls_max) = self.bounds.walls();
+        let (faces_min, faces_max) = self.bounds.faces();
+        let inside = aabb.mins.cmpge(walls_min).all()
+            && aabb.maxs.cmple(walls_max).all()
+            && centre.cmpge(faces_min).all()
+            && centre.cmple(faces_max).all();
+        if !inside {
             return Err(VadopError::ShapeOutsideBox {
                 position: position.to_array(),
                 low: aabb.mins.to_array(),

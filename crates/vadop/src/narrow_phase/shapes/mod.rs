@@ -691,7 +691,9 @@ pub fn shape_wall_search<S: Spin>(
 ) -> Result<Search<(f64, Wall)>> {
     let mut best: Option<(f64, Wall)> = None;
     let mut iterations = 0;
-    for wall in Wall::ALL {
+    // A periodic axis has no walls: its corners are at infinity.
+    let walled = |wall: &Wall| if wall.is_max() { max[wall.axis()].is_finite() } else { min[wall.axis()].is_finite() };
+    for wall in Wall::ALL.into_iter().filter(walled) {
         let Some(mut searcher) = wall_searcher(geometry, motion, wall, min, max) else { break };
         // A later wall only matters before the best time so far.
         let window = Window::new(window.start, best.map_or(window.end, |(t, _)| t.next_up().min(window.end)));
