@@ -72,6 +72,7 @@ pub struct Event {
 }
 
 impl Event {
+    #[inline]
     fn order(&self, other: &Self) -> Ordering {
         // Lazily: times almost never tie, and the rest is only worked out when they do.
         self.time.total_cmp(&other.time).then_with(|| {
@@ -86,6 +87,7 @@ impl Event {
 
 /// Equal events predict the same contact of the same motions.
 impl PartialEq for Event {
+    #[inline]
     fn eq(&self, other: &Self) -> bool {
         self.order(other) == Ordering::Equal
     }
@@ -161,12 +163,18 @@ impl EventQueue {
     #[inline]
     pub fn peek_time(&mut self) -> Option<f64> {
         while let Some(&event) = self.peek() {
-            if self.last != Some(event) {
+            if !self.is_repeat(&event) {
                 return Some(event.time);
             }
             self.take();
         }
         None
+    }
+    /// True when `event` repeats the event popped last. Times almost never tie: the rest of the
+    /// order is only looked at when they do.
+    #[inline(always)]
+    fn is_repeat(&self, event: &Event) -> bool {
+        self.last.as_ref().is_some_and(|last| last.time.to_bits() == event.time.to_bits() && last == event)
     }
     /// Removes and returns the earliest event (valid or not: the caller checks stamps), dropping
     /// repeats of the event popped before it.
@@ -174,7 +182,7 @@ impl EventQueue {
     pub fn pop(&mut self) -> Option<Event> {
         loop {
             let event = self.take()?;
-            if self.last != Some(event) {
+            if !self.is_repeat(&event) {
                 self.last = Some(event);
                 return Some(event);
             }

@@ -54,7 +54,7 @@ pub(crate) type Parking = ((u32, u32), (u32, u32), Resume);
 
 /// The canonical time in `window` at which bodies `a` and `b` start to touch, `a` the lower id,
 /// from their motions `state_a`, `state_b` (current for the stamps the caller holds).
-#[inline]
+#[inline(always)]
 pub(crate) fn pair_start(
     bodies: &Bodies,
     (a, state_a): (usize, &BodyState),
@@ -66,7 +66,13 @@ pub(crate) fn pair_start(
             pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, bodies.gravity)?;
         return window.contains(time).then_some((time, false));
     }
-    // Shapes across periodic faces come through `pair_start_parked`, with their shift.
+    shape_pair_start(bodies, a, b, window)
+}
+
+/// [`pair_start`] of a pair that is not two spheres (shapes across periodic faces come through
+/// [`pair_start_parked`], with their shift): kept out of line, off the spheres' path.
+#[inline(never)]
+fn shape_pair_start(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
     pair_start_parked(bodies, (a, b, DVec3::ZERO), window, None).0
 }
 

@@ -56,7 +56,7 @@ pub(super) fn predict_pair(
 /// Two reports as the bodies they are of, the lower id first, each with the stamp its motion was
 /// made with and the whole sides its state is shifted by; `None` for a ghost retired since it was
 /// entered, or a body against its own image.
-#[inline]
+#[inline(always)]
 fn resolved<'a>(
     proxies: &ProxyTable,
     x: Reported<'a>,
@@ -74,7 +74,7 @@ fn resolved<'a>(
 
 /// [`predict_pair`] of two resolved spheres (or any two bodies, by their shapes' search, but
 /// without parking it).
-#[inline]
+#[inline(always)]
 fn sphere_event(
     bodies: &Bodies,
     (a, shift_a): (Reported, DVec3),
