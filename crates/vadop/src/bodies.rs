@@ -251,17 +251,13 @@ impl Bodies {
     /// at the same canonical instant.
     pub(crate) fn wrap(&mut self, i: usize, face: Wall, t: f64) {
         let (axis, out) = (face.axis(), if face.is_max() { 1 } else { -1 });
-        let velocity = self.velocity_at(i, t);
-        let mut position = self.position_at(i, t);
+        self.set_motion_at(i, t, self.velocity_at(i, t), self.angular_velocity_at(i, t));
         let (low, high) = (self.periodic.min[axis], self.periodic.min[axis] + self.periodic.side[axis]);
-        position[axis] = (position[axis] - out as f64 * self.periodic.side[axis]).clamp(low, high);
-        let spin = self.has_rigid().then(|| (self.orientation_at(i, t), self.angular_velocity_at(i, t)));
-        self.log_overwrite(i, Some((axis, out)));
-        self.state[i].motion = Motion { position, since: t, velocity };
-        self.stamp[i] = self.stamp[i].wrapping_add(1);
-        self.new_motion(i);
-        if let Some((orientation, angular_velocity)) = spin {
-            self.start_spin(i, orientation, angular_velocity);
+        let x = &mut self.state[i].motion.position[axis];
+        *x = (*x - out as f64 * self.periodic.side[axis]).clamp(low, high);
+        // The undo entry the motion just wrote takes the crossing back too.
+        if let Some(overwritten) = self.undo.as_mut().and_then(|log| log.last_mut()) {
+            overwritten.crossed = Some((axis, out));
         }
         if self.crossings.len() < self.slots() {
             self.crossings.resize(self.slots(), [0; 3]);
@@ -612,23 +608,17 @@ impl Bodies {
     /// Moves body `i`'s centre to time `t` with a new velocity, voiding its predictions.
     #[inline]
     fn move_to(&mut self, i: usize, t: f64, velocity: DVec3) {
-        self.log_overwrite(i, None);
-        self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
-        self.stamp[i] = self.stamp[i].wrapping_add(1);
-        self.new_motion(i);
-        self.speed_bound = self.speed_bound.max(speed(velocity));
-    }
-
-    /// Keeps body `i`'s motion for [`Bodies::undo`] while a step that may be undone runs.
-    #[inline]
-    fn log_overwrite(&mut self, i: usize, crossed: Option<(usize, i64)>) {
         if self.undo.is_some() {
             let spin = self.has_rigid().then(|| (self.rigid.spin[i], self.rigid.spin_start[i]));
-            let overwritten = Overwritten { slot: i, state: self.state[i], spin, crossed };
+            let overwritten = Overwritten { slot: i, state: self.state[i], spin, crossed: None };
             if let Some(log) = &mut self.undo {
                 log.push(overwritten);
             }
         }
+        self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
+        self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.new_motion(i);
+        self.speed_bound = self.speed_bound.max(speed(velocity));
     }
 
     /// Sets the speed bound to the speed of the fastest live body, and returns it.

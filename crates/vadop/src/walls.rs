@@ -142,6 +142,21 @@ impl Periodic {
         offset + self.shift(offset)
     }
 
+    /// The images of something spanning `[low, high]` that reach across the faces: for every
+    /// non-empty combination of the periodic axes on which the span reaches a face, the whole
+    /// sides that take it to the opposite side (at most one face per axis: a span shorter than
+    /// half a side never reaches both). At most seven.
+    pub(crate) fn image_shifts(&self, low: DVec3, high: DVec3) -> impl Iterator<Item = DVec3> {
+        let shifts: [f64; 3] = std::array::from_fn(|a| match self.axes[a] {
+            true if low[a] <= self.min[a] => self.side[a],
+            true if high[a] >= self.min[a] + self.side[a] => -self.side[a],
+            _ => 0.0,
+        });
+        (1..8usize).filter(move |mask| (0..3).all(|a| mask & (1 << a) == 0 || shifts[a] != 0.0)).map(move |mask| {
+            DVec3::from_array(std::array::from_fn(|a| if mask & (1 << a) != 0 { shifts[a] } else { 0.0 }))
+        })
+    }
+
     /// The whole sides that take `offset` to its nearest image (zero on walled axes).
     #[inline]
     pub fn shift(&self, offset: DVec3) -> DVec3 {

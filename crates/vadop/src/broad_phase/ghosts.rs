@@ -51,7 +51,8 @@ pub(crate) struct Ghosts {
 impl Ghosts {
     /// Ghosts for a box of `periodic` axes (none without any).
     pub(crate) fn new(periodic: Periodic) -> Ghosts {
-        Ghosts { periodic, base: usize::MAX, ..Ghosts::default() }
+        let shortest = (0..3).filter(|&a| periodic.axes[a]).map(|a| periodic.side[a]).fold(f64::INFINITY, f64::min);
+        Ghosts { periodic, base: usize::MAX, width: WIDTH_PER_SIDE * shortest, ..Ghosts::default() }
     }
 
     /// True in a box with periodic axes.
@@ -126,23 +127,11 @@ impl Ghosts {
         stamp: u32,
         mut add: impl FnMut(DVec3, u32),
     ) {
-        let mut shifts = [0.0; 3];
-        for (a, shift) in shifts.iter_mut().enumerate().filter(|(a, _)| self.periodic.axes[*a]) {
-            // Corners relative to the box's low corner: the faces lie at 0 and the side.
-            let side = self.periodic.side[a];
-            if low[a] <= 0.0 {
-                *shift = side;
-            } else if high[a] >= side {
-                *shift = -side;
-            }
-        }
         let first = self.base + self.owners.len();
         let mut count = 0u8;
-        for mask in 1..8usize {
-            if (0..3).any(|a| mask & (1 << a) != 0 && shifts[a] == 0.0) {
-                continue;
-            }
-            let shift = DVec3::from_array(std::array::from_fn(|a| if mask & (1 << a) != 0 { shifts[a] } else { 0.0 }));
+        // Corners relative to the box's low corner, the faces' own coordinates.
+        let min = self.periodic.min;
+        for shift in self.periodic.image_shifts(min + low, min + high) {
             let mut image = *state;
             image.motion.position += shift;
             self.owners.push((body as u32, stamp));

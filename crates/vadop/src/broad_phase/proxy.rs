@@ -359,7 +359,7 @@ impl ProxyTable {
     }
 
     /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on,
-    /// with fresh ghosts (see [`Self::ghosts_of`]).
+    /// with fresh ghosts (see [`Self::slots_of`]).
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
         debug_assert!(self.fits(i, bodies), "a body the window's ghosts are not sized for");
         self.resize(bodies.slots());
@@ -388,11 +388,11 @@ impl ProxyTable {
         !self.ghosts.active() || (i < self.ghosts.base() && bodies.bounding_radius(i) <= self.largest_radius)
     }
 
-    /// The ghost slots of body `i`'s proxy (none outside a periodic box): each must be entered
-    /// into the broad phase, as the proxy is.
+    /// Body `i`'s proxy slot and its ghosts' (none outside a periodic box): each is entered
+    /// into the broad phase and meets its own partners.
     #[inline]
-    pub fn ghosts_of(&self, i: usize) -> std::ops::Range<usize> {
-        self.ghosts.of(i)
+    pub fn slots_of(&self, i: usize) -> impl Iterator<Item = usize> {
+        std::iter::once(i).chain(self.ghosts.of(i))
     }
 
     /// The body a report from slot `slot` is of, the stamp of the motion its state was made

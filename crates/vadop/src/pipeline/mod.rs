@@ -621,6 +621,7 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         let (mut mass, mut momentum) = (0.0, DVec3::ZERO);
         let (mut touches_min, mut touches_max) = ([false; 3], [false; 3]);
+        let (walls_min, walls_max) = physics.bounds.walls();
         let mut k = 0;
         while k < cluster.len() {
             let m = cluster[k] as usize;
@@ -628,7 +629,6 @@ impl<B: BroadPhase> Pipeline<B> {
             let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
             mass += bodies.mass[m];
             momentum += bodies.mass[m] * bodies.velocity_at(m, t);
-            let (walls_min, walls_max) = physics.bounds.walls();
             for axis in 0..3 {
                 let slack = 4.0 * CONTACT_TOLERANCE * rm;
                 touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
@@ -637,7 +637,7 @@ impl<B: BroadPhase> Pipeline<B> {
             near.clear();
             // Its neighbours through its own proxy and, across periodic faces, its ghosts.
             let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
-            for slot in std::iter::once(m).chain(table.ghosts_of(m)) {
+            for slot in table.slots_of(m) {
                 self.broad.query(slot as u32, proxies, None, |o, _| {
                     near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
                 });

@@ -124,21 +124,8 @@ impl PseudoDynamic {
         images.clear();
         for &b in &self.order {
             let (p, r) = (self.centre[b as usize], bodies.radius(b as usize));
-            let mut shifts = [0.0; 3];
-            for (a, shift) in shifts.iter_mut().enumerate().filter(|(a, _)| periodic.axes[*a]) {
-                let (low, high) = (periodic.min[a], periodic.min[a] + periodic.side[a]);
-                if p[a] < low + near {
-                    *shift = periodic.side[a];
-                } else if p[a] > high - near {
-                    *shift = -periodic.side[a];
-                }
-            }
-            for mask in 1..8usize {
-                if (0..3).all(|a| mask & (1 << a) == 0 || shifts[a] != 0.0) {
-                    let shift =
-                        DVec3::from_array(std::array::from_fn(|a| if mask & (1 << a) != 0 { shifts[a] } else { 0.0 }));
-                    images.push((b, p + shift, p.x + shift.x - r));
-                }
+            for shift in periodic.image_shifts(p - near, p + near) {
+                images.push((b, p + shift, p.x + shift.x - r));
             }
         }
         images.sort_unstable_by(|x, y| x.2.total_cmp(&y.2).then(x.0.cmp(&y.0)));

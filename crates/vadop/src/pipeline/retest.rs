@@ -36,8 +36,8 @@ impl<B: BroadPhase> Pipeline<B> {
         let window = self.window.from(t);
         // The body's own proxy, then (in a periodic box) its ghosts: each meets the bodies near
         // it. `skip` names a body, which a ghost's partners are told apart by.
-        let ghosts = self.proxies.ghosts_of(body as usize);
-        for slot in std::iter::once(body).chain(ghosts.map(|g| g as u32)) {
+        for slot in self.proxies.slots_of(body as usize) {
+            let slot = slot as u32;
             let (skip_slot, skip_body) = if slot == body { (skip, None) } else { (None, skip) };
             self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
         }

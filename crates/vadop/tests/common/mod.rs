@@ -7,7 +7,7 @@ use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use vadop::narrow_phase::spheres::CONTACT_TOLERANCE;
-use vadop::{BodyHandle, Contact, Mode, Sphere, World};
+use vadop::{BodyHandle, Contact, Mode, Sphere, VadopError, World};
 
 /// Every field of every contact as bits: a difference in the last bit, or in the sign of a zero,
 /// shows.
@@ -80,4 +80,35 @@ pub fn frame_end_violation(world: &World, pairs: bool) -> Option<String> {
         }
     }
     None
+}
+
+/// Steps `found` and the brute-force `oracle` side by side for `frames` frames of `dt`: each
+/// frame's contacts must match the oracle's to the bit, then `check(frame, oracle)` runs; at the
+/// end the states must match to the bit. A step both refuse ends the run early and returns the
+/// error, which must read the same for both.
+pub fn step_beside_oracle(
+    found: &mut World,
+    oracle: &mut World,
+    frames: usize,
+    dt: f64,
+    mut check: impl FnMut(usize, &World),
+) -> Option<VadopError> {
+    let method = found.method();
+    let mut refused = None;
+    for frame in 0..frames {
+        match (found.step(dt).map(<[Contact]>::to_vec), oracle.step(dt)) {
+            (Ok(contacts), Ok(expected)) => {
+                assert_eq!(contact_bits(&contacts), contact_bits(expected), "frame {frame}: {method:?}");
+            }
+            (Err(e), Err(o)) => {
+                assert_eq!(e.to_string(), o.to_string(), "frame {frame}: both refuse the same body");
+                refused = Some(e);
+                break;
+            }
+            (found, expected) => panic!("frame {frame}: {method:?} gave {found:?}, the oracle {expected:?}"),
+        }
+        check(frame, oracle);
+    }
+    assert_eq!(state_bits(found), state_bits(oracle), "{method:?}: final states differ");
+    refused
 }
