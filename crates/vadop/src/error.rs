@@ -123,6 +123,18 @@ pub enum VadopError {
     /// The world's time plus the time step is no longer a finite number.
     #[error("the world's time {time:e} plus the time step {dt:e} is not finite; positions at that time would be NaN")]
     TimeOverflow { time: f64, dt: f64 },
+    /// [`crate::World::start_at`] with a time that is not finite or is negative.
+    #[error("a world's start time must be finite and >= 0, got {0}")]
+    BadStartTime(f64),
+    /// [`crate::World::start_at`] on a world that holds bodies or has stepped: its clock is theirs.
+    #[error("only an empty world that has never stepped can start at another time")]
+    AlreadyStarted,
+    /// A body's record ([`crate::SphereRecord`]) holds a time after the world's.
+    #[error("a record's {what} must be finite and at most the world's time {time}, got {value}")]
+    BadRecordTime { what: &'static str, value: f64, time: f64 },
+    /// A body's record counts crossings of periodic faces, but the box has walls on every axis.
+    #[error("a record counts crossings of periodic faces, but this world's box has none")]
+    CrossingsInWalledBox,
     /// The step's interrupt flag ([`crate::World::set_interrupt`]) was raised: the world is as it
     /// was before the step.
     #[error("the step was interrupted; the world is as it was before it")]

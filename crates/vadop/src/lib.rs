@@ -79,7 +79,7 @@ pub use glam;
 pub use handle::BodyHandle;
 pub use walls::{BoxBounds, Periodic, Wall, MIN_PERIODIC_DIAMETERS};
 pub use window::Window;
-pub use world::{Body, BodyShape, Method, ShapeId, World, WorldConfig};
+pub use world::{Body, BodyShape, Method, ShapeId, SphereRecord, World, WorldConfig};
 
 /// The README's Rust examples, compiled and run with the doctests so they cannot go stale.
 #[cfg(doctest)]

@@ -192,7 +192,14 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
     let normal = direction(bodies.offset_at(i, j, t))
         .or_else(|| direction(bodies.velocity_at(i, t) - bodies.velocity_at(j, t)))
         .unwrap_or(DVec3::X);
-    (pi + normal * bodies.radius(i), normal)
+    // Midway between the two surface points (which coincide at a contact, up to rounding), so
+    // that in a walled box naming the pair either way round gives the same bits: the sum
+    // commutes, and negating the normal is exact. Two processes that hold a pair under different
+    // local ids then agree on its contact (vadop-mpi). Across a periodic face the point lies by
+    // the lower id's image, as before.
+    let pj = bodies.position_at(j, t) + bodies.image_shift(i, j, t);
+    let point = 0.5 * ((pi + normal * bodies.radius(i)) + (pj - normal * bodies.radius(j)));
+    (point, normal)
 }
 
 /// Where body `i` touches `wall` at `t`, and the wall's outward normal.

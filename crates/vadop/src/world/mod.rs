@@ -29,9 +29,11 @@ use engine::Engine;
 pub(crate) mod overlap;
 mod rigid;
 mod snapshot;
+mod transfer;
 
 pub use config::{Method, WorldConfig, AUTO_POOL_AXES, MAX_BOX_LENGTHS_PER_FRAME};
 pub use rigid::{Body, BodyShape, ShapeId};
+pub use transfer::SphereRecord;
 
 /// Bounces a body may make on one wall in one step under gravity: a body resting on a floor
 /// would make infinitely many (resting contact is not built). One that nearly rests makes
@@ -80,6 +82,9 @@ pub struct World {
     stats: FrameStats,
     /// Raised by the caller to stop the step in progress (see [`World::set_interrupt`]).
     interrupt: Option<Arc<AtomicBool>>,
+    /// Last contacts of bodies added with their history before the engine (which keeps the
+    /// history) was built: given to it when it is.
+    history: Vec<(u32, f64)>,
 }
 
 /// What a step that may be interrupted must put back: what the engine keeps besides the bodies
@@ -135,6 +140,7 @@ impl World {
             ends: Vec::new(),
             stats: FrameStats::default(),
             interrupt: None,
+            history: Vec::new(),
         })
     }
 
@@ -151,8 +157,9 @@ impl World {
         self.check_room(1)?;
         let slot = self.free_slots.pop().unwrap_or(self.bodies.slots() as u32);
         write(&mut self.bodies, slot as usize, self.time);
-        if let Some(rules) = self.rules_mut() {
-            rules.forget(slot as usize);
+        match self.rules_mut() {
+            Some(rules) => rules.forget(slot as usize),
+            None => self.history.retain(|&(kept, _)| kept != slot),
         }
         self.live += 1;
         self.unplaced.push(slot);
@@ -544,6 +551,26 @@ impl World {
         self.engine.as_ref().map(|engine| engine.rules())
     }
 
+    /// The time of body `i`'s last contact, if it had one.
+    pub(super) fn last_contact(&self, i: usize) -> Option<f64> {
+        let kept = match self.rules() {
+            Some(rules) => rules.last_contact.get(i).copied(),
+            None => self.history.iter().rev().find(|&&(slot, _)| slot as usize == i).map(|&(_, t)| t),
+        };
+        kept.filter(|t| t.is_finite())
+    }
+
+    /// Body `i`'s last contact was at `t`; kept until the engine exists when it does not yet.
+    fn set_last_contact(&mut self, i: usize, t: f64) {
+        match self.rules_mut() {
+            Some(rules) => {
+                rules.resize(i + 1);
+                rules.last_contact[i] = t;
+            }
+            None => self.history.push((i as u32, t)),
+        }
+    }
+
     /// Slots no new body can take: the live bodies' and the retired ones (see
     /// [`BodyHandle::MAX_GENERATION`]). Slot indices must fit a handle's 32 bits.
     fn used_slots(&self) -> usize {
@@ -685,6 +712,9 @@ impl World {
             let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
             self.engine =
                 Some(engine::build(self.config.method.resolve(), &self.config, &self.pool, &self.bounds, workers));
+        }
+        for (i, t) in std::mem::take(&mut self.history) {
+            self.set_last_contact(i as usize, t);
         }
         let physics = self.physics();
         let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);

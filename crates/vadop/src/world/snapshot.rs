@@ -125,7 +125,6 @@ impl World {
         let io =
             |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
         let b = &self.bodies;
-        let history = self.rules().map(|r| &r.last_contact[..]).unwrap_or(&[]);
         let slots = (0..b.slots())
             .map(|i| Slot {
                 position: b.state[i].motion.position,
@@ -135,7 +134,7 @@ impl World {
                 mass: if b.is_fixed(i) { 0.0 } else { b.mass[i] },
                 alive: b.alive[i],
                 generation: b.generation[i],
-                last_contact: history.get(i).copied().filter(|t| t.is_finite()),
+                last_contact: self.last_contact(i),
                 crossings: b.crossings_of(i),
                 spin: b.has_rigid().then(|| SlotSpin {
                     shape: b.rigid.shape[i],
@@ -192,9 +191,7 @@ impl World {
         world.time = time;
         // Bodies end a frame up to a rounding error outside the box; a damaged file is further out.
         let exact = world.bounds;
-        let slack = 1e-9 * (exact.max - exact.min).max_element()
-            + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
-        world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack, periodic: exact.periodic };
+        world.bounds = exact.with_rounding_slack();
         let shapes = snapshot
             .shapes
             .iter()
