@@ -350,7 +350,8 @@ fn steps(
     let ranks = comm.size;
     let started = std::time::Instant::now();
     let frames_done = start.frames_done;
-    run::run(comm, start, &plan, args.contacts.is_some(), |frame, contacts, figures| {
+    let side = start.bounds.max - start.bounds.min;
+    let width = run::run(comm, start, &plan, args.contacts.is_some(), |frame, contacts, figures| {
         if let Some(file) = &mut contacts_file {
             for contact in contacts {
                 writeln!(file, "{}", contact.csv_row(frame, false)).map_err(|e| format!("--contacts: {e}"))?;
@@ -371,7 +372,16 @@ fn steps(
     }
     let seconds = started.elapsed().as_secs_f64();
     if let Some(path) = &args.json {
-        let json = serde_json::json!({ "scene": what, "ranks": ranks, "bodies": bodies, "seconds": seconds, "summary": totals, "frames": rows });
+        let json = serde_json::json!({
+            "scene": what,
+            "ranks": ranks,
+            "bodies": bodies,
+            "box": side.to_array(),
+            "ghost_width": width,
+            "seconds": seconds,
+            "summary": totals,
+            "frames": rows,
+        });
         std::fs::write(path, serde_json::to_string_pretty(&json).expect("plain numbers"))
             .map_err(|e| format!("--json {}: {e}", path.display()))?;
     }

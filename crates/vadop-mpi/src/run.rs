@@ -114,14 +114,15 @@ pub fn ghost_width((speed, radius): (f64, f64), dt: f64, gravity: DVec3) -> f64 
 
 /// Steps the run; `on_frame` is called at rank 0 with each frame's number, its contacts in the
 /// one-process order (gathered only when `gather` is set: at scale that is rank 0's load alone)
-/// and its figures. Returns the error that ended it early, naming the rank.
+/// and its figures. Returns the ghost layer's width, or the error that ended the run early,
+/// naming the rank.
 pub fn run(
     comm: &mut Comm,
     start: Start,
     plan: &Plan,
     gather: bool,
     mut on_frame: impl FnMut(u64, &[Contact], &FrameFigures) -> Result<(), String>,
-) -> Result<(), String> {
+) -> Result<f64, String> {
     let me = comm.rank;
     let gravity = start.config.gravity;
     let positions: Vec<DVec3> = start.bodies.iter().map(|(_, b)| position_at(b, start.time, gravity)).collect();
@@ -215,7 +216,7 @@ pub fn run(
             save(comm, &part, start.config, start.bounds, path)?;
         }
     }
-    Ok(())
+    Ok(width)
 }
 
 /// Every pair an owned body can touch in the coming frame must be held here: two bodies that
