@@ -477,6 +477,18 @@ impl ShapeGeometry {
         self.rotation_radius
     }
 
+    /// The axis, in the body's principal frame, about which the shape is symmetric under every
+    /// turn (a capsule's, cylinder's or cone's own y axis): a spin about it leaves the shape where
+    /// it is. `None` for shapes without one; a ball is symmetric about every axis.
+    pub(crate) fn symmetry_axis(&self) -> Option<DVec3> {
+        match self.shape {
+            Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
+                Some(self.body_from_shape.rotation * DVec3::Y)
+            }
+            _ => None,
+        }
+    }
+
     /// The axis-aligned box `(min, max)` of a triangle mesh in its own frame; `None` for other
     /// shapes (a half-space is unbounded, a solid has its bounding radius).
     pub fn local_aabb(&self) -> Option<(DVec3, DVec3)> {

@@ -100,6 +100,13 @@ pub(super) trait Gauge {
     }
     /// Takes up a warm start that [`Self::warm_start`] gave.
     fn set_warm_start(&self, _warm: Option<Warm>) {}
+    /// Whether the two shapes only translate: neither turns, or turning leaves each where it is
+    /// (see [`super::scaled::still`]). Their signed distance is then a convex function of time
+    /// (that of a point moving in a straight line to a fixed convex set, their Minkowski
+    /// difference).
+    fn translating(&self) -> bool {
+        false
+    }
 }
 
 /// The times since the reference `[enter, leave]` outside which a pair is certainly farther apart
@@ -270,10 +277,8 @@ impl ConvexPair<'_> {
         deepest: Deepest,
         slack: f64,
     ) -> f64 {
-        let turning =
-            |body: &Body| if body.geometry.rotation_radius() == 0.0 { 0.0 } else { body.spin.max_angular_speed() };
         let (mass_a, mass_b) = (DVec3::ZERO, self.offset + self.velocity * tau);
-        let (turn_a, turn_b) = (turning(&self.a), turning(&self.b));
+        let (turn_a, turn_b) = (self.a.turning_speed(), self.b.turning_speed());
         let ball_a = |(centre, radius): (DVec3, f64)| InnerBall::new(centre, radius, mass_a, turn_a);
         let ball_b = |(centre, radius): (DVec3, f64)| InnerBall::new(centre, radius, mass_b, turn_b);
         let (middle_a, middle_b) = self.middles;
@@ -402,6 +407,9 @@ impl Gauge for ConvexPair<'_> {
     }
     fn set_warm_start(&self, warm: Option<Warm>) {
         self.warm.set(warm);
+    }
+    fn translating(&self) -> bool {
+        self.a.still.is_some() && self.b.still.is_some()
     }
 }
 
@@ -627,6 +635,12 @@ impl Gauge for PairGauge<'_> {
             PairGauge::Convex(g) => g.set_warm_start(warm),
             PairGauge::Plane(g, _) => g.set_warm_start(warm),
             PairGauge::Mesh(g, _) => g.set_warm_start(warm),
+        }
+    }
+    fn translating(&self) -> bool {
+        match self {
+            PairGauge::Convex(g) => g.translating(),
+            PairGauge::Plane(..) | PairGauge::Mesh(..) => false,
         }
     }
 }

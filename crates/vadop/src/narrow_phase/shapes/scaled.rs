@@ -277,11 +277,27 @@ impl SupportMap for Scaled<'_> {
 pub(super) struct Body<'a> {
     pub(super) geometry: &'a ShapeGeometry,
     pub(super) spin: &'a dyn Spin,
-    /// Reference minus `since`: the spin is read at `lag + tau`.
     pub(super) lag: f64,
-    /// Centre of mass at the reference.
     pub(super) position: DVec3,
     pub(super) velocity: DVec3,
+    /// The orientation of a body whose turning leaves its shape where it is: a ball, a body that
+    /// does not turn, or a steady spin about the shape's axis of symmetry (see [`still`]). Its
+    /// shape is then the same set at every time, taken at this orientation; `None` for a body
+    /// whose turning moves its shape.
+    pub(super) still: Option<DQuat>,
+}
+
+/// The orientation at which a body of `geometry` turning by `spin` always shows the same shape,
+/// if it does: its orientation at its motion's start when it is a ball (or a static-only shape),
+/// when it does not turn, or when it turns steadily about the axis the shape is symmetric about
+/// (a capsule, cylinder or cone about its own y axis; exactly: the spin's body-frame components
+/// off that axis are zero after [`crate::motion::FreeRotation`]'s rounding snap).
+pub(super) fn still(geometry: &ShapeGeometry, spin: &dyn Spin) -> Option<DQuat> {
+    let unmoved = geometry.rotation_radius() == 0.0
+        || spin.steady_spin().is_some_and(|w| {
+            w == DVec3::ZERO || geometry.symmetry_axis().is_some_and(|axis| w.cross(axis) == DVec3::ZERO)
+        });
+    unmoved.then(|| spin.orientation_at(0.0))
 }
 
 impl<'a> Body<'a> {
@@ -293,20 +309,29 @@ impl<'a> Body<'a> {
             lag,
             position: motion.position + lag * motion.velocity,
             velocity: motion.velocity,
+            still: still(geometry, &motion.spin),
         }
     }
 
     pub(super) fn orientation(&self, tau: f64) -> DQuat {
-        self.spin.orientation_at(self.lag + tau)
+        match self.still {
+            Some(q) => q,
+            None => self.spin.orientation_at(self.lag + tau),
+        }
+    }
+
+    /// A bound on how fast the body's shape turns: 0 when turning leaves it where it is.
+    pub(super) fn turning_speed(&self) -> f64 {
+        if self.still.is_some() {
+            0.0
+        } else {
+            self.spin.max_angular_speed()
+        }
     }
 
     /// How fast turning can move the surface, in unscaled lengths per time.
     pub(super) fn spin_rate(&self) -> f64 {
-        if self.geometry.rotation_radius() == 0.0 {
-            0.0
-        } else {
-            self.spin.max_angular_speed() * self.geometry.rotation_radius()
-        }
+        self.turning_speed() * self.geometry.rotation_radius()
     }
 
     pub(super) fn support(&self, scale: f64) -> Scaled<'a> {
