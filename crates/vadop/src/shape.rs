@@ -359,6 +359,15 @@ impl Shape {
     }
 }
 
+/// The sign of bit `bit` of `k`: the corner `k` of a box, axis by axis.
+fn sign(k: usize, bit: usize) -> f64 {
+    if k >> bit & 1 == 0 {
+        1.0
+    } else {
+        -1.0
+    }
+}
+
 /// How far `points` extend out of their best plane, relative to their extent: the volume of the
 /// largest tetrahedron found greedily, over the cube of the largest distance from the first point.
 /// Zero for coplanar or collinear points.
@@ -487,6 +496,33 @@ impl ShapeGeometry {
             }
             _ => None,
         }
+    }
+
+    /// Bound on the distance of the shape's core (see [`Self::rotation_radius`]) from the line
+    /// through the centre of mass along `axis` (a unit vector in the body's principal frame): a
+    /// steady spin about that axis at angular speed w moves the shape's support in any fixed
+    /// direction n at most w |n x axis| times this. Exact (up to the radii's margin) for a
+    /// cuboid's corners, a capsule's segment and a hull's points; the rotation radius for the
+    /// round kinds.
+    pub(crate) fn rotation_radius_about(&self, axis: DVec3) -> f64 {
+        let body = self.body_from_shape;
+        let off_axis = |points: &mut dyn Iterator<Item = DVec3>| {
+            points.map(|p| (body * p).reject_from_normalized(axis).length()).fold(0.0, f64::max) * (1.0 + RADIUS_MARGIN)
+        };
+        let reach = match &self.shape {
+            Shape::Cuboid { half_extents: h } => off_axis(
+                &mut (0..8).map(|k| DVec3::new(h.x, h.y, h.z) * DVec3::new(sign(k, 0), sign(k, 1), sign(k, 2))),
+            ),
+            Shape::Capsule { half_height, .. } => {
+                off_axis(&mut [DVec3::Y, -DVec3::Y].map(|y| y * *half_height).into_iter())
+            }
+            Shape::ConvexHull { .. } => match self.parry.as_convex_polyhedron() {
+                Some(hull) => off_axis(&mut hull.points().iter().copied()),
+                None => self.rotation_radius,
+            },
+            _ => self.rotation_radius,
+        };
+        reach.min(self.rotation_radius)
     }
 
     /// The axis-aligned box `(min, max)` of a triangle mesh in its own frame; `None` for other

@@ -61,7 +61,13 @@ fn body(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat,
 fn symmetric_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, rate: f64) -> Body {
     let symmetric = matches!(geometry.shape(), Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. });
     let axis = if symmetric { geometry.body_from_shape().rotation * DVec3::Y * rate } else { DVec3::ZERO };
-    let spin = Steady { start, omega: start * axis, body: Some(axis) };
+    steady_spinner(geometry, position, velocity, start, axis)
+}
+
+/// A body turning at the constant angular velocity `body` (in its own frame), said to be steady:
+/// the search may bound its turning by the shape's reach from that axis.
+fn steady_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, body: DVec3) -> Body {
+    let spin = Steady { start, omega: start * body, body: Some(body) };
     (geometry, RigidMotion { position, since: 0.0, velocity, spin })
 }
 
@@ -215,8 +221,9 @@ proptest! {
     // PROPTEST_CASES raises the count for a longer soak.
     #![proptest_config(ProptestConfig { cases: cases(10), ..ProptestConfig::default() })]
 
-    /// (a) + (c) for every pair of solid kinds, on one random set of parameters per case; and
-    /// the same pair only translating: neither turns, or one turns steadily about its shape's
+    /// (a) + (c) for every pair of solid kinds, on one random set of parameters per case; the
+    /// same pair said to spin steadily (the search then bounds turning by each shape's reach
+    /// from its spin's axis, and only across it); and the same pair only translating: neither turns, or one turns steadily about its shape's
     /// axis of symmetry (a capsule, cylinder or cone about its own axis: the oracle turns it, the
     /// search holds it still). Besides the contract, a translating pair's contact ends take a
     /// handful of probes (regula falsi on the convex distance, not steps at the rate bound), and
@@ -245,6 +252,9 @@ proptest! {
                 let b = body(gb.clone(), from_b, vb, pb.2, pb.3);
                 let what = format!("{} vs {}", name(ka), name(kb));
                 check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
+                let a = steady_spinner(ga.clone(), from_a, va, pa.2, pa.3);
+                let b = steady_spinner(gb.clone(), from_b, vb, pb.2, pb.3);
+                check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &format!("{what}, steady"));
                 let a = symmetric_spinner(ga, from_a, va, pa.2, rates[0]);
                 let b = symmetric_spinner(gb, from_b, vb, pb.2, rates[1]);
                 let what = format!("{what}, translating");
@@ -281,11 +291,14 @@ proptest! {
             check_pair(&a, &m, Window::new(0.0, 3.0), 100, &format!("{} vs mesh", name(kind)));
             let h = fixed(floor.clone(), DVec3::new(0.1, -0.3, 0.0), DQuat::IDENTITY);
             check_pair(&a, &h, Window::new(0.0, 3.0), 1000, &format!("{} vs half-space", name(kind)));
+            let steady = steady_spinner(a.0.clone(), position, velocity, p.2, p.3);
+            check_pair(&steady, &h, Window::new(0.0, 3.0), 1000, &format!("{}, steady, vs half-space", name(kind)));
             check_pair(&h, &a, Window::new(0.0, 3.0), 200, &format!("half-space vs {}", name(kind)));
         }
     }
 
-    /// Walls: a spinning solid in the box, against the exact support distance sampled densely.
+    /// Walls: a spinning solid in the box (said to spin steadily too), against the exact support
+    /// distance sampled densely.
     #[test]
     fn every_solid_against_the_walls(
         p in solid_params(),
@@ -295,8 +308,10 @@ proptest! {
         let (min, max) = (DVec3::splat(-4.0), DVec3::splat(4.0));
         for kind in 0..6 {
             let g = solid(kind, p.0, &p.1);
-            let a = body(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            let a = body(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3);
             check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, name(kind));
+            let a = steady_spinner(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, &format!("{}, steady", name(kind)));
         }
     }
 
