@@ -210,6 +210,10 @@ impl<G: Gauge> Searcher<G> {
     /// has ended the distance only grows: no contact follows (the next probe of a start search
     /// finds the pair receding along its axis, see [`Self::next_start`]).
     fn translating_end(&mut self, tau: f64) -> Result<Option<f64>> {
+        if tau >= self.leave() {
+            // The bounding volumes have parted: more than `2 tol` apart.
+            return Ok(Some(tau));
+        }
         let target = 0.5 * (self.clear() + self.ceiling());
         let first = self.probe(tau, Measure::Depth)?;
         if first.lower > self.clear() {
