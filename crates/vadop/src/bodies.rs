@@ -146,6 +146,10 @@ impl Spin for FreeRotation {
     fn max_angular_speed(&self) -> f64 {
         FreeRotation::max_angular_speed(self)
     }
+    #[inline]
+    fn steady_spin(&self) -> Option<DVec3> {
+        FreeRotation::steady_spin(self)
+    }
 }
 
 /// A [`RigidState::shape`] meaning: a sphere of the state's radius.
