@@ -74,23 +74,29 @@ pub fn sphere_sphere_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f
 #[inline]
 fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Option<f64> {
     let approach = offset.dot(relative_velocity);
-    let speed_sq = relative_velocity.length_squared();
-    // Only approaching pairs can start a contact; `!(x < y)` also rejects NaN.
-    let threshold = -APPROACH_TOLERANCE * (offset.length_squared() * speed_sq).sqrt();
-    if !(approach < threshold) {
+    // Most candidate pairs recede or miss: both are told without a square root. The threshold
+    // below is never positive, so a pair that fails `approach < 0` fails it too (NaN included).
+    if !(approach < 0.0) {
         return None;
     }
+    let speed_sq = relative_velocity.length_squared();
     let radius_sq = radius_sum * radius_sum;
-    let gap = offset.length_squared() - radius_sq;
-    if gap <= 0.0 {
-        let touching = gap >= -2.0 * CONTACT_TOLERANCE * radius_sq;
-        return touching.then_some(0.0);
-    }
+    let distance_sq = offset.length_squared();
+    let gap = distance_sq - radius_sq;
     // b^2 - a c written as a R^2 - |offset x v|^2: no cancellation between two large squares,
     // which keeps grazing and nearly parallel motion accurate.
     let discriminant = speed_sq * radius_sq - offset.cross(relative_velocity).length_squared();
-    if discriminant < 0.0 {
+    if gap > 0.0 && discriminant < 0.0 {
         return None;
+    }
+    // Only approaching pairs can start a contact; `!(x < y)` also rejects NaN.
+    let threshold = -APPROACH_TOLERANCE * (distance_sq * speed_sq).sqrt();
+    if !(approach < threshold) {
+        return None;
+    }
+    if gap <= 0.0 {
+        let touching = gap >= -2.0 * CONTACT_TOLERANCE * radius_sq;
+        return touching.then_some(0.0);
     }
     // The smaller root (-b - sqrt(disc)) / a in the form that never divides by a tiny a.
     Some(gap / (-approach + discriminant.sqrt()))
