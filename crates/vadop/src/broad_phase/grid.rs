@@ -20,7 +20,7 @@ use super::{BroadPhase, PrepareCounts};
 use crate::bodies::BodyState;
 use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Proxies, Reported};
 use crate::memory::prefetch;
-use crate::parallel::{split_at_points, DisjointWriter, Workers};
+use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -160,9 +160,6 @@ pub struct Grid {
     plan: Vec<(u32, u32, u32)>,
     per_exponent: Vec<(i32, usize)>,
     extents: Vec<f64>,
-    /// Each body's binned slot when its path is one piece: a fresh piece in the same cell
-    /// replaces it there instead of joining a late list.
-    home: Vec<u32>,
     pieces: Vec<(CompactBox, Window)>,
     /// Scratch of a query: the runs of binned slots it reaches, then the slots whose boxes
     /// overlap (see [`Grid::for_each_overlapping`]).
@@ -188,7 +185,6 @@ impl Grid {
             plan: Vec::new(),
             per_exponent: Vec::new(),
             extents: Vec::new(),
-            home: Vec::new(),
             pieces: Vec::new(),
             runs: Vec::new(),
             hits: Vec::new(),
@@ -592,9 +588,6 @@ impl BroadPhase for Grid {
         self.boxes.resize(first);
         self.motions.resize(first, BodyState::default());
         self.motions.truncate(first);
-        let mut home = std::mem::take(&mut self.home);
-        home.clear();
-        home.resize(plan.len(), NONE);
         let levels = &self.levels;
         // Cells cut so each worker gets about as many pieces; its slots follow from its cells.
         let slot_of_cell = |g: usize| {
@@ -607,7 +600,6 @@ impl BroadPhase for Grid {
         };
         let cell_points = workers.balanced_points(cells, first, slot_of_cell);
         let slot_points: Vec<usize> = cell_points.iter().map(|&g| slot_of_cell(g)).collect();
-        let homes = DisjointWriter::new(&mut home);
         let parts: Vec<_> = split_at_points(&mut next_slot, &cell_points)
             .into_iter()
             .zip(split_at_points(&mut self.owners, &slot_points).into_iter().zip(self.boxes.parts_mut(&slot_points)))
@@ -625,13 +617,8 @@ impl BroadPhase for Grid {
                 owners[k] = Owner { body: i as u32, stamp: proxies.stamp(i), window };
                 boxes.set(k, bbox);
                 motions[k] = *proxies.state(i);
-                if plan_of[i].0 == 1 {
-                    // SAFETY: a single piece is taken by one worker only.
-                    unsafe { homes.write(i, slot as u32) };
-                }
             });
         });
-        self.home = home;
         self.next_slot = next_slot;
         self.late.clear();
         self.late_motions.clear();
@@ -669,33 +656,27 @@ impl BroadPhase for Grid {
     }
 
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        // Wanted once the query is done: ask for it now, so its miss overlaps the query's.
-        if let Some(home) = self.home.get(body as usize) {
-            prefetch(home);
-        }
         let exponent = self.query_pieces(body, proxies, skip, report);
         // The pieces the query just built.
         let i = body as usize;
         let k = self.level_for(exponent);
         let (boxes, owners, motions) = (&mut self.boxes, &mut self.owners, &mut self.motions);
         let level = &mut self.levels[k];
-        if self.home.len() <= i {
-            self.home.resize(i + 1, NONE);
-        }
         for n in 0..self.pieces.len() {
             let (bbox, window) = self.pieces[n];
             let cell = level.index(level.coordinates(bbox.corners().0));
             let entry = Entry { bbox, body, stamp: proxies.stamp(i) };
-            let home = self.home[i] as usize;
-            let run = level.run(cell);
-            if self.pieces.len() == 1 && run.contains(&home) {
-                // Still one piece in the same cell: replace the binned one where it lies.
-                owners[home] = Owner { body, stamp: entry.stamp, window };
-                boxes.set(home, bbox);
-                motions[home] = *proxies.state(i);
-                continue;
+            // One piece in a cell that holds a binned piece of the body (of a path it left: its
+            // stamp has moved on): replace that one where it lies, rather than keep a body's
+            // slot by id (4 bytes a body) to find it. A cell holds a handful of pieces.
+            if self.pieces.len() == 1 {
+                if let Some(old) = level.run(cell).find(|&e| owners[e].body == body) {
+                    owners[old] = Owner { body, stamp: entry.stamp, window };
+                    boxes.set(old, bbox);
+                    motions[old] = *proxies.state(i);
+                    continue;
+                }
             }
-            self.home[i] = NONE;
             self.late.push((entry, window, level.late_head[cell]));
             self.late_motions.push(*proxies.state(i));
             level.late_head[cell] = (self.late.len() - 1) as u32;
@@ -712,7 +693,6 @@ impl BroadPhase for Grid {
             + self.late_motions.capacity() * std::mem::size_of::<BodyState>()
             + self.plan.capacity() * 12
             + self.extents.capacity() * 8
-            + self.home.capacity() * 4
             + self.next_slot.capacity() * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels
