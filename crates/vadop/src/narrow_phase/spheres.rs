@@ -249,23 +249,30 @@ fn any_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, gravity: 
     best.map(|(tau, wall)| (motion.since + tau, wall)).filter(|(time, _)| time.is_finite())
 }
 
-/// [`wall_contact_time`] of a straight path: the same arithmetic, axis by axis, as selects
-/// rather than branches on the signs of the velocity (random in a gas: branches mispredict).
+/// [`wall_contact_time`] of a straight path: the same arithmetic, axis by axis, then the earliest
+/// axis (the lowest on a tie) picked by comparisons turned into indices rather than branches: the
+/// signs of the velocity and the axis that wins are random in a gas, and branches on them
+/// mispredicted about three times a call.
 #[inline]
 fn straight_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -> Option<(f64, Wall)> {
-    let (mut best, mut wall) = (f64::INFINITY, Wall::MinX);
-    for axis in 0..3 {
+    let tau = |axis: usize| {
         let (x, speed) = (motion.position[axis], motion.velocity[axis]);
-        let towards_max = speed > 0.0;
-        let distance = if towards_max { max[axis] - radius - x } else { x - (min[axis] + radius) };
+        let (to_max, to_min) = (max[axis] - radius - x, x - (min[axis] + radius));
         // A body already at (or a rounding error past) the wall and moving out touches it now.
-        let tau = distance.max(0.0) / speed.abs();
-        // At rest along the axis (0 / 0 or x / 0), NaN, or a wall at infinity (a periodic axis):
+        let tau = if speed > 0.0 { to_max } else { to_min }.max(0.0) / speed.abs();
+        // At rest along the axis (x / 0, 0 / 0), NaN, or a wall at infinity (a periodic axis):
         // no contact.
-        if tau.is_finite() && tau < best {
-            (best, wall) = (tau, Wall::new(axis, towards_max));
+        if tau.is_finite() {
+            tau
+        } else {
+            f64::INFINITY
         }
-    }
+    };
+    let (x, y, z) = (tau(0), tau(1), tau(2));
+    let best = x.min(y).min(z);
+    let (past_x, past_y) = (x != best, y != best);
+    let axis = usize::from(past_x) + usize::from(past_x & past_y);
+    let wall = Wall::new(axis, motion.velocity[axis] > 0.0);
     Some((motion.since + best, wall)).filter(|(time, _)| best.is_finite() && time.is_finite())
 }
 
