@@ -605,7 +605,7 @@ impl ProxyRule {
         let no_wall = bodies.is_sphere(i)
             && bodies.gravity_on(i) == self.gravity
             && wall.is_none_or(|(time, _)| !(time < self.window.end));
-        (Span { start, end, bbox }, u8::from(expires) * EXPIRES | u8::from(no_wall) * NO_WALL)
+        (Span { start, end, bbox }, (u8::from(expires) * EXPIRES) | (u8::from(no_wall) * NO_WALL))
     }
 }
 
