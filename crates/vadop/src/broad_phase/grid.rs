@@ -155,9 +155,9 @@ pub struct Grid {
     /// Pieces entered mid-window, chained per cell: the piece, its window, the next in the chain.
     late: Vec<(Entry, Window, u32)>,
     late_motions: Vec<BodyState>,
-    /// Scratch: each body's piece count, level and (for a single piece) cell; pieces per level
-    /// exponent; one body's pieces.
-    plan: Vec<(u32, u32, u32)>,
+    /// Scratch: each body's piece count and level, or for a single piece its cell (numbered
+    /// across levels); pieces per level exponent; one body's pieces.
+    plan: Vec<(u32, u32)>,
     per_exponent: Vec<(i32, usize)>,
     extents: Vec<f64>,
     pieces: Vec<(CompactBox, Window)>,
@@ -237,23 +237,23 @@ impl Grid {
     #[inline(always)]
     fn for_each_owned_piece(
         levels: &[Level],
-        plan: &[(u32, u32, u32)],
+        plan: &[(u32, u32)],
         proxies: Proxies,
         owned: std::ops::Range<usize>,
         mut f: impl FnMut(usize, usize, CompactBox, Window),
     ) {
-        for (i, &(count, k, cell)) in plan.iter().enumerate() {
+        for (i, &(count, level_or_cell)) in plan.iter().enumerate() {
             if count == 0 {
                 continue;
             }
-            let level = &levels[k as usize];
             if count == 1 {
-                let cell = level.cells_before + cell as usize;
+                let cell = level_or_cell as usize;
                 if owned.contains(&cell) {
                     f(i, cell, proxies.bbox(i), proxies.window_of(i));
                 }
                 continue;
             }
+            let level = &levels[level_or_cell as usize];
             // The pieces' low corners lie in the path's box, so their cells lie between the
             // cells of its corners: cells are numbered in x, then y, then z order.
             let (low, high) = proxies.bbox(i).corners();
@@ -499,7 +499,7 @@ impl BroadPhase for Grid {
         // Pass 1: each body's piece count and level exponent, and the pieces per exponent.
         let mut plan = std::mem::take(&mut self.plan);
         plan.clear();
-        plan.resize(proxies.slots(), (0, 0, 0));
+        plan.resize(proxies.slots(), (0, 0));
         let this = &*self;
         let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
             let mut per_exponent: Vec<(i32, usize)> = Vec::new();
@@ -509,7 +509,7 @@ impl BroadPhase for Grid {
                     continue;
                 }
                 let (count, exponent) = this.plan_pieces(proxies, i);
-                *plan = (count, exponent as u32, 0);
+                *plan = (count, exponent as u32);
                 match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
                     Some((_, n)) => *n += count as usize,
                     None => per_exponent.push((exponent, count as usize)),
@@ -538,7 +538,7 @@ impl BroadPhase for Grid {
             cells_before += level.late_head.len();
             self.levels.push(level);
         }
-        // Each body's level, and a single piece's cell, found in parallel.
+        // Each body's level, or a single piece's cell, found in parallel.
         let levels = &self.levels;
         workers.chunks_mut(&mut plan, |offset, chunk| {
             for (k, entry) in chunk.iter_mut().enumerate() {
@@ -547,7 +547,8 @@ impl BroadPhase for Grid {
                 }
                 if entry.0 == 1 {
                     let level = &levels[entry.1 as usize];
-                    entry.2 = level.index(level.coordinates(proxies.bbox(offset + k).corners().0)) as u32;
+                    let cell = level.index(level.coordinates(proxies.bbox(offset + k).corners().0));
+                    entry.1 = (level.cells_before + cell) as u32;
                 }
             }
         });
@@ -691,7 +692,7 @@ impl BroadPhase for Grid {
             + self.motions.capacity() * std::mem::size_of::<BodyState>()
             + self.late.capacity() * std::mem::size_of::<(Entry, Window, u32)>()
             + self.late_motions.capacity() * std::mem::size_of::<BodyState>()
-            + self.plan.capacity() * 12
+            + self.plan.capacity() * 8
             + self.extents.capacity() * 8
             + self.next_slot.capacity() * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
