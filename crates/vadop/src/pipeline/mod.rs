@@ -324,7 +324,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let (proxies, statics, window) = (self.proxies.view(bodies), &self.statics, self.window);
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
-                found.extend(predict_wall(bodies, &physics.bounds, i as u32, window));
+                found.extend(predict_wall(bodies, &proxies, &physics.bounds, i as u32, window));
                 found.extend(predict_crossing(bodies, &physics.bounds, i as u32, window));
                 for_each_static_event(bodies, proxies, statics, i, window, |event| found.push(event));
                 if proxies.expires(i) {
