@@ -62,8 +62,8 @@ pub(crate) fn pair_start(
     window: Window,
 ) -> Found {
     if bodies.are_spheres(a, b) {
-        let time =
-            pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, bodies.gravity)?;
+        let accelerations = (bodies.gravity_on(a), bodies.gravity_on(b));
+        let time = pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, accelerations)?;
         return window.contains(time).then_some((time, false));
     }
     shape_pair_start(bodies, a, b, window)
@@ -141,7 +141,7 @@ pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: 
     if bodies.are_spheres(a, b) {
         let mut mb = mb;
         mb.position += shift;
-        let time = pair_separation_time(&ma, &mb, bodies.radius(a) + bodies.radius(b), bodies.gravity)?;
+        let time = pair_separation_time(&ma, &mb, bodies.radius(a) + bodies.radius(b), (bodies.gravity_on(a), bodies.gravity_on(b)))?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);

@@ -27,7 +27,7 @@ pub(crate) mod pseudo_dynamic;
 mod retest;
 pub(crate) mod touching;
 
-use crate::bodies::Bodies;
+use crate::bodies::{Bodies, Rest};
 use crate::broad_phase::proxy::{sampled_quantile, ProxyTable};
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, EventQueue, Partner};
@@ -74,6 +74,9 @@ const WINDOW_QUANTILE: f64 = 0.1;
 const EVENTS_AHEAD: usize = 8;
 /// Windows are kept within this factor of the caller's frame either way.
 const FRAME_RATIO: f64 = 64.0;
+/// A body lying still within this fraction of the radius sum of another lies on it: it came to rest
+/// touching it, to the contact tolerance.
+const HELD_SLACK: f64 = 1e-6;
 
 /// How a pipeline picks its windows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -399,6 +402,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
         let before_j = bodies.velocity_at(j, t);
+        let still = [i, j].map(|k| bodies.rest_of(k) == Rest::Still);
         let resolution = self.impacts.pair(bodies, physics, (a, b), t, (point, normal), out.stats);
         // Impacts with static bodies are the level's pressure, as the walls' are: not the virial.
         let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
@@ -422,6 +426,15 @@ impl<B: BroadPhase> Pipeline<B> {
                 // The pair itself is re-tested once, by the second body, when both proxies are
                 // fresh (a rounding residue may still approach).
                 self.retest_pair(a, b, bodies, physics, t, out.stats);
+                for (k, was_still) in [(i, still[0]), (j, still[1])] {
+                    if was_still && bodies.rest_of(k) != Rest::Still {
+                        self.wake_held(bodies, physics, k, t, out.stats);
+                    }
+                }
+            }
+            Resolution::Rested(k, total) => {
+                impulse = total;
+                self.retest(k, None, bodies, physics, t, out.stats);
             }
             Resolution::Parting | Resolution::Passed => {}
         }
@@ -525,7 +538,7 @@ impl<B: BroadPhase> Pipeline<B> {
         for &k in stuck {
             let i = k as usize;
             if !bodies.is_fixed(i) {
-                bodies.set_motion_at(i, t, bodies.velocity_at(i, t), bodies.angular_velocity_at(i, t));
+                bodies.restart_at(i, t);
             }
         }
         match *stuck {
@@ -577,7 +590,9 @@ impl<B: BroadPhase> Pipeline<B> {
                 self.retest(a, None, bodies, physics, t, out.stats);
                 total
             }
-            Resolution::Parting | Resolution::Passed => unreachable!("a wall always turns a body back"),
+            Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => {
+                unreachable!("a wall always turns a body back")
+            }
         };
         out.contacts.push(Contact {
             time: t,
@@ -587,6 +602,45 @@ impl<B: BroadPhase> Pipeline<B> {
             normal,
             impulse,
         });
+    }
+
+    /// Into `near`, the bodies whose proxies overlap body `m`'s: through its own proxy and,
+    /// across periodic faces, its ghosts.
+    fn neighbours(&mut self, bodies: &Bodies, m: usize, near: &mut Vec<u32>) {
+        near.clear();
+        let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
+        for slot in table.slots_of(m) {
+            self.broad.query(slot as u32, proxies, None, |o, _| {
+                near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
+            });
+        }
+    }
+
+    /// Body `woken`, which lay still, was moved at `t`: the bodies lying still on it (touching it
+    /// from above), and on those in turn, fall again rather than float (see
+    /// [`crate::response::rest`]).
+    fn wake_held(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats) {
+        let mut stack = std::mem::take(&mut self.cluster);
+        let mut near = std::mem::take(&mut self.near);
+        stack.clear();
+        stack.push(woken as u32);
+        while let Some(m) = stack.pop() {
+            let m = m as usize;
+            self.neighbours(bodies, m, &mut near);
+            for &o in &near {
+                let o = o as usize;
+                let offset = bodies.offset_at(m, o, t);
+                let reach = (bodies.radius(m) + bodies.radius(o)) * (1.0 + HELD_SLACK);
+                let held = offset.dot(bodies.gravity) < 0.0 && offset.length() <= reach;
+                if bodies.rest_of(o) == Rest::Still && held {
+                    bodies.come_to_rest(o, t, Rest::Falling);
+                    self.retest(o as u32, None, bodies, physics, t, stats);
+                    stack.push(o as u32);
+                }
+            }
+        }
+        self.cluster = stack;
+        self.near = near;
     }
 
     /// The jam rule (see [`crate::response::rules`]), counted as one jammed contact: every body touching
@@ -634,14 +688,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
                 touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
             }
-            near.clear();
-            // Its neighbours through its own proxy and, across periodic faces, its ghosts.
-            let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
-            for slot in table.slots_of(m) {
-                self.broad.query(slot as u32, proxies, None, |o, _| {
-                    near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
-                });
-            }
+            self.neighbours(bodies, m, &mut near);
             for &o in &near {
                 let o = o as usize;
                 if self.cluster_mark[o] != self.cluster_epoch && contacts::pressed_together(bodies, m, o, t) {

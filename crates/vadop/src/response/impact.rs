@@ -6,8 +6,9 @@
 //! because which bodies are near is the engine's knowledge, not the response's.
 
 use super::impulse::{pair_impulse, resolve_impact, wall_bounce, Impacted};
+use super::rest;
 use super::rules::{ContactRules, Rule};
-use crate::bodies::Bodies;
+use crate::bodies::{Bodies, Rest};
 use crate::frame::{FrameStats, Mode, Physics};
 use crate::narrow_phase::contacts::{self, ManifoldScratch};
 use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
@@ -21,6 +22,9 @@ pub(crate) enum Resolution {
     Passed,
     /// New motions were set, with this total impulse: re-test the bodies that moved.
     Pushed(f64),
+    /// This body came to rest on the other, which is unchanged (the rest rule), taking this
+    /// impulse: re-test it alone.
+    Rested(u32, f64),
     /// Two plain spheres already parting: a zero impulse, nothing changed.
     Parting,
     /// Freeze the cluster touching them (the jam rule). `by_rule` when the contact rules called
@@ -125,15 +129,37 @@ impl Impacts {
         };
         // Two moving spheres without friction: the closed-form impulse along the line of centres.
         let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
+        let resting = rest::applies(bodies, physics);
+        // Gravity pulls them together whatever their velocities: they must part (see [`rest`]).
+        let pulled = resting && rest::fall_differently(bodies, i, j);
+        if let (true, Rule::Impulse { restitution, .. }) = (resting, rule) {
+            let before = |bodies: &Bodies, k: usize| bodies.velocity_at(k, t);
+            if let Some(k) = rest::on_body(bodies, (i, j), t, normal) {
+                let v = before(bodies, k);
+                bodies.come_to_rest(k, t, Rest::Still);
+                stats.rest_contacts += 1;
+                return Resolution::Rested(k as u32, bodies.mass[k] * v.length());
+            }
+            let approach = (before(bodies, i) - before(bodies, j)).dot(normal);
+            if let Some((k, out)) = rest::soft_on_still(bodies, (i, j), normal, approach, restitution) {
+                let v = before(bodies, k);
+                bodies.set_velocity_at(k, t, rest::hop(bodies, k, t, out, restitution));
+                stats.rest_contacts += 1;
+                return Resolution::Rested(k as u32, bodies.mass[k] * (v - bodies.velocity(k)).length());
+            }
+        }
         match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
-                let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
-                // Zero impulse changes nothing; re-testing would find the same touch again.
+                let mut impulse = push_spheres(bodies, (i, j), t, normal, restitution);
+                if pulled {
+                    impulse += rest::part(bodies, (i, j), t, normal);
+                }
                 if impulse > 0.0 {
                     stats.tc_contacts += changed as u64;
                     Resolution::Pushed(impulse)
                 } else {
+                    // Zero impulse changes nothing; re-testing would find the same touch again.
                     Resolution::Parting
                 }
             }
@@ -145,14 +171,15 @@ impl Impacts {
                 let clearance = contacts::clearance(bodies, i, j);
                 let points = &self.manifold.points;
                 match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {
-                    Some(total) if total > 0.0 => {
+                    Some(total) if total > 0.0 || pulled => {
                         stats.tc_contacts += changed as u64;
                         for (k, body) in [(i, body_i), (j, body_j)] {
                             if !bodies.is_fixed(k) {
                                 bodies.set_motion_at(k, t, body.velocity, body.angular_velocity);
                             }
                         }
-                        Resolution::Pushed(total)
+                        let parted = if pulled { rest::part(bodies, (i, j), t, normal) } else { 0.0 };
+                        Resolution::Pushed(total + parted)
                     }
                     // Nothing to push, yet the search found them touching as they turn into
                     // each other (it would find the same touch again while one sinks into the
@@ -174,7 +201,17 @@ impl Impacts {
         stats: &mut FrameStats,
     ) -> Resolution {
         let i = a as usize;
-        match self.rules.wall(a, t, physics.restitution, tc_duration(physics)) {
+        let rule = self.rules.wall(a, t, physics.restitution, tc_duration(physics));
+        let held = bodies.rest_of(i);
+        if let (true, Rule::Impulse { restitution, .. }) = (rest::applies(bodies, physics), rule) {
+            if let Some(rest) = rest::on_wall(bodies, i, wall, t, restitution) {
+                let before = bodies.velocity_at(i, t);
+                bodies.come_to_rest(i, t, rest);
+                stats.rest_contacts += 1;
+                return Resolution::Pushed(bodies.mass[i] * (before - bodies.velocity(i)).length());
+            }
+        }
+        let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if bodies.is_sphere(i) && physics.friction == 0.0 => {
                 stats.tc_contacts += changed as u64;
@@ -197,6 +234,11 @@ impl Impacts {
                     Some(_) | None => Resolution::Jammed { by_rule: false },
                 }
             }
+        };
+        // A body sliding on the floor that bounced off a side wall slides on.
+        if let (Resolution::Pushed(_), Some(rest)) = (resolution, rest::after_bounce(bodies, i, t, held)) {
+            bodies.come_to_rest(i, t, rest);
         }
+        resolution
     }
 }

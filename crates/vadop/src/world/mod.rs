@@ -9,7 +9,7 @@
 //! produce bit-identical contact sequences. It never decides what touches or how bodies respond.
 
 use crate::axis_pool::AxisPool;
-use crate::bodies::{Bodies, Sphere};
+use crate::bodies::{Bodies, Rest, Sphere};
 use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::error::{check_length, check_magnitude, check_vector, Result, VadopError};
 use crate::frame::{Contact, FrameStats, Mode, Touched};
@@ -33,8 +33,9 @@ mod snapshot;
 pub use config::{Method, WorldConfig, AUTO_POOL_AXES, MAX_BOX_LENGTHS_PER_FRAME};
 pub use rigid::{Body, BodyShape, ShapeId};
 
-/// Bounces a body may make on one wall in one step under gravity: a body resting on a floor
-/// would make infinitely many (resting contact is not built). One that nearly rests makes
+/// Bounces a body may make on one wall in one step under gravity where bodies may not come to
+/// rest (elastic or detect mode: see [`crate::response::rest`]): a body resting on a floor
+/// would make infinitely many. One that nearly rests makes
 /// thousands, which an elastic pile under strong gravity leaves in its floor layer, at a cost of
 /// well under a microsecond each; a million in a step is a body at rest.
 pub const MAX_BOUNCES_PER_STEP: f64 = 1e6;
@@ -113,9 +114,6 @@ impl World {
         }
         if !config.gravity.is_finite() {
             return Err(VadopError::BadGravity(config.gravity.to_array()));
-        }
-        if config.gravity != DVec3::ZERO && config.mode == Mode::Simulate && config.restitution < 1.0 {
-            return Err(VadopError::GravityUnsupported("restitution below 1"));
         }
         let pool = AxisPool::new(config.pool_axes.unwrap_or(AUTO_POOL_AXES))?;
         check_phi(config.phi.unwrap_or(pool.covering_radius()), &pool)?;
@@ -261,6 +259,25 @@ impl World {
     /// ```
     pub fn crossings(&self, handle: BodyHandle) -> Result<[i64; 3]> {
         Ok(self.bodies.crossings_of(self.live_slot(handle)?))
+    }
+
+    /// How a body is held up under gravity (see [`Rest`]): falling, sliding on a wall or lying
+    /// still. Bodies come to rest only in simulate mode with restitution below 1.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BoxBounds, Rest, Sphere, World, WorldConfig};
+    /// let config = WorldConfig { gravity: DVec3::new(0.0, 0.0, -9.81), restitution: 0.5, ..WorldConfig::default() };
+    /// let mut world = World::new(BoxBounds::cube(10.0)?, config)?;
+    /// let ball = world.add_sphere(Sphere { position: DVec3::new(5.0, 5.0, 2.0), velocity: DVec3::ZERO, radius: 0.5, mass: 1.0 })?;
+    /// assert_eq!(world.rest(ball)?, Rest::Falling);
+    /// world.step(3.0)?;
+    /// assert_eq!(world.rest(ball)?, Rest::Still);
+    /// assert!((world.sphere(ball)?.position.z - 0.5).abs() < 1e-9);
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn rest(&self, handle: BodyHandle) -> Result<Rest> {
+        Ok(self.bodies.rest_of(self.live_slot(handle)?))
     }
 
     /// The live bodies that are moving spheres, with their handles, in ascending order of handle
@@ -608,13 +625,13 @@ impl World {
         Ok(())
     }
 
-    /// Under gravity, no body may rest on a wall it is pulled towards: with no resting state it
-    /// would bounce without end. The height h a body's bounce reaches above touching is its
+    /// Under gravity where bodies may not come to rest (an elastic world, detect mode), no body
+    /// may rest on a wall it is pulled towards: it would bounce without end. The height h a body's bounce reaches above touching is its
     /// distance plus v^2 / 2g along each pulled axis, a bounce lasts 2 sqrt(2 h / g), and a body
     /// that would bounce more than [`MAX_BOUNCES_PER_STEP`] times in the step is refused.
     fn check_not_resting(&self, dt: f64) -> Result<()> {
         let g = self.config.gravity;
-        if g == DVec3::ZERO {
+        if g == DVec3::ZERO || (self.config.mode == Mode::Simulate && self.config.restitution < 1.0) {
             return Ok(());
         }
         for i in self.moving_ids() {

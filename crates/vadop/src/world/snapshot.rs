@@ -19,7 +19,7 @@
 //! previous file intact.
 
 use super::{BoxBounds, Mode, World, WorldConfig};
-use crate::bodies::{RigidState, Sphere};
+use crate::bodies::{Rest, RigidState, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
 use crate::motion::Motion;
@@ -99,6 +99,13 @@ struct Slot {
     /// In a periodic box: the body's crossings of each periodic axis's faces.
     #[serde(default, skip_serializing_if = "is_zero")]
     crossings: [i64; 3],
+    /// Under gravity: how the body is held up, when at rest.
+    #[serde(default, skip_serializing_if = "is_falling")]
+    rest: Rest,
+}
+
+fn is_falling(rest: &Rest) -> bool {
+    *rest == Rest::Falling
 }
 
 fn is_zero(crossings: &[i64; 3]) -> bool {
@@ -137,6 +144,7 @@ impl World {
                 generation: b.generation[i],
                 last_contact: history.get(i).copied().filter(|t| t.is_finite()),
                 crossings: b.crossings_of(i),
+                rest: b.rest_of(i),
                 spin: b.has_rigid().then(|| SlotSpin {
                     shape: b.rigid.shape[i],
                     orientation: b.rigid.spin_start[i].0,
@@ -229,7 +237,15 @@ impl World {
             // A removed body's slot only keeps its place and generation; a live one must be where
             // stepping put it.
             let motion = Motion { position: slot.position, since: slot.since, velocity: slot.velocity };
-            let now = motion.at_under(time, world.config.gravity);
+            let resting = match slot.rest {
+                Rest::Falling => true,
+                Rest::Sliding(axis) => axis < 3 && slot.velocity[axis as usize] == 0.0,
+                Rest::Still => slot.velocity == DVec3::ZERO,
+            };
+            if !resting || (slot.rest != Rest::Falling && world.config.gravity == DVec3::ZERO) {
+                return Err(bad(format!("slot {i}: {:?} is a state of a body at rest under gravity", slot.rest)));
+            }
+            let now = motion.at_under(time, slot.rest.acceleration(world.config.gravity));
             let checked = match &slot.spin {
                 None => world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
                     true => world.check_sphere(&at(now)),
@@ -276,6 +292,7 @@ impl World {
                 world.bodies.crossings.resize(world.bodies.slots(), [0; 3]);
                 world.bodies.crossings[i] = slot.crossings;
             }
+            world.bodies.set_rest(i, slot.rest);
         }
         world.bounds = exact;
         let slots = snapshot.slots.len();
