@@ -51,15 +51,16 @@ impl Default for BodyState {
 }
 
 /// How a moving body is held up under gravity, in simulate mode with restitution below 1 (see
-/// [`crate::response::rules`]): it falls (the default), slides along a wall that holds it up
-/// (gravity's pull into that wall is gone, its motion along the wall goes on), or lies still on
-/// walls or on bodies lying still (no velocity, no acceleration) until an impact moves it.
+/// [`crate::response::rest`]): it falls (the default), slides along walls that hold it up
+/// (gravity's pull into them is gone, its motion along them goes on), or lies still on walls or
+/// on bodies lying still (no velocity, no acceleration) until an impact moves it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Rest {
     #[default]
     Falling,
-    /// On a wall across this axis.
+    /// On the walls across the axes whose bits are set (bit `k` for axis `k`): a floor, and in a
+    /// corner under tilted gravity the side walls it is pressed into.
     Sliding(u8),
     Still,
 }
@@ -70,14 +71,30 @@ impl Rest {
     pub fn acceleration(self, gravity: DVec3) -> DVec3 {
         match self {
             Rest::Falling => gravity,
-            Rest::Sliding(axis) => {
-                let mut along = gravity;
-                along[axis as usize] = 0.0;
-                along
-            }
+            Rest::Sliding(axes) => without_axes(gravity, axes),
             Rest::Still => DVec3::ZERO,
         }
     }
+
+    /// The axes of the walls a sliding body slides on (bit `k` for axis `k`); none otherwise.
+    #[inline]
+    pub fn sliding_axes(self) -> u8 {
+        match self {
+            Rest::Sliding(axes) => axes,
+            Rest::Falling | Rest::Still => 0,
+        }
+    }
+}
+
+/// `v` with its components along the axes whose bits are set in `axes` dropped.
+#[inline]
+pub(crate) fn without_axes(mut v: DVec3, axes: u8) -> DVec3 {
+    for axis in 0..3 {
+        if axes & (1 << axis) != 0 {
+            v[axis] = 0.0;
+        }
+    }
+    v
 }
 
 /// Flat store of all bodies; removed slots stay until reused (lowest first, by the world).
@@ -331,17 +348,36 @@ impl Bodies {
         self.rest.get(i).copied().unwrap_or_default()
     }
 
-    /// Body `i` comes to rest at `t` as `rest` says: sliding, its velocity into the wall is
-    /// dropped; lying still, all of its motion and spin. Its predictions are void.
-    pub(crate) fn come_to_rest(&mut self, i: usize, t: f64, rest: Rest) {
-        let (mut velocity, mut spin) = (self.velocity_at(i, t), self.angular_velocity_at(i, t));
-        match rest {
-            Rest::Falling => {}
-            Rest::Sliding(axis) => velocity[axis as usize] = 0.0,
-            Rest::Still => (velocity, spin) = (DVec3::ZERO, DVec3::ZERO),
+    /// Body `i` comes to rest at `t` as `rest` says, touching the walls across the axes `on`
+    /// (bits, as [`Rest::Sliding`]'s) that gravity pulls it into: its velocity into them is
+    /// dropped and its centre set touching them (a rounding off at most, so that bodies resting
+    /// side by side on a floor meet level); lying still, all of its motion and spin stop.
+    /// Falling again, it keeps its velocity. Its predictions are void.
+    pub(crate) fn come_to_rest(&mut self, i: usize, t: f64, rest: Rest, on: u8, walls: (DVec3, DVec3)) {
+        let (mut velocity, mut spin) = (without_axes(self.velocity_at(i, t), on), self.angular_velocity_at(i, t));
+        if rest == Rest::Still {
+            (velocity, spin) = (DVec3::ZERO, DVec3::ZERO);
         }
         self.set_motion_at(i, t, velocity, spin);
+        let radius = self.radius(i);
+        for axis in (0..3).filter(|&axis| on & (1 << axis) != 0) {
+            self.state[i].motion.position[axis] =
+                if self.gravity[axis] < 0.0 { walls.0[axis] + radius } else { walls.1[axis] - radius };
+        }
         self.set_rest(i, rest);
+    }
+
+    /// Body `i` lies still from `t` on where it is (on a body lying still, or a jammed cluster's
+    /// member): its motion and spin stop.
+    pub(crate) fn lie_still(&mut self, i: usize, t: f64) {
+        self.set_motion_at(i, t, DVec3::ZERO, DVec3::ZERO);
+        self.set_rest(i, Rest::Still);
+    }
+
+    /// Body `i` falls again from `t` on, from where it is, at the velocity it has (woken from
+    /// lying still: none).
+    pub(crate) fn fall(&mut self, i: usize, t: f64) {
+        self.set_motion_at(i, t, self.velocity_at(i, t), self.angular_velocity_at(i, t));
     }
 
     /// Body `i`'s motion starts afresh at `t` on the same path, held up as it was (a wrap across a

@@ -141,7 +141,7 @@ pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: 
     if bodies.are_spheres(a, b) {
         let mut mb = mb;
         mb.position += shift;
-        let time = pair_separation_time(&ma, &mb, bodies.radius(a) + bodies.radius(b), (bodies.gravity_on(a), bodies.gravity_on(b)))?;
+        let time = pair_separation_time(&ma, &mb, bodies.radius(a) + bodies.radius(b), bodies.gravity)?;
         return window.contains(time).then_some((time, false));
     }
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);

@@ -6,20 +6,18 @@
 //! It owns that quartic's first root and nothing else. The gap's rate is p . p', a cubic; its real
 //! roots split `tau >= 0` into pieces on which the gap is monotone, and the first piece that ends
 //! at or below zero holds the contact, found by bisection. Every root is bracketed and bisected to
-//! adjacent floats, so the time is a function of the two motions alone, to the bit (canonical,
-//! like the straight paths'), and scaling lengths and times by powers of two first makes a
-//! scene scaled by a power of two give times scaled alike. The touching tolerance and the rule
-//! at the reference instant are the straight paths' (see [`super::spheres`]), with one addition:
-//! a pair touching with no relative velocity but pulled together (a ball let go on a resting
-//! one) is approaching, or it would sink in.
+//! adjacent floats (over the floats' bits, so at most 64 steps), so the time is a function of the
+//! two motions alone, to the bit (canonical, like the straight paths'), and scaling lengths and
+//! times by powers of two first makes a scene scaled by a power of two give times scaled alike.
+//! The touching tolerance and the rule at the reference instant are the straight paths' (see
+//! [`super::spheres`]), with two additions, or the pull would sink one into the other: a pair
+//! touching with no relative velocity but pulled together (a ball let go on a resting one) is
+//! approaching, and a pair touching and parting so slowly that the pull turns it back before its
+//! gap opens touches again where it turns.
 
 use super::spheres::{APPROACH_TOLERANCE, CONTACT_TOLERANCE};
 use crate::numeric::{exponent, power_of_two, scale_by_power_of_two};
 use glam::DVec3;
-
-/// Bisection steps at most: adjacent floats are reached in far fewer for any bracket of
-/// normal numbers; the cap only guards against a bracket of NaNs.
-const MAX_BISECTIONS: u32 = 2200;
 
 /// The relative path of two spheres in units where the radius sum and the acceleration are near 1.
 #[derive(Debug, Clone, Copy)]
@@ -71,7 +69,9 @@ impl Bent {
             let (lo, hi) = (ends[k], ends[k + 1]);
             let positive = self.rate(lo) > 0.0;
             // A bracketed sign change: its root, where the gap turns.
-            if let Some(root) = (hi > lo).then(|| first_change(lo, hi, |tau| (self.rate(tau) > 0.0) == positive)).flatten() {
+            if let Some(root) =
+                (hi > lo).then(|| first_change(lo, hi, |tau| (self.rate(tau) > 0.0) == positive)).flatten()
+            {
                 roots[count] = root;
                 count += 1;
             }
@@ -80,25 +80,23 @@ impl Bent {
     }
 }
 
-/// In `[lo, hi]`, where `holds` is true at `lo`: the first float at which it no longer holds,
-/// found by bisection; `None` when it still holds at `hi`.
+/// In `[lo, hi]` (`0 <= lo <= hi`), where `holds` is true at `lo`: the first float at which it
+/// no longer holds, found by bisection over the floats' bits (ordered as the values are for
+/// floats of one sign); `None` when it still holds at `hi`.
 fn first_change(lo: f64, hi: f64, holds: impl Fn(f64) -> bool) -> Option<f64> {
     if holds(hi) {
         return None;
     }
-    let (mut lo, mut hi) = (lo, hi);
-    for _ in 0..MAX_BISECTIONS {
-        let mid = lo + 0.5 * (hi - lo);
-        if !(mid > lo && mid < hi) {
-            break;
-        }
-        if holds(mid) {
+    let (mut lo, mut hi) = (lo.to_bits(), hi.to_bits());
+    while hi - lo > 1 {
+        let mid = lo + (hi - lo) / 2;
+        if holds(f64::from_bits(mid)) {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    Some(hi)
+    Some(f64::from_bits(hi))
 }
 
 /// Scales the relative path so that R and the acceleration are near 1: lengths by `2^-l`, times
@@ -118,15 +116,15 @@ fn scaled(offset: DVec3, velocity: DVec3, acceleration: DVec3, radius_sum: f64) 
 /// Time `tau >= 0` after the reference instant at which two spheres, `offset` apart (the second's
 /// centre minus the first's) with `relative_velocity` and a non-zero `relative_acceleration`
 /// there, first touch while approaching, if they ever do: a pair touching at the reference and
-/// parting touches again when it comes back.
+/// parting touches again when it comes back, or where the pull turns it back before it parts.
 ///
 /// ```
 /// use glam::DVec3;
 /// use vadop::narrow_phase::falling::falling_sphere_time;
 /// // A unit ball dropped from rest 3 above a resting one (R = 2) under g = 2: the gap of 1
-/// // closes after sqrt(2 * 1 / 2) = 1.
+/// // closes after sqrt(2 * 1 / 2) = 1 (to the float where the rounded gap first reaches zero).
 /// let tau = falling_sphere_time(DVec3::new(0.0, 0.0, 3.0), DVec3::ZERO, DVec3::new(0.0, 0.0, -2.0), 2.0);
-/// assert_eq!(tau, Some(1.0));
+/// assert!((tau.unwrap() - 1.0).abs() <= f64::EPSILON);
 /// // Thrown sideways fast enough, it misses.
 /// let tau = falling_sphere_time(DVec3::new(0.0, 0.0, 3.0), DVec3::new(9.0, 0.0, 0.0), DVec3::new(0.0, 0.0, -2.0), 2.0);
 /// assert_eq!(tau, None);
@@ -142,8 +140,6 @@ pub fn falling_sphere_time(
     if !gap.is_finite() {
         return None;
     }
-    // Touching now and parting, a pair pulled together may come back: it touches again once it
-    // has parted (a ball bouncing off a resting one falls back onto it).
     let mut apart = gap > 0.0;
     if !apart {
         let touching = gap >= -2.0 * CONTACT_TOLERANCE * bent.radius_sq;
@@ -152,72 +148,24 @@ pub fn falling_sphere_time(
         }
     }
     // The gap is monotone between turning points: the first piece, once apart, that ends at or
-    // below zero holds the contact, and the gap is positive at its start.
+    // below zero holds the contact. Touching and parting, the pair touches again where its gap
+    // turns back if it never opened (a bounce too slow for the pull), or where it closes again.
     let (turns, count) = bent.turning_points();
     let mut lo = 0.0;
     for &hi in &turns[..count] {
-        if !apart {
-            apart = bent.gap(hi) > 0.0;
-        } else if bent.gap(hi) <= 0.0 {
+        let ends_apart = bent.gap(hi) > 0.0;
+        if apart && !ends_apart {
             let tau = first_change(lo, hi, |tau| bent.gap(tau) > 0.0)?;
             return finite(scale_by_power_of_two(tau, time));
         }
+        if !apart && !ends_apart && bent.rate(lo + 0.5 * (hi - lo)) > 0.0 {
+            return finite(scale_by_power_of_two(hi, time));
+        }
+        apart = ends_apart;
         lo = hi;
     }
     // After the last turning point the gap only grows.
     None
-}
-
-/// Time `tau >= 0` after the reference instant at which two touching or overlapping spheres on
-/// such a bent relative path part (the gap back above zero, growing), 0 when they are apart and
-/// parting; for a pair apart but approaching, when it parts after it next touches, or the closest
-/// approach of a pair that misses.
-///
-/// ```
-/// use glam::DVec3;
-/// use vadop::narrow_phase::falling::falling_separation_time;
-/// // Overlapping, thrown apart at 2 against a pull of 2: they part when 2 apart, after 1.
-/// let tau = falling_separation_time(DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, 2.0), DVec3::new(0.0, 0.0, -2.0), 2.0);
-/// assert_eq!(tau, Some(1.0));
-/// ```
-pub fn falling_separation_time(
-    offset: DVec3,
-    relative_velocity: DVec3,
-    relative_acceleration: DVec3,
-    radius_sum: f64,
-) -> Option<f64> {
-    let (bent, time) = scaled(offset, relative_velocity, relative_acceleration, radius_sum);
-    if !bent.gap(0.0).is_finite() {
-        return None;
-    }
-    if bent.gap(0.0) > 0.0 && bent.rate(0.0) >= 0.0 {
-        return Some(0.0);
-    }
-    let (turns, count) = bent.turning_points();
-    let mut lo = 0.0;
-    let mut entered = bent.gap(0.0) <= 0.0;
-    for &hi in &turns[..count] {
-        // Apart and approaching, the gap falls to its first turning point: a miss parts there,
-        // at its closest approach.
-        if !entered && bent.gap(hi) > 0.0 {
-            return finite(scale_by_power_of_two(hi, time));
-        }
-        entered = true;
-        if let Some(tau) = first_change(lo, hi, |tau| bent.gap(tau) <= 0.0) {
-            return finite(scale_by_power_of_two(tau, time));
-        }
-        lo = hi;
-    }
-    // The gap grows without bound from the last turning point on: bracket where it parts.
-    let mut hi = lo.max(1.0);
-    while bent.gap(hi) <= 0.0 {
-        hi *= 2.0;
-        if !hi.is_finite() {
-            return None;
-        }
-    }
-    let tau = first_change(lo, hi, |tau| bent.gap(tau) <= 0.0)?;
-    finite(scale_by_power_of_two(tau, time))
 }
 
 /// At the reference a touching pair approaches when its gap shrinks, or, with no relative
@@ -323,18 +271,5 @@ mod tests {
             let t = falling_sphere_time(d * l, w * s, c, 1.5 * l).unwrap();
             assert_eq!(t, unit * s, "2^{k}");
         }
-    }
-
-    #[test]
-    fn separation_of_a_pair_apart_that_misses_is_its_closest_approach() {
-        let g = DVec3::new(0.0, 0.0, -1.0);
-        // Apart and parting: now.
-        assert_eq!(falling_separation_time(DVec3::new(0.0, 0.0, 3.0), DVec3::new(0.0, 0.0, 1.0), -g, 2.0), Some(0.0));
-        // Apart, passing by below: parts at its closest approach, where the gap turns.
-        let tau = falling_separation_time(DVec3::new(-4.0, 0.0, -3.0), DVec3::new(2.0, 0.0, 0.0), g * 1e-9, 2.0).unwrap();
-        assert!((tau - 2.0).abs() < 1e-6, "{tau}");
-        // Overlapping, falling apart under the pull: when 2 apart.
-        let tau = falling_separation_time(DVec3::new(0.0, 0.0, -1.0), DVec3::ZERO, g * 2.0, 2.0).unwrap();
-        assert!((tau - 1.0).abs() < 1e-15, "{tau}");
     }
 }

@@ -26,7 +26,7 @@
 //! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
 //! scaled by a power of two gives bit-identical contact times, scaled alike.
 
-use super::falling::{falling_separation_time, falling_sphere_time};
+use super::falling::falling_sphere_time;
 use crate::motion::Motion;
 use crate::numeric::{exponent, power_of_two, scale_by_power_of_two, unit_scale};
 use crate::walls::Wall;
@@ -170,10 +170,9 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
     tau.is_finite().then_some(tau)
 }
 
-/// Canonical absolute time at which two touching spheres on their current motions, under the
-/// accelerations `(ga, gb)`, separate (see [`sphere_separation_time`]), computed from the later
-/// of the two `since` instants like [`pair_contact_time`]; `None` when they move together and
-/// never separate.
+/// Canonical absolute time at which two touching spheres on their current motions, both under
+/// `gravity`, separate (see [`sphere_separation_time`]), computed from the later of the two
+/// `since` instants like [`pair_contact_time`]; `None` when they move together and never separate.
 ///
 /// ```
 /// use glam::DVec3;
@@ -182,19 +181,15 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
-/// let straight = (DVec3::ZERO, DVec3::ZERO);
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, straight), Some(5.0 / 3.0));
-/// assert_eq!(pair_separation_time(&a, &b, 1.0, straight), Some(7.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)), Some(5.0 / 3.0));
+/// assert_eq!(pair_separation_time(&a, &b, 1.0, DVec3::ZERO), Some(7.0 / 3.0));
 /// ```
 #[inline]
-pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64, (ga, gb): (DVec3, DVec3)) -> Option<f64> {
+pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64, gravity: DVec3) -> Option<f64> {
     let reference = a.since.max(b.since);
-    let offset = b.at_under(reference, gb) - a.at_under(reference, ga);
-    let relative_velocity = b.velocity_under(reference, gb) - a.velocity_under(reference, ga);
-    let tau = match ga == gb {
-        true => sphere_separation_time(offset, relative_velocity, radius_sum)?,
-        false => falling_separation_time(offset, relative_velocity, gb - ga, radius_sum)?,
-    };
+    let offset = b.at_under(reference, gravity) - a.at_under(reference, gravity);
+    let relative_velocity = b.velocity_under(reference, gravity) - a.velocity_under(reference, gravity);
+    let tau = sphere_separation_time(offset, relative_velocity, radius_sum)?;
     let time = reference + tau;
     time.is_finite().then_some(time)
 }

@@ -26,6 +26,7 @@ mod predict;
 pub(crate) mod pseudo_dynamic;
 mod retest;
 pub(crate) mod touching;
+mod wake;
 
 use crate::bodies::{Bodies, Rest};
 use crate::broad_phase::proxy::{sampled_quantile, ProxyTable};
@@ -40,6 +41,7 @@ use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
 use crate::pipeline::touching::Touching;
 use crate::response::impact::{exchange_virial, Impacts, Resolution};
+use crate::response::rest;
 use crate::walls::BoxBounds;
 use crate::walls::Wall;
 use crate::window::Window;
@@ -74,9 +76,6 @@ const WINDOW_QUANTILE: f64 = 0.1;
 const EVENTS_AHEAD: usize = 8;
 /// Windows are kept within this factor of the caller's frame either way.
 const FRAME_RATIO: f64 = 64.0;
-/// A body lying still within this fraction of the radius sum of another lies on it: it came to rest
-/// touching it, to the contact tolerance.
-const HELD_SLACK: f64 = 1e-6;
 
 /// How a pipeline picks its windows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -604,45 +603,6 @@ impl<B: BroadPhase> Pipeline<B> {
         });
     }
 
-    /// Into `near`, the bodies whose proxies overlap body `m`'s: through its own proxy and,
-    /// across periodic faces, its ghosts.
-    fn neighbours(&mut self, bodies: &Bodies, m: usize, near: &mut Vec<u32>) {
-        near.clear();
-        let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
-        for slot in table.slots_of(m) {
-            self.broad.query(slot as u32, proxies, None, |o, _| {
-                near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
-            });
-        }
-    }
-
-    /// Body `woken`, which lay still, was moved at `t`: the bodies lying still on it (touching it
-    /// from above), and on those in turn, fall again rather than float (see
-    /// [`crate::response::rest`]).
-    fn wake_held(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats) {
-        let mut stack = std::mem::take(&mut self.cluster);
-        let mut near = std::mem::take(&mut self.near);
-        stack.clear();
-        stack.push(woken as u32);
-        while let Some(m) = stack.pop() {
-            let m = m as usize;
-            self.neighbours(bodies, m, &mut near);
-            for &o in &near {
-                let o = o as usize;
-                let offset = bodies.offset_at(m, o, t);
-                let reach = (bodies.radius(m) + bodies.radius(o)) * (1.0 + HELD_SLACK);
-                let held = offset.dot(bodies.gravity) < 0.0 && offset.length() <= reach;
-                if bodies.rest_of(o) == Rest::Still && held {
-                    bodies.come_to_rest(o, t, Rest::Falling);
-                    self.retest(o as u32, None, bodies, physics, t, stats);
-                    stack.push(o as u32);
-                }
-            }
-        }
-        self.cluster = stack;
-        self.near = near;
-    }
-
     /// The jam rule (see [`crate::response::rules`]), counted as one jammed contact: every body touching
     /// `seeds` at `t`, directly or through each other, without separating, moves on with the
     /// cluster's centre-of-mass velocity less any component into a wall a member touches (a
@@ -663,11 +623,15 @@ impl<B: BroadPhase> Pipeline<B> {
         cluster.clear();
         self.cluster_epoch = self.cluster_epoch.wrapping_add(1);
         self.cluster_mark.resize(bodies.slots(), 0);
-        // A cluster pressed against static geometry stops: the level holds it.
-        let mut pinned = false;
+        // A cluster pressed against static geometry stops: the level holds it. Under the rest
+        // rule bodies lying still hold it up too, and are not of it.
+        let resting = rest::applies(bodies, physics);
+        let support = |bodies: &Bodies, o: usize| resting && bodies.rest_of(o) == Rest::Still;
+        let (mut pinned, mut held) = (false, false);
         for &seed in seeds {
-            if bodies.is_fixed(seed as usize) {
-                pinned = true;
+            if bodies.is_fixed(seed as usize) || support(bodies, seed as usize) {
+                pinned |= bodies.is_fixed(seed as usize);
+                held = true;
                 continue;
             }
             self.cluster_mark[seed as usize] = self.cluster_epoch;
@@ -692,6 +656,10 @@ impl<B: BroadPhase> Pipeline<B> {
             for &o in &near {
                 let o = o as usize;
                 if self.cluster_mark[o] != self.cluster_epoch && contacts::pressed_together(bodies, m, o, t) {
+                    if support(bodies, o) {
+                        held = true;
+                        continue;
+                    }
                     self.cluster_mark[o] = self.cluster_epoch;
                     cluster.push(o as u32);
                 }
@@ -702,7 +670,11 @@ impl<B: BroadPhase> Pipeline<B> {
                 });
             }
         }
-        let mut velocity = if pinned || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
+        // Under the rest rule a cluster held up by a floor or by a body lying still lies still.
+        let g = bodies.gravity;
+        let floor = (0..3).any(|axis| (g[axis] < 0.0 && touches_min[axis]) || (g[axis] > 0.0 && touches_max[axis]));
+        let still = resting && (pinned || held || floor);
+        let mut velocity = if pinned || still || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
         for axis in 0..3 {
             if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {
                 velocity[axis] = 0.0;
@@ -718,6 +690,9 @@ impl<B: BroadPhase> Pipeline<B> {
             virial += bodies.offset_at(first, m, t).dot(gained);
             self.impacts.rules.freeze(m as u32, t);
             bodies.set_motion_at(m, t, velocity, DVec3::ZERO);
+            if still {
+                bodies.lie_still(m, t);
+            }
         }
         for &m in &cluster {
             self.retest(m, None, bodies, physics, t, stats);

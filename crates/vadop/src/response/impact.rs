@@ -8,7 +8,7 @@
 use super::impulse::{pair_impulse, resolve_impact, wall_bounce, Impacted};
 use super::rest;
 use super::rules::{ContactRules, Rule};
-use crate::bodies::{Bodies, Rest};
+use crate::bodies::Bodies;
 use crate::frame::{FrameStats, Mode, Physics};
 use crate::narrow_phase::contacts::{self, ManifoldScratch};
 use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
@@ -120,6 +120,10 @@ impl Impacts {
             return Resolution::Passed;
         }
         let duration = tc_duration(physics);
+        // Whether each body's own previous contact lies within the contact duration (the TC
+        // model asks whether either's does).
+        let quick = [a, b]
+            .map(|k| t - self.rules.last_contact.get(k as usize).copied().unwrap_or(f64::NEG_INFINITY) < duration);
         // Level geometry keeps no contact history, as a wall keeps none: the TC model and the
         // jam count are about the moving body's own contacts.
         let rule = match fixed {
@@ -130,36 +134,32 @@ impl Impacts {
         // Two moving spheres without friction: the closed-form impulse along the line of centres.
         let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
         let resting = rest::applies(bodies, physics);
-        // Gravity pulls them together whatever their velocities: they must part (see [`rest`]).
-        let pulled = resting && rest::fall_differently(bodies, i, j);
+        let before = [bodies.rest_of(i), bodies.rest_of(j)];
+        // Gravity presses one onto the other whatever their velocities: they must part (see
+        // [`rest`]).
+        let pressed = if resting { rest::pressed_onto(bodies, (i, j), normal) } else { None };
         if let (true, Rule::Impulse { restitution, .. }) = (resting, rule) {
-            let before = |bodies: &Bodies, k: usize| bodies.velocity_at(k, t);
-            if let Some(k) = rest::on_body(bodies, (i, j), t, normal) {
-                let v = before(bodies, k);
-                bodies.come_to_rest(k, t, Rest::Still);
+            if let Some((k, impulse)) = rest::against_still(bodies, (i, j), t, normal, (restitution, quick)) {
                 stats.rest_contacts += 1;
-                return Resolution::Rested(k as u32, bodies.mass[k] * v.length());
+                rest::keep_held(bodies, physics, k, t, before[(k == j) as usize]);
+                return Resolution::Rested(k as u32, impulse);
             }
-            let approach = (before(bodies, i) - before(bodies, j)).dot(normal);
-            if let Some((k, out)) = rest::soft_on_still(bodies, (i, j), normal, approach, restitution) {
-                let v = before(bodies, k);
-                bodies.set_velocity_at(k, t, rest::hop(bodies, k, t, out, restitution));
-                stats.rest_contacts += 1;
-                return Resolution::Rested(k as u32, bodies.mass[k] * (v - bodies.velocity(k)).length());
+            // The pressed body's repeat within the contact duration: it collapses onto the other,
+            // which holds it up, or is wedged.
+            if pressed.is_some_and(|k| quick[k]) {
+                return Resolution::Jammed { by_rule: true };
             }
         }
-        match rule {
+        let pressed = pressed.is_some();
+        let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
-                let mut impulse = push_spheres(bodies, (i, j), t, normal, restitution);
-                if pulled {
-                    impulse += rest::part(bodies, (i, j), t, normal);
-                }
+                let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
+                // Zero impulse changes nothing; re-testing would find the same touch again.
                 if impulse > 0.0 {
                     stats.tc_contacts += changed as u64;
                     Resolution::Pushed(impulse)
                 } else {
-                    // Zero impulse changes nothing; re-testing would find the same touch again.
                     Resolution::Parting
                 }
             }
@@ -171,15 +171,14 @@ impl Impacts {
                 let clearance = contacts::clearance(bodies, i, j);
                 let points = &self.manifold.points;
                 match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {
-                    Some(total) if total > 0.0 || pulled => {
+                    Some(total) if total > 0.0 || pressed => {
                         stats.tc_contacts += changed as u64;
                         for (k, body) in [(i, body_i), (j, body_j)] {
                             if !bodies.is_fixed(k) {
                                 bodies.set_motion_at(k, t, body.velocity, body.angular_velocity);
                             }
                         }
-                        let parted = if pulled { rest::part(bodies, (i, j), t, normal) } else { 0.0 };
-                        Resolution::Pushed(total + parted)
+                        Resolution::Pushed(total)
                     }
                     // Nothing to push, yet the search found them touching as they turn into
                     // each other (it would find the same touch again while one sinks into the
@@ -187,6 +186,21 @@ impl Impacts {
                     Some(_) | None => Resolution::Jammed { by_rule: false },
                 }
             }
+        };
+        match resolution {
+            Resolution::Pushed(_) | Resolution::Parting if resting => {
+                let total = if let Resolution::Pushed(total) = resolution { total } else { 0.0 };
+                let parted = if pressed { rest::part(bodies, (i, j), t, normal) } else { 0.0 };
+                stats.rest_contacts += (parted > 0.0) as u64;
+                if total + parted == 0.0 {
+                    return Resolution::Parting;
+                }
+                for (k, before) in [(i, before[0]), (j, before[1])] {
+                    rest::keep_held(bodies, physics, k, t, before);
+                }
+                Resolution::Pushed(total + parted)
+            }
+            _ => resolution,
         }
     }
 
@@ -202,13 +216,12 @@ impl Impacts {
     ) -> Resolution {
         let i = a as usize;
         let rule = self.rules.wall(a, t, physics.restitution, tc_duration(physics));
-        let held = bodies.rest_of(i);
-        if let (true, Rule::Impulse { restitution, .. }) = (rest::applies(bodies, physics), rule) {
-            if let Some(rest) = rest::on_wall(bodies, i, wall, t, restitution) {
-                let before = bodies.velocity_at(i, t);
-                bodies.come_to_rest(i, t, rest);
+        let (resting, before) = (rest::applies(bodies, physics), bodies.rest_of(i));
+        if let (true, Rule::Impulse { restitution, changed }) = (resting, rule) {
+            let velocity = bodies.velocity_at(i, t);
+            if rest::on_wall(bodies, physics, i, wall, t, restitution, changed) {
                 stats.rest_contacts += 1;
-                return Resolution::Pushed(bodies.mass[i] * (before - bodies.velocity(i)).length());
+                return Resolution::Pushed(bodies.mass[i] * (velocity - bodies.velocity(i)).length());
             }
         }
         let resolution = match rule {
@@ -236,8 +249,8 @@ impl Impacts {
             }
         };
         // A body sliding on the floor that bounced off a side wall slides on.
-        if let (Resolution::Pushed(_), Some(rest)) = (resolution, rest::after_bounce(bodies, i, t, held)) {
-            bodies.come_to_rest(i, t, rest);
+        if let (true, Resolution::Pushed(_)) = (resting, resolution) {
+            rest::keep_held(bodies, physics, i, t, before);
         }
         resolution
     }

@@ -29,6 +29,7 @@ use engine::Engine;
 pub(crate) mod overlap;
 mod rigid;
 mod snapshot;
+mod wake;
 
 pub use config::{Method, WorldConfig, AUTO_POOL_AXES, MAX_BOX_LENGTHS_PER_FRAME};
 pub use rigid::{Body, BodyShape, ShapeId};
@@ -68,6 +69,9 @@ pub struct World {
     unplaced: Vec<u32>,
     /// Built at the first step (see [`engine::build`]).
     engine: Option<Box<dyn Engine>>,
+    /// Bodies that lay still, moved or removed by the caller since the last step: where they
+    /// were and their radii (see `wake`).
+    released: Vec<(DVec3, f64)>,
     /// The threads of the frame pipeline (none with one thread).
     threads: Option<rayon::ThreadPool>,
     pool: Arc<AxisPool>,
@@ -125,6 +129,7 @@ impl World {
             free_slots: Vec::new(),
             unplaced: Vec::new(),
             engine: None,
+            released: Vec::new(),
             threads: None,
             pool,
             time: 0.0,
@@ -184,6 +189,7 @@ impl World {
     fn remove_slot(&mut self, handle: BodyHandle) -> Result<()> {
         let i = self.live_slot(handle)?;
         let slot = i as u32;
+        self.release(i);
         self.bodies.remove(i);
         self.live -= 1;
         self.unplaced.retain(|&u| u != slot);
@@ -210,6 +216,7 @@ impl World {
     pub fn set_velocity(&mut self, handle: BodyHandle, velocity: DVec3) -> Result<()> {
         let i = self.moving_slot(handle)?;
         check_vector("velocity", velocity)?;
+        self.release(i);
         self.bodies.set_velocity_at(i, self.time, velocity);
         self.reenter(i);
         Ok(())
@@ -439,6 +446,7 @@ impl World {
         self.stats = FrameStats::default();
         let waiting = self.unplaced.clone();
         self.place_new_bodies();
+        self.wake_released();
         let before = self.keep_undo(waiting);
         let physics = self.physics();
         let World { engine, bodies, contacts, ends, stats, threads, interrupt, .. } = self;

@@ -19,7 +19,7 @@
 //! previous file intact.
 
 use super::{BoxBounds, Mode, World, WorldConfig};
-use crate::bodies::{Rest, RigidState, Sphere};
+use crate::bodies::{without_axes, Rest, RigidState, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
 use crate::motion::Motion;
@@ -65,6 +65,10 @@ struct Snapshot {
     /// True when the store keeps shapes and spins for every slot (then every slot has one).
     #[serde(default)]
     rigid: bool,
+    /// Bodies that lay still, moved or removed since the last step: where they were and their
+    /// radii, so the next step wakes what lay on them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    released: Vec<(DVec3, f64)>,
 }
 
 /// A rigid body's shape and spin: its shape's id, its orientation and angular velocity at its
@@ -164,6 +168,7 @@ impl World {
             slots,
             free_slots: self.free_slots.clone(),
             unplaced: self.unplaced.clone(),
+            released: self.released.clone(),
             overlapping,
             touching_since,
             shapes: b.rigid.shapes.iter().map(|g| g.shape().clone()).collect(),
@@ -237,13 +242,16 @@ impl World {
             // A removed body's slot only keeps its place and generation; a live one must be where
             // stepping put it.
             let motion = Motion { position: slot.position, since: slot.since, velocity: slot.velocity };
-            let resting = match slot.rest {
+            let consistent = match slot.rest {
                 Rest::Falling => true,
-                Rest::Sliding(axis) => axis < 3 && slot.velocity[axis as usize] == 0.0,
+                Rest::Sliding(axes) => (1..8).contains(&axes) && without_axes(slot.velocity, axes) == slot.velocity,
                 Rest::Still => slot.velocity == DVec3::ZERO,
             };
-            if !resting || (slot.rest != Rest::Falling && world.config.gravity == DVec3::ZERO) {
-                return Err(bad(format!("slot {i}: {:?} is a state of a body at rest under gravity", slot.rest)));
+            if !consistent || (slot.rest != Rest::Falling && world.config.gravity == DVec3::ZERO) {
+                return Err(bad(format!(
+                    "slot {i}: rest {:?} needs gravity, and no velocity along the walls it slides on (axes as bits 1 to 7) or none at all lying still",
+                    slot.rest
+                )));
             }
             let now = motion.at_under(time, slot.rest.acceleration(world.config.gravity));
             let checked = match &slot.spin {
@@ -356,6 +364,10 @@ impl World {
         // Enter the bodies that had been stepped into a fresh engine now, so the next step
         // checks only the bodies added since the last one, exactly as the saved world would.
         world.enter_stepped(snapshot.unplaced);
+        if !snapshot.released.iter().all(|&(p, r)| p.is_finite() && r.is_finite() && r > 0.0) {
+            return Err(bad("released bodies need finite positions and positive radii".to_string()));
+        }
+        world.released = snapshot.released;
         if let Some(rules) = world.rules_mut() {
             rules.resize(slots);
             for (i, slot) in snapshot.slots.iter().enumerate() {
