@@ -16,7 +16,9 @@
 //! gap opens touches again where it turns.
 
 use super::spheres::{APPROACH_TOLERANCE, CONTACT_TOLERANCE};
+use crate::motion::Motion;
 use crate::numeric::{exponent, power_of_two, scale_by_power_of_two};
+use crate::window::Window;
 use glam::DVec3;
 
 /// The relative path of two spheres in units where the radius sum and the acceleration are near 1.
@@ -46,6 +48,20 @@ impl Bent {
         self.at(tau).dot(self.velocity + tau * self.acceleration)
     }
 
+    /// The gap and its rate (for Newton's steps).
+    #[inline]
+    fn gap_and_slope(&self, tau: f64) -> (f64, f64) {
+        let (p, v) = (self.at(tau), self.velocity + tau * self.acceleration);
+        (p.length_squared() - self.radius_sq, 2.0 * p.dot(v))
+    }
+
+    /// The rate and its own rate, p' . p' + p . p'' (for Newton's steps).
+    #[inline]
+    fn rate_and_slope(&self, tau: f64) -> (f64, f64) {
+        let (p, v) = (self.at(tau), self.velocity + tau * self.acceleration);
+        (p.dot(v), v.length_squared() + p.dot(self.acceleration))
+    }
+
     /// The times in `(0, inf)` where the gap's rate changes sign, ascending.
     fn turning_points(&self) -> ([f64; 3], usize) {
         let (d, w, c) = (self.offset, self.velocity, self.acceleration);
@@ -67,11 +83,8 @@ impl Bent {
         let mut count = 0;
         for k in 0..3 {
             let (lo, hi) = (ends[k], ends[k + 1]);
-            let positive = self.rate(lo) > 0.0;
             // A bracketed sign change: its root, where the gap turns.
-            if let Some(root) =
-                (hi > lo).then(|| first_change(lo, hi, |tau| (self.rate(tau) > 0.0) == positive)).flatten()
-            {
+            if let Some(root) = (hi > lo).then(|| first_change(lo, hi, |tau| self.rate_and_slope(tau))).flatten() {
                 roots[count] = root;
                 count += 1;
             }
@@ -80,23 +93,63 @@ impl Bent {
     }
 }
 
-/// In `[lo, hi]` (`0 <= lo <= hi`), where `holds` is true at `lo`: the first float at which it
-/// no longer holds, found by bisection over the floats' bits (ordered as the values are for
-/// floats of one sign); `None` when it still holds at `hi`.
-fn first_change(lo: f64, hi: f64, holds: impl Fn(f64) -> bool) -> Option<f64> {
+/// Newton's steps towards the root: after these, the search to the float starts where they
+/// got (bisections stand in for steps that leave the bracket).
+const NEWTON_STEPS: u32 = 6;
+
+/// In `[lo, hi]` (`0 <= lo <= hi`): the first float at which `f` (its value and slope) no longer
+/// has the sign it has at `lo` (positive or not), `None` when it still has it at `hi`. A few
+/// safeguarded Newton steps find where to look; from there a bracket that doubles its width in
+/// floats, then a bisection over the floats' bits (ordered as the values are for floats of one
+/// sign), close in on adjacent floats: far fewer evaluations than bisecting `[lo, hi]` (64), and
+/// a function of its arguments alone, so every caller gets the same bits.
+fn first_change(lo: f64, hi: f64, f: impl Fn(f64) -> (f64, f64)) -> Option<f64> {
+    let positive = f(lo).0 > 0.0;
+    let holds = |tau: f64| (f(tau).0 > 0.0) == positive;
     if holds(hi) {
         return None;
     }
-    let (mut lo, mut hi) = (lo.to_bits(), hi.to_bits());
-    while hi - lo > 1 {
-        let mid = lo + (hi - lo) / 2;
-        if holds(f64::from_bits(mid)) {
-            lo = mid;
+    let (mut low, mut high, mut x) = (lo, hi, lo + 0.5 * (hi - lo));
+    for _ in 0..NEWTON_STEPS {
+        let (value, slope) = f(x);
+        if (value > 0.0) == positive {
+            low = x;
         } else {
-            hi = mid;
+            high = x;
+        }
+        let next = x - value / slope;
+        x = if next > low && next < high { next } else { low + 0.5 * (high - low) };
+    }
+    // A bracket [a, b] of `[lo, hi]` about `x` where it holds at `a` and not at `b`.
+    let (floor, ceiling) = (lo.to_bits(), hi.to_bits());
+    let start = x.clamp(lo, hi).to_bits();
+    let (mut a, mut b, mut width) = (start, start, 1u64);
+    if holds(f64::from_bits(start)) {
+        loop {
+            b = (a + width).min(ceiling);
+            if !holds(f64::from_bits(b)) {
+                break;
+            }
+            (a, width) = (b, 2 * width);
+        }
+    } else {
+        loop {
+            a = b.saturating_sub(width).max(floor);
+            if a == b || holds(f64::from_bits(a)) {
+                break;
+            }
+            (b, width) = (a, 2 * width);
         }
     }
-    Some(f64::from_bits(hi))
+    while b - a > 1 {
+        let mid = a + (b - a) / 2;
+        if holds(f64::from_bits(mid)) {
+            a = mid;
+        } else {
+            b = mid;
+        }
+    }
+    Some(f64::from_bits(b))
 }
 
 /// Scales the relative path so that R and the acceleration are near 1: lengths by `2^-l`, times
@@ -155,7 +208,7 @@ pub fn falling_sphere_time(
     for &hi in &turns[..count] {
         let ends_apart = bent.gap(hi) > 0.0;
         if apart && !ends_apart {
-            let tau = first_change(lo, hi, |tau| bent.gap(tau) > 0.0)?;
+            let tau = first_change(lo, hi, |tau| bent.gap_and_slope(tau))?;
             return finite(scale_by_power_of_two(tau, time));
         }
         if !apart && !ends_apart && bent.rate(lo + 0.5 * (hi - lo)) > 0.0 {
@@ -166,6 +219,25 @@ pub fn falling_sphere_time(
     }
     // After the last turning point the gap only grows.
     None
+}
+
+/// Whether two spheres on motions `a` and `b` under the accelerations `ga` and `gb` may touch
+/// within `window`: false only when their centres stay farther apart than `radius_sum` all
+/// through it, by a margin far above rounding, so that their canonical time
+/// ([`falling_sphere_time`]), if any, lies past it. A bound on how far the relative path can go
+/// from the window's start: it spares the quartic the many candidate pairs of a falling body
+/// among bodies at rest that cannot meet in the window.
+pub(crate) fn may_touch_within(a: &Motion, ga: DVec3, b: &Motion, gb: DVec3, radius_sum: f64, window: Window) -> bool {
+    let from = window.start.max(a.since).max(b.since);
+    let span = window.end - from;
+    if !(span >= 0.0) {
+        return span.is_nan();
+    }
+    let offset = b.at_under(from, gb) - a.at_under(from, ga);
+    let velocity = b.velocity_under(from, gb) - a.velocity_under(from, ga);
+    let reach = span * (velocity.length() + 0.5 * span * (gb - ga).length());
+    let distance = offset.length();
+    !(distance - reach > radius_sum * (1.0 + 1e-6) + 1e-9 * distance)
 }
 
 /// At the reference a touching pair approaches when its gap shrinks, or, with no relative
