@@ -21,7 +21,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::{Mutex, MutexGuard, TryLockError};
 use vadop::bounding_volume::interval;
-use vadop::{Body, BodyHandle, BodyShape, VadopError, World};
+use vadop::{Body, BodyHandle, BodyShape, Rest, VadopError, World};
 
 /// Bodies in a box, stepped frame by frame; every contact inside a frame is found, in time order.
 /// Bodies are spheres (given here or with ``add``) or rigid bodies of any shape (``add_shape``,
@@ -509,6 +509,28 @@ impl PyWorld {
         Ok(Array2::from_shape_vec((flat.len() / 3, 3), flat).expect("3 values per row").into_pyarray(py))
     }
 
+    /// How each body is held up under gravity (see the Rust ``vadop::Rest``): ``'falling'``,
+    /// ``'sliding'`` (along walls gravity presses it into: the floor, or a corner under tilted
+    /// gravity) or ``'still'`` (on walls or on bodies lying still). Bodies come to rest only in
+    /// simulate mode with restitution below 1; static bodies are ``'still'``.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 2]], [[0.0, 0, 0]], [0.5], box=10.0, gravity=(0, 0, -9.81), restitution=0.5)
+    /// >>> w.rest
+    /// ['falling']
+    /// >>> _ = w.step(3.0)
+    /// >>> w.rest, round(float(w.positions[0, 2]), 12), w.stats()["rest_contacts"]
+    /// (['still'], 0.5, 1)
+    #[getter]
+    fn rest(&self, py: Python<'_>) -> PyResult<Vec<&'static str>> {
+        self.per_body(py, |world, handle, body| match world.rest(handle) {
+            _ if !body.mass.is_finite() => "still",
+            Ok(Rest::Sliding(_)) => "sliding",
+            Ok(Rest::Still) => "still",
+            _ => "falling",
+        })
+    }
+
     /// Velocities of the centres of mass now, float64 (n, 3).
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -613,7 +635,9 @@ impl PyWorld {
     /// counters (broad-phase windows, endpoint swaps, list entries, candidate pairs, narrow tests,
     /// re-tests, contacts, pair contacts, invalidations, broad-phase bytes) and the contacts whose
     /// physics a rule changed (``tc_contacts``: made elastic by the TC model; ``jam_contacts``:
-    /// resolved by the jam rule), and ``pair_virial``: the collisional virial of the frame's
+    /// resolved by the jam rule; ``rest_contacts``: under gravity with restitution below 1, a
+    /// body brought to rest, or parted from or bounced off one that does not fall), and
+    /// ``pair_virial``: the collisional virial of the frame's
     /// impacts between moving bodies (separation of the centres dotted with the momentum
     /// exchanged; simulate mode). Over a run of duration T at translational kinetic energy K,
     /// Z = PV/NkT = 1 + sum(pair_virial) / (2 K T).
@@ -644,6 +668,7 @@ impl PyWorld {
         d.set_item("broad_phase_bytes", s.broad_phase_bytes)?;
         d.set_item("tc_contacts", s.tc_contacts)?;
         d.set_item("jam_contacts", s.jam_contacts)?;
+        d.set_item("rest_contacts", s.rest_contacts)?;
         d.set_item("pair_virial", s.pair_virial)?;
         Ok(d)
     }
