@@ -252,8 +252,9 @@ proptest! {
 
     /// Every continuous method, on one thread or two, reports the oracle's contacts to the bit
     /// while bodies come to rest, slide and are knocked off again, under gravity tilted up to
-    /// about 17 degrees, with or without friction, for equal spheres or mixed sizes; and in the
-    /// oracle nothing sinks or leaves the box.
+    /// about 17 degrees, with or without friction, for equal spheres or mixed sizes, in a box or
+    /// a slab periodic in x and y, over frames of 1/240 to 2/15 s; and in the oracle nothing
+    /// sinks or leaves the box.
     #[test]
     fn every_method_matches_brute_force_while_bodies_rest(
         bodies in 2usize..150,
@@ -263,6 +264,8 @@ proptest! {
         tilt in (-0.3f64..0.3, -0.3f64..0.3),
         friction in prop_oneof![Just(0.0), 0.0f64..0.5],
         mixed in any::<bool>(),
+        periodic in any::<bool>(),
+        frames_per_second in prop_oneof![Just(30.0), Just(240.0), Just(7.5)],
         threads in 1usize..3,
         method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::Grid), Just(Method::SweptAabb), Just(Method::SweptKdop)],
         seed in any::<u64>(),
@@ -277,12 +280,17 @@ proptest! {
                 (s.radius, s.mass) = (s.radius * f, s.mass * f * f * f);
             }
         }
+        // A periodic side holds at least 8 diameters.
+        let periodic = periodic && scene.bounds.max.x - scene.bounds.min.x >= 8.0;
+        scene.bounds = scene.bounds.with_periodic([periodic, periodic, false]);
         let gravity = DVec3::new(tilt.0, tilt.1, -1.0).normalize() * G;
         let config = |method, threads| WorldConfig { restitution, friction, gravity, threads: Some(threads), ..config(method, restitution) };
         let mut found = scene.world(config(method, threads)).unwrap();
         let mut oracle = scene.world(config(Method::Brute, 1)).unwrap();
-        let refused = common::step_beside_oracle(&mut found, &mut oracle, 45, DT, |frame, oracle| {
-            let violation = common::frame_end_violation(oracle, true);
+        // A second and a half.
+        let frames = (1.5 * frames_per_second) as usize;
+        let refused = common::step_beside_oracle(&mut found, &mut oracle, frames, 1.0 / frames_per_second, |frame, oracle| {
+            let violation = common::periodic_violation(oracle);
             assert!(violation.is_none(), "frame {frame}: {violation:?}");
         });
         prop_assert!(refused.is_none(), "{refused:?}");
