@@ -102,7 +102,7 @@ pub enum VadopError {
     #[error("body {body} rests on a wall under gravity: its bounces rise {height:e}, so it would bounce more than {limit:e} times in this step; bodies come to rest only in simulate mode with restitution below 1, so such a body is refused rather than left to sink or to bounce without end")]
     RestingUnderGravity { body: BodyHandle, height: f64, limit: f64 },
     /// Gravity with what it does not support yet.
-    #[error("gravity is supported for spheres only, without static bodies, for now: {0}")]
+    #[error("gravity is supported for spheres only, without static bodies, for now (the search of a shape, and of any body against static geometry, would have to bound a parabola, which it does not yet): {0}")]
     GravityUnsupported(&'static str),
     /// A periodic box with what it does not support yet.
     #[error(

@@ -566,7 +566,10 @@ impl ProxyRule {
         let (motion, gravity) = (bodies.motion(i), bodies.gravity_on(i));
         let velocity = motion.velocity_under(start, gravity);
         let body_radius = bodies.bounding_radius(i);
-        let radius = body_radius + self.bend;
+        // A body at rest, or sliding under a pull its floor takes whole, moves straight: its
+        // proxy needs no bend and lasts as long as a straight one.
+        let (bend, longest) = if gravity == DVec3::ZERO { (0.0, f64::INFINITY) } else { (self.bend, self.longest) };
+        let radius = body_radius + bend;
         // Up to and including the wall contact: a pair touching at that very instant is still
         // found with the motion before the bounce, whichever of the two events comes first. A
         // body of another shape reaches the walls later than its bounding sphere: its proxy goes
@@ -586,7 +589,7 @@ impl ProxyRule {
             Some(time) if time < self.window.end => time.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let reached = (start + self.reach / velocity.length()).min(start + self.longest);
+        let reached = (start + self.reach / velocity.length()).min(start + longest);
         let expires = reached < end && reached > start;
         if expires {
             end = reached;
