@@ -12,6 +12,7 @@ use crate::handles::{handle_id, ids_of, live_handles, moving_handles};
 use crate::interrupt::interruptible;
 use crate::shape_ids::{shape_number, PyShapeIds, ShapeNumbers};
 use crate::shapes;
+use crate::stats::frame_stats;
 use glam::{DQuat, DVec3};
 use numpy::ndarray::{Array1, Array2};
 use numpy::prelude::*;
@@ -45,8 +46,8 @@ use vadop::{Body, BodyHandle, BodyShape, Rest, VadopError, World};
 /// used; None: every core; results are bit-identical whatever the number) and ``contact_ends`` (detect mode only: also report when
 /// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
 /// ``touching()`` — started and stopped events) and ``gravity`` (x, y, z: the uniform
-/// acceleration of every moving body; None: none; spheres only, and restitution 1 in simulate
-/// mode, for now) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
+/// acceleration of every moving body; None: none; spheres only, for now; with restitution below
+/// 1 in simulate mode bodies come to rest, ``rest``) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
 /// ``'xy'``; the others keep their walls: a body leaving through one face comes back through the
 /// opposite one, bodies meet across the faces, and ``crossings`` counts each body's passages;
 /// bodies of any shape, no static bodies yet, and each periodic side at least 8 largest bounding
@@ -649,28 +650,8 @@ impl PyWorld {
     /// >>> s["contacts"] >= s["pair_contacts"], s["total_seconds"] > 0
     /// (True, True)
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = *self.lock(py)?.stats();
-        let d = PyDict::new(py);
-        d.set_item("update_seconds", s.update_seconds)?;
-        d.set_item("sort_seconds", s.sort_seconds)?;
-        d.set_item("test_seconds", s.test_seconds)?;
-        d.set_item("response_seconds", s.response_seconds)?;
-        d.set_item("total_seconds", s.total_seconds())?;
-        d.set_item("windows", s.windows)?;
-        d.set_item("endpoint_swaps", s.endpoint_swaps)?;
-        d.set_item("list_entries", s.list_entries)?;
-        d.set_item("candidate_pairs", s.candidate_pairs)?;
-        d.set_item("narrow_tests", s.narrow_tests)?;
-        d.set_item("retests", s.retests)?;
-        d.set_item("contacts", s.contacts)?;
-        d.set_item("pair_contacts", s.pair_contacts)?;
-        d.set_item("invalidations", s.invalidations)?;
-        d.set_item("broad_phase_bytes", s.broad_phase_bytes)?;
-        d.set_item("tc_contacts", s.tc_contacts)?;
-        d.set_item("jam_contacts", s.jam_contacts)?;
-        d.set_item("rest_contacts", s.rest_contacts)?;
-        d.set_item("pair_virial", s.pair_virial)?;
-        Ok(d)
+        let stats = *self.lock(py)?.stats();
+        frame_stats(py, &stats)
     }
 
     /// Total kinetic energy of the moving bodies: of their centres' motion and of their spins.

@@ -247,7 +247,8 @@ pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, g
 /// pulled towards it by `pull` (negative values: away), reaches it while still moving towards
 /// it: the root of `pull tau^2 / 2 + speed tau = distance` where the speed there,
 /// `sqrt(speed^2 + 2 pull distance)`, is positive. A point at (or a rounding error past) the wall
-/// and moving or pulled out touches it now; one at rest on it touches it too (no resting state).
+/// and moving or pulled out touches it now; one at rest on it touches it too (a resting state,
+/// [`crate::bodies::Rest`], takes the pull away instead).
 #[inline]
 fn parabola_arrival(distance: f64, speed: f64, pull: f64) -> Option<f64> {
     let distance = distance.max(0.0);
