@@ -70,7 +70,7 @@ pub(crate) fn applies(bodies: &Bodies, physics: &Physics) -> bool {
 
 /// The speed of a bounce of body `i` that rises [`REST_HEIGHT`] of its radius.
 #[inline]
-pub fn rest_speed(bodies: &Bodies, i: usize) -> f64 {
+fn rest_speed(bodies: &Bodies, i: usize) -> f64 {
     (2.0 * bodies.gravity.length() * REST_HEIGHT * bodies.radius(i)).sqrt()
 }
 
