@@ -4,10 +4,10 @@
 //! It owns the layouts and nothing else: it never decides what is sent where.
 
 use glam::DVec3;
-use vadop::{BodyHandle, Contact, SphereRecord, Touched, Wall};
+use vadop::{BodyHandle, Contact, Rest, SphereRecord, Touched, Wall};
 
 /// Words per body on the wire.
-pub const BODY_WORDS: usize = 14;
+pub const BODY_WORDS: usize = 15;
 /// Words per contact on the wire.
 pub const CONTACT_WORDS: usize = 11;
 
@@ -39,6 +39,11 @@ impl Parcel {
         // A last contact is finite: minus infinity stands for none.
         out.push(r.last_contact.unwrap_or(f64::NEG_INFINITY).to_bits());
         out.extend(r.crossings.map(|c| c as u64));
+        out.push(match r.rest {
+            Rest::Falling => 0,
+            Rest::Still => 1,
+            Rest::Sliding(axes) => 2 | (axes as u64) << 8,
+        });
     }
 
     pub fn decode(words: &[u64]) -> Parcel {
@@ -53,6 +58,11 @@ impl Parcel {
                 mass: f64::from_bits(words[9]),
                 last_contact: last.is_finite().then_some(last),
                 crossings: [words[11] as i64, words[12] as i64, words[13] as i64],
+                rest: match words[14] & 0xff {
+                    0 => Rest::Falling,
+                    1 => Rest::Still,
+                    _ => Rest::Sliding((words[14] >> 8) as u8),
+                },
             },
         }
     }

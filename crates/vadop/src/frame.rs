@@ -125,6 +125,10 @@ pub struct FrameStats {
     pub tc_contacts: u64,
     /// Contacts resolved as resting contact by the jam rule (see [`crate::response::rules`]).
     pub jam_contacts: u64,
+    /// Contacts at which a body came to rest under gravity instead of bouncing (see
+    /// [`crate::response::rest`]).
+    #[serde(default)]
+    pub rest_contacts: u64,
     /// Contacts between bodies that ended (detect mode, when contact ends are reported).
     #[serde(default)]
     pub contact_ends: u64,

@@ -64,7 +64,7 @@ pub mod scene;
 pub mod shape;
 pub mod world;
 
-pub use bodies::Sphere;
+pub use bodies::{Rest, Sphere};
 pub use error::{Result, VadopError};
 pub use frame::{Contact, FrameStats, Mode, Touched};
 /// The vector and quaternion types of the API (`DVec3`, `DQuat`), re-exported so that a user

@@ -578,7 +578,7 @@ fn spheres_agree_with_the_closed_form() {
             &Motion { position: pa, since: 0.0, velocity: va },
             &Motion { position: pb, since: 0.0, velocity: vb },
             ra + rb,
-            DVec3::ZERO,
+            (DVec3::ZERO, DVec3::ZERO),
         )
         .filter(|&t| t < 100.0);
         let search = shape_contact_search(pair(&a), pair(&b), Window::new(0.0, 100.0)).unwrap();

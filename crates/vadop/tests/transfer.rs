@@ -13,7 +13,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
 use vadop::{
-    BodyHandle, BoxBounds, Contact, Method, Mode, Sphere, SphereRecord, Touched, VadopError, World, WorldConfig,
+    BodyHandle, BoxBounds, Contact, Method, Mode, Rest, Sphere, SphereRecord, Touched, VadopError, World, WorldConfig,
 };
 
 const DT: f64 = 1.0 / FRAMES_PER_SECOND;
@@ -97,6 +97,7 @@ fn records_and_start_times_that_stepping_could_not_make_are_refused() {
         mass: 1.0,
         last_contact: Some(1.5),
         crossings: [0; 3],
+        rest: Rest::Falling,
     };
     let mut refused = |record: SphereRecord| world.add_record(&record).err();
     assert!(matches!(refused(SphereRecord { since: 2.5, ..good }), Some(VadopError::BadRecordTime { .. })));
@@ -107,6 +108,8 @@ fn records_and_start_times_that_stepping_could_not_make_are_refused() {
     ));
     assert!(matches!(refused(SphereRecord { crossings: [1, 0, 0], ..good }), Some(VadopError::CrossingsInWalledBox)));
     assert!(matches!(refused(SphereRecord { radius: 0.0, ..good }), Some(VadopError::BadRadius(_))));
+    // Lying still needs gravity (and no velocity).
+    assert!(matches!(refused(SphereRecord { rest: Rest::Still, ..good }), Some(VadopError::BadRecordRest(_))));
     // Inside the box at its last velocity change, outside now: 4.6 past x = 5 at 1 per second.
     assert!(matches!(
         refused(SphereRecord {

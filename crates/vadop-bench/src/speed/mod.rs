@@ -5,8 +5,8 @@
 //! the cost of a velocity change ([`retest`]); simulate-mode collisions per second and their
 //! independence of the frame length ([`throughput`]); memory per body ([`memory`]); where
 //! each broad phase wins ([`methods`]); all cores against one ([`cores`]); what gravity
-//! costs ([`gravity`]); and the periodic gas's pressure against its equation of state
-//! ([`periodic`]).
+//! costs ([`gravity`]); the periodic gas's pressure against its equation of state
+//! ([`periodic`]); and a granular pile settling under gravity ([`pile`]).
 //!
 //! Every run is a child pinned to one core, but the all-cores runs; timed runs are repeated and the tables show the
 //! median of the repeats; ratios compare runs of this same command. Times are means over frames
@@ -22,6 +22,7 @@ mod gravity;
 mod memory;
 mod methods;
 mod periodic;
+mod pile;
 pub mod retest;
 mod throughput;
 
@@ -42,7 +43,7 @@ use std::rc::Rc;
 (candidates up to 10^5), retest at n = 10^5 with 10,000 calls, throughput at n = 10^4 and 10^5, memory at n = 10^4 to \
 10^6, methods at n = 10^4 and 10^5, cores at the detect and throughput sizes on one thread and on every core \
 and at n = 10^7 on every core, gravity at n = 10^4 and 10^5, the periodic gas at n = 10^5 (3 x 10^7 collisions measured at each of \
-three packings); with --quick every section at n = 10^4 only, with fewer frames and calls and one \
+three packings), the granular pile at n = 10^4 over 300 frames; with --quick every section at n = 10^4 only (the pile at 2,000), with fewer frames and calls and one \
 run each (a minute or two). Frames cover several broad-phase windows. --timeout defaults to 900 s per child run. The \
 full suite takes hours: run it on a quiet machine.")]
 pub struct SpeedArgs {
@@ -73,6 +74,7 @@ enum Section {
     Cores,
     Gravity,
     Periodic,
+    Pile,
 }
 
 /// The sizes of every section.
@@ -104,6 +106,9 @@ struct Plan {
     /// The periodic gas's bodies, and the pair collisions measured at each packing.
     periodic_bodies: usize,
     periodic_collisions: f64,
+    /// Body counts of the granular pile, and the frames each runs (it forms and settles).
+    pile_bodies: Vec<usize>,
+    pile_frames: u64,
 }
 
 impl Plan {
@@ -128,6 +133,8 @@ impl Plan {
                 gravity_bodies: vec![10_000],
                 periodic_bodies: 10_000,
                 periodic_collisions: 1e6,
+                pile_bodies: vec![2_000],
+                pile_frames: 150,
             }
         } else {
             Plan {
@@ -149,6 +156,8 @@ impl Plan {
                 gravity_bodies: vec![10_000, 100_000],
                 periodic_bodies: 100_000,
                 periodic_collisions: 3e7,
+                pile_bodies: vec![10_000],
+                pile_frames: 300,
             }
         }
     }
@@ -322,6 +331,7 @@ pub fn run(args: &SpeedArgs) -> CliResult<()> {
             Section::Cores => cores::run(&context)?,
             Section::Gravity => gravity::run(&context)?,
             Section::Periodic => periodic::run(&context)?,
+            Section::Pile => pile::run(&context)?,
         }
     }
     crate::common::print(&format!("wrote {} and {}\n", context.markdown.display(), context.results.display()))
@@ -340,6 +350,7 @@ impl Section {
                 Section::Cores => "speed-cores",
                 Section::Gravity => "speed-gravity",
                 Section::Periodic => "speed-periodic",
+                Section::Pile => "speed-pile",
             },
         }
     }

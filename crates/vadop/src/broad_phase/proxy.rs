@@ -324,7 +324,7 @@ impl ProxyTable {
     /// The table paired with `bodies`, the bodies its proxies bound, for a broad phase to read.
     #[inline]
     pub fn view<'a>(&'a self, bodies: &'a Bodies) -> Proxies<'a> {
-        Proxies { table: self, states: &bodies.state }
+        Proxies { table: self, bodies }
     }
 
     /// Window start: every live body's proxy over `window`, bodies at their positions at its
@@ -457,7 +457,6 @@ impl ProxyTable {
             walls: self.bounds.walls(),
             faces: self.bounds.is_periodic().then(|| self.bounds.faces()),
             reach,
-            gravity: self.gravity,
             bend: self.bend,
             // Within a proxy the path stays within the bend of its tangent: |g| tau^2 / 2 <= bend.
             longest: if self.bend > 0.0 { (2.0 * self.bend / self.gravity.length()).sqrt() } else { f64::INFINITY },
@@ -498,7 +497,7 @@ impl ProxyTable {
 #[derive(Debug, Clone, Copy)]
 pub struct Proxies<'a> {
     table: &'a ProxyTable,
-    states: &'a [BodyState],
+    bodies: &'a Bodies,
 }
 
 impl std::ops::Deref for Proxies<'_> {
@@ -513,7 +512,7 @@ impl<'a> Proxies<'a> {
     #[inline]
     pub fn state(&self, i: usize) -> &'a BodyState {
         if i < self.table.ghosts.base() {
-            &self.states[i]
+            &self.bodies.state[i]
         } else {
             self.table.ghosts.state(i)
         }
@@ -535,13 +534,23 @@ impl<'a> Proxies<'a> {
     /// Velocity of proxy `i` at its start.
     #[inline]
     pub fn velocity(&self, i: usize) -> DVec3 {
-        self.state(i).motion.velocity_under(self.table.spans[i].start, self.table.gravity)
+        self.state(i).motion.velocity_under(self.table.spans[i].start, self.gravity_on(i))
     }
 
     /// Centre of proxy `i` at its start.
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
-        self.state(i).motion.at_under(self.table.spans[i].start, self.table.gravity)
+        self.state(i).motion.at_under(self.table.spans[i].start, self.gravity_on(i))
+    }
+
+    /// The acceleration proxy `i`'s body moves under (a ghost's is its owner's).
+    #[inline]
+    fn gravity_on(&self, i: usize) -> DVec3 {
+        if self.table.gravity == DVec3::ZERO {
+            return DVec3::ZERO;
+        }
+        let body = if i < self.table.ghosts.base() { i } else { self.table.ghosts.owner(i).0 as usize };
+        self.bodies.gravity_on(body)
     }
 }
 
@@ -556,7 +565,6 @@ struct ProxyRule {
     faces: Option<(DVec3, DVec3)>,
     /// Longest path a proxy may cover.
     reach: f64,
-    gravity: DVec3,
     /// How far a path may bend off its tangent within a proxy, and the longest a proxy may last
     /// for that (infinite without gravity).
     bend: f64,
@@ -569,21 +577,24 @@ impl ProxyRule {
     #[inline]
     fn span(&self, i: usize, bodies: &Bodies, t: f64) -> (Span, u8) {
         let start = t.max(self.window.start);
-        let motion = bodies.motion(i);
-        let velocity = motion.velocity_under(start, self.gravity);
+        let (motion, gravity) = (bodies.motion(i), bodies.gravity_on(i));
+        let velocity = motion.velocity_under(start, gravity);
         let body_radius = bodies.bounding_radius(i);
-        let radius = body_radius + self.bend;
+        // A body at rest, or sliding under a pull its floor takes whole, moves straight: its
+        // proxy needs no bend and lasts as long as a straight one.
+        let (bend, longest) = if gravity == DVec3::ZERO { (0.0, f64::INFINITY) } else { (self.bend, self.longest) };
+        let radius = body_radius + bend;
         // Up to and including the wall contact: a pair touching at that very instant is still
         // found with the motion before the bounce, whichever of the two events comes first. A
         // body of another shape reaches the walls later than its bounding sphere: its proxy goes
         // on to the window's end, and its own wall contact changes its velocity.
         let wall = bodies
             .is_sphere(i)
-            .then(|| wall_contact_time(&motion, body_radius, self.walls.0, self.walls.1, self.gravity))
+            .then(|| wall_contact_time(&motion, body_radius, self.walls.0, self.walls.1, gravity))
             .flatten();
         // Up to and including the crossing of a periodic face too, where the body comes back
         // through the opposite face on a fresh motion.
-        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(&motion, 0.0, low, high, self.gravity));
+        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(&motion, 0.0, low, high, gravity));
         let first = match (wall, crossing) {
             (Some((a, _)), Some((b, _))) => Some(a.min(b)),
             (a, b) => a.or(b).map(|(t, _)| t),
@@ -592,19 +603,18 @@ impl ProxyRule {
             Some(time) if time < self.window.end => time.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let reached = (start + self.reach / velocity.length()).min(start + self.longest);
+        let reached = (start + self.reach / velocity.length()).min(start + longest);
         let expires = reached < end && reached > start;
         if expires {
             end = reached;
         }
-        let origin = motion.at_under(start, self.gravity);
+        let origin = motion.at_under(start, gravity);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         let bbox = CompactBox::new(low, high, self.box_min);
-        // The very time the wall prediction would compute (same motion, radius and pull), so a
-        // wall contact at or past the window's end is known to be none of this window's.
-        let no_wall = bodies.is_sphere(i)
-            && bodies.gravity_on(i) == self.gravity
-            && wall.is_none_or(|(time, _)| !(time < self.window.end));
+        // The very time the wall prediction would compute (same motion, radius and pull, the
+        // body's own), so a wall contact at or past the window's end is known to be none of this
+        // window's.
+        let no_wall = bodies.is_sphere(i) && wall.is_none_or(|(time, _)| !(time < self.window.end));
         (Span { start, end, bbox }, (u8::from(expires) * EXPIRES) | (u8::from(no_wall) * NO_WALL))
     }
 }

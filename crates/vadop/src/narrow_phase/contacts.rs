@@ -13,6 +13,7 @@
 use crate::bodies::{Bodies, BodyState};
 use crate::error::{Result, VadopError};
 use crate::motion::RigidMotion;
+use crate::narrow_phase::falling::may_touch_within;
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
@@ -62,8 +63,12 @@ pub(crate) fn pair_start(
     window: Window,
 ) -> Found {
     if bodies.are_spheres(a, b) {
-        let time =
-            pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, bodies.gravity)?;
+        let (ga, gb) = (bodies.gravity_on(a), bodies.gravity_on(b));
+        let (ma, mb, radius_sum) = (&state_a.motion, &state_b.motion, state_a.radius + state_b.radius);
+        if ga != gb && !may_touch_within(ma, ga, mb, gb, radius_sum, window) {
+            return None;
+        }
+        let time = pair_contact_time(ma, mb, radius_sum, (ga, gb))?;
         return window.contains(time).then_some((time, false));
     }
     shape_pair_start(bodies, a, b, window)

@@ -7,7 +7,9 @@
 //! p(t) = p + (t - since) v, or a parabola under the world's gravity g,
 //! p(t) = p + (t - since) v + (t - since)^2 g / 2: two bodies under the same g keep a linear
 //! relative motion, so a pair's closed form is the same, from both centres and velocities at
-//! the reference instant; only a wall sees the parabola (a quadratic per axis).
+//! the reference instant; only a wall sees the parabola (a quadratic per axis). A pair whose
+//! accelerations differ (one falls onto another at rest) has a bent relative path, served by
+//! [`super::falling`].
 //!
 //! Times are *canonical*: a pair's contact time is computed from the instant its relative motion
 //! began (the later of the two bodies' last velocity changes), never from the window or frame
@@ -24,6 +26,7 @@
 //! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
 //! scaled by a power of two gives bit-identical contact times, scaled alike.
 
+use super::falling::falling_sphere_time;
 use crate::motion::Motion;
 use crate::numeric::{exponent, power_of_two, scale_by_power_of_two, unit_scale};
 use crate::walls::Wall;
@@ -102,10 +105,10 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
     Some(gap / (-approach + discriminant.sqrt()))
 }
 
-/// Canonical absolute time at which two spheres on their current motions, both under the uniform
-/// acceleration `gravity` (zero for straight paths), first touch while approaching, if ever:
-/// computed from the later of the two `since` instants, so it does not depend on when or by whom
-/// it is asked.
+/// Canonical absolute time at which two spheres on their current motions, under the uniform
+/// accelerations `(ga, gb)` (zero for straight paths; the same gravity for two falling bodies),
+/// first touch while approaching, if ever: computed from the later of the two `since` instants,
+/// so it does not depend on when or by whom it is asked.
 ///
 /// ```
 /// use glam::DVec3;
@@ -114,15 +117,22 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // The gap of 5 closes at 3: one contact at 5/3, whichever frame asks.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::ZERO), Some(5.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)), Some(5.0 / 3.0));
 /// // Falling together, they meet at the same instant.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::new(0.0, 0.0, -9.81)), Some(5.0 / 3.0));
+/// let g = DVec3::new(0.0, 0.0, -9.81);
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (g, g)), Some(5.0 / 3.0));
+/// // With a at rest, b falls below it and misses.
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, g)), None);
 /// ```
 #[inline]
-pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, gravity: DVec3) -> Option<f64> {
+pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, (ga, gb): (DVec3, DVec3)) -> Option<f64> {
     let reference = a.since.max(b.since);
-    let (va, vb) = (a.velocity_under(reference, gravity), b.velocity_under(reference, gravity));
-    let offset = b.at_under(reference, gravity) - a.at_under(reference, gravity);
+    let (va, vb) = (a.velocity_under(reference, ga), b.velocity_under(reference, gb));
+    let offset = b.at_under(reference, gb) - a.at_under(reference, ga);
+    if ga != gb {
+        let time = reference + falling_sphere_time(offset, vb - va, gb - ga, radius_sum)?;
+        return time.is_finite().then_some(time);
+    }
     let tau = sphere_sphere_time(offset, vb - va, radius_sum)?;
     // Checked only for predicted contacts, which are far fewer than candidate pairs.
     let scale = unit_scale(va.abs().max_element().max(vb.abs().max_element()));
@@ -177,7 +187,7 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::ZERO), Some(5.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)), Some(5.0 / 3.0));
 /// assert_eq!(pair_separation_time(&a, &b, 1.0, DVec3::ZERO), Some(7.0 / 3.0));
 /// ```
 #[inline]
@@ -280,7 +290,8 @@ fn straight_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -> O
 /// pulled towards it by `pull` (negative values: away), reaches it while still moving towards
 /// it: the root of `pull tau^2 / 2 + speed tau = distance` where the speed there,
 /// `sqrt(speed^2 + 2 pull distance)`, is positive. A point at (or a rounding error past) the wall
-/// and moving or pulled out touches it now; one at rest on it touches it too (no resting state).
+/// and moving or pulled out touches it now; one at rest on it touches it too (a resting state,
+/// [`crate::bodies::Rest`], takes the pull away instead).
 #[inline]
 fn parabola_arrival(distance: f64, speed: f64, pull: f64) -> Option<f64> {
     let distance = distance.max(0.0);
@@ -382,13 +393,14 @@ mod tests {
         // Body b changed velocity at 0.7; the pair's time is computed from 0.7 whatever frame asks.
         let a = Motion { position: DVec3::new(0.0, 0.0, 0.0), since: 0.0, velocity: DVec3::new(1.0, 0.0, 0.0) };
         let b = Motion { position: DVec3::new(5.0, 0.0, 0.0), since: 0.7, velocity: DVec3::new(-1.0, 0.0, 0.0) };
-        let t = pair_contact_time(&a, &b, 1.0, DVec3::ZERO).unwrap();
+        let t = pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)).unwrap();
         // At 0.7, a is at 0.7: the gap 5 - 0.7 - 1 closes at 2.
         assert_eq!(t, 0.7 + (5.0 - 0.7 - 1.0) / 2.0);
         // Moving together exactly (relative velocity noise only): no contact.
         let c = Motion { velocity: DVec3::new(1.0 + 1e-15, 0.0, 0.0), ..b };
         let d = Motion { position: DVec3::new(3.0, 0.0, 0.0), ..a };
-        assert_eq!(pair_contact_time(&d, &Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c }, 1.0, DVec3::ZERO), None);
+        let moved = Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c };
+        assert_eq!(pair_contact_time(&d, &moved, 1.0, (DVec3::ZERO, DVec3::ZERO)), None);
     }
 
     #[test]

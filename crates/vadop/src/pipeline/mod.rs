@@ -26,8 +26,9 @@ mod predict;
 pub(crate) mod pseudo_dynamic;
 mod retest;
 pub(crate) mod touching;
+mod wake;
 
-use crate::bodies::Bodies;
+use crate::bodies::{Bodies, Rest};
 use crate::broad_phase::proxy::{sampled_quantile, ProxyTable};
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, EventQueue, Partner};
@@ -40,6 +41,7 @@ use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
 use crate::pipeline::touching::Touching;
 use crate::response::impact::{exchange_virial, Impacts, Resolution};
+use crate::response::rest;
 use crate::walls::BoxBounds;
 use crate::walls::Wall;
 use crate::window::Window;
@@ -409,6 +411,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
         let before_j = bodies.velocity_at(j, t);
+        let still = [i, j].map(|k| bodies.rest_of(k) == Rest::Still);
         let resolution = self.impacts.pair(bodies, physics, (a, b), t, (point, normal), out.stats);
         // Impacts with static bodies are the level's pressure, as the walls' are: not the virial.
         let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
@@ -432,6 +435,15 @@ impl<B: BroadPhase> Pipeline<B> {
                 // The pair itself is re-tested once, by the second body, when both proxies are
                 // fresh (a rounding residue may still approach).
                 self.retest_pair(a, b, bodies, physics, t, out.stats);
+                for (k, was_still) in [(i, still[0]), (j, still[1])] {
+                    if was_still && bodies.rest_of(k) != Rest::Still {
+                        self.wake_held(bodies, physics, k, t, out.stats);
+                    }
+                }
+            }
+            Resolution::Rested(k, total) => {
+                impulse = total;
+                self.retest(k, None, bodies, physics, t, out.stats);
             }
             Resolution::Parting | Resolution::Passed => {}
         }
@@ -535,7 +547,7 @@ impl<B: BroadPhase> Pipeline<B> {
         for &k in stuck {
             let i = k as usize;
             if !bodies.is_fixed(i) {
-                bodies.set_motion_at(i, t, bodies.velocity_at(i, t), bodies.angular_velocity_at(i, t));
+                bodies.restart_at(i, t);
             }
         }
         match *stuck {
@@ -587,7 +599,9 @@ impl<B: BroadPhase> Pipeline<B> {
                 self.retest(a, None, bodies, physics, t, out.stats);
                 total
             }
-            Resolution::Parting | Resolution::Passed => unreachable!("a wall always turns a body back"),
+            Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => {
+                unreachable!("a wall always turns a body back")
+            }
         };
         out.contacts.push(Contact {
             time: t,
@@ -619,11 +633,15 @@ impl<B: BroadPhase> Pipeline<B> {
         cluster.clear();
         self.cluster_epoch = self.cluster_epoch.wrapping_add(1);
         self.cluster_mark.resize(bodies.slots(), 0);
-        // A cluster pressed against static geometry stops: the level holds it.
-        let mut pinned = false;
+        // A cluster pressed against static geometry stops: the level holds it. Under the rest
+        // rule bodies lying still hold it up too, and are not of it.
+        let resting = rest::applies(bodies, physics);
+        let support = |bodies: &Bodies, o: usize| resting && bodies.rest_of(o) == Rest::Still;
+        let (mut pinned, mut held) = (false, false);
         for &seed in seeds {
-            if bodies.is_fixed(seed as usize) {
-                pinned = true;
+            if bodies.is_fixed(seed as usize) || support(bodies, seed as usize) {
+                pinned |= bodies.is_fixed(seed as usize);
+                held = true;
                 continue;
             }
             self.cluster_mark[seed as usize] = self.cluster_epoch;
@@ -644,17 +662,14 @@ impl<B: BroadPhase> Pipeline<B> {
                 touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
                 touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
             }
-            near.clear();
-            // Its neighbours through its own proxy and, across periodic faces, its ghosts.
-            let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
-            for slot in table.slots_of(m) {
-                self.broad.query(slot as u32, proxies, None, |o, _| {
-                    near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
-                });
-            }
+            self.neighbours(bodies, m, &mut near);
             for &o in &near {
                 let o = o as usize;
                 if self.cluster_mark[o] != self.cluster_epoch && contacts::pressed_together(bodies, m, o, t) {
+                    if support(bodies, o) {
+                        held = true;
+                        continue;
+                    }
                     self.cluster_mark[o] = self.cluster_epoch;
                     cluster.push(o as u32);
                 }
@@ -665,7 +680,11 @@ impl<B: BroadPhase> Pipeline<B> {
                 });
             }
         }
-        let mut velocity = if pinned || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
+        // Under the rest rule a cluster held up by a floor or by a body lying still lies still.
+        let g = bodies.gravity;
+        let floor = (0..3).any(|axis| (g[axis] < 0.0 && touches_min[axis]) || (g[axis] > 0.0 && touches_max[axis]));
+        let still = resting && (pinned || held || floor);
+        let mut velocity = if pinned || still || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
         for axis in 0..3 {
             if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {
                 velocity[axis] = 0.0;
@@ -681,6 +700,9 @@ impl<B: BroadPhase> Pipeline<B> {
             virial += bodies.offset_at(first, m, t).dot(gained);
             self.impacts.rules.freeze(m as u32, t);
             bodies.set_motion_at(m, t, velocity, DVec3::ZERO);
+            if still {
+                bodies.lie_still(m, t);
+            }
         }
         for &m in &cluster {
             self.retest(m, None, bodies, physics, t, stats);

@@ -9,7 +9,7 @@
 //! never decides which bodies go where.
 
 use super::World;
-use crate::bodies::Sphere;
+use crate::bodies::{Rest, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
 use crate::motion::Motion;
@@ -17,7 +17,8 @@ use glam::DVec3;
 
 /// A moving sphere's whole state: its straight (or, under gravity, parabolic) motion from the
 /// instant of its last velocity change, its size and mass, the time of its last contact (which
-/// the TC model reads) and, in a periodic box, its crossings of the faces.
+/// the TC model reads), in a periodic box its crossings of the faces, and under gravity how it is
+/// held up (see [`Rest`]).
 ///
 /// ```
 /// use glam::DVec3;
@@ -48,6 +49,9 @@ pub struct SphereRecord {
     pub last_contact: Option<f64>,
     /// Crossings of each periodic axis's faces (see [`World::crossings`]); zero in a walled box.
     pub crossings: [i64; 3],
+    /// How it is held up under gravity: falling, unless it came to rest.
+    #[serde(default)]
+    pub rest: Rest,
 }
 
 impl World {
@@ -66,6 +70,7 @@ impl World {
             mass: self.bodies.mass[i],
             last_contact: self.last_contact(i),
             crossings: self.bodies.crossings_of(i),
+            rest: self.bodies.rest_of(i),
         })
     }
 
@@ -83,6 +88,7 @@ impl World {
                 bodies.crossings.resize(bodies.slots(), [0; 3]);
                 bodies.crossings[slot] = record.crossings;
             }
+            bodies.set_rest(slot, record.rest);
         })?;
         if let Some(t) = record.last_contact {
             self.set_last_contact(handle.index() as usize, t);
@@ -116,14 +122,17 @@ impl World {
         if record.crossings != [0; 3] && !self.bounds.is_periodic() {
             return Err(VadopError::CrossingsInWalledBox);
         }
+        if !record.rest.fits(record.velocity, self.config.gravity) {
+            return Err(VadopError::BadRecordRest(record.rest));
+        }
         let at = |position| Sphere { position, velocity: record.velocity, radius: record.radius, mass: record.mass };
         let motion = Motion { position: record.position, since: record.since, velocity: record.velocity };
         // Bodies end a frame up to a rounding error outside the box, as a saved world's do.
         let exact = self.bounds;
         self.bounds = exact.with_rounding_slack();
-        let checked = self
-            .check_sphere(&at(record.position))
-            .and_then(|()| self.check_sphere(&at(motion.at_under(time, self.config.gravity))));
+        let checked = self.check_sphere(&at(record.position)).and_then(|()| {
+            self.check_sphere(&at(motion.at_under(time, record.rest.acceleration(self.config.gravity))))
+        });
         self.bounds = exact;
         checked
     }
