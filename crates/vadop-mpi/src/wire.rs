@@ -120,11 +120,12 @@ mod tests {
             mass: 0.523,
             last_contact: Some(0.25),
             crossings: [0, -3, 7],
+            rest: Rest::Falling,
         };
-        for last in [Some(0.25), None] {
+        for (last, rest) in [(Some(0.25), Rest::Sliding(5)), (None, Rest::Still), (None, Rest::Falling)] {
             let parcel = Parcel {
                 id: BodyHandle::from_bits(5 + (2 << 32)),
-                record: SphereRecord { last_contact: last, ..record },
+                record: SphereRecord { last_contact: last, rest, ..record },
             };
             let mut words = Vec::new();
             parcel.encode(&mut words);
