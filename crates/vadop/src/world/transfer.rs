@@ -123,7 +123,7 @@ impl World {
             return Err(VadopError::CrossingsInWalledBox);
         }
         if !record.rest.fits(record.velocity, self.config.gravity) {
-            return Err(VadopError::BadRecordRest(record.rest));
+            return Err(VadopError::BadRecordRest(format!("{:?}", record.rest)));
         }
         let at = |position| Sphere { position, velocity: record.velocity, radius: record.radius, mass: record.mass };
         let motion = Motion { position: record.position, since: record.since, velocity: record.velocity };
