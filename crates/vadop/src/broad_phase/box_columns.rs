@@ -9,7 +9,7 @@
 use crate::broad_phase::proxy::CompactBox;
 use std::ops::Range;
 
-/// Boxes by coordinate, all six columns of one length: the boxes' count and [`PADDING`] more,
+/// Boxes by coordinate, all six columns of one length: the boxes' count and `PADDING` more,
 /// so the vector scan reads whole groups of four past the last box and masks off what is not
 /// asked for, with no scalar tail (whose branch on each box's overlap mispredicts as often as
 /// not).
