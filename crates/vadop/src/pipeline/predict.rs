@@ -203,7 +203,7 @@ pub(super) fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event
 /// Body `body`'s wall contact if its canonical time lies in `window` (or where an undecided
 /// search stalled).
 #[inline]
-pub(super) fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+pub(crate) fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
     let i = body as usize;
     let (time, partner) = match contacts::wall_start(bodies, i, bounds, window)? {
         Ok((time, wall)) => (time, Partner::Wall(wall)),
@@ -215,7 +215,7 @@ pub(super) fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, windo
 /// Body `body`'s crossing of a periodic face of `bounds` if its canonical time lies in `window`:
 /// when its centre reaches the face (the body then comes back through the opposite one).
 #[inline]
-pub(super) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+pub(crate) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
     if !bounds.is_periodic() {
         return None;
     }

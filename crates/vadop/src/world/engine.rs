@@ -10,12 +10,14 @@ use crate::broad_phase::brute_force::BruteForce;
 use crate::broad_phase::grid::Grid;
 use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::broad_phase::BroadPhase;
-use crate::frame::{FrameStats, Output, Physics};
+use crate::event_loop::EventLoop;
+use crate::frame::{FrameStats, Mode, Output, Physics};
 use crate::parallel::Workers;
 use crate::pipeline::pseudo_dynamic::PseudoDynamic;
 use crate::pipeline::{Pipeline, WindowRule};
 use crate::response::rules::ContactRules;
 use crate::walls::BoxBounds;
+use glam::DVec3;
 use std::any::Any;
 use std::sync::Arc;
 
@@ -143,9 +145,14 @@ pub(crate) fn build(
         // The oracle: one window per frame, nothing adaptive between it and the truth.
         Method::Brute => Box::new(Pipeline::new(BruteForce::default(), WindowRule::Frame, bounds, workers)),
         Method::Discrete => Box::new(PseudoDynamic::default()),
-        Method::Grid | Method::Auto => {
-            Box::new(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, bounds, workers))
+        // The default in simulate mode without gravity: the event loop of spheres while every
+        // body is one (see `crate::event_loop`), the grid's pipeline from the first that is not.
+        Method::Grid | Method::Auto
+            if config.method == Method::Auto && config.mode == Mode::Simulate && config.gravity == DVec3::ZERO =>
+        {
+            Box::new(SpheresFirst { spheres: Some(EventLoop::new(bounds)), general: None, bounds: *bounds, workers })
         }
+        Method::Grid | Method::Auto => Box::new(grid_pipeline(bounds, workers)),
         Method::Vadop => {
             let phi = config.phi.unwrap_or(pool.covering_radius());
             // A hair wider than phi, so rounding never costs a pair its shared axis.
@@ -162,5 +169,142 @@ pub(crate) fn build(
             let sap = SweepPrune::new(coordinate_axes, 1.0, min, max, false);
             Box::new(Pipeline::new(sap, WindowRule::Adaptive, bounds, workers))
         }
+    }
+}
+
+/// The grid's frame pipeline: the default method's broad phase.
+fn grid_pipeline(bounds: &BoxBounds, workers: Workers) -> Pipeline<Grid> {
+    Pipeline::new(Grid::new(bounds.min, bounds.max), WindowRule::Adaptive, bounds, workers)
+}
+
+/// [`Method::Auto`] in simulate mode without gravity: the event loop of spheres while every body
+/// is a moving sphere, then, from the first shape or static body added, the grid's frame
+/// pipeline, which takes the bodies and their contact history over at the instant of the hand-over
+/// (both predict from the same canonical times, so nothing changes there).
+#[derive(Debug)]
+struct SpheresFirst {
+    spheres: Option<EventLoop>,
+    general: Option<Pipeline<Grid>>,
+    bounds: BoxBounds,
+    workers: Workers,
+}
+
+impl SpheresFirst {
+    /// The pipeline, taking the event loop's bodies over at `t` if it has not yet.
+    fn general(&mut self, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) -> &mut Pipeline<Grid> {
+        if let Some(mut spheres) = self.spheres.take() {
+            let mut pipeline = grid_pipeline(&self.bounds, self.workers);
+            pipeline.impacts.rules = std::mem::take(&mut spheres.impacts.rules);
+            for i in spheres.bodies() {
+                pipeline.enter(i, bodies, physics, t, stats);
+            }
+            self.general = Some(pipeline);
+        }
+        self.general.as_mut().expect("the pipeline takes over from the event loop")
+    }
+
+    fn engine(&self) -> &dyn Engine {
+        match (&self.spheres, &self.general) {
+            (Some(spheres), _) => spheres,
+            (None, general) => general.as_ref().expect("one of the two steps the world"),
+        }
+    }
+}
+
+impl Engine for SpheresFirst {
+    fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        // A static body added since: the level is the pipeline's.
+        if bodies.rigid.statics_revision != 0 {
+            self.general(bodies, physics, t0, out.stats);
+        }
+        match (&mut self.spheres, &mut self.general) {
+            (Some(spheres), _) => spheres.step(bodies, physics, t0, t1, out),
+            (None, Some(general)) => general.step(bodies, physics, t0, t1, out),
+            (None, None) => unreachable!("one of the two steps the world"),
+        }
+    }
+    fn enter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        match &mut self.spheres {
+            Some(spheres) if EventLoop::takes(bodies, i as usize) => spheres.enter(i, bodies, t, stats),
+            _ => self.general(bodies, physics, t, stats).enter(i, bodies, physics, t, stats),
+        }
+    }
+    fn reenter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        self.enter(i, bodies, physics, t, stats)
+    }
+    fn remove(&mut self, i: u32) {
+        match (&mut self.spheres, &mut self.general) {
+            (Some(spheres), _) => spheres.remove(i),
+            (None, Some(general)) => general.remove(i),
+            (None, None) => {}
+        }
+    }
+    fn rules(&self) -> &ContactRules {
+        self.engine().rules()
+    }
+    fn rules_mut(&mut self) -> &mut ContactRules {
+        match (&mut self.spheres, &mut self.general) {
+            (Some(spheres), _) => &mut spheres.impacts.rules,
+            (None, general) => &mut general.as_mut().expect("one of the two steps the world").impacts.rules,
+        }
+    }
+    fn touching_pairs(&self) -> Vec<(u32, u32)> {
+        self.engine().touching_pairs()
+    }
+    fn touching_since(&self) -> (Vec<(u32, u32)>, Vec<f64>) {
+        self.engine().touching_since()
+    }
+    fn restore_touching(&mut self, pairs: Vec<(u32, u32)>, since: Vec<f64>) {
+        // Simulate mode keeps no pairs in contact; the pipeline's, after a hand-over, would.
+        if let Some(general) = &mut self.general {
+            general.restore_touching(pairs, since);
+        }
+    }
+    fn can_undo(&self) -> bool {
+        true
+    }
+    fn memory_bytes(&self) -> usize {
+        self.engine().memory_bytes()
+    }
+    fn broad_phase(&self) -> Option<&dyn Any> {
+        self.engine().broad_phase()
+    }
+}
+
+/// The event loop as an engine: simulate mode keeps no pairs in contact.
+impl Engine for EventLoop {
+    fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        EventLoop::step(self, bodies, physics, t0, t1, out)
+    }
+    fn enter(&mut self, i: u32, bodies: &Bodies, _: &Physics, t: f64, stats: &mut FrameStats) {
+        EventLoop::enter(self, i, bodies, t, stats)
+    }
+    fn reenter(&mut self, i: u32, bodies: &Bodies, _: &Physics, t: f64, stats: &mut FrameStats) {
+        EventLoop::enter(self, i, bodies, t, stats)
+    }
+    fn remove(&mut self, i: u32) {
+        EventLoop::remove(self, i)
+    }
+    fn rules(&self) -> &ContactRules {
+        &self.impacts.rules
+    }
+    fn rules_mut(&mut self) -> &mut ContactRules {
+        &mut self.impacts.rules
+    }
+    fn touching_pairs(&self) -> Vec<(u32, u32)> {
+        Vec::new()
+    }
+    fn touching_since(&self) -> (Vec<(u32, u32)>, Vec<f64>) {
+        (Vec::new(), Vec::new())
+    }
+    fn restore_touching(&mut self, _: Vec<(u32, u32)>, _: Vec<f64>) {}
+    fn can_undo(&self) -> bool {
+        true
+    }
+    fn memory_bytes(&self) -> usize {
+        EventLoop::memory_bytes(self)
+    }
+    fn broad_phase(&self) -> Option<&dyn Any> {
+        None
     }
 }

@@ -1,0 +1,389 @@
+//! The event loop of spheres in simulate mode, of the class of dedicated event-driven molecular
+//! dynamics (EDMD) codes: one scheduled event per body, cells with crossing events, an O(1)
+//! calendar, and no work at a frame's end for the bodies nothing touched.
+//!
+//! It owns the scheduling of a world whose every body is a moving sphere, in simulate mode and
+//! without gravity: each body's earliest event alone (a contact, a wall contact, a crossing of a
+//! periodic face, or the crossing of its centre into another cell: [`cells`]) is kept in the
+//! calendar ([`calendar`]); a body whose motion changed is tested against the bodies of the 27
+//! cells around it ([`search`]), and a body crossing into a cell against the 9 that came within
+//! reach. A body whose scheduled contact was voided by its partner's velocity change (stamps, as
+//! in the event queue) is tested again when that contact surfaces. Each body's event is the
+//! earliest of those it may still have, so the calendar's earliest is the next event of the
+//! world: the events are handled in the order the frame pipeline's queue handles them, ties
+//! included. The contact times, the impacts, the contact rules (the TC model and the jam rule,
+//! its cluster found through the cells) and the reports are the pipeline's own functions, so the
+//! contacts and states are bit-identical to the brute-force oracle's, for every frame length.
+//!
+//! Where it applies: [`crate::world`] steps a world of `Method::Auto` in simulate mode with it
+//! while every body is a moving sphere and there is no gravity, and hands the world to the grid's
+//! frame pipeline (which predicts from the same canonical times, so nothing changes at the hand-over)
+//! as soon as another shape or a static body is added. Detect mode stays with the pipeline:
+//! there no contact changes a path, so predicting every pair once per window costs less than
+//! testing a body's neighbourhood after each of its contacts. Shapes stay with it because their
+//! searches are conservative advancement, parked and resumed across windows, which the
+//! pipeline owns; gravity, because a body's path is then a parabola, and its cell crossings and
+//! resting contact belong with the pipeline's proxies. It never decides what touches (the narrow
+//! phase) nor what an impact does (the response).
+
+mod calendar;
+mod cells;
+mod search;
+
+use crate::bodies::Bodies;
+use crate::event_queue::{Event, Partner};
+use crate::frame::{Contact, FrameStats, Output, Physics, Touched};
+use crate::pipeline::jam::Cluster;
+use crate::pipeline::respond::{self, Responder};
+use crate::response::impact::{Impacts, Resolution};
+use crate::walls::BoxBounds;
+use calendar::{Calendar, Scheduled};
+use cells::{Cells, Crossing, NONE};
+use search::{Candidate, Eligible, Search};
+use std::time::Instant;
+
+/// The grid is rebuilt when the bodies have grown past this many times those it was sized for.
+const GROWTH: usize = 2;
+/// How many events pass between looks at the interrupt flag.
+const INTERRUPT_EVERY: u32 = 4096;
+
+/// The event loop (see the module documentation).
+#[derive(Debug)]
+pub(crate) struct EventLoop {
+    bounds: BoxBounds,
+    cells: Cells,
+    calendar: Calendar,
+    /// Per body: its earliest eligible contact, wall contact or periodic crossing.
+    next: Vec<Option<Event>>,
+    /// Per body: when its centre next leaves its cell.
+    crossing: Vec<Crossing>,
+    pub(crate) impacts: Impacts,
+    cluster: Cluster,
+    /// Scratch: the members of the cluster last frozen; a search's candidates.
+    members: Vec<u32>,
+    candidates: Vec<Candidate>,
+    /// Per slot: the body was entered and not removed since.
+    held: Vec<bool>,
+    /// Bodies listed in the cells, and how many the grid was sized for.
+    listed: usize,
+    sized_for: usize,
+    /// The largest coordinate of the box, and the smallest radius entered: whether the search's
+    /// screen is trusted (see [`search::screen_trusted`]).
+    scale: f64,
+    min_radius: f64,
+    /// The grid and the calendar are rebuilt at the next step (bodies were entered that the grid
+    /// does not fit, or none was entered yet).
+    stale: bool,
+}
+
+impl EventLoop {
+    /// An event loop for the box `bounds`.
+    pub(crate) fn new(bounds: &BoxBounds) -> EventLoop {
+        EventLoop {
+            bounds: *bounds,
+            cells: Cells::default(),
+            calendar: Calendar::default(),
+            next: Vec::new(),
+            crossing: Vec::new(),
+            impacts: Impacts::default(),
+            cluster: Cluster::default(),
+            members: Vec::new(),
+            candidates: Vec::new(),
+            held: Vec::new(),
+            listed: 0,
+            sized_for: 0,
+            scale: bounds.min.abs().max(bounds.max.abs()).max_element() + bounds.side().max_element(),
+            min_radius: f64::INFINITY,
+            stale: true,
+        }
+    }
+
+    /// True when the loop takes body `i`: a moving sphere.
+    pub(crate) fn takes(bodies: &Bodies, i: usize) -> bool {
+        bodies.is_sphere(i) && !bodies.is_fixed(i)
+    }
+
+    /// The bodies entered and not removed, ascending.
+    pub(crate) fn bodies(&self) -> impl Iterator<Item = u32> + '_ {
+        self.held.iter().enumerate().filter(|(_, &held)| held).map(|(i, _)| i as u32)
+    }
+
+    /// Bytes held: cells, calendar, each body's next events, the rules.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.cells.memory_bytes()
+            + self.calendar.memory_bytes()
+            + self.next.capacity() * std::mem::size_of::<Option<Event>>()
+            + self.crossing.capacity() * std::mem::size_of::<Crossing>()
+            + self.impacts.rules.memory_bytes()
+            + self.cluster.memory_bytes()
+            + self.members.capacity() * 4
+            + self.held.capacity()
+            + self.candidates.capacity() * std::mem::size_of::<Candidate>()
+    }
+
+    /// Body `i` was added, or given a new motion between frames, at `t`.
+    pub(crate) fn enter(&mut self, i: u32, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
+        let i = i as usize;
+        self.impacts.rules.resize(bodies.slots());
+        if self.held.len() < bodies.slots() {
+            self.held.resize(bodies.slots(), false);
+        }
+        self.held[i] = true;
+        self.min_radius = self.min_radius.min(bodies.radius(i));
+        if self.stale {
+            return;
+        }
+        if self.cells.cell_of(i) == NONE {
+            if !self.cells.fits(bodies.radius(i)) || self.listed + 1 > GROWTH * self.sized_for.max(64) {
+                self.stale = true;
+                return;
+            }
+            self.grow(bodies.slots());
+            self.cells.insert(bodies, i, t);
+            self.listed += 1;
+        }
+        self.predict(bodies, i, t, Eligible::From(t), stats);
+    }
+
+    /// Body `i` was removed: it leaves its cell, and its event is void.
+    pub(crate) fn remove(&mut self, i: u32) {
+        if let Some(held) = self.held.get_mut(i as usize) {
+            *held = false;
+        }
+        if self.cells.cell_of(i as usize) != NONE {
+            self.cells.remove(i as usize);
+            self.listed -= 1;
+        }
+        self.calendar.cancel(i);
+        self.impacts.rules.forget(i as usize);
+    }
+
+    fn grow(&mut self, slots: usize) {
+        if self.next.len() < slots {
+            self.next.resize(slots, None);
+            self.crossing.resize(slots, Crossing::NEVER);
+        }
+    }
+
+    /// Lists every body afresh in a grid sized for them and schedules each one's earliest
+    /// event from `t` on, before any event at `t` was handled.
+    fn rebuild(&mut self, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
+        let ids: Vec<u32> = self.bodies().collect();
+        let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
+        self.cells = Cells::new(&self.bounds, max_radius, ids.len());
+        (self.listed, self.sized_for) = (ids.len(), ids.len());
+        self.next.clear();
+        self.crossing.clear();
+        self.grow(bodies.slots());
+        for &i in &ids {
+            self.min_radius = self.min_radius.min(bodies.radius(i as usize));
+            self.cells.insert(bodies, i as usize, t);
+        }
+        for &i in &ids {
+            let mut search = self.search(bodies);
+            let next = search.next_event(i as usize, t, Eligible::From(t));
+            stats.narrow_tests += search.tests;
+            self.next[i as usize] = next;
+        }
+        stats.retests += ids.len() as u64;
+        for &i in &ids {
+            self.crossing[i as usize] = self.cells.next_crossing(bodies, i as usize, t);
+        }
+        self.stale = false;
+        self.retune(t);
+    }
+
+    /// Resets the calendar with buckets sized for the events now scheduled, and schedules them.
+    fn retune(&mut self, t: f64) {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for i in 0..self.next.len() {
+            let time = self.scheduled(i).time();
+            if time.is_finite() {
+                (sum, count) = (sum + (time - t).max(0.0), count + 1);
+            }
+        }
+        // A body's events come about `sum / count` apart: the world's, that over `count`.
+        let gap = if count > 0 { sum / (count * count) as f64 } else { 1.0 };
+        self.calendar.reset(self.next.len(), t, if gap > 0.0 { gap } else { 1.0 });
+        for i in 0..self.next.len() {
+            if self.cells.cell_of(i) != NONE {
+                self.calendar.schedule(i as u32, self.scheduled(i));
+            }
+        }
+    }
+
+    /// A search of the cells, its screen on when trusted for the bodies entered so far.
+    fn search<'a>(&'a mut self, bodies: &'a Bodies) -> Search<'a> {
+        let screen = search::screen_trusted(self.scale, self.min_radius);
+        Search { bodies, cells: &self.cells, bounds: &self.bounds, screen, candidates: &mut self.candidates, tests: 0 }
+    }
+
+    /// Body `i`'s scheduled event: its earliest contact (or wall contact, or periodic crossing)
+    /// or its next cell crossing, whichever comes first (the crossing at a tie).
+    #[inline]
+    fn scheduled(&self, i: usize) -> Scheduled {
+        let crossing = self.crossing[i];
+        match self.next[i] {
+            Some(event) if event.time < crossing.time => Scheduled { event, cell_crossing: false },
+            _ => {
+                let event = Event {
+                    time: crossing.time,
+                    body: i as u32,
+                    partner: Partner::Renew,
+                    body_stamp: 0,
+                    partner_stamp: 0,
+                };
+                Scheduled { event, cell_crossing: true }
+            }
+        }
+    }
+
+    /// Body `i`'s events at `now` found again, those `eligible`; a body whose motion is new gets
+    /// its next cell crossing too.
+    #[inline]
+    fn predict(&mut self, bodies: &Bodies, i: usize, now: f64, eligible: Eligible, stats: &mut FrameStats) {
+        let mut search = self.search(bodies);
+        let next = search.next_event(i, now, eligible);
+        stats.narrow_tests += search.tests;
+        stats.retests += 1;
+        self.next[i] = next;
+        if let Eligible::From(_) = eligible {
+            self.crossing[i] = self.cells.next_crossing(bodies, i, now);
+        }
+        self.calendar.schedule(i as u32, self.scheduled(i));
+    }
+
+    /// Steps from `t0` to `t1`: every contact with a time in `[t0, t1)`, in time order.
+    pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        let start = Instant::now();
+        self.impacts.rules.resize(bodies.slots());
+        self.impacts.rules.next_step();
+        if self.stale {
+            self.rebuild(bodies, t0, out.stats);
+        } else if self.calendar.needs_tuning() {
+            self.retune(t0);
+        }
+        let mut handled = 0u32;
+        while let Some((owner, scheduled)) = self.calendar.peek() {
+            if !(scheduled.time() < t1) {
+                break;
+            }
+            handled = handled.wrapping_add(1);
+            if handled.is_multiple_of(INTERRUPT_EVERY) && crate::interrupt::raised() {
+                break;
+            }
+            self.calendar.pop();
+            let (owner, t) = (owner as usize, scheduled.time());
+            if scheduled.cell_crossing {
+                self.cross_cell(bodies, owner, t, out.stats);
+            } else {
+                self.handle(bodies, physics, owner, scheduled.event, out);
+            }
+        }
+        out.stats.response_seconds += start.elapsed().as_secs_f64();
+    }
+
+    /// Body `i` crosses into the next cell at `t`: it is listed there, and tested against the
+    /// bodies that came within reach.
+    fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
+        let crossing = self.crossing[i];
+        self.cells.step_across(i, crossing);
+        self.crossing[i] = self.cells.next_crossing(bodies, i, t);
+        let before = self.next[i];
+        let mut search = self.search(bodies);
+        let next = search.after_crossing(i, crossing, t, before);
+        stats.narrow_tests += search.tests;
+        self.next[i] = next;
+        self.calendar.schedule(i as u32, self.scheduled(i));
+    }
+
+    /// The event `event`, scheduled by body `owner`: handled if its bodies' motions are those
+    /// it was predicted from; otherwise `owner`'s events after it are found again.
+    fn handle(&mut self, bodies: &mut Bodies, physics: &Physics, owner: usize, event: Event, out: &mut Output) {
+        let i = event.body as usize;
+        let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
+        let partner_current = match event.partner {
+            Partner::Body(j) => current(j as usize, event.partner_stamp),
+            _ => true,
+        };
+        if !(current(i, event.body_stamp) && partner_current) {
+            out.stats.invalidations += 1;
+            self.predict(bodies, owner, event.time, Eligible::After(event), out.stats);
+            return;
+        }
+        let t = event.time;
+        match event.partner {
+            Partner::Body(j) => self.pair_contact(bodies, physics, event, j, out),
+            Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, t, out),
+            Partner::Cross(face) => {
+                bodies.wrap(i, face, t);
+                self.cells.relist(bodies, i, t);
+                self.predict(bodies, i, t, Eligible::From(t), out.stats);
+            }
+            Partner::End(_) | Partner::Stalled(_) | Partner::WallStalled | Partner::Renew => {
+                unreachable!("the event loop predicts contacts, wall contacts and periodic crossings only")
+            }
+        }
+    }
+
+    /// The contact `event` of bodies `event.body < b`, as the frame pipeline handles two moving
+    /// spheres (see [`respond`]); bodies that parted at it go on to their events after it.
+    fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, event: Event, b: u32, out: &mut Output) {
+        let (a, t) = (event.body, event.time);
+        let (point, normal, resolution, impulse) = respond::pair_impact(self, bodies, physics, (a, b), t, out.stats);
+        if resolution == Resolution::Parting {
+            // Nothing changed: each goes on to its events after this one.
+            self.predict(bodies, a as usize, t, Eligible::After(event), out.stats);
+            self.predict(bodies, b as usize, t, Eligible::After(event), out.stats);
+        }
+        out.stats.pair_contacts += 1;
+        let (body, touched) = (bodies.handle(a as usize), Touched::Body(bodies.handle(b as usize)));
+        out.contacts.push(Contact { time: t, body, touched, point, normal, impulse });
+    }
+}
+
+impl Responder for EventLoop {
+    fn impacts(&mut self) -> &mut Impacts {
+        &mut self.impacts
+    }
+
+    /// The jam rule on the bodies touching `seeds` at `t`, found through the cells; every member's
+    /// events are found again. Returns the cluster's virial.
+    fn freeze_cluster(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        seeds: &[u32],
+        t: f64,
+        stats: &mut FrameStats,
+    ) -> f64 {
+        let cells = &self.cells;
+        let near = |_: &Bodies, m: usize, near: &mut Vec<u32>| {
+            cells.for_each_around(m, |n| {
+                let mut q = cells.first(n.cell);
+                while q != NONE {
+                    if q as usize != m {
+                        near.push(q);
+                    }
+                    q = cells.after(q);
+                }
+            })
+        };
+        let rules = &mut self.impacts.rules;
+        let virial = self.cluster.freeze(bodies, physics, rules, seeds, t, stats, near, |_, _| false);
+        let mut members = std::mem::take(&mut self.members);
+        members.clear();
+        members.extend_from_slice(self.cluster.members());
+        for &m in &members {
+            self.predict(bodies, m as usize, t, Eligible::From(t), stats);
+        }
+        self.members = members;
+        virial
+    }
+
+    fn moved(&mut self, bodies: &Bodies, _: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats) {
+        for i in [Some(a), b].into_iter().flatten() {
+            self.predict(bodies, i as usize, t, Eligible::From(t), stats);
+        }
+    }
+}
