@@ -41,13 +41,19 @@ impl Scheduled {
 
 /// A heap entry: the event, whose body scheduled it, and that body's version then.
 #[derive(Debug, Clone, Copy)]
-struct Entry {
-    scheduled: Scheduled,
-    owner: u32,
-    version: u32,
+pub(super) struct Entry {
+    pub scheduled: Scheduled,
+    pub owner: u32,
+    pub version: u32,
 }
 
 impl Entry {
+    /// True when `self` comes before `other` in the calendar's order.
+    #[inline]
+    pub(super) fn precedes(&self, other: &Entry) -> bool {
+        self.order(other) == Ordering::Less
+    }
+
     /// `Less` when `self` comes first.
     #[inline]
     fn order(&self, other: &Entry) -> Ordering {
@@ -192,9 +198,22 @@ impl Calendar {
         }
     }
 
+    /// True when `entry` is still its body's scheduled event.
+    #[inline]
+    pub(super) fn is_current_entry(&self, entry: &Entry) -> bool {
+        self.is_current(entry.owner, entry.version)
+    }
+
     #[inline]
     fn is_current(&self, owner: u32, version: u32) -> bool {
         self.version[owner as usize] == version
+    }
+
+    /// The earliest scheduled event as an entry, dropping entries replaced since.
+    #[inline]
+    pub(super) fn peek_entry(&mut self) -> Option<Entry> {
+        self.peek()?;
+        self.heap.peek().copied()
     }
 
     /// The earliest scheduled event and its body, dropping entries replaced since.

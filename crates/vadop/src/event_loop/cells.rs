@@ -11,6 +11,7 @@
 //! time it crosses into a new one. It never computes a contact time nor changes a body.
 
 use crate::bodies::Bodies;
+use crate::motion::Motion;
 use crate::walls::BoxBounds;
 use glam::DVec3;
 
@@ -63,8 +64,9 @@ pub(super) struct Cells {
     counts: [i64; 3],
     /// Cell index = x + y * strides[1] + z * strides[2].
     strides: [i64; 3],
-    /// The index offsets of the 27 cells around a cell away from every face.
-    inner: [i64; 27],
+    /// The index offsets of the 9 rows of cells (their middle cells) around a cell away from
+    /// every face.
+    rows: [i64; 9],
     periodic: [bool; 3],
     /// The widest pair of bodies the grid was sized for (the sum of two radii).
     reach: f64,
@@ -109,10 +111,7 @@ impl Cells {
         let width = DVec3::from_array(std::array::from_fn(|a| side[a] / counts[a] as f64));
         let total = counts.iter().product::<i64>() as usize;
         let strides = [1, counts[0], counts[0] * counts[1]];
-        let inner = std::array::from_fn(|k| {
-            let d = [k as i64 % 3 - 1, (k as i64 / 3) % 3 - 1, k as i64 / 9 - 1];
-            d[0] + d[1] * strides[1] + d[2] * strides[2]
-        });
+        let rows = std::array::from_fn(|k| (k as i64 % 3 - 1) * strides[1] + (k as i64 / 3 - 1) * strides[2]);
         Cells {
             min: bounds.min,
             side,
@@ -120,7 +119,7 @@ impl Cells {
             inverse_width: width.recip(),
             counts,
             strides,
-            inner,
+            rows,
             periodic: bounds.periodic,
             reach,
             head: vec![NONE; total],
@@ -186,10 +185,30 @@ impl Cells {
 
     /// Moves body `i` one cell along `crossing`'s axis.
     pub(super) fn step_across(&mut self, i: usize, crossing: Crossing) {
-        let mut at = self.at[i].map(i64::from);
-        at[crossing.axis as usize] += if crossing.up { 1 } else { -1 };
+        let at = self.stepped(i, crossing).0.map(i64::from);
         self.unlink(i);
         self.link(i, at);
+    }
+
+    /// The coordinates and index of the cell body `i` steps into by `crossing`.
+    #[inline]
+    pub(super) fn stepped(&self, i: usize, crossing: Crossing) -> ([u16; 3], u32) {
+        let (mut at, axis) = (self.at[i], crossing.axis as usize);
+        let stride = self.strides[axis] as u32;
+        let cell = if crossing.up {
+            at[axis] += 1;
+            self.cell[i] + stride
+        } else {
+            at[axis] -= 1;
+            self.cell[i] - stride
+        };
+        (at, cell)
+    }
+
+    /// Body `i`'s cell: its coordinates and index.
+    #[inline]
+    pub(super) fn place(&self, i: usize) -> ([u16; 3], u32) {
+        (self.at[i], self.cell[i])
     }
 
     fn link(&mut self, i: usize, at: [i64; 3]) {
@@ -271,14 +290,40 @@ impl Cells {
         }
     }
 
-    /// The 27 cells around body `i`'s when none of them lies across a face of the box (most
-    /// bodies' case, then no shift is needed): their indices.
+    /// The heads of the 27 cells around body `i`'s, as 9 rows of 3 neighbours along x, when none
+    /// of them lies across a face of the box (most bodies' case; then no shift is needed).
     #[inline(always)]
-    pub(super) fn inner_around(&self, i: usize) -> Option<impl Iterator<Item = u32> + '_> {
+    pub(super) fn inner_rows(&self, i: usize) -> Option<impl Iterator<Item = &[u32]> + '_> {
         let at = self.at[i];
         let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
         let cell = self.cell[i] as i64;
-        inside.then(|| self.inner.iter().map(move |&d| (cell + d) as u32))
+        inside.then(|| {
+            self.rows.iter().map(move |&d| {
+                let first = (cell + d - 1) as usize;
+                &self.head[first..first + 3]
+            })
+        })
+    }
+
+    /// Number of cells.
+    pub(super) fn len(&self) -> usize {
+        self.head.len()
+    }
+
+    /// Calls `visit` with the index of every cell of body `i`'s neighbourhood.
+    #[inline]
+    pub(super) fn for_each_cell_around(&self, i: usize, mut visit: impl FnMut(u32)) {
+        let at = self.at[i];
+        if (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]) {
+            let cell = self.cell[i] as i64;
+            for &d in &self.rows {
+                for dx in [-1, 0, 1] {
+                    visit((cell + d + dx) as u32);
+                }
+            }
+        } else {
+            self.for_each_around(i, |n| visit(n.cell));
+        }
     }
 
     /// Calls `visit` with every cell of body `i`'s neighbourhood: the 27 cells around its own
@@ -289,12 +334,29 @@ impl Cells {
         Self::for_each_in(self.around(0, at[0]), self.around(1, at[1]), self.around(2, at[2]), visit);
     }
 
-    /// Calls `visit` with the cells body `i` came within reach of by its last step across
-    /// `crossing`: the 9 beyond its new cell in the direction it moved.
+    /// Calls `visit` with the cells a body came within reach of by a step across `crossing` into
+    /// the cell `(at, cell)`: the 9 beyond it in the direction it moved.
     #[inline(always)]
-    pub(super) fn for_each_new(&self, i: usize, crossing: Crossing, visit: impl FnMut(Neighbour)) {
-        let at = self.at[i].map(i64::from);
+    pub(super) fn for_each_new(
+        &self,
+        (at, cell): ([u16; 3], u32),
+        crossing: Crossing,
+        mut visit: impl FnMut(Neighbour),
+    ) {
+        let at = at.map(i64::from);
         let axis = crossing.axis as usize;
+        if (0..3).all(|a| at[a] >= 1 && at[a] + 2 <= self.counts[a]) {
+            // Away from every face: the 9 cells of the plane ahead, none across a face.
+            let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+            let ahead = cell as i64 + if crossing.up { self.strides[axis] } else { -self.strides[axis] };
+            for dw in [-1, 0, 1] {
+                for du in [-1, 0, 1] {
+                    let cell = (ahead + du * self.strides[u] + dw * self.strides[w]) as u32;
+                    visit(Neighbour { cell, shift: DVec3::ZERO });
+                }
+            }
+            return;
+        }
         let mut steps: [AxisSteps; 3] = std::array::from_fn(|a| self.around(a, at[a]));
         let ahead = self.step(axis, at[axis], if crossing.up { 1 } else { -1 });
         steps[axis] = ([ahead.unwrap_or((0, 0.0)); 3], ahead.is_some() as usize);
@@ -308,8 +370,12 @@ impl Cells {
     /// body's wrap, an event of its own.
     #[inline]
     pub(super) fn next_crossing(&self, bodies: &Bodies, i: usize, now: f64) -> Crossing {
-        let motion = bodies.motion(i);
-        let at = self.at[i];
+        self.next_crossing_from(&bodies.motion(i), self.at[i], now)
+    }
+
+    /// [`Self::next_crossing`] of a body on `motion` in the cell at `at`.
+    #[inline]
+    pub(super) fn next_crossing_from(&self, motion: &Motion, at: [u16; 3], now: f64) -> Crossing {
         let mut best = Crossing::NEVER;
         for (a, &c) in at.iter().enumerate() {
             let (v, c) = (motion.velocity[a], c as i64);

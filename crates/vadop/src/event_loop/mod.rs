@@ -26,6 +26,7 @@
 //! resting contact belong with the pipeline's proxies. It never decides what touches (the narrow
 //! phase) nor what an impact does (the response).
 
+mod ahead;
 mod calendar;
 mod cells;
 mod search;
@@ -37,9 +38,11 @@ use crate::pipeline::jam::Cluster;
 use crate::pipeline::respond::{self, Responder};
 use crate::response::impact::{Impacts, Resolution};
 use crate::walls::BoxBounds;
-use calendar::{Calendar, Scheduled};
+use ahead::{Marks, Seen, Worked, Worker, PER_WORKER};
+use calendar::{Calendar, Entry, Scheduled};
 use cells::{Cells, Crossing, NONE};
-use search::{Candidate, Eligible, Search};
+use rayon::prelude::*;
+use search::{Candidate, Eligible, Near, Overlay, Search};
 use std::time::Instant;
 
 /// The grid is rebuilt when the bodies have grown past this many times those it was sized for.
@@ -62,6 +65,7 @@ pub(crate) struct EventLoop {
     /// Scratch: the members of the cluster last frozen; a search's candidates.
     members: Vec<u32>,
     candidates: Vec<Candidate>,
+    near: Box<Near>,
     /// Per slot: the body was entered and not removed since.
     held: Vec<bool>,
     /// Bodies listed in the cells, and how many the grid was sized for.
@@ -71,14 +75,21 @@ pub(crate) struct EventLoop {
     /// screen is trusted (see [`search::screen_trusted`]).
     scale: f64,
     min_radius: f64,
+    /// With more than one thread: the workers of the parallel loop (see [`ahead`]), the batch
+    /// they work out, the cells changed since it started, and the worked-out impact the next
+    /// contact handled may use.
+    workers: Vec<Worker>,
+    batch: Vec<Entry>,
+    marks: Marks,
+    pending: Option<Worked>,
     /// The grid and the calendar are rebuilt at the next step (bodies were entered that the grid
     /// does not fit, or none was entered yet).
     stale: bool,
 }
 
 impl EventLoop {
-    /// An event loop for the box `bounds`.
-    pub(crate) fn new(bounds: &BoxBounds) -> EventLoop {
+    /// An event loop for the box `bounds`, its searches shared among `threads` threads.
+    pub(crate) fn new(bounds: &BoxBounds, threads: usize) -> EventLoop {
         EventLoop {
             bounds: *bounds,
             cells: Cells::default(),
@@ -89,11 +100,16 @@ impl EventLoop {
             cluster: Cluster::default(),
             members: Vec::new(),
             candidates: Vec::new(),
+            near: Box::default(),
             held: Vec::new(),
             listed: 0,
             sized_for: 0,
             scale: bounds.min.abs().max(bounds.max.abs()).max_element() + bounds.side().max_element(),
             min_radius: f64::INFINITY,
+            workers: if threads > 1 { (0..threads).map(|_| Worker::default()).collect() } else { Vec::new() },
+            batch: Vec::new(),
+            marks: Marks::default(),
+            pending: None,
             stale: true,
         }
     }
@@ -118,6 +134,9 @@ impl EventLoop {
             + self.cluster.memory_bytes()
             + self.members.capacity() * 4
             + self.held.capacity()
+            + self.marks.memory_bytes()
+            + self.batch.capacity() * std::mem::size_of::<Entry>()
+            + self.workers.iter().map(|w| w.worked.capacity() * std::mem::size_of::<Worked>()).sum::<usize>()
             + self.candidates.capacity() * std::mem::size_of::<Candidate>()
     }
 
@@ -215,7 +234,17 @@ impl EventLoop {
     /// A search of the cells, its screen on when trusted for the bodies entered so far.
     fn search<'a>(&'a mut self, bodies: &'a Bodies) -> Search<'a> {
         let screen = search::screen_trusted(self.scale, self.min_radius);
-        Search { bodies, cells: &self.cells, bounds: &self.bounds, screen, candidates: &mut self.candidates, tests: 0 }
+        let (candidates, near) = (&mut self.candidates, &mut self.near);
+        Search {
+            bodies,
+            cells: &self.cells,
+            bounds: &self.bounds,
+            screen,
+            candidates,
+            near,
+            overlay: Overlay::default(),
+            tests: 0,
+        }
     }
 
     /// Body `i`'s scheduled event: its earliest contact (or wall contact, or periodic crossing)
@@ -249,6 +278,7 @@ impl EventLoop {
         self.next[i] = next;
         if let Eligible::From(_) = eligible {
             self.crossing[i] = self.cells.next_crossing(bodies, i, now);
+            self.marks.mark(self.cells.cell_of(i));
         }
         self.calendar.schedule(i as u32, self.scheduled(i));
     }
@@ -263,35 +293,154 @@ impl EventLoop {
         } else if self.calendar.needs_tuning() {
             self.retune(t0);
         }
-        let mut handled = 0u32;
-        while let Some((owner, scheduled)) = self.calendar.peek() {
-            if !(scheduled.time() < t1) {
-                break;
+        if self.workers.is_empty() {
+            let mut handled = 0u32;
+            while let Some(entry) = self.calendar.peek_entry() {
+                if !(entry.scheduled.time() < t1) {
+                    break;
+                }
+                handled = handled.wrapping_add(1);
+                if handled.is_multiple_of(INTERRUPT_EVERY) && crate::interrupt::raised() {
+                    break;
+                }
+                self.calendar.pop();
+                self.dispatch(bodies, physics, entry, out);
             }
-            handled = handled.wrapping_add(1);
-            if handled.is_multiple_of(INTERRUPT_EVERY) && crate::interrupt::raised() {
-                break;
-            }
-            self.calendar.pop();
-            let (owner, t) = (owner as usize, scheduled.time());
-            if scheduled.cell_crossing {
-                self.cross_cell(bodies, owner, t, out.stats);
-            } else {
-                self.handle(bodies, physics, owner, scheduled.event, out);
-            }
+        } else {
+            self.step_ahead(bodies, physics, t1, out);
         }
         out.stats.response_seconds += start.elapsed().as_secs_f64();
+    }
+
+    /// The calendar's event `entry`, handled.
+    fn dispatch(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, out: &mut Output) {
+        let (owner, t) = (entry.owner as usize, entry.scheduled.time());
+        if entry.scheduled.cell_crossing {
+            self.cross_cell(bodies, owner, t, out.stats);
+        } else {
+            self.handle(bodies, physics, owner, entry.scheduled.event, out);
+        }
+    }
+
+    /// [`Self::step`] on every worker: batch after batch of the next events before `t1`, worked
+    /// out on every worker, then handled in order (see [`ahead`]).
+    fn step_ahead(&mut self, bodies: &mut Bodies, physics: &Physics, t1: f64, out: &mut Output) {
+        loop {
+            let mut batch = std::mem::take(&mut self.batch);
+            batch.clear();
+            while batch.len() < PER_WORKER * self.workers.len() {
+                match self.calendar.peek_entry() {
+                    Some(entry) if entry.scheduled.time() < t1 => {
+                        self.calendar.pop();
+                        batch.push(entry);
+                    }
+                    _ => break,
+                }
+            }
+            if batch.is_empty() {
+                self.batch = batch;
+                return;
+            }
+            self.marks.next_batch(self.cells.len());
+            let share = batch.len().div_ceil(self.workers.len());
+            let seen = Seen {
+                bodies,
+                cells: &self.cells,
+                bounds: &self.bounds,
+                physics,
+                rules: &self.impacts.rules,
+                screen: search::screen_trusted(self.scale, self.min_radius),
+                next: &self.next,
+                crossing: &self.crossing,
+            };
+            self.workers.par_iter_mut().enumerate().for_each(|(k, worker)| {
+                worker.worked.clear();
+                for entry in batch.iter().skip(k * share).take(share) {
+                    let worked = seen.work_out(entry, worker);
+                    worker.worked.push(worked);
+                }
+            });
+            for (k, &entry) in batch.iter().enumerate() {
+                // Events predicted since, and due before this one, come first.
+                while let Some(first) = self.calendar.peek_entry() {
+                    if !(first.scheduled.time() < t1 && first.precedes(&entry)) {
+                        break;
+                    }
+                    self.calendar.pop();
+                    self.dispatch(bodies, physics, first, out);
+                }
+                if self.calendar.is_current_entry(&entry) {
+                    let worked = self.workers[k / share].worked[k % share];
+                    self.commit(bodies, physics, entry, worked, out);
+                }
+            }
+            for worker in &mut self.workers {
+                out.stats.narrow_tests += std::mem::take(&mut worker.tests);
+            }
+            self.batch = batch;
+            if crate::interrupt::raised() {
+                return;
+            }
+        }
+    }
+
+    /// Handles `entry` with what a worker found for it, when nothing it read has changed since.
+    fn commit(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, worked: Worked, out: &mut Output) {
+        let i = entry.owner as usize;
+        match worked {
+            Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
+                self.marks.mark(self.cells.cell_of(i));
+                self.cells.step_across(i, self.crossing[i]);
+                self.marks.mark(self.cells.cell_of(i));
+                (self.next[i], self.crossing[i]) = (next, crossing);
+                self.calendar.schedule(i as u32, self.scheduled(i));
+            }
+            Worked::Voided { next } if self.untouched_around(i) => {
+                out.stats.invalidations += 1;
+                out.stats.retests += 1;
+                self.next[i] = next;
+                self.calendar.schedule(i as u32, self.scheduled(i));
+            }
+            Worked::Pushed { pair, .. }
+                if self.untouched_around(pair[0] as usize) && self.untouched_around(pair[1] as usize) =>
+            {
+                self.pending = Some(worked);
+                self.handle(bodies, physics, i, entry.scheduled.event, out);
+                self.pending = None;
+            }
+            _ => self.dispatch(bodies, physics, entry, out),
+        }
+    }
+
+    /// True when no cell around body `i`'s was marked in this batch.
+    fn untouched_around(&self, i: usize) -> bool {
+        let mut untouched = true;
+        self.cells.for_each_cell_around(i, |cell| untouched &= !self.marks.is_marked(cell));
+        untouched
+    }
+
+    /// True when neither body `i`'s cell nor the cells its next crossing brings within reach were
+    /// marked in this batch.
+    fn untouched_crossing(&self, i: usize) -> bool {
+        let crossing = self.crossing[i];
+        let mut untouched = !self.marks.is_marked(self.cells.cell_of(i));
+        self.cells
+            .for_each_new(self.cells.stepped(i, crossing), crossing, |n| untouched &= !self.marks.is_marked(n.cell));
+        untouched
     }
 
     /// Body `i` crosses into the next cell at `t`: it is listed there, and tested against the
     /// bodies that came within reach.
     fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
         let crossing = self.crossing[i];
+        self.marks.mark(self.cells.cell_of(i));
         self.cells.step_across(i, crossing);
+        self.marks.mark(self.cells.cell_of(i));
+        let into = self.cells.place(i);
         self.crossing[i] = self.cells.next_crossing(bodies, i, t);
         let before = self.next[i];
         let mut search = self.search(bodies);
-        let next = search.after_crossing(i, crossing, t, before);
+        let next = search.after_crossing(i, (into, crossing), t, before);
         stats.narrow_tests += search.tests;
         self.next[i] = next;
         self.calendar.schedule(i as u32, self.scheduled(i));
@@ -301,12 +450,7 @@ impl EventLoop {
     /// it was predicted from; otherwise `owner`'s events after it are found again.
     fn handle(&mut self, bodies: &mut Bodies, physics: &Physics, owner: usize, event: Event, out: &mut Output) {
         let i = event.body as usize;
-        let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
-        let partner_current = match event.partner {
-            Partner::Body(j) => current(j as usize, event.partner_stamp),
-            _ => true,
-        };
-        if !(current(i, event.body_stamp) && partner_current) {
+        if !ahead::is_current(bodies, &event) {
             out.stats.invalidations += 1;
             self.predict(bodies, owner, event.time, Eligible::After(event), out.stats);
             return;
@@ -317,6 +461,7 @@ impl EventLoop {
             Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, t, out),
             Partner::Cross(face) => {
                 bodies.wrap(i, face, t);
+                self.marks.mark(self.cells.cell_of(i));
                 self.cells.relist(bodies, i, t);
                 self.predict(bodies, i, t, Eligible::From(t), out.stats);
             }
@@ -330,6 +475,9 @@ impl EventLoop {
     /// spheres (see [`respond`]); bodies that parted at it go on to their events after it.
     fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, event: Event, b: u32, out: &mut Output) {
         let (a, t) = (event.body, event.time);
+        // Their contact histories change, whatever the impact does.
+        self.marks.mark(self.cells.cell_of(a as usize));
+        self.marks.mark(self.cells.cell_of(b as usize));
         let (point, normal, resolution, impulse) = respond::pair_impact(self, bodies, physics, (a, b), t, out.stats);
         if resolution == Resolution::Parting {
             // Nothing changed: each goes on to its events after this one.
@@ -381,7 +529,25 @@ impl Responder for EventLoop {
         virial
     }
 
+    /// With the worker's result for this impact when its motions are the ones the impact just
+    /// gave (see [`ahead`]); otherwise both bodies' events found again.
     fn moved(&mut self, bodies: &Bodies, _: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats) {
+        if let Some(Worked::Pushed { pair, motions, stamps, next, crossings }) = self.pending.take() {
+            let same = |k: usize| {
+                let i = pair[k] as usize;
+                ahead::same_bits(&bodies.motion(i), &motions[k]) && bodies.stamp[i] == stamps[k]
+            };
+            if Some(pair[1]) == b && pair[0] == a && same(0) && same(1) {
+                for k in 0..2 {
+                    let i = pair[k] as usize;
+                    (self.next[i], self.crossing[i]) = (next[k], crossings[k]);
+                    self.marks.mark(self.cells.cell_of(i));
+                    self.calendar.schedule(pair[k], self.scheduled(i));
+                }
+                stats.retests += 2;
+                return;
+            }
+        }
         for i in [Some(a), b].into_iter().flatten() {
             self.predict(bodies, i as usize, t, Eligible::From(t), stats);
         }

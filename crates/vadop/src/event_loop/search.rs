@@ -18,7 +18,7 @@ use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::memory::prefetch;
 use crate::narrow_phase::contacts;
-use crate::pipeline::predict::{predict_crossing, predict_wall};
+use crate::pipeline::predict::{crossing_event, sphere_wall_event};
 use crate::walls::BoxBounds;
 use crate::window::Window;
 use glam::DVec3;
@@ -90,10 +90,36 @@ pub(super) struct Search<'a> {
     pub cells: &'a Cells,
     pub bounds: &'a BoxBounds,
     pub screen: bool,
-    /// The partners that passed the screen, waiting for their exact tests.
+    /// The partners that passed the screen, waiting for their exact tests, and the cells they
+    /// came from.
     pub candidates: &'a mut Vec<Candidate>,
+    pub near: &'a mut Near,
+    /// Motions not yet written to the store (see [`Overlay`]).
+    pub overlay: Overlay,
     /// Exact pair tests made.
     pub tests: u64,
+}
+
+/// The motions and stamps of up to two bodies as an impact not yet applied leaves them: a search
+/// made ahead of the impact's turn reads them instead of the store's.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Overlay {
+    bodies: [(u32, u32, BodyState); 2],
+    len: usize,
+}
+
+impl Overlay {
+    /// Body `i` with `state` and `stamp`.
+    pub(super) fn with(mut self, i: u32, state: BodyState, stamp: u32) -> Overlay {
+        self.bodies[self.len] = (i, stamp, state);
+        self.len += 1;
+        self
+    }
+
+    #[inline(always)]
+    fn find(&self, i: usize) -> Option<&(u32, u32, BodyState)> {
+        self.bodies[..self.len].iter().find(|(k, _, _)| *k as usize == i)
+    }
 }
 
 /// A partner from the neighbourhood: once it passed the screen, its exact test waits, ordered by
@@ -108,15 +134,16 @@ pub(super) struct Candidate {
 
 /// The neighbour cells a search gathered bodies from, each with the whole sides that bring its
 /// bodies next to the searching body, and the searching body's centre less those.
-struct Near {
+#[derive(Debug)]
+pub(super) struct Near {
     cells: usize,
-    shifts: [DVec3; 27],
-    origins: [DVec3; 27],
+    shifts: [DVec3; 32],
+    origins: [DVec3; 32],
 }
 
 impl Default for Near {
     fn default() -> Near {
-        Near { cells: 0, shifts: [DVec3::ZERO; 27], origins: [DVec3::ZERO; 27] }
+        Near { cells: 0, shifts: [DVec3::ZERO; 32], origins: [DVec3::ZERO; 32] }
     }
 }
 
@@ -167,28 +194,35 @@ impl<'a> Search<'a> {
         let mut best = Best::new(None, now);
         // A box periodic on every axis has no walls to predict against.
         let walled = self.bounds.periodic.contains(&false);
+        let (state, stamp, gravity) = (self.state_of(p), self.stamp_of(p), self.bodies.gravity);
         let (wall, face) = (
-            walled.then(|| predict_wall(self.bodies, self.bounds, p as u32, window)).flatten(),
-            predict_crossing(self.bodies, self.bounds, p as u32, window),
+            walled.then(|| sphere_wall_event((p as u32, stamp), state, gravity, self.bounds, window)).flatten(),
+            crossing_event((p as u32, stamp), &state.motion, gravity, self.bounds, window),
         );
         for event in [wall, face].into_iter().flatten() {
             best.offer(event, eligible, now);
         }
         let (own, cells) = (self.own(p, now), self.cells);
-        let mut near = Near::default();
         self.candidates.clear();
-        match cells.inner_around(p) {
-            Some(around) => {
-                around.for_each(|cell| self.gather(&own, Neighbour { cell, shift: DVec3::ZERO }, &mut near))
+        self.near.cells = 0;
+        match cells.inner_rows(p) {
+            Some(rows) => {
+                // No cell across a face: one origin for all.
+                (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
+                for row in rows {
+                    for &first in row {
+                        self.gather_list(own.p, first, 0);
+                    }
+                }
             }
-            None => cells.for_each_around(p, |n| self.gather(&own, n, &mut near)),
+            None => cells.for_each_around(p, |n| self.gather(&own, n)),
         }
-        self.screen_all(&own, &near, &mut best);
-        self.test_candidates(&own, &near, eligible, &mut best);
+        self.screen_all(&own, &mut best);
+        self.test_candidates(&own, eligible, &mut best);
         best.event
     }
 
-    /// Body `p`, which has just stepped into a new cell by `crossing` at `now`: its earliest
+    /// Body `p`, which steps into the cell `into` by `crossing` at `now`: its earliest
     /// contact with the bodies of the cells it came within reach of, or `best` when none is
     /// earlier. (A contact with them cannot be at `now` itself: touching bodies are always in
     /// neighbouring cells.)
@@ -196,23 +230,38 @@ impl<'a> Search<'a> {
     pub(super) fn after_crossing(
         &mut self,
         p: usize,
-        crossing: Crossing,
+        (into, crossing): (([u16; 3], u32), Crossing),
         now: f64,
         best: Option<Event>,
     ) -> Option<Event> {
         let (own, cells) = (self.own(p, now), self.cells);
         let mut best = Best::new(best, now);
-        let mut near = Near::default();
         self.candidates.clear();
-        cells.for_each_new(p, crossing, |n| self.gather(&own, n, &mut near));
-        self.screen_all(&own, &near, &mut best);
-        self.test_candidates(&own, &near, Eligible::From(now), &mut best);
+        self.near.cells = 0;
+        cells.for_each_new(into, crossing, |n| self.gather(&own, n));
+        self.screen_all(&own, &mut best);
+        self.test_candidates(&own, Eligible::From(now), &mut best);
         best.event
+    }
+
+    /// Body `i`'s motion and radius: the overlay's, or the store's.
+    #[inline(always)]
+    fn state_of(&self, i: usize) -> &BodyState {
+        match self.overlay.len {
+            0 => &self.bodies.state[i],
+            _ => self.overlay.find(i).map_or(&self.bodies.state[i], |(_, _, state)| state),
+        }
+    }
+
+    /// Body `i`'s stamp: the overlay's, or the store's.
+    #[inline(always)]
+    fn stamp_of(&self, i: usize) -> u32 {
+        self.overlay.find(i).map_or(self.bodies.stamp[i], |(_, stamp, _)| *stamp)
     }
 
     #[inline]
     fn own(&self, p: usize, now: f64) -> Own {
-        let state = &self.bodies.state[p];
+        let state = self.state_of(p);
         let rounding = ROUNDINGS * f64::EPSILON * now.abs();
         Own { p, position: state.motion.at(now), velocity: state.motion.velocity, radius: state.radius, now, rounding }
     }
@@ -221,20 +270,27 @@ impl<'a> Search<'a> {
     /// asking for their records on the way: a neighbourhood's bodies are scattered in memory,
     /// and the records then arrive together rather than one after the other.
     #[inline(always)]
-    fn gather(&mut self, own: &Own, n: Neighbour, near: &mut Near) {
-        let (cells, states) = (self.cells, &self.bodies.state[..]);
-        let mut q = cells.first(n.cell);
-        if q == NONE {
+    fn gather(&mut self, own: &Own, n: Neighbour) {
+        if self.cells.first(n.cell) == NONE {
             return;
         }
-        let k = near.cells;
-        near.origins[k] = own.position - n.shift;
-        near.shifts[k] = n.shift;
-        near.cells += 1;
+        let k = self.near.cells;
+        self.near.origins[k] = own.position - n.shift;
+        self.near.shifts[k] = n.shift;
+        self.near.cells += 1;
+        self.gather_list(own.p, self.cells.first(n.cell), k as u8);
+    }
+
+    /// [`Self::gather`] of the cell whose first body is `first`, its shift the `k`-th of the
+    /// neighbourhood's.
+    #[inline(always)]
+    fn gather_list(&mut self, p: usize, first: u32, k: u8) {
+        let (cells, states) = (self.cells, &self.bodies.state[..]);
+        let mut q = first;
         while q != NONE {
-            if q as usize != own.p {
+            if q as usize != p {
                 prefetch(&states[q as usize]);
-                self.candidates.push(Candidate { earliest: 0.0, q, cell: k as u8 });
+                self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
             }
             q = cells.after(q);
         }
@@ -243,28 +299,28 @@ impl<'a> Search<'a> {
     /// Screens the bodies gathered: those that pass stay in `self.candidates`, each with the
     /// earliest it can touch `own`.
     #[inline(always)]
-    fn screen_all(&mut self, own: &Own, near: &Near, best: &mut Best) {
-        let states = &self.bodies.state[..];
+    fn screen_all(&mut self, own: &Own, best: &mut Best) {
         if !self.screen {
             self.candidates.iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
             return;
         }
         let mut bound = best.bound;
-        self.candidates.retain_mut(|c| {
-            match screen(own, &states[c.q as usize], near.origins[c.cell as usize], &mut bound) {
-                Some(earliest) => {
-                    c.earliest = earliest;
-                    true
-                }
-                None => false,
+        let mut kept = 0;
+        for k in 0..self.candidates.len() {
+            let c = self.candidates[k];
+            let state = self.state_of(c.q as usize);
+            if let Some(earliest) = screen(own, state, self.near.origins[c.cell as usize & 31], &mut bound) {
+                self.candidates[kept] = Candidate { earliest, ..c };
+                kept += 1;
             }
-        });
+        }
+        self.candidates.truncate(kept);
         best.bound = bound;
     }
 
     /// The candidates' exact tests, earliest first, until the next cannot come before the best.
     #[inline]
-    fn test_candidates(&mut self, own: &Own, near: &Near, eligible: Eligible, best: &mut Best) {
+    fn test_candidates(&mut self, own: &Own, eligible: Eligible, best: &mut Best) {
         let mut candidates = std::mem::take(self.candidates);
         if candidates.len() > 1 {
             candidates.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
@@ -273,7 +329,7 @@ impl<'a> Search<'a> {
             if c.earliest > best.horizon {
                 break;
             }
-            self.exact(own, c.q as usize, near.shifts[c.cell as usize], eligible, best);
+            self.exact(own, c.q as usize, self.near.shifts[c.cell as usize], eligible, best);
         }
         *self.candidates = candidates;
     }
@@ -286,16 +342,16 @@ impl<'a> Search<'a> {
         let p = own.p;
         // The lower id's own motion against the higher id's, shifted next to it.
         let (low, high, image_shift) = if p < q { (p, q, shift) } else { (q, p, DVec3::ZERO - shift) };
-        let mut image = self.bodies.state[high];
+        let (low_state, high_state) = (self.state_of(low), self.state_of(high));
+        let mut image = *high_state;
         if image_shift != DVec3::ZERO {
             image.motion.position += image_shift;
         }
         let window = Window::new(eligible.start(), f64::INFINITY);
-        let Some((time, _)) = contacts::pair_start(self.bodies, (low, &self.bodies.state[low]), (high, &image), window)
-        else {
+        let Some((time, _)) = contacts::pair_start(self.bodies, (low, low_state), (high, &image), window) else {
             return;
         };
-        let stamps = (self.bodies.stamp[low], self.bodies.stamp[high]);
+        let stamps = (self.stamp_of(low), self.stamp_of(high));
         let event = Event {
             time,
             body: low as u32,
@@ -318,10 +374,12 @@ impl<'a> Search<'a> {
 #[inline(always)]
 fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Option<f64> {
     let motion = &state.motion;
-    let offset = motion.position + (own.now - motion.since) * motion.velocity - origin;
-    let velocity = motion.velocity - own.velocity;
-    let approach = offset.dot(velocity);
-    let (d2, v2) = (offset.length_squared(), velocity.length_squared());
+    // Written per component: the vector types' shuffles cost more than the arithmetic here.
+    let (p, v, dt) = (motion.position, motion.velocity, own.now - motion.since);
+    let (ox, oy, oz) = (p.x + dt * v.x - origin.x, p.y + dt * v.y - origin.y, p.z + dt * v.z - origin.z);
+    let (vx, vy, vz) = (v.x - own.velocity.x, v.y - own.velocity.y, v.z - own.velocity.z);
+    let approach = ox * vx + oy * vy + oz * vz;
+    let (d2, v2) = (ox * ox + oy * oy + oz * oz, vx * vx + vy * vy + vz * vz);
     // |approach| clear of 10^-6 |offset| |velocity|: its sign is sure.
     let clear = approach * approach > RECEDING * RECEDING * d2 * v2;
     if approach > 0.0 {

@@ -121,6 +121,16 @@ impl ContactRules {
         Rule::Impulse { restitution: if recent { 1.0 } else { restitution }, changed: recent }
     }
 
+    /// The restitution a contact of bodies `a` and `b` at `t` gets under the TC model, unless it
+    /// jams them, without recording it: what [`Self::pair`] would apply.
+    pub(crate) fn pair_restitution(&self, a: u32, b: u32, t: f64, restitution: f64, duration: f64) -> f64 {
+        let previous = self.last_contact[a as usize].max(self.last_contact[b as usize]);
+        match ContactRules::restitution(restitution, duration, t, previous) {
+            Rule::Impulse { restitution, .. } => restitution,
+            Rule::Jam => unreachable!("the TC model never jams"),
+        }
+    }
+
     /// The rule for a contact of bodies `a` and `b` at `t`, recorded in their history.
     pub(crate) fn pair(&mut self, a: u32, b: u32, t: f64, restitution: f64, duration: f64) -> Rule {
         let (a, b) = (a as usize, b as usize);

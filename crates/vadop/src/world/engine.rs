@@ -150,7 +150,8 @@ pub(crate) fn build(
         Method::Grid | Method::Auto
             if config.method == Method::Auto && config.mode == Mode::Simulate && config.gravity == DVec3::ZERO =>
         {
-            Box::new(SpheresFirst { spheres: Some(EventLoop::new(bounds)), general: None, bounds: *bounds, workers })
+            let spheres = EventLoop::new(bounds, workers.threads());
+            Box::new(SpheresFirst { spheres: Some(spheres), general: None, bounds: *bounds, workers })
         }
         Method::Grid | Method::Auto => Box::new(grid_pipeline(bounds, workers)),
         Method::Vadop => {
