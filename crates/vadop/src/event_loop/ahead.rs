@@ -26,33 +26,55 @@ use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
 use crate::motion::Motion;
 use crate::narrow_phase::contacts;
-use crate::response::impulse::pair_impulse;
+use crate::response::impact::{spheres_pushed, virial_of};
 use crate::response::rules::ContactRules;
 use crate::walls::BoxBounds;
+use glam::DVec3;
 
 /// Events each worker works out per batch: enough that waking the workers costs little against
-/// the batch, few enough that events handled early in it rarely change what later ones read.
-pub(super) const PER_WORKER: usize = 64;
+/// the batch, few enough that events handled early in it rarely change what later ones read (an
+/// event reads about 50 cells and changes 2 or 3, so with a batch of k events over C cells about
+/// 75 k / C of them were worked out in vain): at most this many, at least [`MIN_PER_WORKER`],
+/// and a batch no larger than one event per [`CELLS_PER_EVENT`] cells.
+pub(super) const PER_WORKER: usize = 32;
+pub(super) const MIN_PER_WORKER: usize = 8;
+pub(super) const CELLS_PER_EVENT: usize = 2048;
 
-/// What a worker found for an event, from the world as the batch found it.
+/// What a worker found for an event, from the world as the batch found it. Kept unboxed: the
+/// workers' vectors are reused from batch to batch, and a box would allocate per event.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
 pub(super) enum Worked {
     /// Nothing worked out (a wall contact, a periodic crossing, or a contact the impact would not
     /// simply push apart).
     Nothing,
-    /// Bodies `pair` pushed apart: their motions and stamps after the impact, their next events
-    /// and their next cell crossings.
-    Pushed {
-        pair: [u32; 2],
-        motions: [Motion; 2],
-        stamps: [u32; 2],
-        next: [Option<Event>; 2],
-        crossings: [Crossing; 2],
-    },
+    /// Bodies `pair` pushed apart (see [`Pushed`]).
+    Pushed(Pushed),
     /// A voided event: its body's next event after it.
     Voided { next: Option<Event> },
     /// A body crossing into a cell: its next event with the cells it reaches, its next crossing.
     Crossed { next: Option<Event>, crossing: Crossing },
+}
+
+/// A contact of two spheres pushed apart, as a worker found it: what the impact does and what
+/// follows it.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Pushed {
+    pub pair: [u32; 2],
+    /// Where they touch and the normal from the first to the second.
+    pub point: DVec3,
+    pub normal: DVec3,
+    /// The restitution of the impact (the TC model's), the impulse and the virial it adds.
+    pub restitution: f64,
+    pub impulse: f64,
+    pub virial: f64,
+    /// Their velocities, motions and stamps after it.
+    pub velocities: [DVec3; 2],
+    pub motions: [Motion; 2],
+    pub stamps: [u32; 2],
+    /// Their next events and next cell crossings.
+    pub next: [Option<Event>; 2],
+    pub crossings: [Crossing; 2],
 }
 
 /// A worker's scratch, and what it found for its share of the batch.
@@ -79,7 +101,9 @@ pub(super) struct Seen<'a> {
 }
 
 impl Seen<'_> {
-    /// What handling `entry` would find, worked out without changing anything.
+    /// What handling `entry` would find, worked out without changing anything. (Kept out of line:
+    /// a profile then tells the workers' share of a step from the rest.)
+    #[inline(never)]
     pub(super) fn work_out(&self, entry: &Entry, worker: &mut Worker) -> Worked {
         let (owner, time) = (entry.owner as usize, entry.scheduled.time());
         let mut search = Search {
@@ -114,20 +138,18 @@ impl Seen<'_> {
     /// new motions; nothing when they would part without an impulse.
     fn pushed(&self, search: &mut Search, a: u32, b: u32, t: f64) -> Worked {
         let (i, j) = (a as usize, b as usize);
-        if self.physics.friction != 0.0 {
-            return Worked::Nothing;
-        }
         let physics = self.physics;
-        let restitution = self.rules.pair_restitution(a, b, t, physics.restitution, physics.contact_duration);
-        let (_, normal) = contacts::pair_geometry(self.bodies, i, j, t);
-        let (vi, vj) = (self.bodies.velocity_at(i, t), self.bodies.velocity_at(j, t));
-        let (wi, wj) = (self.bodies.inverse_mass(i), self.bodies.inverse_mass(j));
-        let impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
-        if !(impulse > 0.0) {
+        if physics.friction != 0.0 {
             return Worked::Nothing;
         }
+        let restitution = self.rules.pair_restitution(a, b, t, physics.restitution, physics.contact_duration);
+        let (point, normal) = contacts::pair_geometry(self.bodies, i, j, t);
+        let Some((impulse, vi, vj)) = spheres_pushed(self.bodies, (i, j), t, normal, restitution) else {
+            return Worked::Nothing;
+        };
+        let virial = virial_of(self.bodies, (i, j), t, (self.bodies.velocity_at(j, t), vj));
         let moved = |k: usize, velocity| Motion { position: self.bodies.position_at(k, t), since: t, velocity };
-        let motions = [moved(i, vi - impulse * wi * normal), moved(j, vj + impulse * wj * normal)];
+        let motions = [moved(i, vi), moved(j, vj)];
         let stamps = [self.bodies.stamp[i].wrapping_add(1), self.bodies.stamp[j].wrapping_add(1)];
         let state = |k: usize, motion| BodyState { motion, radius: self.bodies.radius(k) };
         search.overlay =
@@ -135,7 +157,20 @@ impl Seen<'_> {
         let next = [search.next_event(i, t, Eligible::From(t)), search.next_event(j, t, Eligible::From(t))];
         let crossings = [(i, motions[0]), (j, motions[1])]
             .map(|(k, motion)| self.cells.next_crossing_from(&motion, self.cells.place(k).0, t));
-        Worked::Pushed { pair: [a, b], motions, stamps, next, crossings }
+        let velocities = [vi, vj];
+        Worked::Pushed(Pushed {
+            pair: [a, b],
+            point,
+            normal,
+            restitution,
+            impulse,
+            virial,
+            velocities,
+            motions,
+            stamps,
+            next,
+            crossings,
+        })
     }
 }
 
@@ -160,11 +195,12 @@ pub(super) fn same_bits(a: &Motion, b: &Motion) -> bool {
 }
 
 /// Per cell, whether anything in it changed since the batch started: a body in it moved, took
-/// part in a contact, or came or left.
+/// part in a contact, or came or left. Two bytes per cell, the batch's number modulo 2^16: a mark
+/// from 2^16 batches before reads as marked, which only costs working an event out again.
 #[derive(Debug, Default)]
 pub(super) struct Marks {
-    batch: Vec<u32>,
-    current: u32,
+    batch: Vec<u16>,
+    current: u16,
 }
 
 impl Marks {
@@ -174,10 +210,6 @@ impl Marks {
             self.batch = vec![0; cells];
         }
         self.current = self.current.wrapping_add(1);
-        if self.current == 0 {
-            self.batch.iter_mut().for_each(|b| *b = 0);
-            self.current = 1;
-        }
     }
 
     /// Something in cell `cell` changed.
@@ -188,14 +220,25 @@ impl Marks {
         }
     }
 
-    /// True when something in cell `cell` changed since the batch started.
+    /// True when something in cell `cell` may have changed since the batch started.
     #[inline]
     pub(super) fn is_marked(&self, cell: u32) -> bool {
         self.batch.get(cell as usize).is_some_and(|&b| b == self.current)
     }
 
+    /// True when something in a cell of the rows of 3 cells starting at `rows` may have changed
+    /// since the batch started.
+    #[inline]
+    pub(super) fn any_in_rows(&self, rows: &[usize; 9]) -> bool {
+        let (marks, current) = (&self.batch[..], self.current);
+        rows.iter().fold(false, |any, &first| {
+            let row = &marks[first..first + 3];
+            any | (row[0] == current) | (row[1] == current) | (row[2] == current)
+        })
+    }
+
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.batch.capacity() * 4
+        self.batch.capacity() * 2
     }
 }

@@ -2,8 +2,8 @@
 //!
 //! It owns Paul's scheme (J. Comput. Phys. 1975; the calendar of most event-driven MD codes):
 //! time is cut into buckets of a fixed width; the bucket being worked through is a small binary
-//! heap, sorted; the buckets after it, a ring of them, are unsorted lists, each poured into the
-//! heap when its turn comes; events past the ring wait in an overflow list, sorted into the ring
+//! list, sorted; the buckets after it, a ring of them, are unsorted lists, each poured into the
+//! sorted list (and sorted) when its turn comes; events past the ring wait in an overflow list, sorted into the ring
 //! each time it turns. A body's event is replaced by scheduling it anew: the old entry stays where
 //! it is and is dropped when it surfaces (each body carries a version, bumped at every
 //! scheduling). The order is total and the one the frame pipeline's event queue keeps: earlier
@@ -14,9 +14,8 @@
 
 use crate::event_queue::Event;
 use std::cmp::Ordering;
-use std::collections::BinaryHeap;
 
-/// Events a bucket holds on average when the width is tuned: the heap stays short, and the
+/// Events a bucket holds on average when the width is tuned: the sorted list stays short, and the
 /// pouring costs little per event.
 const EVENTS_PER_BUCKET: f64 = 24.0;
 /// Buckets in the ring per body: the ring then spans a few of a body's event intervals, so few
@@ -39,7 +38,7 @@ impl Scheduled {
     }
 }
 
-/// A heap entry: the event, whose body scheduled it, and that body's version then.
+/// An entry of the sorted list: the event, whose body scheduled it, and that body's version then.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Entry {
     pub scheduled: Scheduled,
@@ -81,7 +80,7 @@ impl PartialOrd for Entry {
     }
 }
 impl Ord for Entry {
-    // Reversed: std's max-heap pops the earliest.
+    // Reversed: a list sorted ascending ends with the earliest.
     fn cmp(&self, other: &Self) -> Ordering {
         other.order(self)
     }
@@ -104,9 +103,11 @@ pub(super) struct Calendar {
     /// The instant bucket 0 starts at, and the buckets' width (as its inverse).
     origin: f64,
     inverse_width: f64,
-    /// The bucket whose events are in the heap.
+    /// The bucket whose events are in `near`, sorted latest first (popped from the end): most
+    /// come in all at once when the bucket's turn comes, and one sort then costs less than as
+    /// many heap pushes and pops; an event due in this bucket already is inserted in its place.
     current: i64,
-    heap: BinaryHeap<Entry>,
+    near: Vec<Entry>,
     /// Bucket `k` (for `current < k < current + ring.len()`) at `ring[k % ring.len()]`.
     ring: Vec<Vec<Slot>>,
     in_ring: usize,
@@ -126,7 +127,7 @@ impl Calendar {
         self.ring.iter_mut().for_each(Vec::clear);
         self.in_ring = 0;
         self.overflow.clear();
-        self.heap.clear();
+        self.near.clear();
         let width = (gap * EVENTS_PER_BUCKET).max(f64::MIN_POSITIVE);
         self.inverse_width = 1.0 / width;
         if !self.inverse_width.is_finite() {
@@ -151,7 +152,7 @@ impl Calendar {
     pub(super) fn memory_bytes(&self) -> usize {
         self.scheduled.capacity() * std::mem::size_of::<Scheduled>()
             + self.version.capacity() * 4
-            + self.heap.capacity() * std::mem::size_of::<Entry>()
+            + self.near.capacity() * std::mem::size_of::<Entry>()
             + (self.ring.iter().map(Vec::capacity).sum::<usize>() + self.overflow.capacity())
                 * std::mem::size_of::<Slot>()
             + self.ring.capacity() * std::mem::size_of::<Vec<Slot>>()
@@ -161,7 +162,10 @@ impl Calendar {
     fn bucket(&self, time: f64) -> i64 {
         // Monotone in time (a subtraction and a product by a positive number, each rounded
         // correctly), so every event of a bucket comes before every event of a later one.
-        ((time - self.origin) * self.inverse_width).floor() as i64
+        // Rounded down by hand: `floor` is a library call where the target lacks SSE4.1.
+        let x = (time - self.origin) * self.inverse_width;
+        let k = x as i64;
+        k - ((k as f64) > x) as i64
     }
 
     /// Schedules `scheduled` as body `owner`'s event, replacing the one it had.
@@ -181,7 +185,7 @@ impl Calendar {
         let slot = Slot { time, owner, version: self.version[i] };
         let k = self.bucket(time);
         if k <= self.current {
-            self.heap.push(Entry { scheduled, owner, version: slot.version });
+            self.insert_near(Entry { scheduled, owner, version: slot.version });
         } else if k < self.current + self.ring.len() as i64 {
             let ring = self.ring.len() as i64;
             self.ring[(k % ring) as usize].push(slot);
@@ -213,17 +217,17 @@ impl Calendar {
     #[inline]
     pub(super) fn peek_entry(&mut self) -> Option<Entry> {
         self.peek()?;
-        self.heap.peek().copied()
+        self.near.last().copied()
     }
 
     /// The earliest scheduled event and its body, dropping entries replaced since.
     #[inline]
     pub(super) fn peek(&mut self) -> Option<(u32, Scheduled)> {
         loop {
-            match self.heap.peek() {
+            match self.near.last() {
                 Some(top) if self.is_current(top.owner, top.version) => return Some((top.owner, top.scheduled)),
                 Some(_) => {
-                    self.heap.pop();
+                    self.near.pop();
                 }
                 None => {
                     if !self.pour_next() {
@@ -237,11 +241,11 @@ impl Calendar {
     /// Removes the event [`Self::peek`] returned.
     #[inline]
     pub(super) fn pop(&mut self) {
-        self.heap.pop();
+        self.near.pop();
         self.popped += 1;
     }
 
-    /// Moves on to the next bucket holding anything and pours it into the heap; false when
+    /// Moves on to the next bucket holding anything and pours it into the sorted list; false when
     /// nothing is scheduled.
     fn pour_next(&mut self) -> bool {
         let ring = self.ring.len() as i64;
@@ -273,13 +277,15 @@ impl Calendar {
             for slot in &bucket {
                 if self.is_current(slot.owner, slot.version) {
                     let scheduled = self.scheduled[slot.owner as usize];
-                    self.heap.push(Entry { scheduled, owner: slot.owner, version: slot.version });
+                    self.near.push(Entry { scheduled, owner: slot.owner, version: slot.version });
                 }
             }
+            // Ascending in `Ord`, which puts earlier events after later ones.
+            self.near.sort_unstable();
             let mut bucket = bucket;
             bucket.clear();
             self.ring[self.current.rem_euclid(ring) as usize] = bucket;
-            if !self.heap.is_empty() {
+            if !self.near.is_empty() {
                 return true;
             }
         }
@@ -289,25 +295,33 @@ impl Calendar {
     fn sort_overflow(&mut self) {
         let ring = self.ring.len() as i64;
         let mut overflow = std::mem::take(&mut self.overflow);
-        overflow.retain(|slot| {
+        let mut kept = 0;
+        for k in 0..overflow.len() {
+            let slot = overflow[k];
             if !self.is_current(slot.owner, slot.version) {
-                return false;
+                continue;
             }
-            let k = self.bucket(slot.time);
-            if k < self.current + ring {
-                if k <= self.current {
-                    let scheduled = self.scheduled[slot.owner as usize];
-                    self.heap.push(Entry { scheduled, owner: slot.owner, version: slot.version });
-                } else {
-                    self.ring[k.rem_euclid(ring) as usize].push(*slot);
-                    self.in_ring += 1;
-                }
-                false
+            let bucket = self.bucket(slot.time);
+            if bucket <= self.current {
+                let scheduled = self.scheduled[slot.owner as usize];
+                self.insert_near(Entry { scheduled, owner: slot.owner, version: slot.version });
+            } else if bucket < self.current + ring {
+                self.ring[bucket.rem_euclid(ring) as usize].push(slot);
+                self.in_ring += 1;
             } else {
-                true
+                overflow[kept] = slot;
+                kept += 1;
             }
-        });
+        }
+        overflow.truncate(kept);
         self.overflow = overflow;
+    }
+
+    /// Puts `entry`, due in the current bucket, in its place among the others.
+    #[inline]
+    fn insert_near(&mut self, entry: Entry) {
+        let at = self.near.partition_point(|e| e < &entry);
+        self.near.insert(at, entry);
     }
 }
 

@@ -310,20 +310,14 @@ impl Cells {
         self.head.len()
     }
 
-    /// Calls `visit` with the index of every cell of body `i`'s neighbourhood.
+    /// The first cells of the 9 rows of 3 cells along x around body `i`'s, when none of them lies
+    /// across a face of the box (most bodies' case).
     #[inline]
-    pub(super) fn for_each_cell_around(&self, i: usize, mut visit: impl FnMut(u32)) {
+    pub(super) fn rows_around(&self, i: usize) -> Option<[usize; 9]> {
         let at = self.at[i];
-        if (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]) {
-            let cell = self.cell[i] as i64;
-            for &d in &self.rows {
-                for dx in [-1, 0, 1] {
-                    visit((cell + d + dx) as u32);
-                }
-            }
-        } else {
-            self.for_each_around(i, |n| visit(n.cell));
-        }
+        let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
+        let centre = self.cell[i] as i64;
+        inside.then(|| self.rows.map(|d| (centre + d - 1) as usize))
     }
 
     /// Calls `visit` with every cell of body `i`'s neighbourhood: the 27 cells around its own

@@ -106,6 +106,8 @@ pub(super) struct Search<'a> {
 pub(super) struct Overlay {
     bodies: [(u32, u32, BodyState); 2],
     len: usize,
+    /// A body of the overlay a search met among the neighbours, and its cell there.
+    met: Option<(u32, u8)>,
 }
 
 impl Overlay {
@@ -283,14 +285,19 @@ impl<'a> Search<'a> {
 
     /// [`Self::gather`] of the cell whose first body is `first`, its shift the `k`-th of the
     /// neighbourhood's.
+    /// A body of the overlay met this way waits aside (see [`Self::screen_all`]).
     #[inline(always)]
     fn gather_list(&mut self, p: usize, first: u32, k: u8) {
         let (cells, states) = (self.cells, &self.bodies.state[..]);
         let mut q = first;
         while q != NONE {
             if q as usize != p {
-                prefetch(&states[q as usize]);
-                self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
+                    self.overlay.met = Some((q, k));
+                } else {
+                    prefetch(&states[q as usize]);
+                    self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                }
             }
             q = cells.after(q);
         }
@@ -301,20 +308,30 @@ impl<'a> Search<'a> {
     #[inline(always)]
     fn screen_all(&mut self, own: &Own, best: &mut Best) {
         if !self.screen {
+            if let Some((q, cell)) = self.overlay.met.take() {
+                self.candidates.push(Candidate { earliest: 0.0, q, cell });
+            }
             self.candidates.iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
             return;
         }
+        let (states, origins) = (&self.bodies.state[..], &self.near.origins);
         let mut bound = best.bound;
         let mut kept = 0;
         for k in 0..self.candidates.len() {
             let c = self.candidates[k];
-            let state = self.state_of(c.q as usize);
-            if let Some(earliest) = screen(own, state, self.near.origins[c.cell as usize & 31], &mut bound) {
+            if let Some(earliest) = screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound) {
                 self.candidates[kept] = Candidate { earliest, ..c };
                 kept += 1;
             }
         }
         self.candidates.truncate(kept);
+        // The overlay's body met among the neighbours, by its own motion.
+        if let Some((q, k)) = self.overlay.met.take() {
+            let state = self.state_of(q as usize);
+            if let Some(earliest) = screen(own, state, origins[k as usize & 31], &mut bound) {
+                self.candidates.push(Candidate { earliest, q, cell: k });
+            }
+        }
         best.bound = bound;
     }
 

@@ -309,3 +309,88 @@ impl Engine for EventLoop {
         None
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{GeneratedScene, Scene, Velocities, FRAMES_PER_SECOND};
+    use crate::World;
+
+    /// A gas of `bodies` spheres at `packing` (thinned when too dense to place), periodic on
+    /// `periodic`.
+    fn gas(bodies: usize, packing: f64, periodic: [bool; 3], seed: u64) -> Scene {
+        let velocities = Velocities::Maxwell { rms_speed: 0.5 };
+        let mut fraction = packing;
+        let mut scene = loop {
+            match (GeneratedScene { bodies, packing_fraction: fraction, velocities, radius: 0.5, seed }).build() {
+                Ok(scene) => break scene,
+                Err(_) => fraction *= 0.9,
+            }
+        };
+        scene.bounds = scene.bounds.with_periodic(periodic);
+        scene
+    }
+
+    /// The world of `scene`, with its engine the event loop on `workers` workers (the parallel
+    /// loop from 2 on, as it runs from [`crate::event_loop`]'s threshold of threads).
+    fn on_workers(scene: &Scene, config: WorldConfig, workers: usize) -> World {
+        let mut world = scene.world(config).unwrap();
+        let spheres = EventLoop::with_workers(&world.bounds, workers);
+        let threads = Workers::new(config.thread_count());
+        world.engine = Some(Box::new(SpheresFirst {
+            spheres: Some(spheres),
+            general: None,
+            bounds: world.bounds,
+            workers: threads,
+        }));
+        world.threads = rayon::ThreadPoolBuilder::new().num_threads(2).build().ok();
+        world
+    }
+
+    /// The parallel event loop gives the serial loop's bits, contacts and states, frame after frame,
+    /// in walled and periodic boxes, elastic and not, with frames of changing lengths.
+    #[test]
+    fn the_parallel_event_loop_gives_the_serial_loop_s_bits() {
+        let cases =
+            [(0.05, [true; 3], 1.0), (0.3, [true; 3], 1.0), (0.4, [false; 3], 1.0), (0.2, [true, false, true], 0.6)];
+        for (k, (packing, periodic, restitution)) in cases.into_iter().enumerate() {
+            let scene = gas(1500, packing, periodic, k as u64);
+            let config = WorldConfig { restitution, threads: Some(2), ..WorldConfig::default() };
+            let (mut serial, mut parallel) = (on_workers(&scene, config, 1), on_workers(&scene, config, 2));
+            let mut total = 0;
+            for frame in 0..12 {
+                let dt = [0.2, 1.0, 3.0][frame % 3] / FRAMES_PER_SECOND;
+                let expected = serial.step(dt).unwrap().to_vec();
+                assert_eq!(parallel.step(dt).unwrap(), expected, "case {k}, frame {frame}");
+                assert_eq!(parallel.stats().pair_virial.to_bits(), serial.stats().pair_virial.to_bits());
+                total += expected.len();
+            }
+            let state = |w: &World| w.spheres().map(|(_, s)| format!("{s:?}")).collect::<Vec<_>>();
+            assert_eq!(state(&parallel), state(&serial), "case {k}: final states differ");
+            assert!(total > 2000, "case {k}: {total} contacts");
+        }
+    }
+
+    /// The search's screen never changes a body's next event: with it and without it, every body
+    /// of dense and sparse gases finds the same one, after every frame of collisions.
+    #[test]
+    fn the_screen_never_changes_a_next_event() {
+        for (k, (packing, periodic)) in
+            [(0.05, [true; 3]), (0.45, [true; 3]), (0.3, [false, true, false])].into_iter().enumerate()
+        {
+            let scene = gas(2000, packing, periodic, 10 + k as u64);
+            let mut world = on_workers(&scene, WorldConfig { threads: Some(1), ..WorldConfig::default() }, 1);
+            let mut spheres = EventLoop::with_workers(&world.bounds, 1);
+            spheres.check_screen_each_step();
+            world.engine = Some(Box::new(SpheresFirst {
+                spheres: Some(spheres),
+                general: None,
+                bounds: world.bounds,
+                workers: Workers::serial(),
+            }));
+            for _ in 0..6 {
+                assert!(!world.step(1.0 / FRAMES_PER_SECOND).unwrap().is_empty());
+            }
+        }
+    }
+}
