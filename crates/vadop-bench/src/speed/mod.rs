@@ -5,8 +5,9 @@
 //! the cost of a velocity change ([`retest`]); simulate-mode collisions per second and their
 //! independence of the frame length ([`throughput`]); memory per body ([`memory`]); where
 //! each broad phase wins ([`methods`]); all cores against one ([`cores`]); what gravity
-//! costs ([`gravity`]); and the periodic gas's pressure against its equation of state
-//! ([`periodic`]).
+//! costs ([`gravity`]); the periodic gas's pressure against its equation of state
+//! ([`periodic`]); and simulate mode's event loop on the periodic gas: one core at every size and
+//! packing, frames of every length, every core, the energy over 10^7 collisions ([`event_loop`]).
 //!
 //! Every run is a child pinned to one core, but the all-cores runs; timed runs are repeated and the tables show the
 //! median of the repeats; ratios compare runs of this same command. Times are means over frames
@@ -18,6 +19,7 @@
 pub mod candidates;
 mod cores;
 mod detect;
+mod event_loop;
 mod gravity;
 mod memory;
 mod methods;
@@ -42,7 +44,7 @@ use std::rc::Rc;
 (candidates up to 10^5), retest at n = 10^5 with 10,000 calls, throughput at n = 10^4 and 10^5, memory at n = 10^4 to \
 10^6, methods at n = 10^4 and 10^5, cores at the detect and throughput sizes on one thread and on every core \
 and at n = 10^7 on every core, gravity at n = 10^4 and 10^5, the periodic gas at n = 10^5 (3 x 10^7 collisions measured at each of \
-three packings); with --quick every section at n = 10^4 only, with fewer frames and calls and one \
+three packings), the event loop on the periodic gas at n = 10^4 to 10^6 (3 x 10^6 collisions a run, 10^7 for the energy); with --quick every section at n = 10^4 only, with fewer frames and calls and one \
 run each (a minute or two). Frames cover several broad-phase windows. --timeout defaults to 900 s per child run. The \
 full suite takes hours: run it on a quiet machine.")]
 pub struct SpeedArgs {
@@ -73,6 +75,7 @@ enum Section {
     Cores,
     Gravity,
     Periodic,
+    EventLoop,
 }
 
 /// The sizes of every section.
@@ -104,6 +107,13 @@ struct Plan {
     /// The periodic gas's bodies, and the pair collisions measured at each packing.
     periodic_bodies: usize,
     periodic_collisions: f64,
+    /// The event-loop section: body counts of its one-core table, of its frame-length sweep and
+    /// energy run, of its all-cores table; pair collisions measured per run and in the energy run.
+    loop_bodies: Vec<usize>,
+    loop_sweep_bodies: usize,
+    loop_threads_bodies: Vec<usize>,
+    loop_pairs: f64,
+    drift_pairs: f64,
 }
 
 impl Plan {
@@ -128,6 +138,11 @@ impl Plan {
                 gravity_bodies: vec![10_000],
                 periodic_bodies: 10_000,
                 periodic_collisions: 1e6,
+                loop_bodies: vec![10_000],
+                loop_sweep_bodies: 10_000,
+                loop_threads_bodies: vec![10_000],
+                loop_pairs: 2e5,
+                drift_pairs: 1e6,
             }
         } else {
             Plan {
@@ -149,6 +164,11 @@ impl Plan {
                 gravity_bodies: vec![10_000, 100_000],
                 periodic_bodies: 100_000,
                 periodic_collisions: 3e7,
+                loop_bodies: vec![10_000, 100_000, 1_000_000],
+                loop_sweep_bodies: 100_000,
+                loop_threads_bodies: vec![100_000, 1_000_000],
+                loop_pairs: 3e6,
+                drift_pairs: 1e7,
             }
         }
     }
@@ -322,6 +342,7 @@ pub fn run(args: &SpeedArgs) -> CliResult<()> {
             Section::Cores => cores::run(&context)?,
             Section::Gravity => gravity::run(&context)?,
             Section::Periodic => periodic::run(&context)?,
+            Section::EventLoop => event_loop::run(&context)?,
         }
     }
     crate::common::print(&format!("wrote {} and {}\n", context.markdown.display(), context.results.display()))
@@ -340,6 +361,7 @@ impl Section {
                 Section::Cores => "speed-cores",
                 Section::Gravity => "speed-gravity",
                 Section::Periodic => "speed-periodic",
+                Section::EventLoop => "speed-event-loop",
             },
         }
     }
