@@ -205,6 +205,20 @@ impl Cells {
         (at, cell)
     }
 
+    /// True when the cell at `at` lies on a face of the box (a wall, or a periodic face).
+    #[inline]
+    pub(super) fn at_face(&self, at: [u16; 3]) -> bool {
+        (0..3).any(|a| at[a] == 0 || at[a] as i64 == self.counts[a] - 1)
+    }
+
+    /// True when a step across `crossing` into the cell at `into` brought a body to a face of the
+    /// box on the crossing's axis.
+    #[inline]
+    pub(super) fn entered_face(&self, into: [u16; 3], crossing: Crossing) -> bool {
+        let a = crossing.axis as usize;
+        into[a] == 0 || into[a] as i64 == self.counts[a] - 1
+    }
+
     /// Body `i`'s cell: its coordinates and index.
     #[inline]
     pub(super) fn place(&self, i: usize) -> ([u16; 3], u32) {

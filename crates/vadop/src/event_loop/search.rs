@@ -192,17 +192,9 @@ impl<'a> Search<'a> {
     /// with a wall, or its crossing of a periodic face.
     #[inline]
     pub(super) fn next_event(&mut self, p: usize, now: f64, eligible: Eligible) -> Option<Event> {
-        let window = Window::new(eligible.start(), f64::INFINITY);
         let mut best = Best::new(None, now);
-        // A box periodic on every axis has no walls to predict against.
-        let walled = self.bounds.periodic.contains(&false);
-        let (state, stamp, gravity) = (self.state_of(p), self.stamp_of(p), self.bodies.gravity);
-        let (wall, face) = (
-            walled.then(|| sphere_wall_event((p as u32, stamp), state, gravity, self.bounds, window)).flatten(),
-            crossing_event((p as u32, stamp), &state.motion, gravity, self.bounds, window),
-        );
-        for event in [wall, face].into_iter().flatten() {
-            best.offer(event, eligible, now);
+        if self.cells.at_face(self.cells.place(p).0) {
+            self.offer_own(p, now, eligible, &mut best);
         }
         let (own, cells) = (self.own(p, now), self.cells);
         self.candidates.clear();
@@ -238,12 +230,33 @@ impl<'a> Search<'a> {
     ) -> Option<Event> {
         let (own, cells) = (self.own(p, now), self.cells);
         let mut best = Best::new(best, now);
+        if cells.entered_face(into.0, crossing) {
+            self.offer_own(p, now, Eligible::From(now), &mut best);
+        }
         self.candidates.clear();
         self.near.cells = 0;
         cells.for_each_new(into, crossing, |n| self.gather(&own, n));
         self.screen_all(&own, &mut best);
         self.test_candidates(&own, Eligible::From(now), &mut best);
         best.event
+    }
+
+    /// Body `p`'s own events at `now`, those `eligible`: its wall contact and its crossing of a
+    /// periodic face. Asked only of a body in a cell on a face of the box: a centre reaches no face
+    /// before it crosses into such a cell, nor a sphere a wall (a cell is wider than a diameter).
+    #[inline]
+    fn offer_own(&self, p: usize, now: f64, eligible: Eligible, best: &mut Best) {
+        let window = Window::new(eligible.start(), f64::INFINITY);
+        // A box periodic on every axis has no walls to predict against.
+        let walled = self.bounds.periodic.contains(&false);
+        let (state, stamp, gravity) = (self.state_of(p), self.stamp_of(p), self.bodies.gravity);
+        let (wall, face) = (
+            walled.then(|| sphere_wall_event((p as u32, stamp), state, gravity, self.bounds, window)).flatten(),
+            crossing_event((p as u32, stamp), &state.motion, gravity, self.bounds, window),
+        );
+        for event in [wall, face].into_iter().flatten() {
+            best.offer(event, eligible, now);
+        }
     }
 
     /// Body `i`'s motion and radius: the overlay's, or the store's.
