@@ -2,19 +2,36 @@
 # Checks and installs what building vadop needs on a Debian machine: a C linker (installed with
 # apt-get when missing and run as root) and a Rust toolchain of the version rust-toolchain.toml
 # pins. Rust is not a Debian package recent enough, so when cargo is missing this script says
-# exactly how to install it with rustup and stops. Safe to run again: it does nothing when
-# everything is present.
+# exactly how to install it with rustup and stops. With --mpi it also installs what vadop-mpi
+# builds and runs with: Debian's OpenMPI (libopenmpi-dev, openmpi-bin) and libclang-dev for the
+# bindings' generator (the test command asks for it; the main job does not need MPI). Safe to
+# run again: it does nothing when everything is present.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export PATH="$HOME/.cargo/bin:$PATH"
-if ! command -v cc >/dev/null 2>&1; then
+
+# Installs the Debian packages named in "$@" with apt-get (as root), or says how to.
+install_packages() {
   if command -v apt-get >/dev/null 2>&1 && [ "$(id -u)" = 0 ]; then
-    echo "setup: installing a C linker (Debian's build-essential)" >&2
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq build-essential >/dev/null
+    echo "setup: installing $* (apt-get)" >&2
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "$@" >/dev/null
   else
-    echo "setup: no C compiler (cc) found: install one (on Debian: sudo apt-get install build-essential) and run again" >&2
+    echo "setup: missing $*: install them (on Debian: sudo apt-get install $*) and run again" >&2
     exit 1
   fi
+}
+
+if [ "${1:-}" = --mpi ]; then
+  mpi=()
+  command -v mpirun >/dev/null 2>&1 || mpi+=(openmpi-bin)
+  command -v mpicc >/dev/null 2>&1 || mpi+=(libopenmpi-dev)
+  compgen -G "/usr/lib/llvm-*/lib/libclang*.so*" >/dev/null || compgen -G "/usr/lib/x86_64-linux-gnu/libclang*.so*" >/dev/null || mpi+=(libclang-dev)
+  if [ ${#mpi[@]} -gt 0 ]; then
+    install_packages "${mpi[@]}"
+  fi
+fi
+if ! command -v cc >/dev/null 2>&1; then
+  install_packages build-essential
 fi
 toolchain=$(sed -n 's/^channel *= *"\(.*\)"/\1/p' rust-toolchain.toml)
 if ! command -v cargo >/dev/null 2>&1; then

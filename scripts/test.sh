@@ -16,7 +16,7 @@ step() {
   echo "test: $name: done in $((SECONDS - start)) s" >&2
 }
 
-step "checking the toolchain (scripts/setup.sh)" ./scripts/setup.sh
+step "checking the toolchain and MPI for vadop-mpi (scripts/setup.sh --mpi; apt-get the first time)" ./scripts/setup.sh --mpi
 export PATH="$HOME/.cargo/bin:$PATH"
 # Hygiene first, so a formatting slip fails in seconds rather than after the long tests.
 step "formatting (cargo fmt --check)" cargo fmt --all --check

@@ -62,11 +62,12 @@ def test_stubs_and_marker_are_installed() -> None:
         ("detect_comparison.py", ["--bodies", "200", "--frames", "5"], "discrete"),
         ("spinning_boxes.py", ["--boxes", "40", "--bullets", "2", "--frames", "10", "--out", "{page}"], "contact starts at"),
         ("debris_on_mesh.py", ["--debris", "20", "--frames", "30", "--out", "{page}"], "bounces on the terrain; kinetic energy"),
+        ("granular_pile.py", ["--bodies", "120", "--frames", "120", "--out", "{page}"], "spheres lie still"),
     ],
 )
 def test_example_scripts_run(script: str, args: list[str], expected: str, tmp_path: Path) -> None:
     assert {p.name for p in EXAMPLES} == {"bouncing_spheres.py", "bullets_through_crowd.py", "detect_comparison.py",
-                                          "spinning_boxes.py", "debris_on_mesh.py"}
+                                          "spinning_boxes.py", "debris_on_mesh.py", "granular_pile.py"}
     page = tmp_path / "run.html"
     args = [arg.replace("{page}", str(page)) for arg in args]
     work = tmp_path / "work"

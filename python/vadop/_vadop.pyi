@@ -155,6 +155,9 @@ class World:
     @property
     def crossings(self) -> _Int64Array: ...
     @property
+    def rest(self) -> list[Literal["falling", "sliding", "still"]]:
+        """How each body is held up under gravity: 'falling', 'sliding' or 'still'."""
+    @property
     def velocities(self) -> _Float64Array: ...
     @property
     def radii(self) -> _Float64Array: ...

@@ -1,5 +1,5 @@
 //! `vadop-bench`: the benchmark harness of vadop, kept apart from the product CLI. Its suites
-//! (`core`, `experiments`, `peers`, `speed`) run every measurement as a child process pinned to
+//! (`core`, `experiments`, `peers`, `speed`, `mpi`) run every measurement as a child process pinned to
 //! one core, with a timeout and its own peak memory: the product binary's `vadop simulate --json`,
 //! or this binary's hidden `--child` jobs for what must be measured inside the library. Tables
 //! go between their markers in BENCHMARKS.md, CSVs and plots into results/; a `--quick` run writes
@@ -13,6 +13,7 @@ mod common;
 mod core_benchmark;
 mod experiments;
 mod markdown;
+mod mpi;
 mod peers;
 mod plots;
 mod progress;
@@ -44,6 +45,9 @@ enum Command {
     Experiments(experiments::ExperimentsArgs),
     /// vadop side by side with Bullet, FCL and rapier/parry on identical paths.
     Peers(peers::PeersArgs),
+    /// Weak scaling of vadop-mpi (the world split over MPI ranks) beside one process, and a
+    /// model of a billion bodies on a hundred nodes.
+    Mpi(mpi::MpiArgs),
     /// Where the time goes at scale: detect-mode ms/frame against the old engine and the peers,
     /// narrow tests against swept-box overlaps, re-test cost, simulate-mode throughput, memory per
     /// body, and where each broad phase wins.
@@ -61,6 +65,7 @@ fn main() -> ExitCode {
         Command::Experiments(args) => experiments::run(&args),
         Command::Peers(args) => peers::run(&args),
         Command::Speed(args) => speed::run(&args),
+        Command::Mpi(args) => mpi::run(&args),
         Command::Child(args) => child::run(&args),
     };
     match outcome {

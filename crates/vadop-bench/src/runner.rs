@@ -106,6 +106,12 @@ impl Runner {
         self.run_on(program, args, timeout, true)
     }
 
+    /// Runs `program` free on every core (a launcher that places its own processes), to
+    /// completion or `timeout`; returns its stdout.
+    pub fn run_free(&self, program: &Path, args: &[String], timeout: Duration) -> Result<String, String> {
+        self.run_on(program, args, timeout, false)
+    }
+
     /// [`Runner::run`], pinned to the core or free on every core.
     fn run_on(&self, program: &Path, args: &[String], timeout: Duration, pinned: bool) -> Result<String, String> {
         let (stdout_path, stderr_path) = (self.scratch_file("stdout"), self.scratch_file("stderr"));

@@ -14,6 +14,9 @@ pub struct Report {
 #[derive(Debug, Clone, Deserialize)]
 pub struct Frame {
     pub pair_contacts: u64,
+    /// Every contact of the frame: between bodies, with static bodies and with walls.
+    #[serde(default)]
+    pub contacts: u64,
     /// The collisional virial of the frame's impacts between moving bodies.
     #[serde(default)]
     pub pair_virial: f64,
@@ -38,6 +41,12 @@ pub struct Summary {
     /// Simulate mode: energy and momentum kept.
     #[serde(default)]
     pub conservation: Option<Conservation>,
+    /// Contacts whose physics a rule changed.
+    #[serde(default)]
+    pub rules: Rules,
+    /// Under gravity with restitution below 1: the bodies at rest at the end.
+    #[serde(default)]
+    pub resting: Option<Resting>,
     pub error: Option<String>,
 }
 
@@ -72,8 +81,25 @@ pub struct Pool {
     pub axes: usize,
 }
 
+#[derive(Debug, Clone, Default, Deserialize)]
+pub struct Rules {
+    /// Contacts the rest rule changed.
+    #[serde(default)]
+    pub rest_contacts: u64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+pub struct Resting {
+    pub still: u64,
+    pub sliding: u64,
+    pub bodies: u64,
+}
+
 #[derive(Debug, Clone, Deserialize)]
 pub struct Contacts {
+    /// Every contact.
+    #[serde(default)]
+    pub total: u64,
     pub pairs: u64,
     pub per_wall_second: f64,
 }

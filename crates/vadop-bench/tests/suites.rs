@@ -209,7 +209,9 @@ fn peers_render_their_table_and_plot_from_a_csv() {
         "{text}"
     );
     assert!(
-        text.contains("auto ÷ plain-grid 1.25 (96.000 ms).") && text.contains("plain-grid is a reference"),
+        text.contains(
+            "auto ÷ plain-grid 1.25 (96.000 ms); issue 28 (exact, ≤ plain-grid, ≤ 0.5x the fastest exact peer): MISSED."
+        ) && text.contains("plain-grid is a reference"),
         "{text}"
     );
     assert_png(&dir.join("results/peers/peers.png"));

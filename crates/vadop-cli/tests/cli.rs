@@ -437,3 +437,24 @@ fn gravity_runs_exact_and_counts_the_potential_energy() {
     assert!(!bad.status.success());
     assert!(stderr(&bad).contains("expected three numbers x,y,z"), "{}", stderr(&bad));
 }
+
+/// `--kind pile` drops the paper scene under gravity with restitution 0.5: it runs exact against
+/// brute force while the bodies come to rest, says how many lie still, and counts the potential
+/// energy in the loss; `--restitution` and `--gravity` still override its defaults.
+#[test]
+fn a_pile_settles_exactly_and_says_how_many_bodies_lie_still() {
+    let args = ["simulate", "--kind", "pile", "--bodies", "300", "--packing", "0.2", "--frames", "150"];
+    let output = vadop(&args);
+    assert!(output.status.success(), "{}", stderr(&output));
+    let summary = stdout(&output);
+    assert!(summary.contains("granular pile") && summary.contains("restitution 0.5"), "{summary}");
+    assert!(summary.contains("0 missed, 0 extra"), "{summary}");
+    assert!(summary.contains("by the rest rule"), "{summary}");
+    assert!(summary.contains("kinetic energy plus potential relative change -"), "{summary}");
+    let line = summary.lines().find(|l| l.starts_with("at rest")).expect("an at rest line");
+    let still: u64 = line.split_whitespace().nth(2).unwrap().parse().unwrap();
+    assert!(still >= 290 && line.contains("of 300 bodies lie still"), "{line}");
+    // An elastic pile keeps bouncing: no rest rule, no at rest line.
+    let elastic = stdout(&vadop(&[&args[..], &["--restitution", "1", "--frames", "5"]].concat()));
+    assert!(!elastic.contains("at rest") && !elastic.contains("rest rule"), "{elastic}");
+}

@@ -16,6 +16,7 @@ mod handles;
 mod interrupt;
 mod shape_ids;
 mod shapes;
+mod stats;
 mod world;
 
 use contacts::{Contacts, WALLS};

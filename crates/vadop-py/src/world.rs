@@ -12,6 +12,7 @@ use crate::handles::{handle_id, ids_of, live_handles, moving_handles};
 use crate::interrupt::interruptible;
 use crate::shape_ids::{shape_number, PyShapeIds, ShapeNumbers};
 use crate::shapes;
+use crate::stats::frame_stats;
 use glam::{DQuat, DVec3};
 use numpy::ndarray::{Array1, Array2};
 use numpy::prelude::*;
@@ -21,7 +22,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::sync::{Mutex, MutexGuard, TryLockError};
 use vadop::bounding_volume::interval;
-use vadop::{Body, BodyHandle, BodyShape, VadopError, World};
+use vadop::{Body, BodyHandle, BodyShape, Rest, VadopError, World};
 
 /// Bodies in a box, stepped frame by frame; every contact inside a frame is found, in time order.
 /// Bodies are spheres (given here or with ``add``) or rigid bodies of any shape (``add_shape``,
@@ -45,8 +46,8 @@ use vadop::{Body, BodyHandle, BodyShape, VadopError, World};
 /// used; None: every core; results are bit-identical whatever the number) and ``contact_ends`` (detect mode only: also report when
 /// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
 /// ``touching()`` — started and stopped events) and ``gravity`` (x, y, z: the uniform
-/// acceleration of every moving body; None: none; spheres only, and restitution 1 in simulate
-/// mode, for now) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
+/// acceleration of every moving body; None: none; spheres only, for now; with restitution below
+/// 1 in simulate mode bodies come to rest, ``rest``) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
 /// ``'xy'``; the others keep their walls: a body leaving through one face comes back through the
 /// opposite one, bodies meet across the faces, and ``crossings`` counts each body's passages;
 /// bodies of any shape, no static bodies yet, and each periodic side at least 8 largest bounding
@@ -509,6 +510,28 @@ impl PyWorld {
         Ok(Array2::from_shape_vec((flat.len() / 3, 3), flat).expect("3 values per row").into_pyarray(py))
     }
 
+    /// How each body is held up under gravity (see the Rust ``vadop::Rest``): ``'falling'``,
+    /// ``'sliding'`` (along walls gravity presses it into: the floor, or a corner under tilted
+    /// gravity) or ``'still'`` (on walls or on bodies lying still). Bodies come to rest only in
+    /// simulate mode with restitution below 1; static bodies are ``'still'``.
+    ///
+    /// >>> import vadop
+    /// >>> w = vadop.World([[5.0, 5, 2]], [[0.0, 0, 0]], [0.5], box=10.0, gravity=(0, 0, -9.81), restitution=0.5)
+    /// >>> w.rest
+    /// ['falling']
+    /// >>> _ = w.step(3.0)
+    /// >>> w.rest, round(float(w.positions[0, 2]), 12), w.stats()["rest_contacts"]
+    /// (['still'], 0.5, 1)
+    #[getter]
+    fn rest(&self, py: Python<'_>) -> PyResult<Vec<&'static str>> {
+        self.per_body(py, |world, handle, body| match world.rest(handle) {
+            _ if !body.mass.is_finite() => "still",
+            Ok(Rest::Sliding(_)) => "sliding",
+            Ok(Rest::Still) => "still",
+            _ => "falling",
+        })
+    }
+
     /// Velocities of the centres of mass now, float64 (n, 3).
     #[getter]
     fn velocities<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
@@ -613,7 +636,9 @@ impl PyWorld {
     /// counters (broad-phase windows, endpoint swaps, list entries, candidate pairs, narrow tests,
     /// re-tests, contacts, pair contacts, invalidations, broad-phase bytes) and the contacts whose
     /// physics a rule changed (``tc_contacts``: made elastic by the TC model; ``jam_contacts``:
-    /// resolved by the jam rule), and ``pair_virial``: the collisional virial of the frame's
+    /// resolved by the jam rule; ``rest_contacts``: under gravity with restitution below 1, a
+    /// body brought to rest, or parted from or bounced off one that does not fall), and
+    /// ``pair_virial``: the collisional virial of the frame's
     /// impacts between moving bodies (separation of the centres dotted with the momentum
     /// exchanged; simulate mode). Over a run of duration T at translational kinetic energy K,
     /// Z = PV/NkT = 1 + sum(pair_virial) / (2 K T).
@@ -625,27 +650,8 @@ impl PyWorld {
     /// >>> s["contacts"] >= s["pair_contacts"], s["total_seconds"] > 0
     /// (True, True)
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let s = *self.lock(py)?.stats();
-        let d = PyDict::new(py);
-        d.set_item("update_seconds", s.update_seconds)?;
-        d.set_item("sort_seconds", s.sort_seconds)?;
-        d.set_item("test_seconds", s.test_seconds)?;
-        d.set_item("response_seconds", s.response_seconds)?;
-        d.set_item("total_seconds", s.total_seconds())?;
-        d.set_item("windows", s.windows)?;
-        d.set_item("endpoint_swaps", s.endpoint_swaps)?;
-        d.set_item("list_entries", s.list_entries)?;
-        d.set_item("candidate_pairs", s.candidate_pairs)?;
-        d.set_item("narrow_tests", s.narrow_tests)?;
-        d.set_item("retests", s.retests)?;
-        d.set_item("contacts", s.contacts)?;
-        d.set_item("pair_contacts", s.pair_contacts)?;
-        d.set_item("invalidations", s.invalidations)?;
-        d.set_item("broad_phase_bytes", s.broad_phase_bytes)?;
-        d.set_item("tc_contacts", s.tc_contacts)?;
-        d.set_item("jam_contacts", s.jam_contacts)?;
-        d.set_item("pair_virial", s.pair_virial)?;
-        Ok(d)
+        let stats = *self.lock(py)?.stats();
+        frame_stats(py, &stats)
     }
 
     /// Total kinetic energy of the moving bodies: of their centres' motion and of their spins.

@@ -50,6 +50,65 @@ impl Default for BodyState {
     }
 }
 
+/// How a moving body is held up under gravity, in simulate mode with restitution below 1 (see
+/// [`crate::response::rest`]): it falls (the default), slides along walls that hold it up
+/// (gravity's pull into them is gone, its motion along them goes on), or lies still on walls or
+/// on bodies lying still (no velocity, no acceleration) until an impact moves it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rest {
+    #[default]
+    Falling,
+    /// On the walls across the axes whose bits are set (bit `k` for axis `k`): a floor, and in a
+    /// corner under tilted gravity the side walls it is pressed into.
+    Sliding(u8),
+    Still,
+}
+
+impl Rest {
+    /// The acceleration of a moving body held up so under `gravity`.
+    #[inline]
+    pub fn acceleration(self, gravity: DVec3) -> DVec3 {
+        match self {
+            Rest::Falling => gravity,
+            Rest::Sliding(axes) => without_axes(gravity, axes),
+            Rest::Still => DVec3::ZERO,
+        }
+    }
+
+    /// The axes of the walls a sliding body slides on (bit `k` for axis `k`); none otherwise.
+    #[inline]
+    pub fn sliding_axes(self) -> u8 {
+        match self {
+            Rest::Sliding(axes) => axes,
+            Rest::Falling | Rest::Still => 0,
+        }
+    }
+
+    /// Whether a body with `velocity` may be held up so in a world under `gravity`: rest needs
+    /// gravity, a sliding body moves only along the walls it slides on (axes as bits 1 to 7),
+    /// one lying still not at all.
+    pub(crate) fn fits(self, velocity: DVec3, gravity: DVec3) -> bool {
+        match self {
+            Rest::Falling => true,
+            _ if gravity == DVec3::ZERO => false,
+            Rest::Sliding(axes) => (1..8).contains(&axes) && without_axes(velocity, axes) == velocity,
+            Rest::Still => velocity == DVec3::ZERO,
+        }
+    }
+}
+
+/// `v` with its components along the axes whose bits are set in `axes` dropped.
+#[inline]
+pub(crate) fn without_axes(mut v: DVec3, axes: u8) -> DVec3 {
+    for axis in 0..3 {
+        if axes & (1 << axis) != 0 {
+            v[axis] = 0.0;
+        }
+    }
+    v
+}
+
 /// Flat store of all bodies; removed slots stay until reused (lowest first, by the world).
 #[derive(Debug, Default, Clone)]
 pub struct Bodies {
@@ -75,6 +134,8 @@ pub struct Bodies {
     /// axis's faces (+1 out through the max face, -1 through the min face), so its unwrapped
     /// position is its position plus these times the sides. Empty until a first crossing.
     pub crossings: Vec<[i64; 3]>,
+    /// Per slot, under gravity: how the body is held up. Empty until a first body comes to rest.
+    pub rest: Vec<Rest>,
     /// Shapes, spins and static bodies: empty in a world of plain spheres.
     pub rigid: Rigid,
     /// While a step that may be interrupted runs: each motion it overwrote, oldest first, so
@@ -89,6 +150,7 @@ struct Overwritten {
     state: BodyState,
     /// The crossing a wrap counted, on its axis, `+1` or `-1`.
     crossed: Option<(usize, i64)>,
+    rest: Rest,
     spin: Option<(FreeRotation, (DQuat, DVec3))>,
 }
 
@@ -145,6 +207,10 @@ impl Spin for FreeRotation {
     #[inline]
     fn max_angular_speed(&self) -> f64 {
         FreeRotation::max_angular_speed(self)
+    }
+    #[inline]
+    fn steady_spin(&self) -> Option<DVec3> {
+        FreeRotation::steady_spin(self)
     }
 }
 
@@ -251,7 +317,7 @@ impl Bodies {
     /// at the same canonical instant.
     pub(crate) fn wrap(&mut self, i: usize, face: Wall, t: f64) {
         let (axis, out) = (face.axis(), if face.is_max() { 1 } else { -1 });
-        self.set_motion_at(i, t, self.velocity_at(i, t), self.angular_velocity_at(i, t));
+        self.restart_at(i, t);
         let (low, high) = (self.periodic.min[axis], self.periodic.min[axis] + self.periodic.side[axis]);
         let x = &mut self.state[i].motion.position[axis];
         *x = (*x - out as f64 * self.periodic.side[axis]).clamp(low, high);
@@ -282,13 +348,68 @@ impl Bodies {
         self.state[i].motion.velocity_under(t, self.gravity_on(i))
     }
 
-    /// The acceleration body `i` moves under: the world's gravity, none for a static body.
+    /// The acceleration body `i` moves under: the world's gravity, none for a static body or
+    /// one lying still, less the pull into the wall a sliding body slides on.
     #[inline]
     pub fn gravity_on(&self, i: usize) -> DVec3 {
         if self.gravity == DVec3::ZERO || self.is_fixed(i) {
-            DVec3::ZERO
-        } else {
-            self.gravity
+            return DVec3::ZERO;
+        }
+        self.rest_of(i).acceleration(self.gravity)
+    }
+
+    /// How body `i` is held up (see [`Rest`]).
+    #[inline]
+    pub fn rest_of(&self, i: usize) -> Rest {
+        self.rest.get(i).copied().unwrap_or_default()
+    }
+
+    /// Body `i` comes to rest at `t` as `rest` says, touching the walls across the axes `on`
+    /// (bits, as [`Rest::Sliding`]'s) that gravity pulls it into: its velocity into them is
+    /// dropped and its centre set touching them (a rounding off at most, so that bodies resting
+    /// side by side on a floor meet level); lying still, all of its motion and spin stop.
+    /// Falling again, it keeps its velocity. Its predictions are void.
+    pub(crate) fn come_to_rest(&mut self, i: usize, t: f64, rest: Rest, on: u8, walls: (DVec3, DVec3)) {
+        let (mut velocity, mut spin) = (without_axes(self.velocity_at(i, t), on), self.angular_velocity_at(i, t));
+        if rest == Rest::Still {
+            (velocity, spin) = (DVec3::ZERO, DVec3::ZERO);
+        }
+        self.set_motion_at(i, t, velocity, spin);
+        let radius = self.radius(i);
+        for axis in (0..3).filter(|&axis| on & (1 << axis) != 0) {
+            self.state[i].motion.position[axis] =
+                if self.gravity[axis] < 0.0 { walls.0[axis] + radius } else { walls.1[axis] - radius };
+        }
+        self.set_rest(i, rest);
+    }
+
+    /// Body `i` lies still from `t` on where it is (on a body lying still, or a jammed cluster's
+    /// member): its motion and spin stop.
+    pub(crate) fn lie_still(&mut self, i: usize, t: f64) {
+        self.set_motion_at(i, t, DVec3::ZERO, DVec3::ZERO);
+        self.set_rest(i, Rest::Still);
+    }
+
+    /// Body `i` falls again from `t` on, from where it is, at the velocity it has (woken from
+    /// lying still: none).
+    pub(crate) fn fall(&mut self, i: usize, t: f64) {
+        self.set_motion_at(i, t, self.velocity_at(i, t), self.angular_velocity_at(i, t));
+    }
+
+    /// Body `i`'s motion starts afresh at `t` on the same path, held up as it was (a wrap across a
+    /// periodic face, a search started afresh): its predictions are void.
+    pub(crate) fn restart_at(&mut self, i: usize, t: f64) {
+        let rest = self.rest_of(i);
+        self.set_motion_at(i, t, self.velocity_at(i, t), self.angular_velocity_at(i, t));
+        self.set_rest(i, rest);
+    }
+
+    pub(crate) fn set_rest(&mut self, i: usize, rest: Rest) {
+        if rest != Rest::Falling && self.rest.len() < self.slots() {
+            self.rest.resize(self.slots(), Rest::Falling);
+        }
+        if let Some(held) = self.rest.get_mut(i) {
+            *held = rest;
         }
     }
 
@@ -525,6 +646,7 @@ impl Bodies {
             if let Some(crossed) = self.crossings.get_mut(i) {
                 *crossed = [0; 3];
             }
+            self.set_rest(i, Rest::Falling);
         }
     }
 
@@ -597,6 +719,7 @@ impl Bodies {
             if let Some((axis, out)) = o.crossed {
                 self.crossings[o.slot][axis] -= out;
             }
+            self.set_rest(o.slot, o.rest);
             if self.has_rigid() {
                 let (spin, start) = o.spin.unwrap_or_else(|| (steady(), (DQuat::IDENTITY, DVec3::ZERO)));
                 (self.rigid.spin[o.slot], self.rigid.spin_start[o.slot]) = (spin, start);
@@ -610,12 +733,14 @@ impl Bodies {
     fn move_to(&mut self, i: usize, t: f64, velocity: DVec3) {
         if self.undo.is_some() {
             let spin = self.has_rigid().then(|| (self.rigid.spin[i], self.rigid.spin_start[i]));
-            let overwritten = Overwritten { slot: i, state: self.state[i], spin, crossed: None };
+            let overwritten = Overwritten { slot: i, state: self.state[i], spin, crossed: None, rest: self.rest_of(i) };
             if let Some(log) = &mut self.undo {
                 log.push(overwritten);
             }
         }
         self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
+        // A new motion falls: an impact moved the body off whatever held it up.
+        self.set_rest(i, Rest::Falling);
         self.stamp[i] = self.stamp[i].wrapping_add(1);
         self.new_motion(i);
         self.speed_bound = self.speed_bound.max(speed(velocity));

@@ -99,10 +99,10 @@ pub enum VadopError {
     #[error("gravity must be a finite vector, got {0:?}")]
     BadGravity([f64; 3]),
     /// A body that (nearly) rests on a wall under gravity: it would bounce without end.
-    #[error("body {body} rests on a wall under gravity: its bounces rise {height:e}, so it would bounce more than {limit:e} times in this step; resting contact is not built yet, so such a body is refused rather than left to sink or to bounce without end")]
+    #[error("body {body} rests on a wall under gravity: its bounces rise {height:e}, so it would bounce more than {limit:e} times in this step; bodies come to rest only in simulate mode with restitution below 1, so such a body is refused rather than left to sink or to bounce without end")]
     RestingUnderGravity { body: BodyHandle, height: f64, limit: f64 },
     /// Gravity with what it does not support yet.
-    #[error("gravity is supported for spheres only, without static bodies, and in simulate mode with restitution 1 (a ball coming to rest on a floor needs a resting state, not built yet): {0}")]
+    #[error("gravity is supported for spheres only, without static bodies, for now (the search of a shape, and of any body against static geometry, would have to bound a parabola, which it does not yet): {0}")]
     GravityUnsupported(&'static str),
     /// A periodic box with what it does not support yet.
     #[error(
@@ -123,6 +123,22 @@ pub enum VadopError {
     /// The world's time plus the time step is no longer a finite number.
     #[error("the world's time {time:e} plus the time step {dt:e} is not finite; positions at that time would be NaN")]
     TimeOverflow { time: f64, dt: f64 },
+    /// [`crate::World::start_at`] with a time that is not finite or is negative.
+    #[error("a world's start time must be finite and >= 0, got {0}")]
+    BadStartTime(f64),
+    /// [`crate::World::start_at`] on a world that holds bodies or has stepped: its clock is theirs.
+    #[error("only an empty world that has never stepped can start at another time")]
+    AlreadyStarted,
+    /// A body's record ([`crate::SphereRecord`]) holds a time after the world's.
+    #[error("a record's {what} must be finite and at most the world's time {time}, got {value}")]
+    BadRecordTime { what: &'static str, value: f64, time: f64 },
+    /// A body's record rests in a way its world or its velocity does not allow.
+    /// The rest is named as printed (`Rest`'s debug form), so the error module needs no body type.
+    #[error("a record's rest {0} needs gravity, and no velocity along the walls it slides on (axes as bits 1 to 7) or none at all lying still")]
+    BadRecordRest(String),
+    /// A body's record counts crossings of periodic faces, but the box has walls on every axis.
+    #[error("a record counts crossings of periodic faces, but this world's box has none")]
+    CrossingsInWalledBox,
     /// The step's interrupt flag ([`crate::World::set_interrupt`]) was raised: the world is as it
     /// was before the step.
     #[error("the step was interrupted; the world is as it was before it")]

@@ -42,6 +42,54 @@ pub struct Contact {
     pub impulse: f64,
 }
 
+impl Contact {
+    /// The header of a contacts CSV file (`vadop simulate --contacts`, and `vadop-mpi`'s, which
+    /// must match it byte for byte).
+    pub const CSV_HEADER: &'static str =
+        "frame,time,body,touched,other,point_x,point_y,point_z,normal_x,normal_y,normal_z,impulse";
+
+    /// This contact as a row of a contacts CSV file (see [`Contact::CSV_HEADER`]), in frame
+    /// `frame` (numbered from 1); `ended` for the end of a contact between bodies. Numbers are
+    /// written to round-trip exactly; bodies by the number of their handle
+    /// ([`BodyHandle::to_bits`]).
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BodyHandle, Contact, Touched, Wall};
+    /// let contact = Contact {
+    ///     time: 0.25,
+    ///     body: BodyHandle::from_bits(7),
+    ///     touched: Touched::Wall(Wall::MinX),
+    ///     point: DVec3::new(0.0, 1.5, 2.0),
+    ///     normal: DVec3::new(-1.0, 0.0, 0.0),
+    ///     impulse: 3.0,
+    /// };
+    /// assert_eq!(contact.csv_row(8, false).to_string(), "8,0.25,7,wall,MinX,0,1.5,2,-1,0,0,3");
+    /// ```
+    pub fn csv_row(&self, frame: u64, ended: bool) -> impl std::fmt::Display + '_ {
+        CsvRow { contact: self, frame, ended }
+    }
+}
+
+struct CsvRow<'a> {
+    contact: &'a Contact,
+    frame: u64,
+    ended: bool,
+}
+
+impl std::fmt::Display for CsvRow<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let c = self.contact;
+        let (p, n) = (c.point, c.normal);
+        write!(f, "{},{},{},", self.frame, c.time, c.body.to_bits())?;
+        match c.touched {
+            Touched::Body(other) => write!(f, "{},{}", if self.ended { "body-end" } else { "body" }, other.to_bits())?,
+            Touched::Wall(wall) => write!(f, "wall,{wall:?}")?,
+        }
+        write!(f, ",{},{},{},{},{},{},{}", p.x, p.y, p.z, n.x, n.y, n.z, c.impulse)
+    }
+}
+
 /// Counters and timings of one frame.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FrameStats {
@@ -77,6 +125,10 @@ pub struct FrameStats {
     pub tc_contacts: u64,
     /// Contacts resolved as resting contact by the jam rule (see [`crate::response::rules`]).
     pub jam_contacts: u64,
+    /// Contacts at which a body came to rest under gravity instead of bouncing (see
+    /// [`crate::response::rest`]).
+    #[serde(default)]
+    pub rest_contacts: u64,
     /// Contacts between bodies that ended (detect mode, when contact ends are reported).
     #[serde(default)]
     pub contact_ends: u64,

@@ -65,7 +65,7 @@ pub mod scene;
 pub mod shape;
 pub mod world;
 
-pub use bodies::Sphere;
+pub use bodies::{Rest, Sphere};
 pub use error::{Result, VadopError};
 pub use frame::{Contact, FrameStats, Mode, Touched};
 /// The vector and quaternion types of the API (`DVec3`, `DQuat`), re-exported so that a user
@@ -80,7 +80,7 @@ pub use glam;
 pub use handle::BodyHandle;
 pub use walls::{BoxBounds, Periodic, Wall, MIN_PERIODIC_DIAMETERS};
 pub use window::Window;
-pub use world::{Body, BodyShape, Method, ShapeId, World, WorldConfig};
+pub use world::{Body, BodyShape, Method, ShapeId, SphereRecord, World, WorldConfig};
 
 /// The README's Rust examples, compiled and run with the doctests so they cannot go stale.
 #[cfg(doctest)]

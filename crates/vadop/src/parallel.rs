@@ -150,36 +150,6 @@ pub fn split_at_points<'a, T>(mut slice: &'a mut [T], points: &[usize]) -> Vec<&
     parts
 }
 
-/// Lets several threads write one slice at once, each into slots no other thread touches.
-pub(crate) struct DisjointWriter<'a, T> {
-    start: *mut T,
-    len: usize,
-    _slice: std::marker::PhantomData<&'a mut [T]>,
-}
-
-// SAFETY: the writer only moves `T`s into the slice; callers of `write` promise that no two
-// writes, on any threads, name one slot.
-unsafe impl<T: Send> Sync for DisjointWriter<'_, T> {}
-
-impl<'a, T: Copy> DisjointWriter<'a, T> {
-    pub(crate) fn new(slice: &'a mut [T]) -> Self {
-        DisjointWriter { start: slice.as_mut_ptr(), len: slice.len(), _slice: std::marker::PhantomData }
-    }
-
-    /// Writes `value` into slot `i`.
-    ///
-    /// # Safety
-    /// While this writer lives, no other call names slot `i`.
-    #[inline]
-    pub(crate) unsafe fn write(&self, i: usize, value: T) {
-        // A plain assert: a formatted message here slows the hot loops that call this.
-        assert!(i < self.len);
-        // SAFETY: in bounds (checked above), and no other thread touches slot i (the caller's
-        // promise); `T: Copy` has nothing to drop in the value overwritten.
-        unsafe { self.start.add(i).write(value) }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -174,6 +174,8 @@ pub struct ShapeGeometry {
     body_from_shape: Pose,
     bounding_radius: Option<f64>,
     rotation_radius: f64,
+    /// [`ShapeGeometry::rotation_radius_about`] each principal axis, computed once.
+    principal_reach: [f64; 3],
 }
 
 /// Relative margin added to computed bounding radii so that rounding never leaves a point of the
@@ -281,14 +283,40 @@ impl Shape {
     /// [`ShapeGeometry::rotation_radius`]).
     fn solid(&self, parry: SharedShape, bound: f64, rotation_radius: f64) -> ShapeGeometry {
         let props = parry.mass_properties(1.0);
+        let body_from_shape = Pose::from_parts(props.local_com, props.principal_inertia_local_frame).inverse();
+        let rotation_radius = rotation_radius * (1.0 + RADIUS_MARGIN);
+        let principal_reach =
+            DVec3::AXES.map(|axis| self.reach_about(&parry, body_from_shape, axis).min(rotation_radius));
         ShapeGeometry {
             shape: self.clone(),
             volume: props.mass(),
             principal_inertia: props.principal_inertia(),
-            body_from_shape: Pose::from_parts(props.local_com, props.principal_inertia_local_frame).inverse(),
+            body_from_shape,
             bounding_radius: Some(bound * (1.0 + RADIUS_MARGIN)),
-            rotation_radius: rotation_radius * (1.0 + RADIUS_MARGIN),
+            rotation_radius,
+            principal_reach,
             parry,
+        }
+    }
+
+    /// How far the core of this shape (as `parry`, placed in the body frame by `body`) reaches
+    /// from the line through the centre of mass along the unit `axis`: from a cuboid's corners, a
+    /// capsule's segment ends and a hull's points; infinite for the round kinds (the rotation
+    /// radius bounds them).
+    fn reach_about(&self, parry: &SharedShape, body: Pose, axis: DVec3) -> f64 {
+        let off_axis = |points: &mut dyn Iterator<Item = DVec3>| {
+            points.map(|p| (body * p).reject_from_normalized(axis).length()).fold(0.0, f64::max) * (1.0 + RADIUS_MARGIN)
+        };
+        match self {
+            Shape::Cuboid { half_extents: h } => off_axis(&mut (0..8).map(|k| *h * corner(k))),
+            Shape::Capsule { half_height, .. } => {
+                off_axis(&mut [DVec3::Y, -DVec3::Y].map(|y| y * *half_height).into_iter())
+            }
+            Shape::ConvexHull { .. } => match parry.as_convex_polyhedron() {
+                Some(hull) => off_axis(&mut hull.points().iter().copied()),
+                None => f64::INFINITY,
+            },
+            _ => f64::INFINITY,
         }
     }
 
@@ -302,6 +330,7 @@ impl Shape {
             body_from_shape: Pose::IDENTITY,
             bounding_radius: None,
             rotation_radius: 0.0,
+            principal_reach: [0.0; 3],
         }
     }
 
@@ -357,6 +386,12 @@ impl Shape {
             .map_err(|_| VadopError::EmptyMesh { vertices: vertices.len(), triangles: triangles.len() })?;
         Ok(self.fixed(SharedShape::new(mesh)))
     }
+}
+
+/// Corner `k` (0 to 7) of the box with half extents 1: the signs of bits 0, 1 and 2 of `k`.
+fn corner(k: usize) -> DVec3 {
+    let sign = |bit: usize| if k >> bit & 1 == 0 { 1.0 } else { -1.0 };
+    DVec3::new(sign(0), sign(1), sign(2))
 }
 
 /// How far `points` extend out of their best plane, relative to their extent: the volume of the
@@ -475,6 +510,32 @@ impl ShapeGeometry {
     /// static-only shapes.
     pub(crate) fn rotation_radius(&self) -> f64 {
         self.rotation_radius
+    }
+
+    /// The axis, in the body's principal frame, about which the shape is symmetric under every
+    /// turn (a capsule's, cylinder's or cone's own y axis): a spin about it leaves the shape where
+    /// it is. `None` for shapes without one; a ball is symmetric about every axis.
+    pub(crate) fn symmetry_axis(&self) -> Option<DVec3> {
+        match self.shape {
+            Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. } => {
+                Some(self.body_from_shape.rotation * DVec3::Y)
+            }
+            _ => None,
+        }
+    }
+
+    /// Bound on the distance of the shape's core (see [`Self::rotation_radius`]) from the line
+    /// through the centre of mass along `axis` (a unit vector in the body's principal frame): a
+    /// steady spin about that axis at angular speed w moves the shape's support in any fixed
+    /// direction n at most w |n x axis| times this. About a principal axis (where steady spins
+    /// of bodies with distinct moments are) it is exact, up to the radii's margin, for a
+    /// cuboid's corners, a capsule's segment and a hull's points, and the rotation radius for
+    /// the round kinds; about any other axis, the rotation radius.
+    pub(crate) fn rotation_radius_about(&self, axis: DVec3) -> f64 {
+        match DVec3::AXES.iter().position(|&e| axis.abs() == e) {
+            Some(k) => self.principal_reach[k],
+            None => self.rotation_radius,
+        }
     }
 
     /// The axis-aligned box `(min, max)` of a triangle mesh in its own frame; `None` for other

@@ -23,6 +23,15 @@ fn all_walled(periodic: &[bool; 3]) -> bool {
 }
 
 impl BoxBounds {
+    /// The box widened by the rounding error a body may end a frame outside it (1e-9 of its
+    /// longest side, plus a few ulps of its corners): a saved or moved body that far out was put
+    /// there by stepping, one further out by a damaged state.
+    pub(crate) fn with_rounding_slack(&self) -> BoxBounds {
+        let slack = 1e-9 * (self.max - self.min).max_element()
+            + 4.0 * f64::EPSILON * self.min.abs().max(self.max.abs()).max_element();
+        BoxBounds { min: self.min - slack, max: self.max + slack, periodic: self.periodic }
+    }
+
     /// A box, checked to have finite corners and sides of at least [`crate::error::MIN_LENGTH`].
     pub fn new(min: DVec3, max: DVec3) -> Result<BoxBounds> {
         if !(min.is_finite() && max.is_finite() && min.cmplt(max).all()) {

@@ -414,8 +414,9 @@ fn contact_ends_of_shapes_resume_bit_exactly() {
 }
 
 /// A step interrupted from another thread stops soon and leaves the world as it was: stepping on
-/// gives the bits of a run never interrupted, for spheres in simulate mode and for shapes in
-/// detect mode with contact ends, on one thread and on a pool.
+/// gives the bits of a run never interrupted, for spheres in simulate mode, for a pile coming to
+/// rest under gravity (its rest states too) and for shapes in detect mode with contact ends, on
+/// one thread and on a pool.
 #[test]
 fn an_interrupted_step_is_undone() {
     use std::sync::atomic::{AtomicBool, Ordering};
@@ -423,8 +424,12 @@ fn an_interrupted_step_is_undone() {
     use std::time::{Duration, Instant};
     let spheres = PaperScene { bodies: 3000, packing_fraction: 0.3, max_speed: 3.0, radius: 0.5, seed: 5 }.build();
     let shapes = vadop::scene::ShapesScene::new(600, 0.05, 0.5).build();
+    let pile = PaperScene { bodies: 3000, packing_fraction: 0.2, max_speed: 0.5, radius: 0.5, seed: 6 }.build();
+    let falling =
+        WorldConfig { gravity: glam::DVec3::new(0.0, 0.0, -9.81), restitution: 0.5, ..WorldConfig::default() };
     let cases = [
         (spheres.unwrap(), WorldConfig { restitution: 0.9, threads: Some(1), ..WorldConfig::default() }),
+        (pile.unwrap(), WorldConfig { threads: Some(2), ..falling }),
         (
             shapes.unwrap(),
             WorldConfig { mode: Mode::Detect, contact_ends: true, threads: Some(2), ..WorldConfig::default() },
@@ -437,7 +442,10 @@ fn an_interrupted_step_is_undone() {
         let stop = Arc::new(AtomicBool::new(false));
         world.set_interrupt(Some(stop.clone()));
         let mut found = frames(&mut world, 3);
-        let all = |w: &World| (state_bits(w), format!("{:?}", w.bodies().collect::<Vec<_>>()));
+        let all = |w: &World| {
+            let rests: Vec<_> = w.bodies().map(|(h, _)| w.rest(h).ok()).collect();
+            (state_bits(w), format!("{:?} {rests:?}", w.bodies().collect::<Vec<_>>()))
+        };
         let before = all(&world);
         let raiser = {
             let stop = stop.clone();

@@ -17,12 +17,24 @@ fn config(method: Method, mode: Mode, pool_axes: Option<usize>) -> WorldConfig {
 /// Steps `method` and the oracle side by side and checks every frame's contacts are identical;
 /// returns the contact count.
 fn assert_same_contacts(scene: &Scene, method: Method, mode: Mode, pool_axes: Option<usize>, frames: usize) -> usize {
+    assert_same_contacts_with(scene, method, mode, pool_axes, frames, DT)
+}
+
+/// [`assert_same_contacts`] with frames of length `dt`.
+fn assert_same_contacts_with(
+    scene: &Scene,
+    method: Method,
+    mode: Mode,
+    pool_axes: Option<usize>,
+    frames: usize,
+    dt: f64,
+) -> usize {
     let mut vadop = scene.world(config(method, mode, pool_axes)).unwrap();
     let mut oracle = scene.world(config(Method::Brute, mode, pool_axes)).unwrap();
     let mut total = 0;
     for frame in 0..frames {
-        let found: Vec<Contact> = vadop.step(DT).unwrap().to_vec();
-        let expected = oracle.step(DT).unwrap();
+        let found: Vec<Contact> = vadop.step(dt).unwrap().to_vec();
+        let expected = oracle.step(dt).unwrap();
         assert_eq!(found.len(), expected.len(), "frame {frame}: contact count differs");
         assert_eq!(found, expected, "frame {frame}: contact sequences differ");
         let (virial, expected_virial) = (vadop.stats().pair_virial, oracle.stats().pair_virial);
@@ -224,4 +236,50 @@ fn a_dense_periodic_gas_over_many_frames() {
     scene.bounds = scene.bounds.with_periodic([true, true, true]);
     let contacts = assert_same_contacts(&scene, Method::Auto, Mode::Simulate, None, 25);
     assert!(contacts > 10_000, "{contacts} contacts");
+}
+/// A slow bulk on a lattice one diameter apart (boxes touching face to face, as cell faces may
+/// lie) and a fast tail crossing many cells along the lattice's rows and diagonals, some grazing
+/// the bulk at exactly the sum of the radii or a hair inside or outside: the grid's pair sweep
+/// skips a neighbour cell only for boxes that do not reach across into it, and the wall
+/// predictions skip bodies whose proxy found no wall in the window. Every frame length, from a
+/// tenth of a window to many windows.
+#[test]
+fn slow_lattice_and_fast_grazing_tail() {
+    let bounds = BoxBounds::cube(40.0).unwrap();
+    let mut spheres = Vec::new();
+    let per_frame = FRAMES_PER_SECOND; // one unit (a diameter) per frame
+    for k in 0..343usize {
+        let site = DVec3::new((k % 7) as f64, (k / 7 % 7) as f64, (k / 49) as f64);
+        // Slow: at most 0.01 diameters per frame, a different direction each.
+        let drift = DVec3::new(((k * 37) % 11) as f64 - 5.0, ((k * 53) % 13) as f64 - 6.0, ((k * 71) % 7) as f64 - 3.0);
+        spheres.push(Sphere {
+            position: DVec3::splat(16.5) + site,
+            velocity: drift * 0.001 * per_frame,
+            radius: 0.5,
+            mass: 1.0,
+        });
+    }
+    for k in 0..24usize {
+        let miss = [0.0, 1e-9, -1e-9, 1e-12][k % 4];
+        let speed = [20.0, 45.0, 90.0][k % 3] * per_frame;
+        let row = 16.5 + (k % 7) as f64;
+        let (position, velocity) = if k % 2 == 0 {
+            // Along x, past the lattice's top face at exactly one diameter (plus `miss`).
+            (DVec3::new(1.0 + (k / 8) as f64, row, 23.5 + 1.0 + miss), DVec3::new(speed, 0.0, 0.0))
+        } else {
+            // Diagonally through the bulk and on across the box.
+            let d = DVec3::new(1.0, 1.0, 0.5).normalize();
+            (DVec3::new(2.0 + (k / 8) as f64, 2.0 + miss, row - 14.0), d * speed)
+        };
+        spheres.push(Sphere { position, velocity, radius: 0.5, mass: 1.0 });
+    }
+    let scene = Scene::new(bounds, spheres);
+    for dt in [DT / 10.0, DT, 4.0 * DT] {
+        for mode in [Mode::Detect, Mode::Simulate] {
+            for method in [Method::Auto, Method::Grid, Method::Vadop] {
+                let contacts = assert_same_contacts_with(&scene, method, mode, None, 8, dt);
+                assert!(contacts >= 50, "{method:?} {mode:?} dt {dt}: {contacts} contacts");
+            }
+        }
+    }
 }

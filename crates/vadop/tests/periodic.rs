@@ -19,35 +19,6 @@ fn ball(position: DVec3, velocity: DVec3) -> Sphere {
     Sphere { position, velocity, radius: 0.5, mass: 1.0 }
 }
 
-/// What is wrong at a frame end in a periodic box, if anything: a centre outside the faces of a
-/// periodic axis, a body through a wall of a walled one, or (simulate mode) two bodies
-/// overlapping through their nearest images beyond the contact tolerance.
-fn periodic_violation(world: &World) -> Option<String> {
-    let bounds = world.bounds();
-    let spheres: Vec<_> = world.spheres().collect();
-    for (id, s) in &spheres {
-        for a in 0..3 {
-            let reach = if bounds.periodic[a] { 0.0 } else { s.radius };
-            let slack = 1e-9 * s.radius;
-            if s.position[a] - reach < bounds.min[a] - slack || s.position[a] + reach > bounds.max[a] + slack {
-                return Some(format!("body {id} left the box on axis {a}: {s:?}"));
-            }
-        }
-    }
-    if world.config().mode == Mode::Simulate {
-        for (k, (i, a)) in spheres.iter().enumerate() {
-            for (j, b) in &spheres[k + 1..] {
-                let reach = a.radius + b.radius;
-                let distance = bounds.nearest_image(b.position - a.position).length();
-                if distance < reach * (1.0 - 1e-8) {
-                    return Some(format!("bodies {i} and {j} overlap by {:e}", reach - distance));
-                }
-            }
-        }
-    }
-    None
-}
-
 /// A ball thrown across a periodic face meets a partner on the other side at the instant it meets
 /// it in the same scene with the box shifted by half a side, where the meeting is inside the box.
 #[test]
@@ -124,7 +95,7 @@ fn assert_same_as_oracle(scene: &Scene, config: WorldConfig, frames: usize) {
         if kept {
             assert!((energy(oracle) - start).abs() <= tolerance * start.abs(), "frame {frame}: energy drift");
         }
-        assert_eq!(periodic_violation(oracle), None, "frame {frame}");
+        assert_eq!(common::periodic_violation(oracle), None, "frame {frame}");
     });
     let crossings = |w: &World| w.spheres().map(|(h, _)| w.crossings(h).unwrap()).collect::<Vec<_>>();
     assert_eq!(crossings(&found), crossings(&oracle), "{:?}: crossings differ", config.method);
@@ -279,7 +250,7 @@ fn a_periodic_gas_has_the_carnahan_starling_pressure() {
     }
     let drift = (world.kinetic_energy() - energy).abs() / energy;
     assert!(drift <= 1e-12, "energy drift {drift:e}");
-    assert_eq!(periodic_violation(&world), None);
+    assert_eq!(common::periodic_violation(&world), None);
     let z = 1.0 + virial / (3.0 * n * kt * time);
     let expected = carnahan_starling(0.3);
     eprintln!("Z {z} from the virial, Carnahan-Starling {expected}");

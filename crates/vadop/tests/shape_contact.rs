@@ -28,11 +28,14 @@ use vadop::narrow_phase::spheres::pair_contact_time;
 use vadop::shape::{Shape, ShapeGeometry};
 use vadop::{Wall, Window};
 
-/// Constant angular velocity `omega` (world frame) from orientation `start` (test only).
+/// Constant angular velocity `omega` (world frame) from orientation `start` (test only); with
+/// `body`, that angular velocity in the body frame, which the search may read (as it reads the
+/// torque-free rotation's steady spins) to tell a spin that leaves a symmetric shape in place.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Steady {
     start: DQuat,
     omega: DVec3,
+    body: Option<DVec3>,
 }
 
 impl Spin for Steady {
@@ -42,12 +45,30 @@ impl Spin for Steady {
     fn max_angular_speed(&self) -> f64 {
         self.omega.length() * (1.0 + 1e-12)
     }
+    fn steady_spin(&self) -> Option<DVec3> {
+        self.body
+    }
 }
 
 type Body = (ShapeGeometry, RigidMotion<Steady>);
 
 fn body(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, omega: DVec3) -> Body {
-    (geometry, RigidMotion { position, since: 0.0, velocity, spin: Steady { start, omega } })
+    (geometry, RigidMotion { position, since: 0.0, velocity, spin: Steady { start, omega, body: None } })
+}
+
+/// A body spinning at `rate` about its shape's axis of symmetry (the body frame's image of the
+/// shape's y axis), said to be steady; a body of a kind without one does not turn.
+fn symmetric_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, rate: f64) -> Body {
+    let symmetric = matches!(geometry.shape(), Shape::Capsule { .. } | Shape::Cylinder { .. } | Shape::Cone { .. });
+    let axis = if symmetric { geometry.body_from_shape().rotation * DVec3::Y * rate } else { DVec3::ZERO };
+    steady_spinner(geometry, position, velocity, start, axis)
+}
+
+/// A body turning at the constant angular velocity `body` (in its own frame), said to be steady:
+/// the search may bound its turning by the shape's reach from that axis.
+fn steady_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, body: DVec3) -> Body {
+    let spin = Steady { start, omega: start * body, body: Some(body) };
+    (geometry, RigidMotion { position, since: 0.0, velocity, spin })
 }
 
 fn fixed(geometry: ShapeGeometry, position: DVec3, orientation: DQuat) -> Body {
@@ -200,7 +221,13 @@ proptest! {
     // PROPTEST_CASES raises the count for a longer soak.
     #![proptest_config(ProptestConfig { cases: cases(10), ..ProptestConfig::default() })]
 
-    /// (a) + (c) for every pair of solid kinds, on one random set of parameters per case.
+    /// (a) + (c) for every pair of solid kinds, on one random set of parameters per case; the
+    /// same pair said to spin steadily (the search then bounds turning by each shape's reach
+    /// from its spin's axis, and only across it); and the same pair only translating: neither turns, or one turns steadily about its shape's
+    /// axis of symmetry (a capsule, cylinder or cone about its own axis: the oracle turns it, the
+    /// search holds it still). Besides the contract, a translating pair's contact ends take a
+    /// handful of probes (regula falsi on the convex distance, not steps at the rate bound), and
+    /// no contact follows one that ended.
     #[test]
     fn every_solid_pair_against_dense_sampling(
         pa in solid_params(),
@@ -210,6 +237,7 @@ proptest! {
         speed in 0.5f64..4.0,
         drift in prop::array::uniform3(-0.6f64..0.6),
         va in prop::array::uniform3(-1.0f64..1.0),
+        rates in prop::array::uniform2(-5.0f64..5.0),
     ) {
         let u = unit(direction);
         for ka in 0..6 {
@@ -219,10 +247,23 @@ proptest! {
                 let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
                 let va = DVec3::from(va);
                 let vb = va - u * speed + DVec3::from(drift);
-                let a = body(ga, DVec3::new(0.25, -0.5, 1.0), va, pa.2, pa.3);
-                let b = body(gb, a.1.position + u * (reach + gap), vb, pb.2, pb.3);
+                let (from_a, from_b) = (DVec3::new(0.25, -0.5, 1.0), DVec3::new(0.25, -0.5, 1.0) + u * (reach + gap));
+                let a = body(ga.clone(), from_a, va, pa.2, pa.3);
+                let b = body(gb.clone(), from_b, vb, pb.2, pb.3);
                 let what = format!("{} vs {}", name(ka), name(kb));
                 check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
+                let a = steady_spinner(ga.clone(), from_a, va, pa.2, pa.3);
+                let b = steady_spinner(gb.clone(), from_b, vb, pb.2, pb.3);
+                check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &format!("{what}, steady"));
+                let a = symmetric_spinner(ga, from_a, va, pa.2, rates[0]);
+                let b = symmetric_spinner(gb, from_b, vb, pb.2, rates[1]);
+                let what = format!("{what}, translating");
+                let found = check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
+                prop_assert!(found.len() <= 1, "{what}: a contact after an end: {found:?}");
+                for &(start, _) in &found {
+                    let end = contact_end_search(pair(&a), pair(&b), start, 5.0).unwrap();
+                    prop_assert!(end.iterations <= 40, "{what}: {} probes to the end", end.iterations);
+                }
             }
         }
     }
@@ -250,11 +291,14 @@ proptest! {
             check_pair(&a, &m, Window::new(0.0, 3.0), 100, &format!("{} vs mesh", name(kind)));
             let h = fixed(floor.clone(), DVec3::new(0.1, -0.3, 0.0), DQuat::IDENTITY);
             check_pair(&a, &h, Window::new(0.0, 3.0), 1000, &format!("{} vs half-space", name(kind)));
+            let steady = steady_spinner(a.0.clone(), position, velocity, p.2, p.3);
+            check_pair(&steady, &h, Window::new(0.0, 3.0), 1000, &format!("{}, steady, vs half-space", name(kind)));
             check_pair(&h, &a, Window::new(0.0, 3.0), 200, &format!("half-space vs {}", name(kind)));
         }
     }
 
-    /// Walls: a spinning solid in the box, against the exact support distance sampled densely.
+    /// Walls: a spinning solid in the box (said to spin steadily too), against the exact support
+    /// distance sampled densely.
     #[test]
     fn every_solid_against_the_walls(
         p in solid_params(),
@@ -264,8 +308,10 @@ proptest! {
         let (min, max) = (DVec3::splat(-4.0), DVec3::splat(4.0));
         for kind in 0..6 {
             let g = solid(kind, p.0, &p.1);
-            let a = body(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            let a = body(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3);
             check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, name(kind));
+            let a = steady_spinner(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, &format!("{}, steady", name(kind)));
         }
     }
 
@@ -532,7 +578,7 @@ fn spheres_agree_with_the_closed_form() {
             &Motion { position: pa, since: 0.0, velocity: va },
             &Motion { position: pb, since: 0.0, velocity: vb },
             ra + rb,
-            DVec3::ZERO,
+            (DVec3::ZERO, DVec3::ZERO),
         )
         .filter(|&t| t < 100.0);
         let search = shape_contact_search(pair(&a), pair(&b), Window::new(0.0, 100.0)).unwrap();
@@ -886,32 +932,67 @@ fn parked_searches_resume_bit_exactly_frame_by_frame() {
     for case in 0..cases(30) {
         let (ka, kb, a, b) = spinning_pair(&mut rng, case, &points, 0.2..1.0);
         let long: Vec<f64> = contacts(&a, &b, Window::new(0.0, 4.0)).into_iter().map(|(start, _)| start).collect();
-        // As the pipeline asks: the first start of each frame, taken up where the last search
-        // parked, then each later start of the frame after the one before it.
-        let (mut framed, mut parked) = (Vec::new(), None);
-        for frame in 0..40 {
-            let frame = Window::new(frame as f64 * 0.1, (frame + 1) as f64 * 0.1);
-            let replay = shape_contact_search(pair(&a), pair(&b), frame).unwrap();
-            replayed_probes += replay.iterations as u64;
-            let (search, mut park) = shape_contact_resumed(pair(&a), pair(&b), frame, parked.as_ref()).unwrap();
-            resumed_probes += search.iterations as u64;
-            assert_eq!(search.found, replay.found, "case {case}: frame {frame:?}");
-            let mut next = search.found;
-            while let Some(start) = next {
-                assert!(frame.contains(start), "case {case}: {start} outside {frame:?}");
-                framed.push(start);
-                (next, park) =
-                    shape_contact_after_parked(pair(&a), pair(&b), start, Window::new(start.next_up(), frame.end))
-                        .unwrap();
-            }
-            parked = park;
-        }
+        let (framed, resumed, replayed) = framed_starts(&a, &b);
+        (resumed_probes, replayed_probes) = (resumed_probes + resumed, replayed_probes + replayed);
         let bits = |times: &[f64]| times.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&framed), bits(&long), "case {case}: {} vs {}", name(ka), name(kb));
         total += long.len();
     }
     assert!(total >= 10, "only {total} contacts");
     assert!(resumed_probes * 4 < replayed_probes, "resumed {resumed_probes} probes, replays {replayed_probes}");
+}
+
+/// The starts of a pair's contacts over 40 frames of 0.1 as the pipeline asks: the first start of
+/// each frame, taken up where the last search parked, then each later start of the frame after
+/// the one before it; with the probes that took, and those of replaying each frame's search from
+/// the reference (whose answers must be the same).
+fn framed_starts(a: &Body, b: &Body) -> (Vec<f64>, u64, u64) {
+    let (mut framed, mut parked, mut resumed, mut replayed) = (Vec::new(), None, 0, 0);
+    for frame in 0..40 {
+        let frame = Window::new(frame as f64 * 0.1, (frame + 1) as f64 * 0.1);
+        let replay = shape_contact_search(pair(a), pair(b), frame).unwrap();
+        replayed += replay.iterations as u64;
+        let (search, mut park) = shape_contact_resumed(pair(a), pair(b), frame, parked.as_ref()).unwrap();
+        resumed += search.iterations as u64;
+        assert_eq!(search.found, replay.found, "frame {frame:?}");
+        let mut next = search.found;
+        while let Some(start) = next {
+            assert!(frame.contains(start), "{start} outside {frame:?}");
+            framed.push(start);
+            (next, park) =
+                shape_contact_after_parked(pair(a), pair(b), start, Window::new(start.next_up(), frame.end)).unwrap();
+        }
+        parked = park;
+    }
+    (framed, resumed, replayed)
+}
+
+/// Pairs that only translate (see `every_solid_pair_against_dense_sampling`) searched frame by
+/// frame, each search taken up where the last one parked (a contact's end past a frame's end parks
+/// the chain outside the contact), find one long search's starts to the bit.
+#[test]
+fn translating_searches_resume_bit_exactly_frame_by_frame() {
+    let mut rng = ChaCha8Rng::seed_from_u64(37);
+    let points: Vec<DVec3> = (0..8).map(|_| random_spin(&mut rng, 1.0)).collect();
+    let mut total = 0;
+    for case in 0..cases(40) {
+        let (ka, kb) = (rng.random_range(0..6), rng.random_range(0..6));
+        let (ga, gb) = (long_solid(ka, &mut rng, &points), long_solid(kb, &mut rng, &points));
+        let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+        let turn = |rng: &mut ChaCha8Rng| DQuat::from_scaled_axis(random_spin(rng, 3.0));
+        let a = symmetric_spinner(ga, DVec3::ZERO, DVec3::ZERO, turn(&mut rng), rng.random_range(-5.0..5.0));
+        let u = random_spin(&mut rng, 1.0).normalize();
+        let aim = random_spin(&mut rng, 0.3 * reach);
+        let velocity = -u * rng.random_range(1.0..3.0) * reach;
+        let (start, rate) = (turn(&mut rng), rng.random_range(-5.0..5.0));
+        let b = symmetric_spinner(gb, u * 1.5 * reach + aim, velocity, start, rate);
+        let long: Vec<f64> = contacts(&a, &b, Window::new(0.0, 4.0)).into_iter().map(|(start, _)| start).collect();
+        let (framed, _, _) = framed_starts(&a, &b);
+        let bits = |times: &[f64]| times.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&framed), bits(&long), "case {case}: {} vs {}", name(ka), name(kb));
+        total += long.len();
+    }
+    assert!(total >= 10, "only {total} contacts");
 }
 
 /// parry's contact of two solids at time `t`: its signed distance (negative when they overlap)

@@ -280,7 +280,9 @@ impl PlainGrid {
         loop {
             let (end_a, end_b) = (next(a_pieces, a), next(b_pieces, b));
             let end = end_a.min(end_b);
-            if let Some(t) = pair_contact_time(&a_pieces[a], &b_pieces[b], 2.0 * self.radius, DVec3::ZERO) {
+            if let Some(t) =
+                pair_contact_time(&a_pieces[a], &b_pieces[b], 2.0 * self.radius, (DVec3::ZERO, DVec3::ZERO))
+            {
                 if t < end && (t > 0.0 || a > 0 || b > 0 || fresh) {
                     return true;
                 }

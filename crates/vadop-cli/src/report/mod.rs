@@ -13,7 +13,7 @@ mod terminal;
 mod text;
 mod writers;
 
-pub use summary::{Accuracy, Conservation, FrameTotals, Motion, PoolInfo, RunInfo, SceneInfo, Summary};
+pub use summary::{Accuracy, Conservation, FrameTotals, Motion, PoolInfo, Resting, RunInfo, SceneInfo, Summary};
 pub use terminal::{print, progress_bar, reveal};
 pub use text::number;
 pub use writers::{create_file, io_error, FrameRow, FramesCsv, JsonReport, OutputFile};

@@ -294,6 +294,7 @@ pub struct FrameTotals {
     retests: u64,
     tc_contacts: u64,
     jam_contacts: u64,
+    rest_contacts: u64,
     contact_ends: u64,
     pair_virial: f64,
     update_ms: f64,
@@ -323,6 +324,7 @@ impl FrameTotals {
         self.retests += row.retests;
         self.tc_contacts += row.tc_contacts;
         self.jam_contacts += row.jam_contacts;
+        self.rest_contacts += row.rest_contacts;
         self.contact_ends += row.contact_ends;
         self.pair_virial += row.pair_virial;
         self.update_ms += row.update_ms;
@@ -400,6 +402,21 @@ pub struct RuleCounts {
     pub tc_contacts: u64,
     /// Resolved by the jam rule (a jammed cluster frozen).
     pub jam_contacts: u64,
+    /// Under gravity with restitution below 1: contacts at which the rest rule brought a body to
+    /// rest, or parted or bounced it off one that does not fall.
+    #[serde(default)]
+    pub rest_contacts: u64,
+}
+
+/// Under gravity with restitution below 1: how many bodies are at rest at the end.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Resting {
+    /// Lying still on walls or on bodies lying still.
+    pub still: u64,
+    /// Sliding along walls gravity presses them into.
+    pub sliding: u64,
+    /// Moving bodies in all.
+    pub bodies: u64,
 }
 
 /// Everything a run reports, built once and then printed, written as JSON or read back.
@@ -425,6 +442,9 @@ pub struct Summary {
     /// Elastic, frictionless simulate runs without gravity: the pressure from the collisional virial.
     #[serde(default)]
     pub pressure: Option<Pressure>,
+    /// Under gravity with restitution below 1 (simulate mode): the bodies at rest at the end.
+    #[serde(default)]
+    pub resting: Option<Resting>,
     /// The error that stopped the run early.
     pub error: Option<String>,
 }
@@ -477,7 +497,12 @@ impl Summary {
                 windows: frames.mean(frames.windows as f64),
                 retests: frames.mean(frames.retests as f64),
             },
-            rules: RuleCounts { tc_contacts: frames.tc_contacts, jam_contacts: frames.jam_contacts },
+            rules: RuleCounts {
+                tc_contacts: frames.tc_contacts,
+                jam_contacts: frames.jam_contacts,
+                rest_contacts: frames.rest_contacts,
+            },
+            resting: None,
             broad_phase_bytes: frames.broad_phase_bytes,
             peak_memory_mib: peak_memory_mib(),
             conservation,

@@ -152,13 +152,24 @@ impl fmt::Display for Summary {
             p.windows, p.endpoint_swaps, p.candidate_pairs, p.narrow_tests, p.retests, p.invalidations
         )?;
         let r = &self.rules;
+        let rest = match &self.resting {
+            Some(_) => format!(", {} by the rest rule", r.rest_contacts),
+            None => String::new(),
+        };
         writeln!(
             f,
-            "rules       {} made elastic by the TC model, {} resolved by the jam rule{}",
+            "rules       {} made elastic by the TC model, {} resolved by the jam rule{rest}{}",
             number(r.tc_contacts, "contact", "contacts"),
             r.jam_contacts,
-            if r.tc_contacts + r.jam_contacts == 0 { " (the physics was never changed)" } else { "" }
+            if r.tc_contacts + r.jam_contacts + r.rest_contacts == 0 { " (the physics was never changed)" } else { "" }
         )?;
+        if let Some(resting) = &self.resting {
+            writeln!(
+                f,
+                "at rest     {} of {} bodies lie still, {} slide along the walls gravity presses them into (the rest rule)",
+                resting.still, resting.bodies, resting.sliding
+            )?;
+        }
         let peak = match self.peak_memory_mib {
             Some(mib) if self.accuracy.is_some() => format!("{mib:.1} MiB (whole process, reference world included)"),
             Some(mib) => format!("{mib:.1} MiB (whole process)"),

@@ -42,9 +42,12 @@ pub struct FrameRow {
     pub broad_phase_bytes: u64,
     pub windows: u64,
     pub retests: u64,
-    /// Contacts whose physics a rule changed: made elastic by the TC model, resolved by the jam rule.
+    /// Contacts whose physics a rule changed: made elastic by the TC model, resolved by the jam
+    /// rule, brought to rest under gravity by the rest rule.
     pub tc_contacts: u64,
     pub jam_contacts: u64,
+    #[serde(default)]
+    pub rest_contacts: u64,
     /// Contacts between bodies that ended (with --contact-ends).
     #[serde(default)]
     pub contact_ends: u64,
@@ -56,7 +59,7 @@ pub struct FrameRow {
 impl FrameRow {
     const CSV_HEADER: &'static str = "frame,time,contacts,pair_contacts,ms,update_ms,sort_ms,test_ms,response_ms,\
         endpoint_swaps,list_entries,candidate_pairs,narrow_tests,invalidations,wall_ms,broad_phase_bytes,\
-        windows,retests,tc_contacts,jam_contacts,contact_ends,static_contacts,pair_virial";
+        windows,retests,tc_contacts,jam_contacts,contact_ends,static_contacts,pair_virial,rest_contacts";
 
     /// A frame's row; `static_contacts` of its body contacts were with static bodies.
     pub fn new(frame: u64, time: f64, stats: &FrameStats, static_contacts: u64, wall_seconds: f64) -> FrameRow {
@@ -83,6 +86,7 @@ impl FrameRow {
             retests: stats.retests,
             tc_contacts: stats.tc_contacts,
             jam_contacts: stats.jam_contacts,
+            rest_contacts: stats.rest_contacts,
             contact_ends: stats.contact_ends,
             pair_virial: stats.pair_virial,
         }
@@ -91,7 +95,7 @@ impl FrameRow {
     /// The row in the order of `CSV_HEADER`.
     fn csv_line(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.frame,
             self.time,
             self.contacts,
@@ -114,7 +118,8 @@ impl FrameRow {
             self.jam_contacts,
             self.contact_ends,
             self.static_contacts,
-            self.pair_virial
+            self.pair_virial,
+            self.rest_contacts
         )
     }
 }

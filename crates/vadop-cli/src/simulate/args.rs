@@ -60,7 +60,10 @@ Reading the summary (README.md, \"Reading the summary\", says more):
               entries binned); candidate pairs; narrow tests (exact contact times, re-tests
               included); re-tests (bodies predicted again after a velocity change);
               invalidations (predictions voided by a velocity change before their time)
-  rules       contacts made elastic by the TC model, or resolved by the jam rule
+  rules       contacts made elastic by the TC model, or resolved by the jam rule; under gravity
+              with restitution below 1, those the rest rule changed (a body brought to rest, or
+              parted from or bounced off one that does not fall)
+  at rest     the same runs: bodies lying still and sliding along the floor at the end
   memory      largest broad-phase footprint, peak resident memory of the whole process
   energy      simulate mode: relative kinetic-energy drift (plus the potential energy under
               --gravity) of an elastic frictionless run (0 up to rounding), or the change a lossy one was asked for; the momentum change beside
@@ -77,7 +80,8 @@ endpoint_swaps, list_entries (broad-phase entries after the frame's last window 
 frame that starts none), candidate_pairs, narrow_tests, invalidations, wall_ms (the whole step
 call), broad_phase_bytes, windows, retests, tc_contacts, jam_contacts, contact_ends,
 static_contacts (with static bodies; the rest of the contacts are with walls), pair_virial (the
-collisional virial of the impacts between moving bodies, simulate mode).")
+collisional virial of the impacts between moving bodies, simulate mode), rest_contacts (contacts
+the rest rule changed).")
 )]
 pub struct SimulateArgs {
     /// Scene file (JSON: {"bounds": {"min": [x,y,z], "max": [x,y,z]}, "spheres": [{"position",
@@ -115,9 +119,11 @@ pub struct SimulateArgs {
     /// The generated scene: spheres of one size with the velocities of paper (random directions,
     /// uniform speeds), gas (an equilibrium gas: Maxwell velocities, no net momentum), stream
     /// (every body within --spread of +x, as bullets, rain or a beam) or heavy-tail (Pareto speeds:
-    /// a few bodies far faster); or shapes, a crowd of spheres, cuboids, capsules, cylinders, cones
-    /// and convex hulls, each one diameter across, at random orientations, with uniform speeds and
-    /// spins up to --spin (and a floor with --floor)
+    /// a few bodies far faster); pile, the paper scene falling under gravity onto the floor, with
+    /// restitution 0.5, into a granular pile at rest (--gravity and --restitution override them);
+    /// or shapes, a crowd of spheres, cuboids, capsules, cylinders, cones and convex hulls, each
+    /// one diameter across, at random orientations, with uniform speeds and spins up to --spin (and
+    /// a floor with --floor)
     #[arg(long, value_enum, default_value_t = KindArg::Paper, conflicts_with = "scene", help_heading = "Scene")]
     pub(super) kind: KindArg,
     /// Half-angle of a stream's directions, in degrees
@@ -165,9 +171,9 @@ pub struct SimulateArgs {
     /// Alignment angle phi in degrees, at least the pool's covering radius rho [default: rho]
     #[arg(long, value_name = "DEGREES", allow_negative_numbers = true, help_heading = "World")]
     pub(super) phi: Option<f64>,
-    /// Coefficient of restitution of every impact, in [0, 1]
-    #[arg(long, value_name = "E", default_value_t = 1.0, allow_negative_numbers = true, help_heading = "World")]
-    pub(super) restitution: f64,
+    /// Coefficient of restitution of every impact, in [0, 1] [default: 1; 0.5 with --kind pile]
+    #[arg(long, value_name = "E", allow_negative_numbers = true, help_heading = "World")]
+    pub(super) restitution: Option<f64>,
     /// Coulomb friction coefficient of every impact, >= 0 (0: frictionless); friction acts at the
     /// contact point, so it spins bodies up
     #[arg(long, value_name = "MU", default_value_t = 0.0, allow_negative_numbers = true, help_heading = "World")]
@@ -178,7 +184,9 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "SECONDS", default_value_t = vadop::response::rules::DEFAULT_CONTACT_DURATION, allow_negative_numbers = true, help_heading = "World")]
     pub(super) contact_duration: f64,
     /// Uniform acceleration of every moving body, as x,y,z (e.g. 0,0,-9.81): parabolic paths,
-    /// exact for every method; spheres only, and restitution 1 in simulate mode, for now
+    /// exact for every method; with restitution below 1 in simulate mode bodies come to rest on
+    /// the floor and on each other (the rest rule); spheres only, for now [default: none;
+    /// 0,0,-9.81 with --kind pile]
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_negative_numbers = true, help_heading = "World")]
     pub(super) gravity: Option<glam::DVec3>,
     /// Periodic axes of the box, e.g. xyz or xy (the others keep their walls): a body leaving
@@ -241,8 +249,14 @@ pub(super) enum KindArg {
     Gas,
     Stream,
     HeavyTail,
+    Pile,
     Shapes,
 }
+
+/// `--kind pile`'s gravity and restitution unless given: one-diameter balls under the Earth's
+/// pull (the diameter the unit of length), half their speed kept at each impact.
+pub(super) const PILE_GRAVITY: glam::DVec3 = glam::DVec3::new(0.0, 0.0, -9.81);
+pub(super) const PILE_RESTITUTION: f64 = 0.5;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub(super) enum ModeArg {

@@ -14,16 +14,17 @@ mod outputs;
 pub use args::SimulateArgs;
 
 use crate::report::{
-    self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, Motion, PoolInfo, RunInfo, SceneInfo, Summary,
+    self, Accuracy, Conservation, FrameRow, FrameTotals, FramesCsv, Motion, PoolInfo, Resting, RunInfo, SceneInfo,
+    Summary,
 };
 use crate::CliResult;
-use args::{KindArg, ModeArg, ReferenceArg};
+use args::{KindArg, ModeArg, ReferenceArg, PILE_GRAVITY, PILE_RESTITUTION};
 use outputs::{ContactWriter, Files, Outputs};
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vadop::memory;
 use vadop::scene::{GeneratedScene, Scene, SceneLayout, ShapesScene, Velocities, MAX_SCENE_BODIES};
-use vadop::{BodyHandle, Contact, Method, Mode, Touched, VadopError, World, WorldConfig};
+use vadop::{BodyHandle, Contact, Method, Mode, Rest, Touched, VadopError, World, WorldConfig};
 
 /// Scenes up to this many moving bodies are checked against brute force unless told otherwise.
 const DEFAULT_REFERENCE_MAX_BODIES: usize = 3000;
@@ -62,12 +63,12 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
         },
         pool_axes: args.pool.0,
         phi: args.phi.map(f64::to_radians),
-        restitution: args.restitution,
+        restitution: args.restitution.unwrap_or(if args.kind == KindArg::Pile { PILE_RESTITUTION } else { 1.0 }),
         friction: args.friction,
         contact_duration: args.contact_duration,
         threads: args.threads,
         contact_ends: args.contact_ends,
-        gravity: args.gravity.unwrap_or_default(),
+        gravity: args.gravity.unwrap_or(if args.kind == KindArg::Pile { PILE_GRAVITY } else { glam::DVec3::ZERO }),
     };
     let (scene, source) = match &args.scene {
         Some(path) => {
@@ -124,6 +125,10 @@ fn generate(args: &SimulateArgs) -> CliResult<(Scene, String)> {
         KindArg::HeavyTail => (
             Velocities::HeavyTail { median_speed: args.max_speed, tail_index: 1.5 },
             format!("heavy-tailed speeds (median {} diameters/frame, tail index 1.5", args.max_speed),
+        ),
+        KindArg::Pile => (
+            Velocities::Uniform { max_speed: args.max_speed },
+            format!("granular pile (falling from the paper scene, speeds up to {} diameters/frame", args.max_speed),
         ),
         KindArg::Shapes => {
             let shapes = ShapesScene {
@@ -294,7 +299,9 @@ fn run_world(
         let spins = info.scene.may_spin() || config.friction > 0.0;
         Conservation::new(&start, &Motion::of(&world), spins)
     });
-    let summary = Summary::new(info, &outcome.frames, pool, outcome.accuracy, conservation, outcome.failure.clone());
+    let mut summary =
+        Summary::new(info, &outcome.frames, pool, outcome.accuracy, conservation, outcome.failure.clone());
+    summary.resting = resting(&world);
     if !args.quiet && outcome.frames.frames > 0 {
         report::print(&summary.to_string())?;
     }
@@ -303,6 +310,25 @@ fn run_world(
         Some(message) => Err(message),
         None => written,
     }
+}
+
+/// Under the rest rule (simulate mode, gravity, restitution below 1): how many moving bodies lie
+/// still and slide at the end.
+fn resting(world: &World) -> Option<Resting> {
+    let config = world.config();
+    if !(config.mode == Mode::Simulate && config.restitution < 1.0 && config.gravity != glam::DVec3::ZERO) {
+        return None;
+    }
+    let mut resting = Resting { still: 0, sliding: 0, bodies: 0 };
+    for (handle, _) in world.bodies().filter(|(_, b)| b.mass.is_finite()) {
+        resting.bodies += 1;
+        match world.rest(handle) {
+            Ok(Rest::Still) => resting.still += 1,
+            Ok(Rest::Sliding(_)) => resting.sliding += 1,
+            _ => {}
+        }
+    }
+    Some(resting)
 }
 
 /// What the frame loop produced.

@@ -12,7 +12,7 @@ use crate::CliResult;
 use std::fs::{File, OpenOptions};
 use std::io::{BufRead, BufReader, Seek, SeekFrom};
 use std::path::{Path, PathBuf};
-use vadop::{Contact, Touched};
+use vadop::Contact;
 
 /// Whether a contact at `time` belongs to frame `frame` (numbered from 1) of `dt`.
 fn in_frame(time: f64, frame: u64, dt: f64) -> bool {
@@ -143,8 +143,7 @@ pub(super) struct ContactWriter {
 }
 
 impl ContactWriter {
-    const HEADER: &'static str =
-        "frame,time,body,touched,other,point_x,point_y,point_z,normal_x,normal_y,normal_z,impulse";
+    const HEADER: &'static str = Contact::CSV_HEADER;
 
     fn create(path: &Path) -> CliResult<ContactWriter> {
         let file = report::create_file(path)?;
@@ -226,15 +225,7 @@ impl ContactWriter {
                 (None, None) => return Ok(()),
             };
             let c = c.expect("peeked");
-            let (kind, other) = match c.touched {
-                Touched::Body(other) => (if ended { "body-end" } else { "body" }, other.to_bits().to_string()),
-                Touched::Wall(wall) => ("wall", format!("{wall:?}")),
-            };
-            let (body, p, n) = (c.body.to_bits(), c.point, c.normal);
-            self.file.line(format_args!(
-                "{frame},{},{body},{kind},{other},{},{},{},{},{},{},{}",
-                c.time, p.x, p.y, p.z, n.x, n.y, n.z, c.impulse
-            ))?;
+            self.file.line(format_args!("{}", c.csv_row(frame, ended)))?;
         }
     }
 

@@ -20,7 +20,7 @@ use super::{BroadPhase, PrepareCounts};
 use crate::bodies::BodyState;
 use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Proxies, Reported};
 use crate::memory::prefetch;
-use crate::parallel::{split_at_points, DisjointWriter, Workers};
+use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -155,14 +155,11 @@ pub struct Grid {
     /// Pieces entered mid-window, chained per cell: the piece, its window, the next in the chain.
     late: Vec<(Entry, Window, u32)>,
     late_motions: Vec<BodyState>,
-    /// Scratch: each body's piece count, level and (for a single piece) cell; pieces per level
-    /// exponent; one body's pieces.
-    plan: Vec<(u32, u32, u32)>,
+    /// Scratch: each body's piece count and level, or for a single piece its cell (numbered
+    /// across levels); pieces per level exponent; one body's pieces.
+    plan: Vec<(u32, u32)>,
     per_exponent: Vec<(i32, usize)>,
     extents: Vec<f64>,
-    /// Each body's binned slot when its path is one piece: a fresh piece in the same cell
-    /// replaces it there instead of joining a late list.
-    home: Vec<u32>,
     pieces: Vec<(CompactBox, Window)>,
     /// Scratch of a query: the runs of binned slots it reaches, then the slots whose boxes
     /// overlap (see [`Grid::for_each_overlapping`]).
@@ -188,7 +185,6 @@ impl Grid {
             plan: Vec::new(),
             per_exponent: Vec::new(),
             extents: Vec::new(),
-            home: Vec::new(),
             pieces: Vec::new(),
             runs: Vec::new(),
             hits: Vec::new(),
@@ -241,23 +237,23 @@ impl Grid {
     #[inline(always)]
     fn for_each_owned_piece(
         levels: &[Level],
-        plan: &[(u32, u32, u32)],
+        plan: &[(u32, u32)],
         proxies: Proxies,
         owned: std::ops::Range<usize>,
         mut f: impl FnMut(usize, usize, CompactBox, Window),
     ) {
-        for (i, &(count, k, cell)) in plan.iter().enumerate() {
+        for (i, &(count, level_or_cell)) in plan.iter().enumerate() {
             if count == 0 {
                 continue;
             }
-            let level = &levels[k as usize];
             if count == 1 {
-                let cell = level.cells_before + cell as usize;
+                let cell = level_or_cell as usize;
                 if owned.contains(&cell) {
                     f(i, cell, proxies.bbox(i), proxies.window_of(i));
                 }
                 continue;
             }
+            let level = &levels[level_or_cell as usize];
             // The pieces' low corners lie in the path's box, so their cells lie between the
             // cells of its corners: cells are numbered in x, then y, then z order.
             let (low, high) = proxies.bbox(i).corners();
@@ -437,16 +433,13 @@ impl Grid {
                     if from == to {
                         continue;
                     }
-                    for a in from..to {
-                        boxes.for_each_overlap(&boxes.get(a), a + 1..to, |b| hit(a, b));
-                    }
-                    let mut sweep = |other_from: usize, other_to: usize| {
-                        for a in from..to {
-                            boxes.for_each_overlap(&boxes.get(a), other_from..other_to, |b| hit(a, b));
-                        }
-                    };
+                    // The neighbours' runs of binned slots: the next cell along z, then the
+                    // columns, each with the axis a box must reach across into it.
+                    let mut runs = [(0, 0, 0); 5];
+                    let mut count = 0;
                     if z + 1 < nz {
-                        sweep(to, level.first + starts[c + 2] as usize);
+                        runs[0] = (to, level.first + starts[c + 2] as usize, 2);
+                        count = 1;
                     }
                     for [dx, dy] in COLUMNS {
                         let (x2, y2) = (x + dx, (y + dy).wrapping_sub(1));
@@ -455,17 +448,29 @@ impl Grid {
                         }
                         let column = (x2 * ny + y2) * nz;
                         let (z_from, z_to) = (z.saturating_sub(1), (z + 1).min(nz - 1));
-                        sweep(
-                            level.first + starts[column + z_from] as usize,
-                            level.first + starts[column + z_to + 1] as usize,
-                        );
+                        let from = level.first + starts[column + z_from] as usize;
+                        runs[count] = (from, level.first + starts[column + z_to + 1] as usize, 1 - dx);
+                        count += 1;
                     }
-                    // Coarser levels: each piece against the cells that can hold an
-                    // overlapping box there.
-                    for coarser in &self.levels[k + 1..] {
-                        for a in from..to {
-                            let bbox = boxes.get(a);
-                            let (low, high) = bbox.corners();
+                    for a in from..to {
+                        let bbox = boxes.get(a);
+                        boxes.for_each_overlap(&bbox, a + 1..to, |b| hit(a, b));
+                        // A box in a neighbour lies past this cell's upper face on the axis that
+                        // leads there (its low corner does, and cells are never smaller than a
+                        // box): only a box reaching across that face can overlap it. The
+                        // coordinate is the binning's own, monotonic in the value, so no overlap
+                        // is skipped. Boxes of this level reach across in a fraction of cases
+                        // near their extent over the cell's, which this saves sweeping the rest.
+                        let reach = level.coordinates(bbox.corners().1);
+                        let beyond = [reach[0] > x, reach[1] > y, reach[2] > z];
+                        for &(other_from, other_to, axis) in &runs[..count] {
+                            if beyond[axis] {
+                                boxes.for_each_overlap(&bbox, other_from..other_to, |b| hit(a, b));
+                            }
+                        }
+                        // Coarser levels: the cells that can hold an overlapping box there.
+                        let (low, high) = bbox.corners();
+                        for coarser in &self.levels[k + 1..] {
                             for c2 in coarser.cells_near(low, high) {
                                 boxes.for_each_overlap(&bbox, coarser.run(c2), |b| hit(a, b));
                             }
@@ -494,7 +499,7 @@ impl BroadPhase for Grid {
         // Pass 1: each body's piece count and level exponent, and the pieces per exponent.
         let mut plan = std::mem::take(&mut self.plan);
         plan.clear();
-        plan.resize(proxies.slots(), (0, 0, 0));
+        plan.resize(proxies.slots(), (0, 0));
         let this = &*self;
         let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
             let mut per_exponent: Vec<(i32, usize)> = Vec::new();
@@ -504,7 +509,7 @@ impl BroadPhase for Grid {
                     continue;
                 }
                 let (count, exponent) = this.plan_pieces(proxies, i);
-                *plan = (count, exponent as u32, 0);
+                *plan = (count, exponent as u32);
                 match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
                     Some((_, n)) => *n += count as usize,
                     None => per_exponent.push((exponent, count as usize)),
@@ -533,7 +538,7 @@ impl BroadPhase for Grid {
             cells_before += level.late_head.len();
             self.levels.push(level);
         }
-        // Each body's level, and a single piece's cell, found in parallel.
+        // Each body's level, or a single piece's cell, found in parallel.
         let levels = &self.levels;
         workers.chunks_mut(&mut plan, |offset, chunk| {
             for (k, entry) in chunk.iter_mut().enumerate() {
@@ -542,7 +547,8 @@ impl BroadPhase for Grid {
                 }
                 if entry.0 == 1 {
                     let level = &levels[entry.1 as usize];
-                    entry.2 = level.index(level.coordinates(proxies.bbox(offset + k).corners().0)) as u32;
+                    let cell = level.index(level.coordinates(proxies.bbox(offset + k).corners().0));
+                    entry.1 = (level.cells_before + cell) as u32;
                 }
             }
         });
@@ -583,9 +589,6 @@ impl BroadPhase for Grid {
         self.boxes.resize(first);
         self.motions.resize(first, BodyState::default());
         self.motions.truncate(first);
-        let mut home = std::mem::take(&mut self.home);
-        home.clear();
-        home.resize(plan.len(), NONE);
         let levels = &self.levels;
         // Cells cut so each worker gets about as many pieces; its slots follow from its cells.
         let slot_of_cell = |g: usize| {
@@ -598,7 +601,6 @@ impl BroadPhase for Grid {
         };
         let cell_points = workers.balanced_points(cells, first, slot_of_cell);
         let slot_points: Vec<usize> = cell_points.iter().map(|&g| slot_of_cell(g)).collect();
-        let homes = DisjointWriter::new(&mut home);
         let parts: Vec<_> = split_at_points(&mut next_slot, &cell_points)
             .into_iter()
             .zip(split_at_points(&mut self.owners, &slot_points).into_iter().zip(self.boxes.parts_mut(&slot_points)))
@@ -616,13 +618,8 @@ impl BroadPhase for Grid {
                 owners[k] = Owner { body: i as u32, stamp: proxies.stamp(i), window };
                 boxes.set(k, bbox);
                 motions[k] = *proxies.state(i);
-                if plan_of[i].0 == 1 {
-                    // SAFETY: a single piece is taken by one worker only.
-                    unsafe { homes.write(i, slot as u32) };
-                }
             });
         });
-        self.home = home;
         self.next_slot = next_slot;
         self.late.clear();
         self.late_motions.clear();
@@ -660,33 +657,27 @@ impl BroadPhase for Grid {
     }
 
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        // Wanted once the query is done: ask for it now, so its miss overlaps the query's.
-        if let Some(home) = self.home.get(body as usize) {
-            prefetch(home);
-        }
         let exponent = self.query_pieces(body, proxies, skip, report);
         // The pieces the query just built.
         let i = body as usize;
         let k = self.level_for(exponent);
         let (boxes, owners, motions) = (&mut self.boxes, &mut self.owners, &mut self.motions);
         let level = &mut self.levels[k];
-        if self.home.len() <= i {
-            self.home.resize(i + 1, NONE);
-        }
         for n in 0..self.pieces.len() {
             let (bbox, window) = self.pieces[n];
             let cell = level.index(level.coordinates(bbox.corners().0));
             let entry = Entry { bbox, body, stamp: proxies.stamp(i) };
-            let home = self.home[i] as usize;
-            let run = level.run(cell);
-            if self.pieces.len() == 1 && run.contains(&home) {
-                // Still one piece in the same cell: replace the binned one where it lies.
-                owners[home] = Owner { body, stamp: entry.stamp, window };
-                boxes.set(home, bbox);
-                motions[home] = *proxies.state(i);
-                continue;
+            // One piece in a cell that holds a binned piece of the body (of a path it left: its
+            // stamp has moved on): replace that one where it lies, rather than keep a body's
+            // slot by id (4 bytes a body) to find it. A cell holds a handful of pieces.
+            if self.pieces.len() == 1 {
+                if let Some(old) = level.run(cell).find(|&e| owners[e].body == body) {
+                    owners[old] = Owner { body, stamp: entry.stamp, window };
+                    boxes.set(old, bbox);
+                    motions[old] = *proxies.state(i);
+                    continue;
+                }
             }
-            self.home[i] = NONE;
             self.late.push((entry, window, level.late_head[cell]));
             self.late_motions.push(*proxies.state(i));
             level.late_head[cell] = (self.late.len() - 1) as u32;
@@ -701,9 +692,8 @@ impl BroadPhase for Grid {
             + self.motions.capacity() * std::mem::size_of::<BodyState>()
             + self.late.capacity() * std::mem::size_of::<(Entry, Window, u32)>()
             + self.late_motions.capacity() * std::mem::size_of::<BodyState>()
-            + self.plan.capacity() * 12
+            + self.plan.capacity() * 8
             + self.extents.capacity() * 8
-            + self.home.capacity() * 4
             + self.next_slot.capacity() * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels

@@ -74,9 +74,10 @@ pub struct ProxyTable {
     stamps: Vec<u32>,
     /// False for removed bodies and bodies not entered yet.
     live: Vec<bool>,
-    /// True when the proxy ends before the window because of its reach: it must be renewed. Kept
-    /// out of the spans, which it would pad by 8 bytes.
-    expires: Vec<bool>,
+    /// Per proxy, [`EXPIRES`] when it ends before the window because of its reach (it must be
+    /// renewed) and [`NO_WALL`] when its body meets no wall before the window's end. Kept out of
+    /// the spans, which they would pad by 8 bytes.
+    flags: Vec<u8>,
     /// Scratch for the median radius (a sample).
     radii: Vec<f64>,
     /// The bodies' uniform acceleration, and how far a path may bend off its tangent within a
@@ -134,25 +135,29 @@ impl CompactBox {
     }
 }
 
-/// `x` in single precision, rounded down (up).
+/// `x` in single precision, rounded down (up): `x as f32` stepped one ulp down (up) when it
+/// rounded the wrong way, the step made on the bits without a branch (it is as likely as not for
+/// every coordinate of every box, so a branch would mispredict half the time). The step is the
+/// one `f32::next_down` (`next_up`) takes on the values it can meet: a negative value's bits go
+/// up, a positive one's (and infinity's) down; zero and NaN never step the other way.
 #[inline]
 fn down(x: f64) -> f32 {
     let f = x as f32;
-    if f as f64 > x {
-        f.next_down()
-    } else {
-        f
-    }
+    let sign = (f.to_bits() >> 31) as i32;
+    let step = i32::from(f as f64 > x) * (2 * sign - 1);
+    f32::from_bits(f.to_bits().wrapping_add_signed(step))
 }
 #[inline]
 fn up(x: f64) -> f32 {
     let f = x as f32;
-    if (f as f64) < x {
-        f.next_up()
-    } else {
-        f
-    }
+    let sign = (f.to_bits() >> 31) as i32;
+    let step = i32::from((f as f64) < x) * (1 - 2 * sign);
+    f32::from_bits(f.to_bits().wrapping_add_signed(step))
 }
+
+/// Proxy flags: it ends before the window because of its reach; its body meets no wall in the window.
+const EXPIRES: u8 = 1;
+const NO_WALL: u8 = 2;
 
 /// Most values [`sampled_quantile`] looks at.
 const QUANTILE_SAMPLE: usize = 4096;
@@ -282,7 +287,15 @@ impl ProxyTable {
     /// True when proxy `i` ends before the window because of its reach.
     #[inline]
     pub fn expires(&self, i: usize) -> bool {
-        self.expires[i]
+        self.flags[i] & EXPIRES != 0
+    }
+
+    /// True when proxy `i`'s body, on the motion the proxy was made from, meets no wall before
+    /// the window's end: its wall contact, computed once with the proxy, need not be predicted
+    /// again (false when unknown, e.g. for a shape, whose proxy does not stop at walls).
+    #[inline]
+    pub fn meets_no_wall(&self, i: usize) -> bool {
+        self.flags[i] & NO_WALL != 0
     }
 
     /// True when body `i` has a proxy.
@@ -311,7 +324,7 @@ impl ProxyTable {
     /// The table paired with `bodies`, the bodies its proxies bound, for a broad phase to read.
     #[inline]
     pub fn view<'a>(&'a self, bodies: &'a Bodies) -> Proxies<'a> {
-        Proxies { table: self, states: &bodies.state }
+        Proxies { table: self, bodies }
     }
 
     /// Window start: every live body's proxy over `window`, bodies at their positions at its
@@ -339,10 +352,10 @@ impl ProxyTable {
             self.ghosts.clear(bodies.slots());
         }
         let rule = self.rule();
-        workers.zip_chunks(&mut self.spans, &mut self.expires, |offset, spans, expires| {
-            for (k, (span, expires)) in spans.iter_mut().zip(expires).enumerate() {
+        workers.zip_chunks(&mut self.spans, &mut self.flags, |offset, spans, flags| {
+            for (k, (span, flags)) in spans.iter_mut().zip(flags).enumerate() {
                 if live[offset + k] {
-                    (*span, *expires) = rule.span(offset + k, bodies, window.start);
+                    (*span, *flags) = rule.span(offset + k, bodies, window.start);
                 }
             }
         });
@@ -363,7 +376,7 @@ impl ProxyTable {
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
         debug_assert!(self.fits(i, bodies), "a body the window's ghosts are not sized for");
         self.resize(bodies.slots());
-        (self.spans[i], self.expires[i]) = self.rule().span(i, bodies, t);
+        (self.spans[i], self.flags[i]) = self.rule().span(i, bodies, t);
         self.stamps[i] = bodies.stamp[i];
         self.live[i] = true;
         if self.ghosts.active() {
@@ -412,14 +425,14 @@ impl ProxyTable {
 
     /// Body `i`'s ghosts from its proxy, into fresh slots.
     fn make_ghosts(&mut self, i: usize, bodies: &Bodies) {
-        let (spans, stamps, live, expires) = (&mut self.spans, &mut self.stamps, &mut self.live, &mut self.expires);
+        let (spans, stamps, live, flags) = (&mut self.spans, &mut self.stamps, &mut self.live, &mut self.flags);
         let own = spans[i];
         let (low, high) = own.bbox.corners();
         self.ghosts.make(i, (low, high), &bodies.state[i], bodies.stamp[i], |shift, stamp| {
             spans.push(Span { bbox: CompactBox::new(low + shift, high + shift, DVec3::ZERO), ..own });
             stamps.push(stamp);
             live.push(true);
-            expires.push(false);
+            flags.push(0);
         });
     }
 
@@ -444,7 +457,6 @@ impl ProxyTable {
             walls: self.bounds.walls(),
             faces: self.bounds.is_periodic().then(|| self.bounds.faces()),
             reach,
-            gravity: self.gravity,
             bend: self.bend,
             // Within a proxy the path stays within the bend of its tangent: |g| tau^2 / 2 <= bend.
             longest: if self.bend > 0.0 { (2.0 * self.bend / self.gravity.length()).sqrt() } else { f64::INFINITY },
@@ -456,7 +468,7 @@ impl ProxyTable {
         self.spans.truncate(slots);
         self.stamps.truncate(slots);
         self.live.truncate(slots);
-        self.expires.truncate(slots);
+        self.flags.truncate(slots);
     }
 
     fn resize(&mut self, slots: usize) {
@@ -464,7 +476,7 @@ impl ProxyTable {
             self.spans.resize(slots, Span::default());
             self.stamps.resize(slots, 0);
             self.live.resize(slots, false);
-            self.expires.resize(slots, false);
+            self.flags.resize(slots, 0);
         }
     }
 
@@ -473,7 +485,7 @@ impl ProxyTable {
         self.spans.capacity() * std::mem::size_of::<Span>()
             + self.stamps.capacity() * 4
             + self.live.capacity()
-            + self.expires.capacity()
+            + self.flags.capacity()
             + self.radii.capacity() * 8
             + self.ghosts.memory_bytes()
     }
@@ -485,7 +497,7 @@ impl ProxyTable {
 #[derive(Debug, Clone, Copy)]
 pub struct Proxies<'a> {
     table: &'a ProxyTable,
-    states: &'a [BodyState],
+    bodies: &'a Bodies,
 }
 
 impl std::ops::Deref for Proxies<'_> {
@@ -500,7 +512,7 @@ impl<'a> Proxies<'a> {
     #[inline]
     pub fn state(&self, i: usize) -> &'a BodyState {
         if i < self.table.ghosts.base() {
-            &self.states[i]
+            &self.bodies.state[i]
         } else {
             self.table.ghosts.state(i)
         }
@@ -522,13 +534,23 @@ impl<'a> Proxies<'a> {
     /// Velocity of proxy `i` at its start.
     #[inline]
     pub fn velocity(&self, i: usize) -> DVec3 {
-        self.state(i).motion.velocity_under(self.table.spans[i].start, self.table.gravity)
+        self.state(i).motion.velocity_under(self.table.spans[i].start, self.gravity_on(i))
     }
 
     /// Centre of proxy `i` at its start.
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
-        self.state(i).motion.at_under(self.table.spans[i].start, self.table.gravity)
+        self.state(i).motion.at_under(self.table.spans[i].start, self.gravity_on(i))
+    }
+
+    /// The acceleration proxy `i`'s body moves under (a ghost's is its owner's).
+    #[inline]
+    fn gravity_on(&self, i: usize) -> DVec3 {
+        if self.table.gravity == DVec3::ZERO {
+            return DVec3::ZERO;
+        }
+        let body = if i < self.table.ghosts.base() { i } else { self.table.ghosts.owner(i).0 as usize };
+        self.bodies.gravity_on(body)
     }
 }
 
@@ -543,7 +565,6 @@ struct ProxyRule {
     faces: Option<(DVec3, DVec3)>,
     /// Longest path a proxy may cover.
     reach: f64,
-    gravity: DVec3,
     /// How far a path may bend off its tangent within a proxy, and the longest a proxy may last
     /// for that (infinite without gravity).
     bend: f64,
@@ -551,25 +572,29 @@ struct ProxyRule {
 }
 
 impl ProxyRule {
-    /// Body `i`'s proxy from time `t` on, and whether it expires (ends because of its reach).
+    /// Body `i`'s proxy from time `t` on, and its flags: [`EXPIRES`] when it ends because of its
+    /// reach, [`NO_WALL`] when the body meets no wall before the window's end.
     #[inline]
-    fn span(&self, i: usize, bodies: &Bodies, t: f64) -> (Span, bool) {
+    fn span(&self, i: usize, bodies: &Bodies, t: f64) -> (Span, u8) {
         let start = t.max(self.window.start);
-        let motion = bodies.motion(i);
-        let velocity = motion.velocity_under(start, self.gravity);
+        let (motion, gravity) = (bodies.motion(i), bodies.gravity_on(i));
+        let velocity = motion.velocity_under(start, gravity);
         let body_radius = bodies.bounding_radius(i);
-        let radius = body_radius + self.bend;
+        // A body at rest, or sliding under a pull its floor takes whole, moves straight: its
+        // proxy needs no bend and lasts as long as a straight one.
+        let (bend, longest) = if gravity == DVec3::ZERO { (0.0, f64::INFINITY) } else { (self.bend, self.longest) };
+        let radius = body_radius + bend;
         // Up to and including the wall contact: a pair touching at that very instant is still
         // found with the motion before the bounce, whichever of the two events comes first. A
         // body of another shape reaches the walls later than its bounding sphere: its proxy goes
         // on to the window's end, and its own wall contact changes its velocity.
         let wall = bodies
             .is_sphere(i)
-            .then(|| wall_contact_time(&motion, body_radius, self.walls.0, self.walls.1, self.gravity))
+            .then(|| wall_contact_time(&motion, body_radius, self.walls.0, self.walls.1, gravity))
             .flatten();
         // Up to and including the crossing of a periodic face too, where the body comes back
         // through the opposite face on a fresh motion.
-        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(&motion, 0.0, low, high, self.gravity));
+        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(&motion, 0.0, low, high, gravity));
         let first = match (wall, crossing) {
             (Some((a, _)), Some((b, _))) => Some(a.min(b)),
             (a, b) => a.or(b).map(|(t, _)| t),
@@ -578,14 +603,47 @@ impl ProxyRule {
             Some(time) if time < self.window.end => time.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let reached = (start + self.reach / velocity.length()).min(start + self.longest);
+        let reached = (start + self.reach / velocity.length()).min(start + longest);
         let expires = reached < end && reached > start;
         if expires {
             end = reached;
         }
-        let origin = motion.at_under(start, self.gravity);
+        let origin = motion.at_under(start, gravity);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         let bbox = CompactBox::new(low, high, self.box_min);
-        (Span { start, end, bbox }, expires)
+        // The very time the wall prediction would compute (same motion, radius and pull, the
+        // body's own), so a wall contact at or past the window's end is known to be none of this
+        // window's.
+        let no_wall = bodies.is_sphere(i) && wall.is_none_or(|(time, _)| !(time < self.window.end));
+        (Span { start, end, bbox }, (u8::from(expires) * EXPIRES) | (u8::from(no_wall) * NO_WALL))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The branch-free steps give the bits of `next_down` and `next_up` on every kind of value.
+    #[test]
+    fn rounding_outwards_matches_next_down_and_next_up() {
+        let plain_down = |x: f64| if x as f32 as f64 > x { (x as f32).next_down() } else { x as f32 };
+        let plain_up = |x: f64| if ((x as f32) as f64) < x { (x as f32).next_up() } else { x as f32 };
+        let mut values = vec![0.0, -0.0, 1e-50, -1e-50, 1e300, -1e300, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+        values.extend([f32::MAX as f64, f32::MIN_POSITIVE as f64, 1.0 + 1e-12, -1.0 - 1e-12, 0.1, -0.1, 3.4e38]);
+        let mut state = 0x2545f4914f6cdd1du64;
+        for _ in 0..100_000 {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let unit = (state >> 11) as f64 / (1u64 << 53) as f64;
+            values.push((unit - 0.5) * 10f64.powi((state % 90) as i32 - 45));
+        }
+        for x in values {
+            assert_eq!(down(x).to_bits(), plain_down(x).to_bits(), "down({x:e})");
+            assert_eq!(up(x).to_bits(), plain_up(x).to_bits(), "up({x:e})");
+            if x.is_finite() {
+                assert!(down(x) as f64 <= x && up(x) as f64 >= x, "{x:e}");
+            }
+        }
     }
 }

@@ -589,6 +589,12 @@ impl Responder for EventLoop {
         &mut self.impacts
     }
 
+    /// The event loop runs only without gravity, where no body lies still (see
+    /// [`crate::response::rest`]), so no impact wakes one.
+    fn woke(&mut self, _: &mut Bodies, _: &Physics, woken: usize, _: f64, _: &mut FrameStats) {
+        unreachable!("body {woken} lay still in the event loop, which runs without gravity");
+    }
+
     /// The jam rule on the bodies touching `seeds` at `t`, found through the cells; every member's
     /// events are found again. Returns the cluster's virial.
     fn freeze_cluster(

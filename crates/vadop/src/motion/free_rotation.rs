@@ -123,6 +123,8 @@ enum Motion {
     Steady {
         orientation: DQuat,
         angular_velocity: DVec3,
+        /// The angular velocity in the principal frame, its rounding zeroed (see [`AXIS_SNAP`]).
+        body_angular_velocity: DVec3,
     },
     Tumbling(Tumbling),
 }
@@ -204,7 +206,11 @@ impl FreeRotation {
         let angular_momentum = orientation * momentum * inertia_unscale * velocity_unscale;
         let kinetic_energy = 0.5 * velocity.dot(momentum) * inertia_unscale * velocity_unscale * velocity_unscale;
         let steady = |velocity: DVec3| FreeRotation {
-            motion: Motion::Steady { orientation, angular_velocity: orientation * velocity * velocity_unscale },
+            motion: Motion::Steady {
+                orientation,
+                angular_velocity: orientation * velocity * velocity_unscale,
+                body_angular_velocity: velocity * velocity_unscale,
+            },
             angular_momentum,
             kinetic_energy,
             max_angular_speed: velocity.length() * velocity_unscale * (1.0 + SPEED_BOUND_SLACK),
@@ -271,7 +277,7 @@ impl FreeRotation {
     /// ```
     pub fn orientation_at(&self, dt: f64) -> DQuat {
         match &self.motion {
-            Motion::Steady { orientation, angular_velocity } => {
+            Motion::Steady { orientation, angular_velocity, .. } => {
                 DQuat::from_scaled_axis(*angular_velocity * dt) * *orientation
             }
             Motion::Tumbling(tumbling) => tumbling.working_to_world(dt).0 * tumbling.body_to_working,
@@ -339,6 +345,28 @@ impl FreeRotation {
     /// ```
     pub fn max_angular_speed(&self) -> f64 {
         self.max_angular_speed
+    }
+
+    /// The constant angular velocity in the body's principal frame of a steady rotation (one
+    /// whose angular velocity stays parallel to the angular momentum), with the components that
+    /// are rounding of the frame change zeroed; `None` for a tumbling body. A spin about a body
+    /// axis along which a shape is symmetric leaves the shape where it is.
+    ///
+    /// ```
+    /// use glam::{DQuat, DVec3};
+    /// use vadop::motion::free_rotation::FreeRotation;
+    /// // About the middle principal axis, given in world axes after a quarter turn: steady.
+    /// let turned = DQuat::from_rotation_z(std::f64::consts::FRAC_PI_2);
+    /// let top = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), turned, turned * DVec3::new(0.0, 3.0, 0.0));
+    /// assert_eq!(top.steady_spin(), Some(DVec3::new(0.0, 3.0, 0.0)));
+    /// let tumbling = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(0.1, 3.0, 0.2));
+    /// assert_eq!(tumbling.steady_spin(), None);
+    /// ```
+    pub fn steady_spin(&self) -> Option<DVec3> {
+        match &self.motion {
+            Motion::Steady { body_angular_velocity, .. } => Some(*body_angular_velocity),
+            Motion::Tumbling(_) => None,
+        }
     }
 }
 

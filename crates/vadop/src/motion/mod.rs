@@ -62,6 +62,12 @@ pub trait Spin {
     fn orientation_at(&self, dt: f64) -> DQuat;
     /// Upper bound on the body's angular speed |w| over all time.
     fn max_angular_speed(&self) -> f64;
+    /// The constant angular velocity in the body's own frame when the rotation is steady (zero
+    /// for a body that does not turn), `None` when it may change: what tells a spin that leaves
+    /// a symmetric shape where it is.
+    fn steady_spin(&self) -> Option<DVec3> {
+        None
+    }
 }
 
 impl<S: Spin + ?Sized> Spin for &S {
@@ -70,6 +76,9 @@ impl<S: Spin + ?Sized> Spin for &S {
     }
     fn max_angular_speed(&self) -> f64 {
         (**self).max_angular_speed()
+    }
+    fn steady_spin(&self) -> Option<DVec3> {
+        (**self).steady_spin()
     }
 }
 
@@ -83,6 +92,9 @@ impl Spin for Fixed {
     }
     fn max_angular_speed(&self) -> f64 {
         0.0
+    }
+    fn steady_spin(&self) -> Option<DVec3> {
+        Some(DVec3::ZERO)
     }
 }
 

@@ -13,6 +13,7 @@
 use crate::bodies::{Bodies, BodyState};
 use crate::error::{Result, VadopError};
 use crate::motion::RigidMotion;
+use crate::narrow_phase::falling::may_touch_within;
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
@@ -62,8 +63,12 @@ pub(crate) fn pair_start(
     window: Window,
 ) -> Found {
     if bodies.are_spheres(a, b) {
-        let time =
-            pair_contact_time(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius, bodies.gravity)?;
+        let (ga, gb) = (bodies.gravity_on(a), bodies.gravity_on(b));
+        let (ma, mb, radius_sum) = (&state_a.motion, &state_b.motion, state_a.radius + state_b.radius);
+        if ga != gb && !may_touch_within(ma, ga, mb, gb, radius_sum, window) {
+            return None;
+        }
+        let time = pair_contact_time(ma, mb, radius_sum, (ga, gb))?;
         return window.contains(time).then_some((time, false));
     }
     shape_pair_start(bodies, a, b, window)
@@ -192,7 +197,14 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
     let normal = direction(bodies.offset_at(i, j, t))
         .or_else(|| direction(bodies.velocity_at(i, t) - bodies.velocity_at(j, t)))
         .unwrap_or(DVec3::X);
-    (pi + normal * bodies.radius(i), normal)
+    // Midway between the two surface points (which coincide at a contact, up to rounding), so
+    // that in a walled box naming the pair either way round gives the same bits: the sum
+    // commutes, and negating the normal is exact. Two processes that hold a pair under different
+    // local ids then agree on its contact (vadop-mpi). Across a periodic face the point lies by
+    // the lower id's image, as before.
+    let pj = bodies.position_at(j, t) + bodies.image_shift(i, j, t);
+    let point = 0.5 * ((pi + normal * bodies.radius(i)) + (pj - normal * bodies.radius(j)));
+    (point, normal)
 }
 
 /// Where body `i` touches `wall` at `t`, and the wall's outward normal.

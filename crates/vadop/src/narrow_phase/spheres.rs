@@ -7,7 +7,9 @@
 //! p(t) = p + (t - since) v, or a parabola under the world's gravity g,
 //! p(t) = p + (t - since) v + (t - since)^2 g / 2: two bodies under the same g keep a linear
 //! relative motion, so a pair's closed form is the same, from both centres and velocities at
-//! the reference instant; only a wall sees the parabola (a quadratic per axis).
+//! the reference instant; only a wall sees the parabola (a quadratic per axis). A pair whose
+//! accelerations differ (one falls onto another at rest) has a bent relative path, served by
+//! [`super::falling`].
 //!
 //! Times are *canonical*: a pair's contact time is computed from the instant its relative motion
 //! began (the later of the two bodies' last velocity changes), never from the window or frame
@@ -24,6 +26,7 @@
 //! so the arithmetic neither underflows for tiny scenes nor overflows for huge ones, and a scene
 //! scaled by a power of two gives bit-identical contact times, scaled alike.
 
+use super::falling::falling_sphere_time;
 use crate::motion::Motion;
 use crate::numeric::{exponent, power_of_two, scale_by_power_of_two, unit_scale};
 use crate::walls::Wall;
@@ -74,32 +77,38 @@ pub fn sphere_sphere_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f
 #[inline]
 fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Option<f64> {
     let approach = offset.dot(relative_velocity);
-    let speed_sq = relative_velocity.length_squared();
-    // Only approaching pairs can start a contact; `!(x < y)` also rejects NaN.
-    let threshold = -APPROACH_TOLERANCE * (offset.length_squared() * speed_sq).sqrt();
-    if !(approach < threshold) {
+    // Most candidate pairs recede or miss: both are told without a square root. The threshold
+    // below is never positive, so a pair that fails `approach < 0` fails it too (NaN included).
+    if !(approach < 0.0) {
         return None;
     }
+    let speed_sq = relative_velocity.length_squared();
     let radius_sq = radius_sum * radius_sum;
-    let gap = offset.length_squared() - radius_sq;
-    if gap <= 0.0 {
-        let touching = gap >= -2.0 * CONTACT_TOLERANCE * radius_sq;
-        return touching.then_some(0.0);
-    }
+    let distance_sq = offset.length_squared();
+    let gap = distance_sq - radius_sq;
     // b^2 - a c written as a R^2 - |offset x v|^2: no cancellation between two large squares,
     // which keeps grazing and nearly parallel motion accurate.
     let discriminant = speed_sq * radius_sq - offset.cross(relative_velocity).length_squared();
-    if discriminant < 0.0 {
+    if gap > 0.0 && discriminant < 0.0 {
         return None;
+    }
+    // Only approaching pairs can start a contact; `!(x < y)` also rejects NaN.
+    let threshold = -APPROACH_TOLERANCE * (distance_sq * speed_sq).sqrt();
+    if !(approach < threshold) {
+        return None;
+    }
+    if gap <= 0.0 {
+        let touching = gap >= -2.0 * CONTACT_TOLERANCE * radius_sq;
+        return touching.then_some(0.0);
     }
     // The smaller root (-b - sqrt(disc)) / a in the form that never divides by a tiny a.
     Some(gap / (-approach + discriminant.sqrt()))
 }
 
-/// Canonical absolute time at which two spheres on their current motions, both under the uniform
-/// acceleration `gravity` (zero for straight paths), first touch while approaching, if ever:
-/// computed from the later of the two `since` instants, so it does not depend on when or by whom
-/// it is asked.
+/// Canonical absolute time at which two spheres on their current motions, under the uniform
+/// accelerations `(ga, gb)` (zero for straight paths; the same gravity for two falling bodies),
+/// first touch while approaching, if ever: computed from the later of the two `since` instants,
+/// so it does not depend on when or by whom it is asked.
 ///
 /// ```
 /// use glam::DVec3;
@@ -108,15 +117,22 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // The gap of 5 closes at 3: one contact at 5/3, whichever frame asks.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::ZERO), Some(5.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)), Some(5.0 / 3.0));
 /// // Falling together, they meet at the same instant.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::new(0.0, 0.0, -9.81)), Some(5.0 / 3.0));
+/// let g = DVec3::new(0.0, 0.0, -9.81);
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (g, g)), Some(5.0 / 3.0));
+/// // With a at rest, b falls below it and misses.
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, g)), None);
 /// ```
 #[inline]
-pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, gravity: DVec3) -> Option<f64> {
+pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, (ga, gb): (DVec3, DVec3)) -> Option<f64> {
     let reference = a.since.max(b.since);
-    let (va, vb) = (a.velocity_under(reference, gravity), b.velocity_under(reference, gravity));
-    let offset = b.at_under(reference, gravity) - a.at_under(reference, gravity);
+    let (va, vb) = (a.velocity_under(reference, ga), b.velocity_under(reference, gb));
+    let offset = b.at_under(reference, gb) - a.at_under(reference, ga);
+    if ga != gb {
+        let time = reference + falling_sphere_time(offset, vb - va, gb - ga, radius_sum)?;
+        return time.is_finite().then_some(time);
+    }
     let tau = sphere_sphere_time(offset, vb - va, radius_sum)?;
     // Checked only for predicted contacts, which are far fewer than candidate pairs.
     let scale = unit_scale(va.abs().max_element().max(vb.abs().max_element()));
@@ -171,7 +187,7 @@ pub fn sphere_separation_time(offset: DVec3, relative_velocity: DVec3, radius_su
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
 /// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// // They touch at 5/3 (centres 1 apart), pass through each other and part at 7/3.
-/// assert_eq!(pair_contact_time(&a, &b, 1.0, DVec3::ZERO), Some(5.0 / 3.0));
+/// assert_eq!(pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)), Some(5.0 / 3.0));
 /// assert_eq!(pair_separation_time(&a, &b, 1.0, DVec3::ZERO), Some(7.0 / 3.0));
 /// ```
 #[inline]
@@ -202,6 +218,16 @@ pub fn pair_separation_time(a: &Motion, b: &Motion, radius_sum: f64, gravity: DV
 /// ```
 #[inline]
 pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, gravity: DVec3) -> Option<(f64, Wall)> {
+    if gravity == DVec3::ZERO {
+        return straight_wall_time(motion, radius, min, max);
+    }
+    any_wall_time(motion, radius, min, max, gravity)
+}
+
+/// [`wall_contact_time`] axis by axis: a parabola along the axes with a pull, a straight line
+/// along the others.
+#[inline]
+fn any_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, gravity: DVec3) -> Option<(f64, Wall)> {
     let mut best: Option<(f64, Wall)> = None;
     for axis in 0..3 {
         if gravity[axis] != 0.0 {
@@ -233,11 +259,39 @@ pub fn wall_contact_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, g
     best.map(|(tau, wall)| (motion.since + tau, wall)).filter(|(time, _)| time.is_finite())
 }
 
+/// [`wall_contact_time`] of a straight path: the same arithmetic, axis by axis, then the earliest
+/// axis (the lowest on a tie) picked by comparisons turned into indices rather than branches: the
+/// signs of the velocity and the axis that wins are random in a gas, and branches on them
+/// mispredicted about three times a call.
+#[inline]
+fn straight_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -> Option<(f64, Wall)> {
+    let tau = |axis: usize| {
+        let (x, speed) = (motion.position[axis], motion.velocity[axis]);
+        let (to_max, to_min) = (max[axis] - radius - x, x - (min[axis] + radius));
+        // A body already at (or a rounding error past) the wall and moving out touches it now.
+        let tau = if speed > 0.0 { to_max } else { to_min }.max(0.0) / speed.abs();
+        // At rest along the axis (x / 0, 0 / 0), NaN, or a wall at infinity (a periodic axis):
+        // no contact.
+        if tau.is_finite() {
+            tau
+        } else {
+            f64::INFINITY
+        }
+    };
+    let (x, y, z) = (tau(0), tau(1), tau(2));
+    let best = x.min(y).min(z);
+    let (past_x, past_y) = (x != best, y != best);
+    let axis = usize::from(past_x) + usize::from(past_x & past_y);
+    let wall = Wall::new(axis, motion.velocity[axis] > 0.0);
+    Some((motion.since + best, wall)).filter(|(time, _)| best.is_finite() && time.is_finite())
+}
+
 /// First `tau >= 0` at which a point `distance` from a wall, moving towards it at `speed` and
 /// pulled towards it by `pull` (negative values: away), reaches it while still moving towards
 /// it: the root of `pull tau^2 / 2 + speed tau = distance` where the speed there,
 /// `sqrt(speed^2 + 2 pull distance)`, is positive. A point at (or a rounding error past) the wall
-/// and moving or pulled out touches it now; one at rest on it touches it too (no resting state).
+/// and moving or pulled out touches it now; one at rest on it touches it too (a resting state,
+/// [`crate::bodies::Rest`], takes the pull away instead).
 #[inline]
 fn parabola_arrival(distance: f64, speed: f64, pull: f64) -> Option<f64> {
     let distance = distance.max(0.0);
@@ -339,13 +393,14 @@ mod tests {
         // Body b changed velocity at 0.7; the pair's time is computed from 0.7 whatever frame asks.
         let a = Motion { position: DVec3::new(0.0, 0.0, 0.0), since: 0.0, velocity: DVec3::new(1.0, 0.0, 0.0) };
         let b = Motion { position: DVec3::new(5.0, 0.0, 0.0), since: 0.7, velocity: DVec3::new(-1.0, 0.0, 0.0) };
-        let t = pair_contact_time(&a, &b, 1.0, DVec3::ZERO).unwrap();
+        let t = pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)).unwrap();
         // At 0.7, a is at 0.7: the gap 5 - 0.7 - 1 closes at 2.
         assert_eq!(t, 0.7 + (5.0 - 0.7 - 1.0) / 2.0);
         // Moving together exactly (relative velocity noise only): no contact.
         let c = Motion { velocity: DVec3::new(1.0 + 1e-15, 0.0, 0.0), ..b };
         let d = Motion { position: DVec3::new(3.0, 0.0, 0.0), ..a };
-        assert_eq!(pair_contact_time(&d, &Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c }, 1.0, DVec3::ZERO), None);
+        let moved = Motion { position: DVec3::new(4.0, 0.0, 0.0), ..c };
+        assert_eq!(pair_contact_time(&d, &moved, 1.0, (DVec3::ZERO, DVec3::ZERO)), None);
     }
 
     #[test]
@@ -362,5 +417,63 @@ mod tests {
         assert_eq!(Wall::MaxY.outward_normal(), DVec3::Y);
         assert_eq!(Wall::new(2, false), Wall::MinZ);
         assert_eq!(Wall::MinZ.to_string(), "min-z");
+    }
+
+    /// The contact time in its first, plainer form: the early rejections must give the same bits
+    /// on every input (as must the straight wall time's selects against the general loop).
+    fn plain_scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Option<f64> {
+        let approach = offset.dot(relative_velocity);
+        let speed_sq = relative_velocity.length_squared();
+        let threshold = -APPROACH_TOLERANCE * (offset.length_squared() * speed_sq).sqrt();
+        if !(approach < threshold) {
+            return None;
+        }
+        let radius_sq = radius_sum * radius_sum;
+        let gap = offset.length_squared() - radius_sq;
+        if gap <= 0.0 {
+            return (gap >= -2.0 * CONTACT_TOLERANCE * radius_sq).then_some(0.0);
+        }
+        let discriminant = speed_sq * radius_sq - offset.cross(relative_velocity).length_squared();
+        if discriminant < 0.0 {
+            return None;
+        }
+        Some(gap / (-approach + discriminant.sqrt()))
+    }
+
+    /// Random, grazing, touching, overlapping, receding, at-rest and non-finite inputs.
+    #[test]
+    fn early_rejections_and_selects_change_no_result() {
+        let mut state = 0x9e3779b97f4a7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let special = [0.0, -0.0, 1.0, -1.0, 2.0, 1e-300, -1e300, f64::INFINITY, f64::NAN, 0.5];
+        for k in 0..200_000 {
+            let mut pick = || {
+                if k % 7 == 0 {
+                    special[(next() * special.len() as f64) as usize % special.len()]
+                } else {
+                    (next() - 0.5) * [4.0, 1e-3, 1e3][k % 3]
+                }
+            };
+            let (offset, velocity) = (DVec3::new(pick(), pick(), pick()), DVec3::new(pick(), pick(), pick()));
+            let radius = 1.0 + (k % 5) as f64 * 0.25;
+            // A pair grazing at exactly the radius sum, or touching, now and then.
+            let offset = match k % 11 {
+                0 => DVec3::new(offset.x, radius, 0.0),
+                1 => offset.normalize_or_zero() * radius,
+                _ => offset,
+            };
+            let (a, b) = (scaled_time(offset, velocity, radius), plain_scaled_time(offset, velocity, radius));
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "{offset} {velocity} {radius}");
+            let motion = Motion { position: offset.abs() * 3.0, since: pick(), velocity };
+            let (min, max) = (DVec3::ZERO, DVec3::new(10.0, f64::INFINITY, 7.0));
+            let found = wall_contact_time(&motion, 0.5, min, max, DVec3::ZERO);
+            let plain = any_wall_time(&motion, 0.5, min, max, DVec3::ZERO);
+            assert_eq!(found.map(|(t, w)| (t.to_bits(), w)), plain.map(|(t, w)| (t.to_bits(), w)), "{motion:?}");
+        }
     }
 }

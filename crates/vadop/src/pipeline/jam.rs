@@ -9,10 +9,11 @@
 //! cluster's velocity does not depend on the order a broad phase reports neighbours in: every
 //! method freezes a cluster to the same bits. It never schedules or re-tests a body itself.
 
-use crate::bodies::Bodies;
+use crate::bodies::{Bodies, Rest};
 use crate::frame::{FrameStats, Physics};
 use crate::narrow_phase::contacts;
 use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
+use crate::response::rest;
 use crate::response::rules::ContactRules;
 use glam::DVec3;
 
@@ -61,11 +62,15 @@ impl Cluster {
         cluster.clear();
         self.epoch = self.epoch.wrapping_add(1);
         self.mark.resize(bodies.slots(), 0);
-        // A cluster pressed against static geometry stops: the level holds it.
-        let mut pinned = false;
+        // A cluster pressed against static geometry stops: the level holds it. Under the rest
+        // rule bodies lying still hold it up too, and are not of it.
+        let resting = rest::applies(bodies, physics);
+        let support = |bodies: &Bodies, o: usize| resting && bodies.rest_of(o) == Rest::Still;
+        let (mut pinned, mut held) = (false, false);
         for &seed in seeds {
-            if bodies.is_fixed(seed as usize) {
-                pinned = true;
+            if bodies.is_fixed(seed as usize) || support(bodies, seed as usize) {
+                pinned |= bodies.is_fixed(seed as usize);
+                held = true;
                 continue;
             }
             self.mark[seed as usize] = self.epoch;
@@ -81,6 +86,10 @@ impl Cluster {
             for &o in &found {
                 let o = o as usize;
                 if self.mark[o] != self.epoch && contacts::pressed_together(bodies, m, o, t) {
+                    if support(bodies, o) {
+                        held = true;
+                        continue;
+                    }
                     self.mark[o] = self.epoch;
                     cluster.push(o as u32);
                 }
@@ -103,7 +112,11 @@ impl Cluster {
                 touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
             }
         }
-        let mut velocity = if pinned || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
+        // Under the rest rule a cluster held up by a floor or by a body lying still lies still.
+        let g = bodies.gravity;
+        let floor = (0..3).any(|axis| (g[axis] < 0.0 && touches_min[axis]) || (g[axis] > 0.0 && touches_max[axis]));
+        let still = resting && (pinned || held || floor);
+        let mut velocity = if pinned || still || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
         for axis in 0..3 {
             if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {
                 velocity[axis] = 0.0;
@@ -118,6 +131,9 @@ impl Cluster {
             virial += bodies.offset_at(first, m, t).dot(gained);
             rules.freeze(m as u32, t);
             bodies.set_motion_at(m, t, velocity, DVec3::ZERO);
+            if still {
+                bodies.lie_still(m, t);
+            }
         }
         self.members = cluster;
         self.near = found;

@@ -202,10 +202,20 @@ pub(super) fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event
 }
 
 /// Body `body`'s wall contact if its canonical time lies in `window` (or where an undecided
-/// search stalled).
+/// search stalled); `proxies` holds the body's proxy, made from its current motion.
 #[inline]
-pub(crate) fn predict_wall(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+pub(super) fn predict_wall(
+    bodies: &Bodies,
+    proxies: &ProxyTable,
+    bounds: &BoxBounds,
+    body: u32,
+    window: Window,
+) -> Option<Event> {
     let i = body as usize;
+    // Its proxy, just made from this motion, found the wall contact past the window's end.
+    if proxies.meets_no_wall(i) && !(window.end > proxies.window().end) {
+        return None;
+    }
     let (time, partner) = match contacts::wall_start(bodies, i, bounds, window)? {
         Ok((time, wall)) => (time, Partner::Wall(wall)),
         Err(time) => (time, Partner::WallStalled),

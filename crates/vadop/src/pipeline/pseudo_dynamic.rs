@@ -20,6 +20,7 @@ use crate::frame::{Output, Physics};
 use crate::narrow_phase::spheres::wall_contact_time;
 use crate::numeric::direction;
 use crate::response::impact::{bounce_off_wall, exchange_virial, push_spheres};
+use crate::response::rest;
 use crate::response::rules::{ContactRules, Rule};
 use glam::DVec3;
 use std::time::Instant;
@@ -192,6 +193,20 @@ impl PseudoDynamic {
                         let stopped = v - v.dot(wall.outward_normal()).max(0.0) * wall.outward_normal();
                         bodies.set_velocity_at(i, t, stopped);
                         bodies.mass[i] * (v - stopped).length()
+                    }
+                    // Under gravity with restitution below 1 it comes to rest on a floor as in the
+                    // continuous methods (see [`crate::response::rest`]), or it would bounce
+                    // without end.
+                    Rule::Impulse { restitution, .. } if rest::applies(bodies, physics) => {
+                        let (v, before) = (bodies.velocity_at(i, t), bodies.rest_of(i));
+                        if rest::on_wall(bodies, physics, i, wall, t, restitution, false) {
+                            out.stats.rest_contacts += 1;
+                            bodies.mass[i] * (v - bodies.velocity(i)).length()
+                        } else {
+                            let impulse = bounce_off_wall(bodies, i, wall, t, restitution);
+                            rest::keep_held(bodies, physics, i, t, before);
+                            impulse
+                        }
                     }
                     Rule::Impulse { restitution, .. } => bounce_off_wall(bodies, i, wall, t, restitution),
                 };

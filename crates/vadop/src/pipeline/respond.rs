@@ -8,7 +8,7 @@
 //! next event). It never predicts a contact nor schedules an event itself.
 
 use super::Pipeline;
-use crate::bodies::Bodies;
+use crate::bodies::{Bodies, Rest};
 use crate::broad_phase::BroadPhase;
 use crate::frame::{Contact, FrameStats, Output, Physics, Touched};
 use crate::narrow_phase::contacts;
@@ -33,6 +33,9 @@ pub(crate) trait Responder {
     /// Body `a` (and, given, body `b > a`) changed motion at `t`: test it again (them, the pair
     /// once).
     fn moved(&mut self, bodies: &Bodies, physics: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats);
+    /// Body `woken`, which lay still (see [`crate::response::rest`]), moves at `t`: the bodies
+    /// it held up fall again.
+    fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats);
 }
 
 /// The impact of bodies `a < b` touching at `t`: where, the normal from `a` to `b`, how it was
@@ -50,6 +53,7 @@ pub(crate) fn pair_impact(
     let (i, j) = (a as usize, b as usize);
     let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
     let before_j = bodies.velocity_at(j, t);
+    let still = [i, j].map(|k| bodies.rest_of(k) == Rest::Still);
     let resolution = engine.impacts().pair(bodies, physics, (a, b), t, (point, normal), stats);
     let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
     let mut impulse = 0.0;
@@ -70,6 +74,15 @@ pub(crate) fn pair_impact(
                 stats.pair_virial += exchange_virial(bodies, (i, j), t, before_j);
             }
             engine.moved(bodies, physics, a, Some(b), t, stats);
+            for (k, was_still) in [(i, still[0]), (j, still[1])] {
+                if was_still && bodies.rest_of(k) != Rest::Still {
+                    engine.woke(bodies, physics, k, t, stats);
+                }
+            }
+        }
+        Resolution::Rested(k, total) => {
+            impulse = total;
+            engine.moved(bodies, physics, k, None, t, stats);
         }
         Resolution::Parting | Resolution::Passed => {}
     }
@@ -103,7 +116,9 @@ pub(crate) fn wall_contact(
             engine.moved(bodies, physics, a, None, t, out.stats);
             total
         }
-        Resolution::Parting | Resolution::Passed => unreachable!("a wall always turns a body back"),
+        Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => {
+            unreachable!("a wall always turns a body back")
+        }
     };
     out.contacts.push(Contact {
         time: t,
@@ -136,5 +151,8 @@ impl<B: BroadPhase> Responder for Pipeline<B> {
             Some(b) => self.retest_pair(a, b, bodies, physics, t, stats),
             None => self.retest(a, None, bodies, physics, t, stats),
         }
+    }
+    fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats) {
+        self.wake_held(bodies, physics, woken, t, stats);
     }
 }

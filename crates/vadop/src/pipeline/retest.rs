@@ -42,7 +42,7 @@ impl<B: BroadPhase> Pipeline<B> {
             self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
         }
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
-        if let Some(event) = predict_wall(bodies, &physics.bounds, body, window) {
+        if let Some(event) = predict_wall(bodies, &self.proxies, &physics.bounds, body, window) {
             queue.push(event);
         }
         if let Some(event) = predict_crossing(bodies, &physics.bounds, body, window) {

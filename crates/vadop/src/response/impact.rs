@@ -6,6 +6,7 @@
 //! because which bodies are near is the engine's knowledge, not the response's.
 
 use super::impulse::{pair_impulse, resolve_impact, wall_bounce, Impacted};
+use super::rest;
 use super::rules::{ContactRules, Rule};
 use crate::bodies::Bodies;
 use crate::frame::{FrameStats, Mode, Physics};
@@ -21,6 +22,9 @@ pub(crate) enum Resolution {
     Passed,
     /// New motions were set, with this total impulse: re-test the bodies that moved.
     Pushed(f64),
+    /// This body came to rest on the other, which is unchanged (the rest rule), taking this
+    /// impulse: re-test it alone.
+    Rested(u32, f64),
     /// Two plain spheres already parting: a zero impulse, nothing changed.
     Parting,
     /// Freeze the cluster touching them (the jam rule). `by_rule` when the contact rules called
@@ -139,6 +143,10 @@ impl Impacts {
             return Resolution::Passed;
         }
         let duration = tc_duration(physics);
+        // Whether each body's own previous contact lies within the contact duration (the TC
+        // model asks whether either's does).
+        let quick = [a, b]
+            .map(|k| t - self.rules.last_contact.get(k as usize).copied().unwrap_or(f64::NEG_INFINITY) < duration);
         // Level geometry keeps no contact history, as a wall keeps none: the TC model and the
         // jam count are about the moving body's own contacts.
         let rule = match fixed {
@@ -148,7 +156,25 @@ impl Impacts {
         };
         // Two moving spheres without friction: the closed-form impulse along the line of centres.
         let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
-        match rule {
+        let resting = rest::applies(bodies, physics);
+        let before = [bodies.rest_of(i), bodies.rest_of(j)];
+        // Gravity presses one onto the other whatever their velocities: they must part (see
+        // [`rest`]).
+        let pressed = if resting { rest::pressed_onto(bodies, (i, j), normal) } else { None };
+        if let (true, Rule::Impulse { restitution, .. }) = (resting, rule) {
+            if let Some((k, impulse)) = rest::against_still(bodies, (i, j), t, normal, (restitution, quick)) {
+                stats.rest_contacts += 1;
+                rest::keep_held(bodies, physics, k, t, before[(k == j) as usize]);
+                return Resolution::Rested(k as u32, impulse);
+            }
+            // The pressed body's repeat within the contact duration: it collapses onto the other,
+            // which holds it up, or is wedged.
+            if pressed.is_some_and(|k| quick[k]) {
+                return Resolution::Jammed { by_rule: true };
+            }
+        }
+        let pressed = pressed.is_some();
+        let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
                 let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
@@ -168,7 +194,7 @@ impl Impacts {
                 let clearance = contacts::clearance(bodies, i, j);
                 let points = &self.manifold.points;
                 match resolve_impact(&mut body_i, &mut body_j, points, restitution, physics.friction, clearance) {
-                    Some(total) if total > 0.0 => {
+                    Some(total) if total > 0.0 || pressed => {
                         stats.tc_contacts += changed as u64;
                         for (k, body) in [(i, body_i), (j, body_j)] {
                             if !bodies.is_fixed(k) {
@@ -183,6 +209,21 @@ impl Impacts {
                     Some(_) | None => Resolution::Jammed { by_rule: false },
                 }
             }
+        };
+        match resolution {
+            Resolution::Pushed(_) | Resolution::Parting if resting => {
+                let total = if let Resolution::Pushed(total) = resolution { total } else { 0.0 };
+                let parted = if pressed { rest::part(bodies, (i, j), t, normal) } else { 0.0 };
+                stats.rest_contacts += (parted > 0.0) as u64;
+                if total + parted == 0.0 {
+                    return Resolution::Parting;
+                }
+                for (k, before) in [(i, before[0]), (j, before[1])] {
+                    rest::keep_held(bodies, physics, k, t, before);
+                }
+                Resolution::Pushed(total + parted)
+            }
+            _ => resolution,
         }
     }
 
@@ -197,7 +238,16 @@ impl Impacts {
         stats: &mut FrameStats,
     ) -> Resolution {
         let i = a as usize;
-        match self.rules.wall(a, t, physics.restitution, tc_duration(physics)) {
+        let rule = self.rules.wall(a, t, physics.restitution, tc_duration(physics));
+        let (resting, before) = (rest::applies(bodies, physics), bodies.rest_of(i));
+        if let (true, Rule::Impulse { restitution, changed }) = (resting, rule) {
+            let velocity = bodies.velocity_at(i, t);
+            if rest::on_wall(bodies, physics, i, wall, t, restitution, changed) {
+                stats.rest_contacts += 1;
+                return Resolution::Pushed(bodies.mass[i] * (velocity - bodies.velocity(i)).length());
+            }
+        }
+        let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if bodies.is_sphere(i) && physics.friction == 0.0 => {
                 stats.tc_contacts += changed as u64;
@@ -220,6 +270,11 @@ impl Impacts {
                     Some(_) | None => Resolution::Jammed { by_rule: false },
                 }
             }
+        };
+        // A body sliding on the floor that bounced off a side wall slides on.
+        if let (true, Resolution::Pushed(_)) = (resting, resolution) {
+            rest::keep_held(bodies, physics, i, t, before);
         }
+        resolution
     }
 }

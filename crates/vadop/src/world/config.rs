@@ -123,8 +123,8 @@ pub struct WorldConfig {
     pub contact_ends: bool,
     /// Uniform acceleration of every moving body (e.g. `[0, 0, -9.81]`); zero by default. Paths
     /// are then parabolas, exact in both modes and for every method; this first version takes
-    /// spheres only (no other shapes, no static bodies) and, in simulate mode, restitution 1,
-    /// for a ball coming to rest on a floor needs a resting state that is not built yet.
+    /// spheres only (no other shapes, no static bodies). With restitution below 1 in simulate
+    /// mode bodies come to rest on the floor and on each other ([`crate::response::rest`]).
     #[serde(default)]
     pub gravity: DVec3,
 }

@@ -9,7 +9,7 @@
 //! produce bit-identical contact sequences. It never decides what touches or how bodies respond.
 
 use crate::axis_pool::AxisPool;
-use crate::bodies::{Bodies, Sphere};
+use crate::bodies::{Bodies, Rest, Sphere};
 use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::error::{check_length, check_magnitude, check_vector, Result, VadopError};
 use crate::frame::{Contact, FrameStats, Mode, Touched};
@@ -29,12 +29,16 @@ use engine::Engine;
 pub(crate) mod overlap;
 mod rigid;
 mod snapshot;
+mod transfer;
+mod wake;
 
 pub use config::{Method, WorldConfig, AUTO_POOL_AXES, MAX_BOX_LENGTHS_PER_FRAME};
 pub use rigid::{Body, BodyShape, ShapeId};
+pub use transfer::SphereRecord;
 
-/// Bounces a body may make on one wall in one step under gravity: a body resting on a floor
-/// would make infinitely many (resting contact is not built). One that nearly rests makes
+/// Bounces a body may make on one wall in one step under gravity where bodies may not come to
+/// rest (elastic or detect mode: see [`crate::response::rest`]): a body resting on a floor
+/// would make infinitely many. One that nearly rests makes
 /// thousands, which an elastic pile under strong gravity leaves in its floor layer, at a cost of
 /// well under a microsecond each; a million in a step is a body at rest.
 pub const MAX_BOUNCES_PER_STEP: f64 = 1e6;
@@ -67,6 +71,9 @@ pub struct World {
     unplaced: Vec<u32>,
     /// Built at the first step (see [`engine::build`]).
     engine: Option<Box<dyn Engine>>,
+    /// Bodies that lay still, moved or removed by the caller since the last step: where they
+    /// were and their radii (see `wake`).
+    released: Vec<(DVec3, f64)>,
     /// The threads of the frame pipeline (none with one thread).
     threads: Option<rayon::ThreadPool>,
     pool: Arc<AxisPool>,
@@ -80,6 +87,9 @@ pub struct World {
     stats: FrameStats,
     /// Raised by the caller to stop the step in progress (see [`World::set_interrupt`]).
     interrupt: Option<Arc<AtomicBool>>,
+    /// Last contacts of bodies added with their history before the engine (which keeps the
+    /// history) was built: given to it when it is.
+    history: Vec<(u32, f64)>,
 }
 
 /// What a step that may be interrupted must put back: what the engine keeps besides the bodies
@@ -114,9 +124,6 @@ impl World {
         if !config.gravity.is_finite() {
             return Err(VadopError::BadGravity(config.gravity.to_array()));
         }
-        if config.gravity != DVec3::ZERO && config.mode == Mode::Simulate && config.restitution < 1.0 {
-            return Err(VadopError::GravityUnsupported("restitution below 1"));
-        }
         let pool = AxisPool::new(config.pool_axes.unwrap_or(AUTO_POOL_AXES))?;
         check_phi(config.phi.unwrap_or(pool.covering_radius()), &pool)?;
         Ok(World {
@@ -127,6 +134,7 @@ impl World {
             free_slots: Vec::new(),
             unplaced: Vec::new(),
             engine: None,
+            released: Vec::new(),
             threads: None,
             pool,
             time: 0.0,
@@ -135,6 +143,7 @@ impl World {
             ends: Vec::new(),
             stats: FrameStats::default(),
             interrupt: None,
+            history: Vec::new(),
         })
     }
 
@@ -151,8 +160,9 @@ impl World {
         self.check_room(1)?;
         let slot = self.free_slots.pop().unwrap_or(self.bodies.slots() as u32);
         write(&mut self.bodies, slot as usize, self.time);
-        if let Some(rules) = self.rules_mut() {
-            rules.forget(slot as usize);
+        match self.rules_mut() {
+            Some(rules) => rules.forget(slot as usize),
+            None => self.history.retain(|&(kept, _)| kept != slot),
         }
         self.live += 1;
         self.unplaced.push(slot);
@@ -186,6 +196,7 @@ impl World {
     fn remove_slot(&mut self, handle: BodyHandle) -> Result<()> {
         let i = self.live_slot(handle)?;
         let slot = i as u32;
+        self.release(i);
         self.bodies.remove(i);
         self.live -= 1;
         self.unplaced.retain(|&u| u != slot);
@@ -212,6 +223,7 @@ impl World {
     pub fn set_velocity(&mut self, handle: BodyHandle, velocity: DVec3) -> Result<()> {
         let i = self.moving_slot(handle)?;
         check_vector("velocity", velocity)?;
+        self.release(i);
         self.bodies.set_velocity_at(i, self.time, velocity);
         self.reenter(i);
         Ok(())
@@ -261,6 +273,25 @@ impl World {
     /// ```
     pub fn crossings(&self, handle: BodyHandle) -> Result<[i64; 3]> {
         Ok(self.bodies.crossings_of(self.live_slot(handle)?))
+    }
+
+    /// How a body is held up under gravity (see [`Rest`]): falling, sliding on a wall or lying
+    /// still. Bodies come to rest only in simulate mode with restitution below 1.
+    ///
+    /// ```
+    /// use glam::DVec3;
+    /// use vadop::{BoxBounds, Rest, Sphere, World, WorldConfig};
+    /// let config = WorldConfig { gravity: DVec3::new(0.0, 0.0, -9.81), restitution: 0.5, ..WorldConfig::default() };
+    /// let mut world = World::new(BoxBounds::cube(10.0)?, config)?;
+    /// let ball = world.add_sphere(Sphere { position: DVec3::new(5.0, 5.0, 2.0), velocity: DVec3::ZERO, radius: 0.5, mass: 1.0 })?;
+    /// assert_eq!(world.rest(ball)?, Rest::Falling);
+    /// world.step(3.0)?;
+    /// assert_eq!(world.rest(ball)?, Rest::Still);
+    /// assert!((world.sphere(ball)?.position.z - 0.5).abs() < 1e-9);
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn rest(&self, handle: BodyHandle) -> Result<Rest> {
+        Ok(self.bodies.rest_of(self.live_slot(handle)?))
     }
 
     /// The live bodies that are moving spheres, with their handles, in ascending order of handle
@@ -422,6 +453,7 @@ impl World {
         self.stats = FrameStats::default();
         let waiting = self.unplaced.clone();
         self.place_new_bodies();
+        self.wake_released();
         let before = self.keep_undo(waiting);
         let physics = self.physics();
         let World { engine, bodies, contacts, ends, stats, threads, interrupt, .. } = self;
@@ -544,6 +576,26 @@ impl World {
         self.engine.as_ref().map(|engine| engine.rules())
     }
 
+    /// The time of body `i`'s last contact, if it had one.
+    pub(super) fn last_contact(&self, i: usize) -> Option<f64> {
+        let kept = match self.rules() {
+            Some(rules) => rules.last_contact.get(i).copied(),
+            None => self.history.iter().rev().find(|&&(slot, _)| slot as usize == i).map(|&(_, t)| t),
+        };
+        kept.filter(|t| t.is_finite())
+    }
+
+    /// Body `i`'s last contact was at `t`; kept until the engine exists when it does not yet.
+    fn set_last_contact(&mut self, i: usize, t: f64) {
+        match self.rules_mut() {
+            Some(rules) => {
+                rules.resize(i + 1);
+                rules.last_contact[i] = t;
+            }
+            None => self.history.push((i as u32, t)),
+        }
+    }
+
     /// Slots no new body can take: the live bodies' and the retired ones (see
     /// [`BodyHandle::MAX_GENERATION`]). Slot indices must fit a handle's 32 bits.
     fn used_slots(&self) -> usize {
@@ -608,13 +660,13 @@ impl World {
         Ok(())
     }
 
-    /// Under gravity, no body may rest on a wall it is pulled towards: with no resting state it
-    /// would bounce without end. The height h a body's bounce reaches above touching is its
+    /// Under gravity where bodies may not come to rest (an elastic world, detect mode), no body
+    /// may rest on a wall it is pulled towards: it would bounce without end. The height h a body's bounce reaches above touching is its
     /// distance plus v^2 / 2g along each pulled axis, a bounce lasts 2 sqrt(2 h / g), and a body
     /// that would bounce more than [`MAX_BOUNCES_PER_STEP`] times in the step is refused.
     fn check_not_resting(&self, dt: f64) -> Result<()> {
         let g = self.config.gravity;
-        if g == DVec3::ZERO {
+        if g == DVec3::ZERO || (self.config.mode == Mode::Simulate && self.config.restitution < 1.0) {
             return Ok(());
         }
         for i in self.moving_ids() {
@@ -685,6 +737,9 @@ impl World {
             let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
             self.engine =
                 Some(engine::build(self.config.method.resolve(), &self.config, &self.pool, &self.bounds, workers));
+        }
+        for (i, t) in std::mem::take(&mut self.history) {
+            self.set_last_contact(i as usize, t);
         }
         let physics = self.physics();
         let (bodies, time, stats) = (&self.bodies, self.time, &mut self.stats);

@@ -40,34 +40,69 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(
             }
         }
     }
-    let position = |i: u32| bodies.position_at(i as usize, time);
-    let max_radius = live.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
-    let (lo, hi) = live.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &i| {
-        let p = position(i);
-        (lo.min(p), hi.max(p))
-    });
-    // Cells at least one diameter wide, and few enough per axis to fit the key. On a periodic
-    // axis they tile the box's side, and the neighbours of the last cell are the first ones.
-    let limit = (1u64 << CELL_BITS) as f64 - 2.0;
-    let cell = (2.0 * max_radius).max((hi - lo).max_element() / limit).max(f64::MIN_POSITIVE);
-    let periodic = bodies.periodic;
-    let axes: [(f64, f64, u64, bool); 3] = std::array::from_fn(|a| match periodic.axes[a] {
-        true => {
-            let count = ((periodic.side[a] / cell).floor() as u64).clamp(1, limit as u64);
-            (periodic.min[a], periodic.side[a] / count as f64, count, true)
-        }
-        false => (lo[a], cell, u64::MAX, false),
-    });
-    let coords = |p: DVec3| -> [u64; 3] {
+    let cells = Cells::new(bodies, &live, time, live.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max));
+    for &a in new_bodies.iter().filter(|&&a| !bodies.is_fixed(a as usize)) {
+        cells.for_each_near(bodies.position_at(a as usize, time), |b| {
+            if b != a {
+                if let Some(depth) = penetration(bodies, a as usize, b as usize, time) {
+                    note(a, b, depth);
+                }
+            }
+        });
+    }
+    found
+}
+
+/// A grid of cells, each at least one largest diameter wide, over some bodies at an instant:
+/// their ids sorted by cell index (an index, not a hash). On a periodic axis the cells tile the
+/// box and wrap around, so bodies touching across a face are neighbours too.
+pub(crate) struct Cells {
+    /// Per axis: the first cell's low end, the cells' width, their count, and whether they wrap.
+    axes: [(f64, f64, u64, bool); 3],
+    by_cell: Vec<(u64, u32)>,
+}
+
+impl Cells {
+    /// The cells of the bodies `ids` at `time`, for bodies of radius at most `largest`.
+    pub(crate) fn new(bodies: &Bodies, ids: &[u32], time: f64, largest: f64) -> Cells {
+        let position = |i: u32| bodies.position_at(i as usize, time);
+        let (lo, hi) = ids.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &i| {
+            let p = position(i);
+            (lo.min(p), hi.max(p))
+        });
+        // Cells at least one diameter wide, and few enough per axis to fit the key. On a periodic
+        // axis they tile the box's side, and the neighbours of the last cell are the first ones.
+        let limit = (1u64 << CELL_BITS) as f64 - 2.0;
+        let cell = (2.0 * largest).max((hi - lo).max_element() / limit).max(f64::MIN_POSITIVE);
+        let periodic = bodies.periodic;
+        let axes = std::array::from_fn(|a| match periodic.axes[a] {
+            true => {
+                let count = ((periodic.side[a] / cell).floor() as u64).clamp(1, limit as u64);
+                (periodic.min[a], periodic.side[a] / count as f64, count, true)
+            }
+            false => (lo[a], cell, u64::MAX, false),
+        });
+        let mut cells = Cells { axes, by_cell: Vec::with_capacity(ids.len()) };
+        let by_cell: Vec<(u64, u32)> = ids.iter().map(|&i| (cells.key(cells.coords(position(i))), i)).collect();
+        cells.by_cell = by_cell;
+        cells.by_cell.sort_unstable();
+        cells
+    }
+
+    fn coords(&self, p: DVec3) -> [u64; 3] {
         std::array::from_fn(|a| {
-            let (origin, width, count, _) = axes[a];
+            let (origin, width, count, _) = self.axes[a];
             (((p[a] - origin) / width).floor().max(0.0) as u64).min(count - 1)
         })
-    };
-    let key = |c: [u64; 3]| c[0] | (c[1] << CELL_BITS) | (c[2] << (2 * CELL_BITS));
-    // The cells next to coordinate `c` on axis `a` (itself included), each once.
-    let near = |a: usize, c: u64| -> ([u64; 3], usize) {
-        let (_, _, count, wraps) = axes[a];
+    }
+
+    fn key(&self, c: [u64; 3]) -> u64 {
+        c[0] | (c[1] << CELL_BITS) | (c[2] << (2 * CELL_BITS))
+    }
+
+    /// The cells next to coordinate `c` on axis `a` (itself included), each once.
+    fn near(&self, a: usize, c: u64) -> ([u64; 3], usize) {
+        let (_, _, count, wraps) = self.axes[a];
         let mut cells = [0u64; 3];
         let mut n = 0;
         for step in 0..3u64 {
@@ -82,28 +117,23 @@ pub fn first_overlap(bodies: &Bodies, new_bodies: &[u32], time: f64) -> Option<(
             }
         }
         (cells, n)
-    };
-    let mut by_cell: Vec<(u64, u32)> = live.iter().map(|&i| (key(coords(position(i))), i)).collect();
-    by_cell.sort_unstable();
-    for &a in new_bodies.iter().filter(|&&a| !bodies.is_fixed(a as usize)) {
-        let c = coords(position(a));
-        let ((zs, nz), (ys, ny), (xs, nx)) = (near(2, c[2]), near(1, c[1]), near(0, c[0]));
+    }
+
+    /// Calls `f` with every body in the cells next to `position`'s: every body within one cell
+    /// width of it, and some farther.
+    pub(crate) fn for_each_near(&self, position: DVec3, mut f: impl FnMut(u32)) {
+        let c = self.coords(position);
+        let ((zs, nz), (ys, ny), (xs, nx)) = (self.near(2, c[2]), self.near(1, c[1]), self.near(0, c[0]));
         for &z in &zs[..nz] {
             for &y in &ys[..ny] {
                 for &x in &xs[..nx] {
-                    let k = key([x, y, z]);
-                    let start = by_cell.partition_point(|&(ck, _)| ck < k);
-                    for &(_, b) in by_cell[start..].iter().take_while(|&&(ck, _)| ck == k) {
-                        if b == a {
-                            continue;
-                        }
-                        if let Some(depth) = penetration(bodies, a as usize, b as usize, time) {
-                            note(a, b, depth);
-                        }
+                    let k = self.key([x, y, z]);
+                    let start = self.by_cell.partition_point(|&(ck, _)| ck < k);
+                    for &(_, b) in self.by_cell[start..].iter().take_while(|&&(ck, _)| ck == k) {
+                        f(b);
                     }
                 }
             }
         }
     }
-    found
 }

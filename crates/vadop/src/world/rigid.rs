@@ -159,6 +159,7 @@ impl World {
         let i = self.moving_slot(handle)?;
         check_vector("velocity", velocity)?;
         check_vector("angular velocity", angular_velocity)?;
+        self.release(i);
         self.bodies.set_motion_at(i, self.time, velocity, angular_velocity);
         self.reenter(i);
         Ok(())

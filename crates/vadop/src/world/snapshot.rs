@@ -19,7 +19,7 @@
 //! previous file intact.
 
 use super::{BoxBounds, Mode, World, WorldConfig};
-use crate::bodies::{RigidState, Sphere};
+use crate::bodies::{Rest, RigidState, Sphere};
 use crate::error::{Result, VadopError};
 use crate::handle::BodyHandle;
 use crate::motion::Motion;
@@ -65,6 +65,10 @@ struct Snapshot {
     /// True when the store keeps shapes and spins for every slot (then every slot has one).
     #[serde(default)]
     rigid: bool,
+    /// Bodies that lay still, moved or removed since the last step: where they were and their
+    /// radii, so the next step wakes what lay on them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    released: Vec<(DVec3, f64)>,
 }
 
 /// A rigid body's shape and spin: its shape's id, its orientation and angular velocity at its
@@ -99,6 +103,13 @@ struct Slot {
     /// In a periodic box: the body's crossings of each periodic axis's faces.
     #[serde(default, skip_serializing_if = "is_zero")]
     crossings: [i64; 3],
+    /// Under gravity: how the body is held up, when at rest.
+    #[serde(default, skip_serializing_if = "is_falling")]
+    rest: Rest,
+}
+
+fn is_falling(rest: &Rest) -> bool {
+    *rest == Rest::Falling
 }
 
 fn is_zero(crossings: &[i64; 3]) -> bool {
@@ -125,7 +136,6 @@ impl World {
         let io =
             |e: &dyn std::fmt::Display| VadopError::Io { path: path.display().to_string(), message: e.to_string() };
         let b = &self.bodies;
-        let history = self.rules().map(|r| &r.last_contact[..]).unwrap_or(&[]);
         let slots = (0..b.slots())
             .map(|i| Slot {
                 position: b.state[i].motion.position,
@@ -135,8 +145,9 @@ impl World {
                 mass: if b.is_fixed(i) { 0.0 } else { b.mass[i] },
                 alive: b.alive[i],
                 generation: b.generation[i],
-                last_contact: history.get(i).copied().filter(|t| t.is_finite()),
+                last_contact: self.last_contact(i),
                 crossings: b.crossings_of(i),
+                rest: b.rest_of(i),
                 spin: b.has_rigid().then(|| SlotSpin {
                     shape: b.rigid.shape[i],
                     orientation: b.rigid.spin_start[i].0,
@@ -156,6 +167,7 @@ impl World {
             slots,
             free_slots: self.free_slots.clone(),
             unplaced: self.unplaced.clone(),
+            released: self.released.clone(),
             overlapping,
             touching_since,
             shapes: b.rigid.shapes.iter().map(|g| g.shape().clone()).collect(),
@@ -192,9 +204,7 @@ impl World {
         world.time = time;
         // Bodies end a frame up to a rounding error outside the box; a damaged file is further out.
         let exact = world.bounds;
-        let slack = 1e-9 * (exact.max - exact.min).max_element()
-            + 4.0 * f64::EPSILON * exact.min.abs().max(exact.max.abs()).max_element();
-        world.bounds = BoxBounds { min: exact.min - slack, max: exact.max + slack, periodic: exact.periodic };
+        world.bounds = exact.with_rounding_slack();
         let shapes = snapshot
             .shapes
             .iter()
@@ -229,7 +239,13 @@ impl World {
             // A removed body's slot only keeps its place and generation; a live one must be where
             // stepping put it.
             let motion = Motion { position: slot.position, since: slot.since, velocity: slot.velocity };
-            let now = motion.at_under(time, world.config.gravity);
+            if !slot.rest.fits(slot.velocity, world.config.gravity) {
+                return Err(bad(format!(
+                    "slot {i}: rest {:?} needs gravity, and no velocity along the walls it slides on (axes as bits 1 to 7) or none at all lying still",
+                    slot.rest
+                )));
+            }
+            let now = motion.at_under(time, slot.rest.acceleration(world.config.gravity));
             let checked = match &slot.spin {
                 None => world.check_sphere(&at(slot.position)).and_then(|()| match slot.alive {
                     true => world.check_sphere(&at(now)),
@@ -276,6 +292,7 @@ impl World {
                 world.bodies.crossings.resize(world.bodies.slots(), [0; 3]);
                 world.bodies.crossings[i] = slot.crossings;
             }
+            world.bodies.set_rest(i, slot.rest);
         }
         world.bounds = exact;
         let slots = snapshot.slots.len();
@@ -339,6 +356,10 @@ impl World {
         // Enter the bodies that had been stepped into a fresh engine now, so the next step
         // checks only the bodies added since the last one, exactly as the saved world would.
         world.enter_stepped(snapshot.unplaced);
+        if !snapshot.released.iter().all(|&(p, r)| p.is_finite() && r.is_finite() && r > 0.0) {
+            return Err(bad("released bodies need finite positions and positive radii".to_string()));
+        }
+        world.released = snapshot.released;
         if let Some(rules) = world.rules_mut() {
             rules.resize(slots);
             for (i, slot) in snapshot.slots.iter().enumerate() {

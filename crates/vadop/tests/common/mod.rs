@@ -82,6 +82,35 @@ pub fn frame_end_violation(world: &World, pairs: bool) -> Option<String> {
     None
 }
 
+/// What is wrong at a frame end in a periodic box, if anything: a centre outside the faces of a
+/// periodic axis, a body through a wall of a walled one, or (simulate mode) two bodies
+/// overlapping through their nearest images beyond the contact tolerance.
+pub fn periodic_violation(world: &World) -> Option<String> {
+    let bounds = world.bounds();
+    let spheres: Vec<_> = world.spheres().collect();
+    for (id, s) in &spheres {
+        for a in 0..3 {
+            let reach = if bounds.periodic[a] { 0.0 } else { s.radius };
+            let slack = 1e-9 * s.radius;
+            if s.position[a] - reach < bounds.min[a] - slack || s.position[a] + reach > bounds.max[a] + slack {
+                return Some(format!("body {id} left the box on axis {a}: {s:?}"));
+            }
+        }
+    }
+    if world.config().mode == Mode::Simulate {
+        for (k, (i, a)) in spheres.iter().enumerate() {
+            for (j, b) in &spheres[k + 1..] {
+                let reach = a.radius + b.radius;
+                let distance = bounds.nearest_image(b.position - a.position).length();
+                if distance < reach * (1.0 - 1e-8) {
+                    return Some(format!("bodies {i} and {j} overlap by {:e}", reach - distance));
+                }
+            }
+        }
+    }
+    None
+}
+
 /// Steps `found` and the brute-force `oracle` side by side for `frames` frames of `dt`: each
 /// frame's contacts must match the oracle's to the bit, then `check(frame, oracle)` runs; at the
 /// end the states must match to the bit. A step both refuse ends the run early and returns the

@@ -100,6 +100,13 @@ pub(super) trait Gauge {
     }
     /// Takes up a warm start that [`Self::warm_start`] gave.
     fn set_warm_start(&self, _warm: Option<Warm>) {}
+    /// Whether the two shapes only translate: neither turns, or turning leaves each where it is
+    /// (see [`super::scaled::still`]). Their signed distance is then a convex function of time
+    /// (that of a point moving in a straight line to a fixed convex set, their Minkowski
+    /// difference).
+    fn translating(&self) -> bool {
+        false
+    }
 }
 
 /// The times since the reference `[enter, leave]` outside which a pair is certainly farther apart
@@ -270,12 +277,9 @@ impl ConvexPair<'_> {
         deepest: Deepest,
         slack: f64,
     ) -> f64 {
-        let turning =
-            |body: &Body| if body.geometry.rotation_radius() == 0.0 { 0.0 } else { body.spin.max_angular_speed() };
         let (mass_a, mass_b) = (DVec3::ZERO, self.offset + self.velocity * tau);
-        let (turn_a, turn_b) = (turning(&self.a), turning(&self.b));
-        let ball_a = |(centre, radius): (DVec3, f64)| InnerBall::new(centre, radius, mass_a, turn_a);
-        let ball_b = |(centre, radius): (DVec3, f64)| InnerBall::new(centre, radius, mass_b, turn_b);
+        let ball_a = |(centre, radius)| InnerBall { centre, radius, drift: self.a.drift_of(centre, mass_a) };
+        let ball_b = |(centre, radius)| InnerBall { centre, radius, drift: self.b.drift_of(centre, mass_b) };
         let (middle_a, middle_b) = self.middles;
         let middle_a = middle_a.map(|(centre, radius)| ball_a((*pose_a * centre, radius)));
         let middle_b = middle_b.map(|(centre, radius)| ball_b((*pose_b * centre, radius)));
@@ -320,7 +324,7 @@ impl ConvexPair<'_> {
         let centre = self.offset + self.velocity * tau;
         let Some(n) = direction(centre).filter(|_| self.spin > 0.0) else { return NO_FAR };
         let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
-        let (spin_a, spin_b) = (self.a.spin_rate() * self.scale, self.b.spin_rate() * self.scale);
+        let (spin_a, spin_b) = (self.a.spin_rate_along(n) * self.scale, self.b.spin_rate_along(n) * self.scale);
         let closing = (-self.velocity.dot(n)).max(0.0);
         let centres = n.dot(centre);
         let near_b = n.dot(b.support_point(pose_b, -n));
@@ -339,6 +343,11 @@ impl ConvexPair<'_> {
             step(*x).total_cmp(&step(*y))
         })
         .unwrap_or(NO_FAR)
+    }
+
+    /// How fast turning can shrink the separation along the fixed unit axis `n` (scaled).
+    fn spin_along(&self, n: DVec3) -> f64 {
+        (self.a.spin_rate_along(n) + self.b.spin_rate_along(n)) * self.scale
     }
 
     pub(super) fn poses(&self, tau: f64) -> (Pose, Pose) {
@@ -381,7 +390,7 @@ impl Gauge for ConvexPair<'_> {
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
-            shrink: (-self.velocity.dot(bounds.axis)).max(0.0) + self.spin,
+            shrink: (-self.velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
             grow,
             far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
             hold,
@@ -403,6 +412,9 @@ impl Gauge for ConvexPair<'_> {
     fn set_warm_start(&self, warm: Option<Warm>) {
         self.warm.set(warm);
     }
+    fn translating(&self) -> bool {
+        self.a.still.is_some() && self.b.still.is_some()
+    }
 }
 
 /// A solid and a half-space. The frame has world axes and its origin at the half-space's origin.
@@ -416,7 +428,6 @@ pub(super) struct PlanePair<'a> {
     pub(super) offset: DVec3,
     /// The body's velocity minus the plane's, scaled.
     pub(super) velocity: DVec3,
-    pub(super) spin: f64,
     pub(super) size: f64,
 }
 
@@ -435,13 +446,14 @@ impl Gauge for PlanePair<'_> {
     fn probe(&self, tau: f64, _measure: Measure) -> Probe {
         let (n, _, distance, slack) = self.state(tau);
         let approach = self.velocity.dot(n);
+        let spin = self.body.spin_rate_along(n) * self.scale;
         // The body's bounding sphere above the plane, which does not turn.
         let height = n.dot(self.offset + self.velocity * tau) - self.size;
         Probe {
             lower: distance - slack,
             upper: distance + slack,
-            shrink: (-approach).max(0.0) + self.spin,
-            grow: approach.max(0.0) + self.spin,
+            shrink: (-approach).max(0.0) + spin,
+            grow: approach.max(0.0) + spin,
             far: (height - slack, (-approach).max(0.0)),
             hold: 0.0,
         }
@@ -629,6 +641,12 @@ impl Gauge for PairGauge<'_> {
             PairGauge::Mesh(g, _) => g.set_warm_start(warm),
         }
     }
+    fn translating(&self) -> bool {
+        match self {
+            PairGauge::Convex(g) => g.translating(),
+            PairGauge::Plane(..) | PairGauge::Mesh(..) => false,
+        }
+    }
 }
 
 /// A solid and one wall of the box. The frame has world axes and its origin at the body's centre
@@ -642,7 +660,6 @@ pub(super) struct WallGauge<'a> {
     pub(super) gap: f64,
     /// Velocity towards the wall, scaled.
     pub(super) speed: f64,
-    pub(super) spin: f64,
     pub(super) size: f64,
 }
 
@@ -660,11 +677,12 @@ impl Gauge for WallGauge<'_> {
         let (distance, _, slack) = self.distance(tau);
         // The body's bounding sphere from the wall.
         let sphere = self.gap - self.speed * tau - self.size;
+        let spin = self.body.spin_rate_along(self.normal) * self.scale;
         Probe {
             lower: distance - slack,
             upper: distance + slack,
-            shrink: self.speed.max(0.0) + self.spin,
-            grow: (-self.speed).max(0.0) + self.spin,
+            shrink: self.speed.max(0.0) + spin,
+            grow: (-self.speed).max(0.0) + spin,
             far: (sphere - slack, self.speed.max(0.0)),
             hold: 0.0,
         }

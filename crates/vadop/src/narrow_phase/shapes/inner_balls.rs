@@ -20,14 +20,6 @@ pub(super) struct InnerBall {
     pub(super) drift: f64,
 }
 
-impl InnerBall {
-    /// The ball about `centre` of `radius` in a body whose centre of mass is at `mass_centre`,
-    /// turning at most at `angular_speed`.
-    pub(super) fn new(centre: DVec3, radius: f64, mass_centre: DVec3, angular_speed: f64) -> InnerBall {
-        InnerBall { centre, radius, drift: angular_speed * centre.distance(mass_centre) }
-    }
-}
-
 /// The longest time `s >= 0` over which the ball `b` (in the second body) stays within `limit`
 /// of the ball `a` (in the first) while the second body's centre of mass moves at `velocity`
 /// relative to the first's, up to `slack` of rounding: over it the shapes' signed distance stays

@@ -331,7 +331,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
             let parry = fixed.geometry.parry_shape();
             if let Some(half_space) = parry.as_halfspace() {
                 let normal = half_space.normal;
-                let pair = PlanePair { body, plane: fixed, normal, scale, offset, velocity, spin, size: size * scale };
+                let pair = PlanePair { body, plane: fixed, normal, scale, offset, velocity, size: size * scale };
                 PairGauge::Plane(pair, first_static)
             } else {
                 let trimesh = parry.as_trimesh().expect("static-only shapes are half-spaces or meshes");
@@ -639,12 +639,10 @@ fn wall_searcher<'a, S: Spin>(
     let axis = wall.axis();
     let gap = if wall.is_max() { max[axis] - body.position[axis] } else { body.position[axis] - min[axis] };
     let speed = if wall.is_max() { body.velocity[axis] } else { -body.velocity[axis] };
-    let spin = body.spin_rate() * scale;
     let gauge = WallGauge {
         normal: wall.outward_normal(),
         gap: gap * scale,
         speed: speed * scale,
-        spin,
         size: size * scale,
         scale,
         body,

@@ -277,36 +277,96 @@ impl SupportMap for Scaled<'_> {
 pub(super) struct Body<'a> {
     pub(super) geometry: &'a ShapeGeometry,
     pub(super) spin: &'a dyn Spin,
-    /// Reference minus `since`: the spin is read at `lag + tau`.
     pub(super) lag: f64,
-    /// Centre of mass at the reference.
     pub(super) position: DVec3,
     pub(super) velocity: DVec3,
+    /// The orientation of a body whose turning leaves its shape where it is: a ball, a body that
+    /// does not turn, or a steady spin about the shape's axis of symmetry (see [`still`]). Its
+    /// shape is then the same set at every time, taken at this orientation; `None` for a body
+    /// whose turning moves its shape.
+    pub(super) still: Option<DQuat>,
+    /// The world axis (a unit vector) of a steady spin that moves the shape, and how far the
+    /// shape's core reaches from the line along it through the centre of mass: a point of the
+    /// core moves at most `max_angular_speed` times its distance from that line, and only across
+    /// the axis. Without a steady axis, the rotation radius.
+    pub(super) axis: Option<DVec3>,
+    pub(super) reach: f64,
+}
+
+/// The orientation at which a body of `geometry` turning by `spin` always shows the same shape,
+/// if it does: its orientation at its motion's start when it is a ball (or a static-only shape),
+/// when it does not turn, or when it turns steadily about the axis the shape is symmetric about
+/// (a capsule, cylinder or cone about its own y axis; exactly: the spin's body-frame components
+/// off that axis are zero after [`crate::motion::FreeRotation`]'s rounding snap).
+pub(super) fn still(geometry: &ShapeGeometry, spin: &dyn Spin) -> Option<DQuat> {
+    let unmoved = geometry.rotation_radius() == 0.0
+        || spin.steady_spin().is_some_and(|w| {
+            w == DVec3::ZERO || geometry.symmetry_axis().is_some_and(|axis| w.cross(axis) == DVec3::ZERO)
+        });
+    unmoved.then(|| spin.orientation_at(0.0))
 }
 
 impl<'a> Body<'a> {
     pub(super) fn new<S: Spin>(geometry: &'a ShapeGeometry, motion: &'a RigidMotion<S>, reference: f64) -> Self {
         let lag = reference - motion.since;
+        let still = still(geometry, &motion.spin);
+        let steady = motion.spin.steady_spin().filter(|_| still.is_none()).and_then(|w| w.try_normalize());
+        let (axis, reach) = match steady {
+            Some(w) => (Some(motion.spin.orientation_at(0.0) * w), geometry.rotation_radius_about(w)),
+            None => (None, geometry.rotation_radius()),
+        };
         Body {
             geometry,
             spin: &motion.spin,
             lag,
             position: motion.position + lag * motion.velocity,
             velocity: motion.velocity,
+            still,
+            axis,
+            reach,
         }
     }
 
     pub(super) fn orientation(&self, tau: f64) -> DQuat {
-        self.spin.orientation_at(self.lag + tau)
+        match self.still {
+            Some(q) => q,
+            None => self.spin.orientation_at(self.lag + tau),
+        }
+    }
+
+    /// A bound on how fast the body's shape turns: 0 when turning leaves it where it is.
+    pub(super) fn turning_speed(&self) -> f64 {
+        if self.still.is_some() {
+            0.0
+        } else {
+            self.spin.max_angular_speed()
+        }
     }
 
     /// How fast turning can move the surface, in unscaled lengths per time.
     pub(super) fn spin_rate(&self) -> f64 {
-        if self.geometry.rotation_radius() == 0.0 {
-            0.0
-        } else {
-            self.spin.max_angular_speed() * self.geometry.rotation_radius()
+        self.turning_speed() * self.reach
+    }
+
+    /// How fast turning can move the shape's support along the fixed unit direction `n`, in
+    /// unscaled lengths per time: a steady spin moves points only across its axis.
+    pub(super) fn spin_rate_along(&self, n: DVec3) -> f64 {
+        match self.axis {
+            Some(axis) => self.spin_rate() * (n.cross(axis).length() * (1.0 + 1e-12)).min(1.0),
+            None => self.spin_rate(),
         }
+    }
+
+    /// How fast turning can move the point `p` fixed in the body (in any frame with the body's
+    /// centre of mass at `centre`, world axes): its distance from the spin's axis (or from the
+    /// centre of mass, without a steady one) times the angular speed bound.
+    pub(super) fn drift_of(&self, p: DVec3, centre: DVec3) -> f64 {
+        let offset = p - centre;
+        let lever = match self.axis {
+            Some(axis) => offset.reject_from_normalized(axis).length() * (1.0 + 1e-12),
+            None => offset.length(),
+        };
+        self.turning_speed() * lever
     }
 
     pub(super) fn support(&self, scale: f64) -> Scaled<'a> {
@@ -323,7 +383,42 @@ impl<'a> Body<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::shape::Shape;
     use rand::{Rng, SeedableRng};
+
+    /// No point of a solid's core (its support points in every direction) lies farther from a
+    /// line through the centre of mass than `rotation_radius_about` that line's axis says, and
+    /// about a principal axis, for a cuboid, a capsule and a hull, some point lies nearly that
+    /// far: the bound a steady spin about the axis moves the shape by.
+    #[test]
+    fn the_core_lies_within_its_reach_from_every_axis() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let mut unit = move || {
+            DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+                .normalize_or(DVec3::X)
+        };
+        for shape in crate::shape::one_solid_of_each_kind() {
+            let geometry = shape.geometry().unwrap();
+            let scaled = Scaled::new(geometry.parry_shape().as_ref(), 1.0);
+            let exact = matches!(shape, Shape::Cuboid { .. } | Shape::Capsule { .. } | Shape::ConvexHull { .. });
+            for case in 0..200 {
+                // The principal axes, where the bound is exact, then any.
+                let axis = if case < 6 { DVec3::AXES[case % 3] * if case < 3 { 1.0 } else { -1.0 } } else { unit() };
+                let bound = geometry.rotation_radius_about(axis);
+                assert!(bound <= geometry.rotation_radius(), "{shape:?}: {bound} above the rotation radius");
+                let mut farthest: f64 = 0.0;
+                for _ in 0..400 {
+                    let point = geometry.body_from_shape() * scaled.core().local_support_point(unit());
+                    let off = point.reject_from_normalized(axis).length();
+                    assert!(off <= bound * (1.0 + 1e-9), "{shape:?} about {axis}: {off} beyond {bound}");
+                    farthest = farthest.max(off);
+                }
+                if exact && case < 6 {
+                    assert!(farthest >= 0.9 * bound, "{shape:?} about {axis}: {farthest} of {bound}");
+                }
+            }
+        }
+    }
 
     /// The depth of a point inside each solid is its distance to the boundary (parry's
     /// projection), to rounding; outside it is at most 0; and the inward direction deepens it.

@@ -156,6 +156,19 @@ impl<G: Gauge> Searcher<G> {
 
     /// The end of the contact in progress at `tau`, before absolute time `end`.
     pub(super) fn contact_end(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
+        if self.gauge.translating() {
+            return match self.translating_end(tau)? {
+                Some(found) if self.reference + found < end => Ok(Some(found)),
+                // The chain goes on from the end as the caller would take it up (restarted
+                // there, see `after_contact`), outside the contact: the same iterates follow.
+                Some(found) => {
+                    let next = self.restart_at(self.reference + found);
+                    self.parked = Some(Parked { tau: next, in_contact: false });
+                    Ok(None)
+                }
+                None => Ok(self.done()),
+            };
+        }
         loop {
             if !(self.reference + tau < end) {
                 self.parked = Some(Parked { tau, in_contact: true });
@@ -181,6 +194,76 @@ impl<G: Gauge> Searcher<G> {
                 Some(next) => tau = next.min(self.leave()),
                 None => return Ok(self.done()),
             }
+        }
+    }
+
+    /// The end of the contact in progress at `tau` of a pair that only translates, whatever
+    /// window asks (the same iterates for every caller); `None` when it never ends.
+    ///
+    /// The signed distance `d` is then convex in time: between two times where it is at most
+    /// `2 tol` it stays so, and a time where the bounds put it in `(tol, 2 tol)` (less the
+    /// margins) ends the contact in progress at `tau`, where it is at most `2 tol`. Such a time is
+    /// found by the Illinois variant of regula falsi on the bounds' midpoint against the middle
+    /// of that band, bracketed by `tau` and the time the bounding volumes part (where `d`
+    /// exceeds `2 tol`), bisecting where the interpolation falls outside the bracket: a handful
+    /// of probes where stepping at the rate bound needs one per halving of the depth. Once it
+    /// has ended the distance only grows: no contact follows (the next probe of a start search
+    /// finds the pair receding along its axis, see [`Self::next_start`]).
+    fn translating_end(&mut self, tau: f64) -> Result<Option<f64>> {
+        if tau >= self.leave() {
+            // The bounding volumes have parted: more than `2 tol` apart.
+            return Ok(Some(tau));
+        }
+        let target = 0.5 * (self.clear() + self.ceiling());
+        let first = self.probe(tau, Measure::Depth)?;
+        if first.lower > self.clear() {
+            return Ok(Some(tau));
+        }
+        if !(first.upper <= self.ceiling()) {
+            return Err(self.stall(tau, "the distance bounds were too loose to step"));
+        }
+        let leave = self.leave();
+        if !leave.is_finite() {
+            // No relative motion: the distance never changes.
+            return Ok(None);
+        }
+        let value = |p: &Probe| if p.lower.is_finite() { 0.5 * (p.lower + p.upper) } else { p.upper };
+        // Below and above the band's middle, with the distance's excess over it there.
+        let (mut low, mut high) = ((tau, (value(&first) - target).min(0.0)), (leave, f64::NAN));
+        // Which end the last probe replaced: Illinois halves an end's excess when it is kept twice.
+        let mut replaced_low = None;
+        loop {
+            let next = if high.1.is_nan() {
+                // The first probe past the contact: where the bounding volumes part.
+                leave
+            } else {
+                let chord = low.0 + (high.0 - low.0) * (low.1 / (low.1 - high.1));
+                if chord > low.0 && chord < high.0 {
+                    chord
+                } else {
+                    low.0 + 0.5 * (high.0 - low.0)
+                }
+            };
+            if !(next > low.0 && (next < high.0 || high.1.is_nan())) {
+                return Err(self.stall(low.0, "the step fell below the resolution of time"));
+            }
+            let p = self.probe(next, Measure::Depth)?;
+            if p.lower > self.clear() && p.upper <= self.ceiling() {
+                return Ok(Some(next));
+            }
+            let below = p.upper <= self.ceiling();
+            if below {
+                low = (next, (value(&p) - target).min(0.0));
+                if replaced_low == Some(true) {
+                    high.1 *= 0.5;
+                }
+            } else {
+                high = (next, (value(&p) - target).max(f64::MIN_POSITIVE));
+                if replaced_low == Some(false) {
+                    low.1 *= 0.5;
+                }
+            }
+            replaced_low = Some(below);
         }
     }
 
