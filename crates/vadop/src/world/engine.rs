@@ -49,6 +49,10 @@ pub(crate) trait Engine: Send + std::fmt::Debug {
     fn memory_bytes(&self) -> usize;
     /// The broad phase, for callers that inspect it (the sweep and prune's lists).
     fn broad_phase(&self) -> Option<&dyn Any>;
+    /// True while simulate mode's event loop of spheres steps the world.
+    fn on_event_loop(&self) -> bool {
+        false
+    }
 }
 
 impl<B: BroadPhase + Send + std::fmt::Debug + 'static> Engine for Pipeline<B> {
@@ -147,9 +151,7 @@ pub(crate) fn build(
         Method::Discrete => Box::new(PseudoDynamic::default()),
         // The default in simulate mode without gravity: the event loop of spheres while every
         // body is one (see `crate::event_loop`), the grid's pipeline from the first that is not.
-        Method::Grid | Method::Auto
-            if config.method == Method::Auto && config.mode == Mode::Simulate && config.gravity == DVec3::ZERO =>
-        {
+        Method::Grid | Method::Auto if starts_on_event_loop(config) => {
             let spheres = EventLoop::new(bounds, workers.threads());
             Box::new(SpheresFirst { spheres: Some(spheres), general: None, bounds: *bounds, workers })
         }
@@ -171,6 +173,12 @@ pub(crate) fn build(
             Box::new(Pipeline::new(sap, WindowRule::Adaptive, bounds, workers))
         }
     }
+}
+
+/// True when a world of `config` starts on the event loop of spheres: [`Method::Auto`] in simulate
+/// mode without gravity (it keeps to it while every body is a moving sphere).
+pub(super) fn starts_on_event_loop(config: &WorldConfig) -> bool {
+    config.method == Method::Auto && config.mode == Mode::Simulate && config.gravity == DVec3::ZERO
 }
 
 /// The grid's frame pipeline: the default method's broad phase.
@@ -269,6 +277,9 @@ impl Engine for SpheresFirst {
     }
     fn broad_phase(&self) -> Option<&dyn Any> {
         self.engine().broad_phase()
+    }
+    fn on_event_loop(&self) -> bool {
+        self.spheres.is_some()
     }
 }
 
