@@ -150,6 +150,14 @@ impl Spin for FreeRotation {
     fn steady_spin(&self) -> Option<DVec3> {
         FreeRotation::steady_spin(self)
     }
+    #[inline]
+    fn angular_velocity_at(&self, dt: f64) -> Option<DVec3> {
+        Some(FreeRotation::angular_velocity_at(self, dt))
+    }
+    #[inline]
+    fn max_angular_acceleration(&self) -> f64 {
+        FreeRotation::max_angular_acceleration(self)
+    }
 }
 
 /// A [`RigidState::shape`] meaning: a sphere of the state's radius.

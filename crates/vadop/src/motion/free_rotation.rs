@@ -347,6 +347,35 @@ impl FreeRotation {
         self.max_angular_speed
     }
 
+    /// An upper bound on |dω/dt| over all time: 0 for a steady rotation; for a tumbling one
+    /// (I_max - I_min) / (2 I_min) times the square of [`Self::max_angular_speed`], from Euler's
+    /// equations I dω/dt = (I ω) × ω = ((I - c) ω) × ω with c halfway between the extreme
+    /// moments (the world and body frames see the same derivative of ω), plus a relative 2^-40
+    /// for rounding.
+    ///
+    /// ```
+    /// use glam::{DQuat, DVec3};
+    /// use vadop::motion::free_rotation::FreeRotation;
+    /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(0.3, 1.0, 0.2));
+    /// let bound = rotation.max_angular_acceleration();
+    /// let h = 1e-4;
+    /// for i in 0..1000 {
+    ///     let t = 0.01 * i as f64;
+    ///     let rate = (rotation.angular_velocity_at(t + h) - rotation.angular_velocity_at(t - h)) / (2.0 * h);
+    ///     assert!(rate.length() <= bound * (1.0 + 1e-6));
+    /// }
+    /// ```
+    pub fn max_angular_acceleration(&self) -> f64 {
+        match &self.motion {
+            Motion::Steady { .. } => 0.0,
+            Motion::Tumbling(tumbling) => {
+                let e = tumbling.inverse_inertia;
+                let spread = 0.5 * (e.max_element() / e.min_element() - 1.0);
+                spread * self.max_angular_speed * self.max_angular_speed * (1.0 + SPEED_BOUND_SLACK)
+            }
+        }
+    }
+
     /// The constant angular velocity in the body's principal frame of a steady rotation (one
     /// whose angular velocity stays parallel to the angular momentum), with the components that
     /// are rounding of the frame change zeroed; `None` for a tumbling body. A spin about a body

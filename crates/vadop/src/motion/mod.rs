@@ -68,6 +68,17 @@ pub trait Spin {
     fn steady_spin(&self) -> Option<DVec3> {
         None
     }
+    /// The world angular velocity `dt` after the body's last velocity change (the derivative of
+    /// [`Self::orientation_at`]), `None` when unknown. With [`Self::max_angular_acceleration`] it
+    /// predicts turning to first order and bounds the rest, where the speed bound alone would
+    /// take every point to move at its worst.
+    fn angular_velocity_at(&self, _dt: f64) -> Option<DVec3> {
+        None
+    }
+    /// Upper bound on |dω/dt| over all time (world frame): infinite when unknown.
+    fn max_angular_acceleration(&self) -> f64 {
+        f64::INFINITY
+    }
 }
 
 impl<S: Spin + ?Sized> Spin for &S {
@@ -79,6 +90,12 @@ impl<S: Spin + ?Sized> Spin for &S {
     }
     fn steady_spin(&self) -> Option<DVec3> {
         (**self).steady_spin()
+    }
+    fn angular_velocity_at(&self, dt: f64) -> Option<DVec3> {
+        (**self).angular_velocity_at(dt)
+    }
+    fn max_angular_acceleration(&self) -> f64 {
+        (**self).max_angular_acceleration()
     }
 }
 
@@ -95,6 +112,12 @@ impl Spin for Fixed {
     }
     fn steady_spin(&self) -> Option<DVec3> {
         Some(DVec3::ZERO)
+    }
+    fn angular_velocity_at(&self, _dt: f64) -> Option<DVec3> {
+        Some(DVec3::ZERO)
+    }
+    fn max_angular_acceleration(&self) -> f64 {
+        0.0
     }
 }
 

@@ -3,10 +3,11 @@
 //! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
 //! never chooses the probe times (the searcher does).
 
+use super::chord::{axis_hold, chord_hold, Moving};
 use super::distance::{closer_points, convex_bounds, separation, Bounds};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{Body, Scaled};
-use super::{ceiling, guard};
+use super::{ceiling, ending, guard, starting, SLACK};
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
 use glam::DVec3;
@@ -14,10 +15,6 @@ use parry3d_f64::math::Pose;
 use parry3d_f64::partitioning::BvhNode;
 use parry3d_f64::shape::{SupportMap, TriMesh, Triangle};
 use std::cell::{Cell, RefCell};
-
-/// Relative rounding allowance on support points and closest points, times the size of the
-/// coordinates involved.
-pub(super) const SLACK: f64 = 64.0 * f64::EPSILON;
 
 /// Bounds on the signed distance at one instant, and on how fast they can move (scaled units).
 #[derive(Debug, Clone, Copy)]
@@ -33,8 +30,10 @@ pub(super) struct Probe {
     /// body, and how fast it shrinks: `(-inf, 0)` when there is none. Far from contact it steps a
     /// fast spinner by its straight motion, where `lower` would step it by its spin.
     pub(super) far: (f64, f64),
-    /// Within a contact, how long the signed distance certainly stays below the search's
-    /// ceiling from here (see [`super::inner_balls`]): 0 when nothing says so.
+    /// How long the signed distance certainly stays on this side of the band the search is
+    /// crossing: within a contact below the search's ceiling (see [`super::inner_balls`] and
+    /// [`super::chord`]), before one above its guard (see [`super::chord::axis_hold`]); 0 when
+    /// nothing says so.
     pub(super) hold: f64,
 }
 
@@ -304,10 +303,72 @@ impl ConvexPair<'_> {
         let deep_b = inside(b, pose_b, near.1 .0 + inward.1 * width(middle_b)).map(ball_b);
         let (near_a, near_b) = (Some(ball_a(near.0)), Some(ball_b(near.1)));
         let limit = ceiling(self.tol);
-        [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
+        let balls = [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
             .into_iter()
             .filter_map(|(x, y)| Some(held(x?, y?, self.velocity, limit, slack)))
-            .fold(0.0, f64::max)
+            .fold(0.0, f64::max);
+        let points = match deepest {
+            Deepest::Inside { point, .. } => (point, point),
+            Deepest::Witnesses(x, y) => (x, y),
+        };
+        balls.max(self.chord(tau, (a, pose_a), (b, pose_b), points, slack))
+    }
+
+    /// How long the signed distance certainly stays below the middle of the band in which a
+    /// contact ends, by the chord certificate (see [`super::chord`]) of the point `points.0`
+    /// fixed in a and of `points.1` fixed in b: 0 when a spin does not give its angular velocity.
+    fn chord(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        points: (DVec3, DVec3),
+        slack: f64,
+    ) -> f64 {
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
+        let level = ending(self.tol);
+        let from_a = chord_hold(points.0, &moving_a, &moving_b, level, slack);
+        from_a.max(chord_hold(points.1, &moving_b, &moving_a, level, slack))
+    }
+
+    /// How long the shapes certainly stay farther apart than the middle of the band in which a
+    /// contact starts, by their separation along `axis` (from a to b) turned with either (see
+    /// [`super::chord::axis_hold`]): 0 when a spin does not give its angular velocity.
+    fn apart(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        axis: DVec3,
+        slack: f64,
+    ) -> f64 {
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
+        let level = starting(self.tol);
+        axis_hold(axis, &moving_a, &moving_b, level, slack).max(axis_hold(-axis, &moving_b, &moving_a, level, slack))
+    }
+
+    /// The two bodies at `tau` as the chord certificates read them; `None` when a spin does not
+    /// give its angular velocity.
+    fn moving<'s, 'b>(
+        &self,
+        tau: f64,
+        (a, pose_a): (&'s Scaled<'b>, &'s Pose),
+        (b, pose_b): (&'s Scaled<'b>, &'s Pose),
+    ) -> Option<(Moving<'s, 'b>, Moving<'s, 'b>)> {
+        let (turning_a, turning_b) = (self.a.turning(tau)?, self.b.turning(tau)?);
+        let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
+        let moving_a = Moving {
+            shape: a,
+            pose: pose_a,
+            centre: DVec3::ZERO,
+            radius: radius_a,
+            velocity: DVec3::ZERO,
+            turning: turning_a,
+        };
+        let centre = self.offset + self.velocity * tau;
+        let moving_b =
+            Moving { shape: b, pose: pose_b, centre, radius: radius_b, velocity: self.velocity, turning: turning_b };
+        Some((moving_a, moving_b))
     }
 
     /// The best spin-free bound along the line of centres: a spinning body stays in its bounding
@@ -383,9 +444,14 @@ impl Gauge for ConvexPair<'_> {
             .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
-        let hold = match bounds.witness.filter(|_| measure == Measure::Contact) {
-            Some((x, y)) => self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack),
-            None => 0.0,
+        let hold = match (measure, bounds.witness) {
+            (Measure::Contact, Some((x, y))) => {
+                self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack)
+            }
+            (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
+                self.apart(tau, (&ga, &pose_a), (&gb, &pose_b), bounds.axis, slack)
+            }
+            _ => 0.0,
         };
         Probe {
             lower: bounds.lower,

@@ -64,6 +64,23 @@ impl<'a> Scaled<'a> {
         }
     }
 
+    /// At least the signed distance of the point `p` (in the shape's frame, scaled) from the
+    /// shape, negative inside, to rounding: the closed-form depth inside (and on either side for
+    /// a ball or a capsule), outside the distance to parry's projection on the shape (a point of
+    /// the shape: exact for the primitives, a combination of a hull's points by GJK otherwise).
+    pub(super) fn signed_distance_above(&self, p: DVec3) -> f64 {
+        let (depth, _) = self.depth_at(p);
+        if depth > 0.0 || !matches!(self.core, Core::Solid(_)) {
+            return -depth;
+        }
+        let projection = self.parry.project_local_point(p / self.scale, true);
+        if projection.is_inside {
+            0.0
+        } else {
+            projection.point.distance(p / self.scale) * self.scale
+        }
+    }
+
     /// The shape's core, as a support map.
     pub(super) fn core(&self) -> CoreOf<'_, 'a> {
         CoreOf(self)
@@ -273,6 +290,15 @@ impl SupportMap for Scaled<'_> {
     }
 }
 
+/// A body's turning at a probe time: its world angular velocity, and bounds on the angular
+/// speed and on the angular acceleration over all time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Turning {
+    pub(super) omega: DVec3,
+    pub(super) speed: f64,
+    pub(super) acceleration: f64,
+}
+
 /// A body as the gauges see it, relative to the reference instant.
 pub(super) struct Body<'a> {
     pub(super) geometry: &'a ShapeGeometry,
@@ -332,6 +358,20 @@ impl<'a> Body<'a> {
             Some(q) => q,
             None => self.spin.orientation_at(self.lag + tau),
         }
+    }
+
+    /// The body's turning at `tau` as [`super::chord`] reads it: none for a body held still,
+    /// `None` when its spin gives no angular velocity.
+    pub(super) fn turning(&self, tau: f64) -> Option<Turning> {
+        if self.still.is_some() {
+            return Some(Turning { omega: DVec3::ZERO, speed: 0.0, acceleration: 0.0 });
+        }
+        let omega = self.spin.angular_velocity_at(self.lag + tau)?;
+        Some(Turning {
+            omega,
+            speed: self.spin.max_angular_speed(),
+            acceleration: self.spin.max_angular_acceleration(),
+        })
     }
 
     /// A bound on how fast the body's shape turns: 0 when turning leaves it where it is.
