@@ -6,10 +6,11 @@
 //! point (a ball about p as deep as it lies in one shape, or the nearest point of each, shows
 //! it). Fix p in B: `σ_B(p)` stays what it is, and in A's frame p follows a smooth path `P(s)`,
 //! within `s²/2 sup|P''|` of the line `P0 + s P1` that the velocities at the probe give, the rest
-//! bounded from the spins' bounds on angular speed and acceleration. `σ_A` is convex and
-//! 1-Lipschitz, so over `[0, S]` it stays at most `max(σ_A(P0), σ_A(P0 + S P1))` plus that
-//! remainder: the chord. Where the rate bound moves every point at its worst and the steps shrink
-//! with the room left (a contact's end approached like Zeno's arrow), the chord follows the
+//! bounded from the spins' bounds on angular speed and acceleration. `σ_A` is 1-Lipschitz, and
+//! convex, so along the line below its chord: over `[0, S]` it stays at most the chord plus the
+//! remainder `M t² / 2`, a convex function of t, at most the larger of `σ_A(P0)` and
+//! `σ_A(P0 + S P1) + M S² / 2`. Where the rate bound moves every point at its worst and the steps
+//! shrink with the room left (a contact's end approached like Zeno's arrow), the chord follows the
 //! actual rate at which p leaves A, and sliding along a flat or round surface costs nothing to
 //! first order.
 //!
@@ -65,7 +66,9 @@ pub(super) fn chord_hold(p: DVec3, own: &Moving, other: &Moving, level: f64, sla
     let rounding = |s: f64| {
         slack + SLACK * s * heading.length() + OMEGA_ROUNDING * (w_own * lever.length() + w_other * reach.length()) * s
     };
-    let bound = |s: f64, far: f64| near.max(far) + own_depth + 0.5 * curvature(s) * s * s + rounding(s);
+    // Along [0, s] the path is within `curvature(s) t² / 2` of the line at time t, and σ on the
+    // line below its chord: their sum is convex in t, at most its larger end.
+    let bound = |s: f64, far: f64| near.max(far + 0.5 * curvature(s) * s * s) + own_depth + rounding(s);
     let room = level - bound(0.0, near);
     if !(room > 0.0) {
         return 0.0;
@@ -83,8 +86,8 @@ pub(super) fn chord_hold(p: DVec3, own: &Moving, other: &Moving, level: f64, sla
 /// With the axis turning with its body, that body's support along it stays what it is; the
 /// offset of the centres along the axis and the other's support along it follow the velocities
 /// at the probe to first order. The first is linear and the support function convex along the
-/// line of directions, so their difference is concave and over `[0, S]` stays above its smaller
-/// end, less the second-order rest.
+/// line of directions, so their difference is concave, above its chord, and so is that less
+/// the second-order rest `M t² / 2`: over `[0, S]` it stays above the smaller of its ends.
 pub(super) fn axis_hold(m: DVec3, with: &Moving, other: &Moving, level: f64, slack: f64) -> f64 {
     let support = |shape: &Scaled, pose: &Pose, centre: DVec3, direction: DVec3| {
         direction.dot(shape.support_point(pose, direction) - centre)
@@ -111,7 +114,9 @@ pub(super) fn axis_hold(m: DVec3, with: &Moving, other: &Moving, level: f64, sla
     let rounding = |s: f64| {
         slack + SLACK * s * rate + OMEGA_ROUNDING * (w_with * offset.length() + (w_with + w_other) * radius) * s
     };
-    let bound = |s: f64, far: f64| near.min(far) - own - 0.5 * curvature(s) * s * s - rounding(s);
+    // Concave in t over [0, s] (the gap on the line above its chord, less the rest): at least
+    // its smaller end.
+    let bound = |s: f64, far: f64| near.min(far - 0.5 * curvature(s) * s * s) - own - rounding(s);
     let room = bound(0.0, near) - level;
     if !(room > 0.0) {
         return 0.0;

@@ -195,12 +195,11 @@ impl Warm {
     }
 
     /// An upper bound on the signed distance from what the last full measure found, with no
-    /// distance search: the distance of the witness points carried along with the shapes, or
-    /// less where a point lies inside both shapes. A ball about it as deep as it lies in a shape
-    /// lies in that shape, and two shapes holding balls of radii `r_a` and `r_b` about one point
-    /// must move `r_a + r_b` apart to part. The point starts at the witnesses' midpoint and is
-    /// moved a few times away from the nearer face of the shape it lies shallower in, by half
-    /// the difference of the depths: the bound holds at every point, the moves only tighten it.
+    /// distance search: less than 0 by how deep a point lies in both shapes ([`deepest_point`],
+    /// from the witness points carried along with the shapes and their midpoint: after a long
+    /// step the witnesses, each carried with its own body, may have drifted apart, one of them
+    /// still deep in the other shape), or the witnesses' distance where no point is found
+    /// inside both.
     pub(super) fn contact_upper(
         &self,
         (a, pose_a): (&Scaled, &Pose),
@@ -208,26 +207,13 @@ impl Warm {
         slack: f64,
     ) -> (f64, Deepest) {
         let (x, y) = (*pose_a * self.witness.0, *pose_b * self.witness.1);
-        let mut point = (x + y) * 0.5;
-        let mut deepest = Deepest::Witnesses(x, y);
-        let mut depth: f64 = 0.0;
-        for _ in 0..DEEP_POINT_MOVES {
-            let (in_a, inward_a) = a.depth_at(pose_a.inverse_transform_point(point));
-            let (in_b, inward_b) = b.depth_at(pose_b.inverse_transform_point(point));
-            if in_a > 0.0 && in_b > 0.0 && in_a + in_b > depth {
-                let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
-                (depth, deepest) = (in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward });
-            }
-            point += if in_a < in_b {
-                pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
-            } else {
-                pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
-            };
-        }
-        if depth > 0.0 {
-            (slack - depth, deepest)
-        } else {
-            ((y - x).length() + slack, deepest)
+        // Each shape's extreme point into the other along the axis turned with the other (a
+        // face normal turns with its face): the deepest point of a corner pushed into a face.
+        let (n_a, n_b) = (pose_a.rotation * self.axis.0, pose_b.rotation * self.axis.1);
+        let corners = [b.support_point(pose_b, -n_a), a.support_point(pose_a, n_b)];
+        match deepest_point(&[x, y, (x + y) * 0.5, corners[0], corners[1]], (a, pose_a), (b, pose_b)) {
+            Some((depth, deepest)) => (slack - depth, deepest),
+            None => ((y - x).length() + slack, Deepest::Witnesses(x, y)),
         }
     }
 
@@ -254,6 +240,46 @@ impl Warm {
             if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
         tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
     }
+}
+
+/// A point inside both shapes and how deep it lies in them together, `None` when none is found:
+/// from whichever of `seeds` lies deepest in the shape it lies shallower in, moved a few times
+/// away from the nearer face of that shape by half the difference of the depths. A ball about
+/// the point as deep as it lies in a shape lies in that shape, and two shapes holding balls of
+/// radii `r_a` and `r_b` about one point must move `r_a + r_b` apart to part: the bound holds at
+/// every point, the moves only tighten it.
+fn deepest_point(
+    seeds: &[DVec3],
+    (a, pose_a): (&Scaled, &Pose),
+    (b, pose_b): (&Scaled, &Pose),
+) -> Option<(f64, Deepest)> {
+    let depths =
+        |p: DVec3| (a.depth_at(pose_a.inverse_transform_point(p)), b.depth_at(pose_b.inverse_transform_point(p)));
+    let shallower = |((in_a, _), (in_b, _)): &((f64, DVec3), (f64, DVec3))| in_a.min(*in_b);
+    let (mut point, mut measured) = seeds.iter().map(|&p| (p, depths(p))).reduce(|best, seed| {
+        if shallower(&seed.1) > shallower(&best.1) {
+            seed
+        } else {
+            best
+        }
+    })?;
+    let mut found = None;
+    for moves in 0..=DEEP_POINT_MOVES {
+        if moves > 0 {
+            measured = depths(point);
+        }
+        let ((in_a, inward_a), (in_b, inward_b)) = measured;
+        if in_a > 0.0 && in_b > 0.0 && found.is_none_or(|(depth, _)| in_a + in_b > depth) {
+            let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
+            found = Some((in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward }));
+        }
+        point += if in_a < in_b {
+            pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
+        } else {
+            pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
+        };
+    }
+    found
 }
 
 /// Where [`Warm::contact_upper`] found its bound: a point inside both shapes, as deep as given
