@@ -158,6 +158,11 @@ impl Spin for FreeRotation {
     fn max_angular_acceleration(&self) -> f64 {
         FreeRotation::max_angular_acceleration(self)
     }
+    #[inline]
+    fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, Option<DVec3>) {
+        let (orientation, omega) = FreeRotation::orientation_and_angular_velocity_at(self, dt);
+        (orientation, Some(omega))
+    }
 }
 
 /// A [`RigidState::shape`] meaning: a sphere of the state's radius.

@@ -299,9 +299,26 @@ impl FreeRotation {
     pub fn angular_velocity_at(&self, dt: f64) -> DVec3 {
         match &self.motion {
             Motion::Steady { angular_velocity, .. } => *angular_velocity,
+            Motion::Tumbling(tumbling) => tumbling.angular_velocity(tumbling.working_to_world(dt)),
+        }
+    }
+
+    /// [`Self::orientation_at`] and [`Self::angular_velocity_at`] together, the same bits, for
+    /// the cost of one: a tumbling body's frame at `dt` (an elliptic integral) is found once.
+    ///
+    /// ```
+    /// use glam::{DQuat, DVec3};
+    /// use vadop::motion::free_rotation::FreeRotation;
+    /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(1.0, 0.5, -2.0));
+    /// let both = rotation.orientation_and_angular_velocity_at(3.0);
+    /// assert_eq!(both, (rotation.orientation_at(3.0), rotation.angular_velocity_at(3.0)));
+    /// ```
+    pub fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, DVec3) {
+        match &self.motion {
+            Motion::Steady { .. } => (self.orientation_at(dt), self.angular_velocity_at(dt)),
             Motion::Tumbling(tumbling) => {
-                let (frame, l) = tumbling.working_to_world(dt);
-                frame * (tumbling.inverse_inertia * l) * tumbling.velocity_unscale
+                let working = tumbling.working_to_world(dt);
+                (working.0 * tumbling.body_to_working, tumbling.angular_velocity(working))
             }
         }
     }
@@ -544,6 +561,12 @@ impl Tumbling {
     fn working_to_world(&self, dt: f64) -> (DQuat, DVec3) {
         let (angle, l) = self.aligned_angle_and_momentum(dt);
         (self.aligned_to_world * DQuat::from_rotation_z(angle) * self.tilt(l), l)
+    }
+
+    /// The world angular velocity from [`Self::working_to_world`]'s rotation and L_W.
+    #[inline]
+    fn angular_velocity(&self, (frame, l): (DQuat, DVec3)) -> DVec3 {
+        frame * (self.inverse_inertia * l) * self.velocity_unscale
     }
 }
 

@@ -79,6 +79,11 @@ pub trait Spin {
     fn max_angular_acceleration(&self) -> f64 {
         f64::INFINITY
     }
+    /// [`Self::orientation_at`] and [`Self::angular_velocity_at`] together, the same values:
+    /// for spins that find both from one costly step.
+    fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, Option<DVec3>) {
+        (self.orientation_at(dt), self.angular_velocity_at(dt))
+    }
 }
 
 impl<S: Spin + ?Sized> Spin for &S {
@@ -96,6 +101,9 @@ impl<S: Spin + ?Sized> Spin for &S {
     }
     fn max_angular_acceleration(&self) -> f64 {
         (**self).max_angular_acceleration()
+    }
+    fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, Option<DVec3>) {
+        (**self).orientation_and_angular_velocity_at(dt)
     }
 }
 

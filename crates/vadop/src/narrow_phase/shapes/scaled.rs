@@ -11,6 +11,7 @@ use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::{Segment, Shape, SupportMap};
+use std::cell::Cell;
 
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
 /// for its flat features.
@@ -317,6 +318,9 @@ pub(super) struct Body<'a> {
     /// the axis. Without a steady axis, the rotation radius.
     pub(super) axis: Option<DVec3>,
     pub(super) reach: f64,
+    /// The angular velocity at the last time its orientation was asked for, found with it: a
+    /// probe asks for both at one time, and for a tumbling body they share an elliptic integral.
+    turned: Cell<(f64, Option<DVec3>)>,
 }
 
 /// The orientation at which a body of `geometry` turning by `spin` always shows the same shape,
@@ -350,13 +354,18 @@ impl<'a> Body<'a> {
             still,
             axis,
             reach,
+            turned: Cell::new((f64::NAN, None)),
         }
     }
 
     pub(super) fn orientation(&self, tau: f64) -> DQuat {
         match self.still {
             Some(q) => q,
-            None => self.spin.orientation_at(self.lag + tau),
+            None => {
+                let (orientation, omega) = self.spin.orientation_and_angular_velocity_at(self.lag + tau);
+                self.turned.set((tau, omega));
+                orientation
+            }
         }
     }
 
@@ -366,7 +375,10 @@ impl<'a> Body<'a> {
         if self.still.is_some() {
             return Some(Turning { omega: DVec3::ZERO, speed: 0.0, acceleration: 0.0 });
         }
-        let omega = self.spin.angular_velocity_at(self.lag + tau)?;
+        let omega = match self.turned.get() {
+            (at, omega) if at == tau => omega,
+            _ => self.spin.angular_velocity_at(self.lag + tau),
+        }?;
         Some(Turning {
             omega,
             speed: self.spin.max_angular_speed(),
