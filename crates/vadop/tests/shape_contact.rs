@@ -366,8 +366,8 @@ proptest! {
         }
     }
 
-    /// Walls: a spinning solid in the box (said to spin steadily too), against the exact support
-    /// distance sampled densely.
+    /// Walls: a spinning solid in the box (said to spin steadily too, and tumbling), against the
+    /// exact support distance sampled densely.
     #[test]
     fn every_solid_against_the_walls(
         p in solid_params(),
@@ -379,8 +379,14 @@ proptest! {
             let g = solid(kind, p.0, &p.1);
             let a = body(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3);
             check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, name(kind));
-            let a = steady_spinner(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            let a = steady_spinner(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3);
             check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, &format!("{}, steady", name(kind)));
+            // Tumbling by the exact torque-free rotation (the start search's hold follows the
+            // extreme point towards each wall to first order), and twelve times as fast.
+            for (fast, window) in [(1.0, Window::new(0.0, 4.0)), (12.0, Window::new(0.0, 1.5))] {
+                let a = tumbler(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3 * fast);
+                check_walls(&a, min, max, window, 2000, &format!("{}, tumbling at {fast}x", name(kind)));
+            }
         }
     }
 
@@ -413,7 +419,14 @@ proptest! {
 
 /// Checks a body against the walls: reported wall contacts touch within `tol` and nothing closer
 /// than `tol/2` before the first; returns the first.
-fn check_walls(a: &Body, min: DVec3, max: DVec3, window: Window, samples: usize, what: &str) -> Option<(f64, Wall)> {
+fn check_walls<S: Spin>(
+    a: &Body<S>,
+    min: DVec3,
+    max: DVec3,
+    window: Window,
+    samples: usize,
+    what: &str,
+) -> Option<(f64, Wall)> {
     let tol = vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE * a.0.bounding_radius().unwrap();
     let found = shape_wall_time(&a.0, &a.1, min, max, window).unwrap();
     let wall_distance = |t: f64, wall: Wall| {

@@ -3,7 +3,7 @@
 //! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
 //! never chooses the probe times (the searcher does).
 
-use super::chord::{axis_hold, chord_hold, Moving};
+use super::chord::{axis_hold, chord_hold, wall_hold, Moving};
 use super::distance::{closer_points, convex_bounds, separation, Bounds};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{Body, Scaled};
@@ -753,30 +753,57 @@ pub(super) struct WallGauge<'a> {
     /// Velocity towards the wall, scaled.
     pub(super) speed: f64,
     pub(super) size: f64,
+    pub(super) tol: f64,
 }
 
 impl WallGauge<'_> {
     pub(super) fn distance(&self, tau: f64) -> (f64, DVec3, f64) {
+        let (distance, extreme, slack, _) = self.measure(tau);
+        (distance, extreme, slack)
+    }
+
+    /// [`Self::distance`] with the shape's pose.
+    fn measure(&self, tau: f64) -> (f64, DVec3, f64, Pose) {
         let pose = self.body.pose(self.body.orientation(tau), DVec3::ZERO, self.scale);
         let extreme = self.body.support(self.scale).support_point(&pose, self.normal);
         let centre = self.gap - self.speed * tau;
-        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size))
+        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size), pose)
+    }
+
+    /// How long the shape certainly stays farther from the wall than the middle of the band in
+    /// which a contact starts, its extreme point towards the wall followed as it turns (see
+    /// [`super::chord::wall_hold`]): 0 when its spin does not give its angular velocity.
+    fn apart(&self, tau: f64, pose: &Pose, slack: f64) -> f64 {
+        let Some(turning) = self.body.turning(tau) else { return 0.0 };
+        let shape = self.body.support(self.scale);
+        let body = Moving {
+            shape: &shape,
+            pose,
+            centre: DVec3::ZERO,
+            radius: self.size,
+            velocity: self.normal * self.speed,
+            turning,
+        };
+        let on_wall = self.normal * (self.gap - self.speed * tau);
+        wall_hold(self.normal, on_wall, &body, starting(self.tol), slack)
     }
 }
 
 impl Gauge for WallGauge<'_> {
-    fn probe(&self, tau: f64, _measure: Measure) -> Probe {
-        let (distance, _, slack) = self.distance(tau);
+    fn probe(&self, tau: f64, measure: Measure) -> Probe {
+        let (distance, _, slack, pose) = self.measure(tau);
         // The body's bounding sphere from the wall.
         let sphere = self.gap - self.speed * tau - self.size;
         let spin = self.body.spin_rate_along(self.normal) * self.scale;
+        let lower = distance - slack;
         Probe {
-            lower: distance - slack,
+            lower,
             upper: distance + slack,
             shrink: self.speed.max(0.0) + spin,
             grow: (-self.speed).max(0.0) + spin,
             far: (sphere - slack, self.speed.max(0.0)),
-            hold: 0.0,
+            // A hold away from the wall steps a start search only, never a contact's end.
+            hold: if measure == Measure::Gap && lower > guard(self.tol) { self.apart(tau, &pose, slack) } else { 0.0 },
         }
     }
 

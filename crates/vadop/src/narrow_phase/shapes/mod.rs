@@ -669,6 +669,7 @@ fn wall_searcher<'a, S: Spin>(
     let axis = wall.axis();
     let gap = if wall.is_max() { max[axis] - body.position[axis] } else { body.position[axis] - min[axis] };
     let speed = if wall.is_max() { body.velocity[axis] } else { -body.velocity[axis] };
+    let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
     let gauge = WallGauge {
         normal: wall.outward_normal(),
         gap: gap * scale,
@@ -676,8 +677,9 @@ fn wall_searcher<'a, S: Spin>(
         size: size * scale,
         scale,
         body,
+        tol,
     };
-    Some(Searcher::new(gauge, motion.since, SHAPE_CONTACT_TOLERANCE * size * scale))
+    Some(Searcher::new(gauge, motion.since, tol))
 }
 
 /// The first time in `window` at which a (spinning) shape inside the box `[min, max]` begins to
