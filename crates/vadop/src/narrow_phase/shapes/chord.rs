@@ -251,7 +251,7 @@ mod tests {
         let shapes = [0, 1].map(|i| Scaled::new(case.geometry[i].parry_shape().as_ref(), 1.0));
         let moving_a = moving(&body_a, &shapes[0], &pose_a, centre_a, case.tau);
         let moving_b = moving(&body_b, &shapes[1], &pose_b, centre_b, case.tau);
-        if k % 2 == 0 {
+        if k.is_multiple_of(2) {
             check(&moving_a, &moving_b, 0)
         } else {
             check(&moving_b, &moving_a, 1)
