@@ -211,7 +211,10 @@ proptest! {
         method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::Grid), Just(Method::Brute)],
         seed in any::<u64>(),
     ) {
-        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build().unwrap();
+        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build();
+        // A few bodies at a high packing do not fit the placement grid: the builder refuses them.
+        prop_assume!(scene.is_ok());
+        let scene = scene.unwrap();
         let mut world = scene.world(detect(method)).unwrap();
         for _ in 0..3 {
             world.step(DT).unwrap();
@@ -240,7 +243,10 @@ proptest! {
         method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::Grid)],
         seed in any::<u64>(),
     ) {
-        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build().unwrap();
+        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build();
+        // A few bodies at a high packing do not fit the placement grid: the builder refuses them.
+        prop_assume!(scene.is_ok());
+        let scene = scene.unwrap();
         let mut world = scene.world(detect(method)).unwrap();
         let fastest = scene.spheres.iter().map(|s| s.velocity.length()).fold(0.0, f64::max);
         // Two bodies that touch within a frame start at most two frames' travel and two radii apart.
