@@ -3,10 +3,11 @@
 //! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
 //! never chooses the probe times (the searcher does).
 
+use super::chord::{axis_hold, chord_hold, wall_hold, Moving};
 use super::distance::{closer_points, convex_bounds, separation, Bounds};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{Body, Scaled};
-use super::{ceiling, guard};
+use super::{ceiling, ending, guard, starting, SLACK};
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
 use glam::DVec3;
@@ -14,10 +15,6 @@ use parry3d_f64::math::Pose;
 use parry3d_f64::partitioning::BvhNode;
 use parry3d_f64::shape::{SupportMap, TriMesh, Triangle};
 use std::cell::{Cell, RefCell};
-
-/// Relative rounding allowance on support points and closest points, times the size of the
-/// coordinates involved.
-pub(super) const SLACK: f64 = 64.0 * f64::EPSILON;
 
 /// Bounds on the signed distance at one instant, and on how fast they can move (scaled units).
 #[derive(Debug, Clone, Copy)]
@@ -33,8 +30,10 @@ pub(super) struct Probe {
     /// body, and how fast it shrinks: `(-inf, 0)` when there is none. Far from contact it steps a
     /// fast spinner by its straight motion, where `lower` would step it by its spin.
     pub(super) far: (f64, f64),
-    /// Within a contact, how long the signed distance certainly stays below the search's
-    /// ceiling from here (see [`super::inner_balls`]): 0 when nothing says so.
+    /// How long the signed distance certainly stays on this side of the band the search is
+    /// crossing: within a contact below the search's ceiling (see [`super::inner_balls`] and
+    /// [`super::chord`]), before one above its guard (see [`super::chord::axis_hold`]); 0 when
+    /// nothing says so.
     pub(super) hold: f64,
 }
 
@@ -196,12 +195,11 @@ impl Warm {
     }
 
     /// An upper bound on the signed distance from what the last full measure found, with no
-    /// distance search: the distance of the witness points carried along with the shapes, or
-    /// less where a point lies inside both shapes. A ball about it as deep as it lies in a shape
-    /// lies in that shape, and two shapes holding balls of radii `r_a` and `r_b` about one point
-    /// must move `r_a + r_b` apart to part. The point starts at the witnesses' midpoint and is
-    /// moved a few times away from the nearer face of the shape it lies shallower in, by half
-    /// the difference of the depths: the bound holds at every point, the moves only tighten it.
+    /// distance search: less than 0 by how deep a point lies in both shapes ([`deepest_point`],
+    /// from the witness points carried along with the shapes and their midpoint: after a long
+    /// step the witnesses, each carried with its own body, may have drifted apart, one of them
+    /// still deep in the other shape), or the witnesses' distance where no point is found
+    /// inside both.
     pub(super) fn contact_upper(
         &self,
         (a, pose_a): (&Scaled, &Pose),
@@ -209,26 +207,13 @@ impl Warm {
         slack: f64,
     ) -> (f64, Deepest) {
         let (x, y) = (*pose_a * self.witness.0, *pose_b * self.witness.1);
-        let mut point = (x + y) * 0.5;
-        let mut deepest = Deepest::Witnesses(x, y);
-        let mut depth: f64 = 0.0;
-        for _ in 0..DEEP_POINT_MOVES {
-            let (in_a, inward_a) = a.depth_at(pose_a.inverse_transform_point(point));
-            let (in_b, inward_b) = b.depth_at(pose_b.inverse_transform_point(point));
-            if in_a > 0.0 && in_b > 0.0 && in_a + in_b > depth {
-                let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
-                (depth, deepest) = (in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward });
-            }
-            point += if in_a < in_b {
-                pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
-            } else {
-                pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
-            };
-        }
-        if depth > 0.0 {
-            (slack - depth, deepest)
-        } else {
-            ((y - x).length() + slack, deepest)
+        // Each shape's extreme point into the other along the axis turned with the other (a
+        // face normal turns with its face): the deepest point of a corner pushed into a face.
+        let (n_a, n_b) = (pose_a.rotation * self.axis.0, pose_b.rotation * self.axis.1);
+        let corners = [b.support_point(pose_b, -n_a), a.support_point(pose_a, n_b)];
+        match deepest_point(&[x, y, (x + y) * 0.5, corners[0], corners[1]], (a, pose_a), (b, pose_b)) {
+            Some((depth, deepest)) => (slack - depth, deepest),
+            None => ((y - x).length() + slack, Deepest::Witnesses(x, y)),
         }
     }
 
@@ -255,6 +240,46 @@ impl Warm {
             if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
         tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
     }
+}
+
+/// A point inside both shapes and how deep it lies in them together, `None` when none is found:
+/// from whichever of `seeds` lies deepest in the shape it lies shallower in, moved a few times
+/// away from the nearer face of that shape by half the difference of the depths. A ball about
+/// the point as deep as it lies in a shape lies in that shape, and two shapes holding balls of
+/// radii `r_a` and `r_b` about one point must move `r_a + r_b` apart to part: the bound holds at
+/// every point, the moves only tighten it.
+fn deepest_point(
+    seeds: &[DVec3],
+    (a, pose_a): (&Scaled, &Pose),
+    (b, pose_b): (&Scaled, &Pose),
+) -> Option<(f64, Deepest)> {
+    let depths =
+        |p: DVec3| (a.depth_at(pose_a.inverse_transform_point(p)), b.depth_at(pose_b.inverse_transform_point(p)));
+    let shallower = |((in_a, _), (in_b, _)): &((f64, DVec3), (f64, DVec3))| in_a.min(*in_b);
+    let (mut point, mut measured) = seeds.iter().map(|&p| (p, depths(p))).reduce(|best, seed| {
+        if shallower(&seed.1) > shallower(&best.1) {
+            seed
+        } else {
+            best
+        }
+    })?;
+    let mut found = None;
+    for moves in 0..=DEEP_POINT_MOVES {
+        if moves > 0 {
+            measured = depths(point);
+        }
+        let ((in_a, inward_a), (in_b, inward_b)) = measured;
+        if in_a > 0.0 && in_b > 0.0 && found.is_none_or(|(depth, _)| in_a + in_b > depth) {
+            let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
+            found = Some((in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward }));
+        }
+        point += if in_a < in_b {
+            pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
+        } else {
+            pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
+        };
+    }
+    found
 }
 
 /// Where [`Warm::contact_upper`] found its bound: a point inside both shapes, as deep as given
@@ -304,10 +329,72 @@ impl ConvexPair<'_> {
         let deep_b = inside(b, pose_b, near.1 .0 + inward.1 * width(middle_b)).map(ball_b);
         let (near_a, near_b) = (Some(ball_a(near.0)), Some(ball_b(near.1)));
         let limit = ceiling(self.tol);
-        [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
+        let balls = [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
             .into_iter()
             .filter_map(|(x, y)| Some(held(x?, y?, self.velocity, limit, slack)))
-            .fold(0.0, f64::max)
+            .fold(0.0, f64::max);
+        let points = match deepest {
+            Deepest::Inside { point, .. } => (point, point),
+            Deepest::Witnesses(x, y) => (x, y),
+        };
+        balls.max(self.chord(tau, (a, pose_a), (b, pose_b), points, slack))
+    }
+
+    /// How long the signed distance certainly stays below the middle of the band in which a
+    /// contact ends, by the chord certificate (see [`super::chord`]) of the point `points.0`
+    /// fixed in a and of `points.1` fixed in b: 0 when a spin does not give its angular velocity.
+    fn chord(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        points: (DVec3, DVec3),
+        slack: f64,
+    ) -> f64 {
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
+        let level = ending(self.tol);
+        let from_a = chord_hold(points.0, &moving_a, &moving_b, level, slack);
+        from_a.max(chord_hold(points.1, &moving_b, &moving_a, level, slack))
+    }
+
+    /// How long the shapes certainly stay farther apart than the middle of the band in which a
+    /// contact starts, by their separation along `axis` (from a to b) turned with either (see
+    /// [`super::chord::axis_hold`]): 0 when a spin does not give its angular velocity.
+    fn apart(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        axis: DVec3,
+        slack: f64,
+    ) -> f64 {
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
+        let level = starting(self.tol);
+        axis_hold(axis, &moving_a, &moving_b, level, slack).max(axis_hold(-axis, &moving_b, &moving_a, level, slack))
+    }
+
+    /// The two bodies at `tau` as the chord certificates read them; `None` when a spin does not
+    /// give its angular velocity.
+    fn moving<'s, 'b>(
+        &self,
+        tau: f64,
+        (a, pose_a): (&'s Scaled<'b>, &'s Pose),
+        (b, pose_b): (&'s Scaled<'b>, &'s Pose),
+    ) -> Option<(Moving<'s, 'b>, Moving<'s, 'b>)> {
+        let (turning_a, turning_b) = (self.a.turning(tau)?, self.b.turning(tau)?);
+        let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
+        let moving_a = Moving {
+            shape: a,
+            pose: pose_a,
+            centre: DVec3::ZERO,
+            radius: radius_a,
+            velocity: DVec3::ZERO,
+            turning: turning_a,
+        };
+        let centre = self.offset + self.velocity * tau;
+        let moving_b =
+            Moving { shape: b, pose: pose_b, centre, radius: radius_b, velocity: self.velocity, turning: turning_b };
+        Some((moving_a, moving_b))
     }
 
     /// The best spin-free bound along the line of centres: a spinning body stays in its bounding
@@ -383,9 +470,14 @@ impl Gauge for ConvexPair<'_> {
             .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
-        let hold = match bounds.witness.filter(|_| measure == Measure::Contact) {
-            Some((x, y)) => self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack),
-            None => 0.0,
+        let hold = match (measure, bounds.witness) {
+            (Measure::Contact, Some((x, y))) => {
+                self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack)
+            }
+            (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
+                self.apart(tau, (&ga, &pose_a), (&gb, &pose_b), bounds.axis, slack)
+            }
+            _ => 0.0,
         };
         Probe {
             lower: bounds.lower,
@@ -661,30 +753,57 @@ pub(super) struct WallGauge<'a> {
     /// Velocity towards the wall, scaled.
     pub(super) speed: f64,
     pub(super) size: f64,
+    pub(super) tol: f64,
 }
 
 impl WallGauge<'_> {
     pub(super) fn distance(&self, tau: f64) -> (f64, DVec3, f64) {
+        let (distance, extreme, slack, _) = self.measure(tau);
+        (distance, extreme, slack)
+    }
+
+    /// [`Self::distance`] with the shape's pose.
+    fn measure(&self, tau: f64) -> (f64, DVec3, f64, Pose) {
         let pose = self.body.pose(self.body.orientation(tau), DVec3::ZERO, self.scale);
         let extreme = self.body.support(self.scale).support_point(&pose, self.normal);
         let centre = self.gap - self.speed * tau;
-        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size))
+        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size), pose)
+    }
+
+    /// How long the shape certainly stays farther from the wall than the middle of the band in
+    /// which a contact starts, its extreme point towards the wall followed as it turns (see
+    /// [`super::chord::wall_hold`]): 0 when its spin does not give its angular velocity.
+    fn apart(&self, tau: f64, pose: &Pose, slack: f64) -> f64 {
+        let Some(turning) = self.body.turning(tau) else { return 0.0 };
+        let shape = self.body.support(self.scale);
+        let body = Moving {
+            shape: &shape,
+            pose,
+            centre: DVec3::ZERO,
+            radius: self.size,
+            velocity: self.normal * self.speed,
+            turning,
+        };
+        let on_wall = self.normal * (self.gap - self.speed * tau);
+        wall_hold(self.normal, on_wall, &body, starting(self.tol), slack)
     }
 }
 
 impl Gauge for WallGauge<'_> {
-    fn probe(&self, tau: f64, _measure: Measure) -> Probe {
-        let (distance, _, slack) = self.distance(tau);
+    fn probe(&self, tau: f64, measure: Measure) -> Probe {
+        let (distance, _, slack, pose) = self.measure(tau);
         // The body's bounding sphere from the wall.
         let sphere = self.gap - self.speed * tau - self.size;
         let spin = self.body.spin_rate_along(self.normal) * self.scale;
+        let lower = distance - slack;
         Probe {
-            lower: distance - slack,
+            lower,
             upper: distance + slack,
             shrink: self.speed.max(0.0) + spin,
             grow: (-self.speed).max(0.0) + spin,
             far: (sphere - slack, self.speed.max(0.0)),
-            hold: 0.0,
+            // A hold away from the wall steps a start search only, never a contact's end.
+            hold: if measure == Measure::Gap && lower > guard(self.tol) { self.apart(tau, &pose, slack) } else { 0.0 },
         }
     }
 
