@@ -55,6 +55,9 @@ pub struct Conservation {
     /// Kinetic energy of the centres' motion at the end: the temperature of a gas.
     #[serde(default)]
     pub translational_end: f64,
+    /// The kinetic (plus potential) energy's relative change over the run.
+    #[serde(default)]
+    pub kinetic_relative_drift: Option<f64>,
 }
 
 impl Summary {

@@ -72,6 +72,11 @@ fn every_mode_and_method_prints_a_summary() {
                 assert!(summary.contains("axes per body"), "{summary}");
             }
         }
+        // The default method says what stepped: the event loop in simulate mode of spheres.
+        let output = vadop(&["simulate", "--bodies", "150", "--frames", "5", "--mode", mode]);
+        assert!(output.status.success(), "{mode} auto: {}", stderr(&output));
+        let stepper = if mode == "simulate" { "event loop" } else { "grid" };
+        assert!(stdout(&output).contains(&format!("auto ({stepper}), {mode} mode")), "{}", stdout(&output));
     }
 }
 

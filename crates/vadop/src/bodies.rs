@@ -212,6 +212,19 @@ impl Spin for FreeRotation {
     fn steady_spin(&self) -> Option<DVec3> {
         FreeRotation::steady_spin(self)
     }
+    #[inline]
+    fn angular_velocity_at(&self, dt: f64) -> Option<DVec3> {
+        Some(FreeRotation::angular_velocity_at(self, dt))
+    }
+    #[inline]
+    fn max_angular_acceleration(&self) -> f64 {
+        FreeRotation::max_angular_acceleration(self)
+    }
+    #[inline]
+    fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, Option<DVec3>) {
+        let (orientation, omega) = FreeRotation::orientation_and_angular_velocity_at(self, dt);
+        (orientation, Some(omega))
+    }
 }
 
 /// A [`RigidState::shape`] meaning: a sphere of the state's radius.

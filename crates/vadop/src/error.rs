@@ -133,7 +133,7 @@ pub enum VadopError {
     #[error("a record's {what} must be finite and at most the world's time {time}, got {value}")]
     BadRecordTime { what: &'static str, value: f64, time: f64 },
     /// A body's record rests in a way its world or its velocity does not allow.
-    /// It names the rest as written (`Still`, `Sliding(4)`): the error module imports no stage.
+    /// The rest is named as printed (`Rest`'s debug form), so the error module needs no body type.
     #[error("a record's rest {0} needs gravity, and no velocity along the walls it slides on (axes as bits 1 to 7) or none at all lying still")]
     BadRecordRest(String),
     /// A body's record counts crossings of periodic faces, but the box has walls on every axis.

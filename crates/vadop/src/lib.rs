@@ -56,6 +56,7 @@ pub mod axis_pool;
 pub(crate) mod bodies;
 pub mod bounding_volume;
 pub mod broad_phase;
+pub(crate) mod event_loop;
 pub(crate) mod event_queue;
 pub mod narrow_phase;
 pub(crate) mod pipeline;

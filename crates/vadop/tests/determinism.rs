@@ -470,3 +470,39 @@ fn an_interrupted_step_is_undone() {
         assert_eq!(all(&world), all(&straight));
     }
 }
+
+/// Simulate mode of spheres (the event loop) and its oracle step through their events whatever the
+/// caller's frames: one frame of a second, frames of an eighth, or frames of a 64th to half a
+/// second (all powers of two, so every run ends at the same instant) give the same contacts, in
+/// order, and the same states to the bit, in a periodic gas and a walled one, elastic and not.
+#[test]
+fn contacts_do_not_depend_on_the_frame_length() {
+    use vadop::scene::{GeneratedScene, Velocities};
+    for (periodic, restitution) in [([true; 3], 1.0), ([false; 3], 0.5)] {
+        let generated = GeneratedScene {
+            bodies: 400,
+            packing_fraction: 0.3,
+            velocities: Velocities::Maxwell { rms_speed: 0.6 },
+            radius: 0.5,
+            seed: 4,
+        };
+        let mut scene = generated.build().unwrap();
+        scene.bounds = scene.bounds.with_periodic(periodic);
+        let partitions: [&[f64]; 3] = [&[1.0], &[0.125; 8], &[0.015625, 0.5, 0.25, 0.0625, 0.125, 0.046875]];
+        for method in [Method::Auto, Method::Brute] {
+            let runs: Vec<_> = partitions
+                .iter()
+                .map(|frames| {
+                    let mut world = scene.world(WorldConfig { method, restitution, ..WorldConfig::default() }).unwrap();
+                    let contacts: Vec<String> =
+                        frames.iter().flat_map(|&dt| contact_bits(world.step(dt).unwrap())).collect();
+                    (contacts, state_bits(&world))
+                })
+                .collect();
+            assert!(runs[0].0.len() > 500, "{method:?}: {} contacts", runs[0].0.len());
+            for run in &runs[1..] {
+                assert_eq!(run, &runs[0], "{method:?} {periodic:?}: frames of other lengths differ");
+            }
+        }
+    }
+}

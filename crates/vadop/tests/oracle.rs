@@ -186,6 +186,57 @@ fn grid_never_bins_a_body_with_its_old_path() {
     assert_same_contacts(&scene, Method::Grid, Mode::Simulate, None, 12);
 }
 
+/// Frame lengths, as factors of the usual frame: from a twentieth to five frames.
+fn frame_factors() -> impl Strategy<Value = Vec<f64>> {
+    proptest::collection::vec(prop_oneof![0.05f64..0.3, 0.3f64..2.0, 2.0f64..5.0], 8..16)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// Simulate mode's event loop of spheres (the default method's, see `vadop::event_loop`)
+    /// against brute force on equilibrium gases: sparse to dense, walled, periodic and mixed
+    /// boxes, elastic and inelastic (the TC model and the jam rule), with and without friction,
+    /// frames of changing lengths: the same contacts, virial and final states, to the bit.
+    #[test]
+    fn the_event_loop_of_gases_matches_brute_force(
+        bodies in 2usize..300,
+        packing_fraction in prop_oneof![0.01f64..0.1, 0.1f64..0.3, 0.3f64..0.45],
+        rms_speed in prop_oneof![0.05f64..0.5, 0.5f64..5.0],
+        axes in (any::<bool>(), any::<bool>(), any::<bool>()),
+        restitution in prop_oneof![3 => Just(1.0), 1 => 0.0f64..1.0],
+        friction in prop_oneof![3 => Just(0.0), 1 => 0.0f64..0.5],
+        factors in frame_factors(),
+        seed in any::<u64>(),
+    ) {
+        let mut scene = generated(bodies, packing_fraction, Velocities::Maxwell { rms_speed }, seed);
+        let periodic = [axes.0, axes.1, axes.2];
+        if scene.bounds.side().min_element() >= 8.0 {
+            scene.bounds = scene.bounds.with_periodic(periodic);
+        }
+        let config = |method| WorldConfig { method, restitution, friction, ..WorldConfig::default() };
+        let mut found = scene.world(config(Method::Auto)).unwrap();
+        let mut oracle = scene.world(config(Method::Brute)).unwrap();
+        for (frame, factor) in factors.iter().enumerate() {
+            let contacts = found.step(DT * factor).unwrap().to_vec();
+            let expected = oracle.step(DT * factor).unwrap();
+            prop_assert_eq!(&contacts, expected, "frame {}", frame);
+            prop_assert_eq!(found.stats().pair_virial.to_bits(), oracle.stats().pair_virial.to_bits());
+        }
+        let state = |w: &vadop::World| w.spheres().map(|(h, s)| format!("{h} {s:?}")).collect::<Vec<_>>();
+        prop_assert_eq!(state(&found), state(&oracle));
+    }
+}
+
+/// A dense periodic gas over many frames, through the event loop and the oracle: tens of
+/// thousands of contacts, every one the same.
+#[test]
+fn a_dense_periodic_gas_over_many_frames() {
+    let mut scene = generated(500, 0.45, Velocities::Maxwell { rms_speed: 1.0 }, 3);
+    scene.bounds = scene.bounds.with_periodic([true, true, true]);
+    let contacts = assert_same_contacts(&scene, Method::Auto, Mode::Simulate, None, 25);
+    assert!(contacts > 10_000, "{contacts} contacts");
+}
 /// A slow bulk on a lattice one diameter apart (boxes touching face to face, as cell faces may
 /// lie) and a fast tail crossing many cells along the lattice's rows and diagonals, some grazing
 /// the bulk at exactly the sum of the radii or a hair inside or outside: the grid's pair sweep

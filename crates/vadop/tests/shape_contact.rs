@@ -16,7 +16,9 @@ use glam::{DQuat, DVec3};
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use std::fmt::Debug;
 use std::time::Instant;
+use vadop::motion::FreeRotation;
 use vadop::motion::Motion;
 use vadop::motion::{RigidMotion, Spin};
 use vadop::narrow_phase::shapes::{
@@ -48,9 +50,16 @@ impl Spin for Steady {
     fn steady_spin(&self) -> Option<DVec3> {
         self.body
     }
+    fn angular_velocity_at(&self, _dt: f64) -> Option<DVec3> {
+        Some(self.omega)
+    }
+    fn max_angular_acceleration(&self) -> f64 {
+        0.0
+    }
 }
 
-type Body = (ShapeGeometry, RigidMotion<Steady>);
+/// A body: its shape and motion, turning at a constant angular velocity unless said otherwise.
+type Body<S = Steady> = (ShapeGeometry, RigidMotion<S>);
 
 fn body(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, omega: DVec3) -> Body {
     (
@@ -80,11 +89,24 @@ fn steady_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, sta
     (geometry, RigidMotion { position, since: 0.0, velocity, acceleration: DVec3::ZERO, spin })
 }
 
+/// A body tumbling by the exact torque-free rotation of its shape's inertia, from orientation
+/// `start` and world angular velocity `omega`.
+fn tumbler(
+    geometry: ShapeGeometry,
+    position: DVec3,
+    velocity: DVec3,
+    start: DQuat,
+    omega: DVec3,
+) -> Body<FreeRotation> {
+    let spin = FreeRotation::new(geometry.principal_inertia_unit(), start, omega);
+    (geometry, RigidMotion { position, since: 0.0, velocity, spin })
+}
+
 fn fixed(geometry: ShapeGeometry, position: DVec3, orientation: DQuat) -> Body {
     body(geometry, position, DVec3::ZERO, orientation, DVec3::ZERO)
 }
 
-fn pair(b: &Body) -> (&ShapeGeometry, &RigidMotion<Steady>) {
+fn pair<S>(b: &Body<S>) -> (&ShapeGeometry, &RigidMotion<S>) {
     (&b.0, &b.1)
 }
 
@@ -96,9 +118,12 @@ fn pair(b: &Body) -> (&ShapeGeometry, &RigidMotion<Steady>) {
 /// smallest positive answer, unless at least two say the shapes intersect. parry's distance to a
 /// half-space is a closed form and is taken as is (its contact query mistakes the frames when
 /// the half-space comes second).
-fn distance(a: &Body, b: &Body, t: f64) -> f64 {
-    let pose = |b: &Body| b.0.pose_of_shape(b.1.position_at(t), b.1.orientation_at(t));
-    let (pa, sa, pb, sb) = (pose(a), a.0.parry_shape().as_ref(), pose(b), b.0.parry_shape().as_ref());
+fn distance<S: Spin, T: Spin>(a: &Body<S>, b: &Body<T>, t: f64) -> f64 {
+    let (pa, pb) = (
+        a.0.pose_of_shape(a.1.position_at(t), a.1.orientation_at(t)),
+        b.0.pose_of_shape(b.1.position_at(t), b.1.orientation_at(t)),
+    );
+    let (sa, sb) = (a.0.parry_shape().as_ref(), b.0.parry_shape().as_ref());
     let d = parry3d_f64::query::distance(&pa, sa, &pb, sb).unwrap().distance;
     if sa.as_halfspace().is_some() || sb.as_halfspace().is_some() {
         return d;
@@ -148,7 +173,7 @@ fn solid(kind: usize, size: [f64; 3], points: &[DVec3]) -> ShapeGeometry {
 
 /// Every contact `(start, end)` of the pair in `window`, through the public API: the first start
 /// in the window, its end, then the first start after it, and so on.
-fn contacts(a: &Body, b: &Body, window: Window) -> Vec<(f64, Option<f64>)> {
+fn contacts<S: Spin + Debug, T: Spin + Debug>(a: &Body<S>, b: &Body<T>, window: Window) -> Vec<(f64, Option<f64>)> {
     let mut out = Vec::new();
     let mut from = window.start;
     let fail = |e| panic!("{e}: {:?} {:?} vs {:?} {:?}", a.0.shape(), a.1, b.0.shape(), b.1);
@@ -166,7 +191,13 @@ fn contacts(a: &Body, b: &Body, window: Window) -> Vec<(f64, Option<f64>)> {
 }
 
 /// Checks the contract against `samples` evenly spaced times of `window`; returns the contacts.
-fn check_pair(a: &Body, b: &Body, window: Window, samples: usize, what: &str) -> Vec<(f64, Option<f64>)> {
+fn check_pair<S: Spin + Debug, T: Spin + Debug>(
+    a: &Body<S>,
+    b: &Body<T>,
+    window: Window,
+    samples: usize,
+    what: &str,
+) -> Vec<(f64, Option<f64>)> {
     let tol = contact_tolerance(&a.0, &b.0);
     let found = contacts(a, b, window);
     for &(start, end) in &found {
@@ -209,6 +240,22 @@ fn check_pair(a: &Body, b: &Body, window: Window, samples: usize, what: &str) ->
     found
 }
 
+/// A random solid's sizes, hull points, orientation and angular velocity (see [`solid_params`]).
+type SolidParams = ([f64; 3], Vec<DVec3>, DQuat, DVec3);
+
+/// Every pair of solid kinds (each kind with itself too) on the parameters `pa` and `pb`: its
+/// name, the two shapes and the sum of their bounding radii.
+fn solid_pairs(pa: &SolidParams, pb: &SolidParams) -> Vec<(String, ShapeGeometry, ShapeGeometry, f64)> {
+    let kinds = (0..6).flat_map(|ka| (ka..6).map(move |kb| (ka, kb)));
+    kinds
+        .map(|(ka, kb)| {
+            let (ga, gb) = (solid(ka, pa.0, &pa.1), solid(kb, pb.0, &pb.1));
+            let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+            (format!("{} vs {}", name(ka), name(kb)), ga, gb, reach)
+        })
+        .collect()
+}
+
 fn unit(v: [f64; 3]) -> DVec3 {
     DVec3::from(v).try_normalize().unwrap_or(DVec3::X)
 }
@@ -221,7 +268,7 @@ prop_compose! {
         axis in prop::array::uniform3(-1.0f64..1.0),
         angle in 0.0f64..6.3,
         omega in prop::array::uniform3(-3.0f64..3.0),
-    ) -> ([f64; 3], Vec<DVec3>, DQuat, DVec3) {
+    ) -> SolidParams {
         (size, points.into_iter().map(DVec3::from).collect(), DQuat::from_axis_angle(unit(axis), angle), DVec3::from(omega))
     }
 }
@@ -249,30 +296,52 @@ proptest! {
         rates in prop::array::uniform2(-5.0f64..5.0),
     ) {
         let u = unit(direction);
-        for ka in 0..6 {
-            for kb in ka..6 {
-                let ga = solid(ka, pa.0, &pa.1);
-                let gb = solid(kb, pb.0, &pb.1);
-                let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
-                let va = DVec3::from(va);
-                let vb = va - u * speed + DVec3::from(drift);
-                let (from_a, from_b) = (DVec3::new(0.25, -0.5, 1.0), DVec3::new(0.25, -0.5, 1.0) + u * (reach + gap));
-                let a = body(ga.clone(), from_a, va, pa.2, pa.3);
-                let b = body(gb.clone(), from_b, vb, pb.2, pb.3);
-                let what = format!("{} vs {}", name(ka), name(kb));
-                check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
-                let a = steady_spinner(ga.clone(), from_a, va, pa.2, pa.3);
-                let b = steady_spinner(gb.clone(), from_b, vb, pb.2, pb.3);
-                check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &format!("{what}, steady"));
-                let a = symmetric_spinner(ga, from_a, va, pa.2, rates[0]);
-                let b = symmetric_spinner(gb, from_b, vb, pb.2, rates[1]);
-                let what = format!("{what}, translating");
-                let found = check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
-                prop_assert!(found.len() <= 1, "{what}: a contact after an end: {found:?}");
-                for &(start, _) in &found {
-                    let end = contact_end_search(pair(&a), pair(&b), start, 5.0).unwrap();
-                    prop_assert!(end.iterations <= 40, "{what}: {} probes to the end", end.iterations);
-                }
+        for (what, ga, gb, reach) in solid_pairs(&pa, &pb) {
+            let va = DVec3::from(va);
+            let vb = va - u * speed + DVec3::from(drift);
+            let (from_a, from_b) = (DVec3::new(0.25, -0.5, 1.0), DVec3::new(0.25, -0.5, 1.0) + u * (reach + gap));
+            let a = body(ga.clone(), from_a, va, pa.2, pa.3);
+            let b = body(gb.clone(), from_b, vb, pb.2, pb.3);
+            check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
+            let a = steady_spinner(ga.clone(), from_a, va, pa.2, pa.3);
+            let b = steady_spinner(gb.clone(), from_b, vb, pb.2, pb.3);
+            check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &format!("{what}, steady"));
+            let a = symmetric_spinner(ga, from_a, va, pa.2, rates[0]);
+            let b = symmetric_spinner(gb, from_b, vb, pb.2, rates[1]);
+            let what = format!("{what}, translating");
+            let found = check_pair(&a, &b, Window::new(0.0, 5.0), 1000, &what);
+            prop_assert!(found.len() <= 1, "{what}: a contact after an end: {found:?}");
+            for &(start, _) in &found {
+                let end = contact_end_search(pair(&a), pair(&b), start, 5.0).unwrap();
+                prop_assert!(end.iterations <= 40, "{what}: {} probes to the end", end.iterations);
+            }
+        }
+    }
+
+    /// (a) + (c) for every pair of solid kinds tumbling by the exact torque-free rotation, whose
+    /// angular velocities move in the bodies (what the searches' chords bound with the angular
+    /// acceleration): aimed off the other's centre by up to the sum of the bounding radii, so that
+    /// many pass through each other and many graze or miss by a hair; and spinning twelve times
+    /// as fast over a shorter window.
+    #[test]
+    fn every_solid_pair_tumbling_against_dense_sampling(
+        pa in solid_params(),
+        pb in solid_params(),
+        direction in prop::array::uniform3(-1.0f64..1.0),
+        aim in prop::array::uniform3(-1.0f64..1.0),
+        gap in 0.3f64..3.0,
+        speed in 0.5f64..4.0,
+        va in prop::array::uniform3(-1.0f64..1.0),
+    ) {
+        let u = unit(direction);
+        for (what, ga, gb, reach) in solid_pairs(&pa, &pb) {
+            let off = DVec3::from(aim).reject_from_normalized(u) * reach;
+            let va = DVec3::from(va);
+            let from_b = u * (reach + gap) + off;
+            for (fast, window) in [(1.0, Window::new(0.0, 5.0)), (12.0, Window::new(0.0, 1.5))] {
+                let a = tumbler(ga.clone(), DVec3::ZERO, va, pa.2, pa.3 * fast);
+                let b = tumbler(gb.clone(), from_b, va - u * speed, pb.2, pb.3 * fast);
+                check_pair(&a, &b, window, 1500, &format!("{what}, tumbling at {fast}x"));
             }
         }
     }
@@ -306,8 +375,8 @@ proptest! {
         }
     }
 
-    /// Walls: a spinning solid in the box (said to spin steadily too), against the exact support
-    /// distance sampled densely.
+    /// Walls: a spinning solid in the box (said to spin steadily too, and tumbling), against the
+    /// exact support distance sampled densely.
     #[test]
     fn every_solid_against_the_walls(
         p in solid_params(),
@@ -319,8 +388,14 @@ proptest! {
             let g = solid(kind, p.0, &p.1);
             let a = body(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3);
             check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, name(kind));
-            let a = steady_spinner(g, DVec3::from(start), DVec3::from(velocity), p.2, p.3);
+            let a = steady_spinner(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3);
             check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, &format!("{}, steady", name(kind)));
+            // Tumbling by the exact torque-free rotation (the start search's hold follows the
+            // extreme point towards each wall to first order), and twelve times as fast.
+            for (fast, window) in [(1.0, Window::new(0.0, 4.0)), (12.0, Window::new(0.0, 1.5))] {
+                let a = tumbler(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3 * fast);
+                check_walls(&a, min, max, window, 2000, &format!("{}, tumbling at {fast}x", name(kind)));
+            }
         }
     }
 
@@ -449,7 +524,14 @@ proptest! {
 
 /// Checks a body against the walls: reported wall contacts touch within `tol` and nothing closer
 /// than `tol/2` before the first; returns the first.
-fn check_walls(a: &Body, min: DVec3, max: DVec3, window: Window, samples: usize, what: &str) -> Option<(f64, Wall)> {
+fn check_walls<S: Spin>(
+    a: &Body<S>,
+    min: DVec3,
+    max: DVec3,
+    window: Window,
+    samples: usize,
+    what: &str,
+) -> Option<(f64, Wall)> {
     let tol = vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE * a.0.bounding_radius().unwrap();
     let found = shape_wall_time(&a.0, &a.1, min, max, window).unwrap();
     let wall_distance = |t: f64, wall: Wall| {

@@ -214,7 +214,10 @@ proptest! {
         method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::Grid), Just(Method::Brute)],
         seed in any::<u64>(),
     ) {
-        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build().unwrap();
+        // A few bodies in a dense box may not fit at random: such a case is no case.
+        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build();
+        prop_assume!(scene.is_ok());
+        let scene = scene.unwrap();
         let mut world = scene.world(detect(method)).unwrap();
         for _ in 0..3 {
             world.step(DT).unwrap();
@@ -243,7 +246,10 @@ proptest! {
         method in prop_oneof![Just(Method::Auto), Just(Method::Vadop), Just(Method::Grid)],
         seed in any::<u64>(),
     ) {
-        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build().unwrap();
+        // A few bodies in a dense box may not fit at random: such a case is no case.
+        let scene = PaperScene { bodies, packing_fraction, max_speed, radius: 0.5, seed }.build();
+        prop_assume!(scene.is_ok());
+        let scene = scene.unwrap();
         let mut world = scene.world(detect(method)).unwrap();
         let fastest = scene.spheres.iter().map(|s| s.velocity.length()).fold(0.0, f64::max);
         // Two bodies that touch within a frame start at most two frames' travel and two radii apart.

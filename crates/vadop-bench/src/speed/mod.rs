@@ -1,4 +1,4 @@
-//! `vadop-bench speed`: where the time goes at scale, in seven sections, each a table between its
+//! `vadop-bench speed`: where the time goes at scale, in sections, each a table between its
 //! own markers in the markdown file with its CSV and plot in results/speed/:
 //! detect-mode ms/frame of the default method against grid, vadop, the old engine's grid and the
 //! peers ([`detect`]); narrow tests against the pairs whose swept boxes overlap ([`candidates`]);
@@ -6,7 +6,9 @@
 //! independence of the frame length ([`throughput`]); memory per body ([`memory`]); where
 //! each broad phase wins ([`methods`]); all cores against one ([`cores`]); what gravity
 //! costs ([`gravity`]); the periodic gas's pressure against its equation of state
-//! ([`periodic`]); and a granular pile settling under gravity ([`pile`]).
+//! ([`periodic`]); a granular pile settling under gravity ([`pile`]); and simulate mode's event
+//! loop on the periodic gas: one core at every size and packing, frames of every length, every core,
+//! the energy over 10^7 collisions ([`event_loop`]).
 //!
 //! Every run is a child pinned to one core, but the all-cores runs; timed runs are repeated and the tables show the
 //! median of the repeats; ratios compare runs of this same command. Times are means over frames
@@ -18,6 +20,7 @@
 pub mod candidates;
 mod cores;
 mod detect;
+mod event_loop;
 mod gravity;
 mod memory;
 mod methods;
@@ -43,7 +46,7 @@ use std::rc::Rc;
 (candidates up to 10^5), retest at n = 10^5 with 10,000 calls, throughput at n = 10^4 and 10^5, memory at n = 10^4 to \
 10^6, methods at n = 10^4 and 10^5, cores at the detect and throughput sizes on one thread and on every core \
 and at n = 10^7 on every core, gravity at n = 10^4 and 10^5, the periodic gas at n = 10^5 (3 x 10^7 collisions measured at each of \
-three packings), the granular pile at n = 10^4 over 300 frames; with --quick every section at n = 10^4 only (the pile at 2,000), with fewer frames and calls and one \
+three packings), the granular pile at n = 10^4 over 300 frames, the event loop on the periodic gas at n = 10^4 to 10^6 (3 x 10^6 collisions a run, 10^7 for the energy); with --quick every section at n = 10^4 only (the pile at 2,000), with fewer frames and calls and one \
 run each (a minute or two). Frames cover several broad-phase windows. --timeout defaults to 900 s per child run. The \
 full suite takes hours: run it on a quiet machine.")]
 pub struct SpeedArgs {
@@ -74,6 +77,7 @@ enum Section {
     Cores,
     Gravity,
     Periodic,
+    EventLoop,
     Pile,
 }
 
@@ -106,6 +110,13 @@ struct Plan {
     /// The periodic gas's bodies, and the pair collisions measured at each packing.
     periodic_bodies: usize,
     periodic_collisions: f64,
+    /// The event-loop section: body counts of its one-core table, of its frame-length sweep and
+    /// energy run, of its all-cores table; pair collisions measured per run and in the energy run.
+    loop_bodies: Vec<usize>,
+    loop_sweep_bodies: usize,
+    loop_threads_bodies: Vec<usize>,
+    loop_pairs: f64,
+    drift_pairs: f64,
     /// Body counts of the granular pile, and the frames each runs (it forms and settles).
     pile_bodies: Vec<usize>,
     pile_frames: u64,
@@ -133,6 +144,11 @@ impl Plan {
                 gravity_bodies: vec![10_000],
                 periodic_bodies: 10_000,
                 periodic_collisions: 1e6,
+                loop_bodies: vec![10_000],
+                loop_sweep_bodies: 10_000,
+                loop_threads_bodies: vec![10_000],
+                loop_pairs: 2e5,
+                drift_pairs: 1e6,
                 pile_bodies: vec![2_000],
                 pile_frames: 150,
             }
@@ -156,6 +172,11 @@ impl Plan {
                 gravity_bodies: vec![10_000, 100_000],
                 periodic_bodies: 100_000,
                 periodic_collisions: 3e7,
+                loop_bodies: vec![10_000, 100_000, 1_000_000],
+                loop_sweep_bodies: 100_000,
+                loop_threads_bodies: vec![100_000, 1_000_000],
+                loop_pairs: 3e6,
+                drift_pairs: 1e7,
                 pile_bodies: vec![10_000],
                 pile_frames: 300,
             }
@@ -331,6 +352,7 @@ pub fn run(args: &SpeedArgs) -> CliResult<()> {
             Section::Cores => cores::run(&context)?,
             Section::Gravity => gravity::run(&context)?,
             Section::Periodic => periodic::run(&context)?,
+            Section::EventLoop => event_loop::run(&context)?,
             Section::Pile => pile::run(&context)?,
         }
     }
@@ -350,6 +372,7 @@ impl Section {
                 Section::Cores => "speed-cores",
                 Section::Gravity => "speed-gravity",
                 Section::Periodic => "speed-periodic",
+                Section::EventLoop => "speed-event-loop",
                 Section::Pile => "speed-pile",
             },
         }

@@ -41,7 +41,7 @@ pub(crate) fn carnahan_starling(eta: f64) -> f64 {
 
 /// Enskog's collisions per sphere per frame, 24 eta g(sigma) sqrt(kT / pi m), with the contact
 /// value g(sigma) = (Z - 1) / 4 eta from Hansen-Goos: what sizes the runs.
-fn collisions_per_sphere_per_frame(eta: f64) -> f64 {
+pub(super) fn collisions_per_sphere_per_frame(eta: f64) -> f64 {
     let kt = RMS_SPEED * RMS_SPEED / 3.0;
     6.0 * (hansen_goos(eta) - 1.0) * (kt / std::f64::consts::PI).sqrt()
 }

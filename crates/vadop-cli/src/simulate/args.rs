@@ -39,7 +39,8 @@ files only."
 Reading the summary (README.md, \"Reading the summary\", says more):
   scene       the bodies, the box, packing (fraction of the box the moving bodies fill), the
               fastest body in its own diameters per frame (a shape's: its bounding sphere's)
-  method      the method as run: auto (the default) is the fastest, today the grid;
+  method      the method as run: auto (the default) is the fastest, today the grid (in
+              simulate mode of spheres without gravity, the event loop);
               --method vadop runs the paper's velocity-aligned sweep and prune
   pool        vadop and swept-kdop: m axes, covering radius rho, alignment angle phi, and the
               axes each body is bounded on (mean over the frames that start a window)
@@ -152,7 +153,8 @@ pub struct SimulateArgs {
     /// follows identical paths; simulate: bodies also collide with each other
     #[arg(long, value_enum, default_value_t = ModeArg::Simulate, help_heading = "Run")]
     pub(super) mode: ModeArg,
-    /// Where candidate pairs come from: auto (the fastest, today grid), vadop (the paper's method:
+    /// Where candidate pairs come from: auto (the fastest: the grid; in simulate mode of spheres
+    /// without gravity, an event loop with one scheduled event per body), vadop (the paper's method:
     /// continuous, velocity-aligned volumes), brute
     /// (continuous, every pair), discrete (overlap checks at frame instants only), or the
     /// continuous baselines swept-aabb (classic sweep and prune over swept boxes), swept-kdop (all

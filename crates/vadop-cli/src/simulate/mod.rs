@@ -258,6 +258,7 @@ fn run_world(
     let info = RunInfo {
         scene: SceneInfo::of(&world, origin.source, args.dt)?,
         method: match config.method {
+            Method::Auto if world.on_event_loop() => "auto (event loop)".to_string(),
             Method::Auto => format!("auto ({})", config.method.resolve().name()),
             method => method.name().to_string(),
         },

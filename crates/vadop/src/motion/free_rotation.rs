@@ -299,9 +299,26 @@ impl FreeRotation {
     pub fn angular_velocity_at(&self, dt: f64) -> DVec3 {
         match &self.motion {
             Motion::Steady { angular_velocity, .. } => *angular_velocity,
+            Motion::Tumbling(tumbling) => tumbling.angular_velocity(tumbling.working_to_world(dt)),
+        }
+    }
+
+    /// [`Self::orientation_at`] and [`Self::angular_velocity_at`] together, the same bits, for
+    /// the cost of one: a tumbling body's frame at `dt` (an elliptic integral) is found once.
+    ///
+    /// ```
+    /// use glam::{DQuat, DVec3};
+    /// use vadop::motion::free_rotation::FreeRotation;
+    /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(1.0, 0.5, -2.0));
+    /// let both = rotation.orientation_and_angular_velocity_at(3.0);
+    /// assert_eq!(both, (rotation.orientation_at(3.0), rotation.angular_velocity_at(3.0)));
+    /// ```
+    pub fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, DVec3) {
+        match &self.motion {
+            Motion::Steady { .. } => (self.orientation_at(dt), self.angular_velocity_at(dt)),
             Motion::Tumbling(tumbling) => {
-                let (frame, l) = tumbling.working_to_world(dt);
-                frame * (tumbling.inverse_inertia * l) * tumbling.velocity_unscale
+                let working = tumbling.working_to_world(dt);
+                (working.0 * tumbling.body_to_working, tumbling.angular_velocity(working))
             }
         }
     }
@@ -345,6 +362,35 @@ impl FreeRotation {
     /// ```
     pub fn max_angular_speed(&self) -> f64 {
         self.max_angular_speed
+    }
+
+    /// An upper bound on |dω/dt| over all time: 0 for a steady rotation; for a tumbling one
+    /// (I_max - I_min) / (2 I_min) times the square of [`Self::max_angular_speed`], from Euler's
+    /// equations I dω/dt = (I ω) × ω = ((I - c) ω) × ω with c halfway between the extreme
+    /// moments (the world and body frames see the same derivative of ω), plus a relative 2^-40
+    /// for rounding.
+    ///
+    /// ```
+    /// use glam::{DQuat, DVec3};
+    /// use vadop::motion::free_rotation::FreeRotation;
+    /// let rotation = FreeRotation::new(DVec3::new(1.0, 2.0, 3.0), DQuat::IDENTITY, DVec3::new(0.3, 1.0, 0.2));
+    /// let bound = rotation.max_angular_acceleration();
+    /// let h = 1e-4;
+    /// for i in 0..1000 {
+    ///     let t = 0.01 * i as f64;
+    ///     let rate = (rotation.angular_velocity_at(t + h) - rotation.angular_velocity_at(t - h)) / (2.0 * h);
+    ///     assert!(rate.length() <= bound * (1.0 + 1e-6));
+    /// }
+    /// ```
+    pub fn max_angular_acceleration(&self) -> f64 {
+        match &self.motion {
+            Motion::Steady { .. } => 0.0,
+            Motion::Tumbling(tumbling) => {
+                let e = tumbling.inverse_inertia;
+                let spread = 0.5 * (e.max_element() / e.min_element() - 1.0);
+                spread * self.max_angular_speed * self.max_angular_speed * (1.0 + SPEED_BOUND_SLACK)
+            }
+        }
     }
 
     /// The constant angular velocity in the body's principal frame of a steady rotation (one
@@ -515,6 +561,12 @@ impl Tumbling {
     fn working_to_world(&self, dt: f64) -> (DQuat, DVec3) {
         let (angle, l) = self.aligned_angle_and_momentum(dt);
         (self.aligned_to_world * DQuat::from_rotation_z(angle) * self.tilt(l), l)
+    }
+
+    /// The world angular velocity from [`Self::working_to_world`]'s rotation and L_W.
+    #[inline]
+    fn angular_velocity(&self, (frame, l): (DQuat, DVec3)) -> DVec3 {
+        frame * (self.inverse_inertia * l) * self.velocity_unscale
     }
 }
 

@@ -68,6 +68,22 @@ pub trait Spin {
     fn steady_spin(&self) -> Option<DVec3> {
         None
     }
+    /// The world angular velocity `dt` after the body's last velocity change (the derivative of
+    /// [`Self::orientation_at`]), `None` when unknown. With [`Self::max_angular_acceleration`] it
+    /// predicts turning to first order and bounds the rest, where the speed bound alone would
+    /// take every point to move at its worst.
+    fn angular_velocity_at(&self, _dt: f64) -> Option<DVec3> {
+        None
+    }
+    /// Upper bound on |dω/dt| over all time (world frame): infinite when unknown.
+    fn max_angular_acceleration(&self) -> f64 {
+        f64::INFINITY
+    }
+    /// [`Self::orientation_at`] and [`Self::angular_velocity_at`] together, the same values:
+    /// for spins that find both from one costly step.
+    fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, Option<DVec3>) {
+        (self.orientation_at(dt), self.angular_velocity_at(dt))
+    }
 }
 
 impl<S: Spin + ?Sized> Spin for &S {
@@ -79,6 +95,15 @@ impl<S: Spin + ?Sized> Spin for &S {
     }
     fn steady_spin(&self) -> Option<DVec3> {
         (**self).steady_spin()
+    }
+    fn angular_velocity_at(&self, dt: f64) -> Option<DVec3> {
+        (**self).angular_velocity_at(dt)
+    }
+    fn max_angular_acceleration(&self) -> f64 {
+        (**self).max_angular_acceleration()
+    }
+    fn orientation_and_angular_velocity_at(&self, dt: f64) -> (DQuat, Option<DVec3>) {
+        (**self).orientation_and_angular_velocity_at(dt)
     }
 }
 
@@ -95,6 +120,12 @@ impl Spin for Fixed {
     }
     fn steady_spin(&self) -> Option<DVec3> {
         Some(DVec3::ZERO)
+    }
+    fn angular_velocity_at(&self, _dt: f64) -> Option<DVec3> {
+        Some(DVec3::ZERO)
+    }
+    fn max_angular_acceleration(&self) -> f64 {
+        0.0
     }
 }
 

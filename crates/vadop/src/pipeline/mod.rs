@@ -21,14 +21,16 @@
 //! method finds it. It never validates input (the world does), never reads a broad phase's
 //! internals and never computes an impulse.
 
+pub(crate) mod jam;
 mod pass_through;
-mod predict;
+pub(crate) mod predict;
 pub(crate) mod pseudo_dynamic;
+pub(crate) mod respond;
 mod retest;
 pub(crate) mod touching;
 mod wake;
 
-use crate::bodies::{Bodies, Rest};
+use crate::bodies::Bodies;
 use crate::broad_phase::proxy::{sampled_quantile, ProxyTable};
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, EventQueue, Partner};
@@ -36,14 +38,11 @@ use crate::frame::{Contact, FrameStats, Mode, Touched};
 use crate::frame::{Output, Physics};
 use crate::narrow_phase::contacts::{self, Parking};
 use crate::narrow_phase::parked::ParkedSearches;
-use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
 use crate::pipeline::touching::Touching;
-use crate::response::impact::{exchange_virial, Impacts, Resolution};
-use crate::response::rest;
+use crate::response::impact::{Impacts, Resolution};
 use crate::walls::BoxBounds;
-use crate::walls::Wall;
 use crate::window::Window;
 use glam::DVec3;
 use pass_through::Searched;
@@ -129,10 +128,11 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     workers: Workers,
     /// Scratch: a sample of travel times for the window rule.
     travel: Vec<f64>,
-    /// Scratch of the jam rule: the cluster being frozen, its members' marks, query results.
-    cluster: Vec<u32>,
-    cluster_mark: Vec<u32>,
-    cluster_epoch: u32,
+    /// Scratch of the jam rule, and the members of the cluster last frozen, to re-test (also
+    /// the stack of the walk that wakes what lay on a body).
+    cluster: jam::Cluster,
+    cluster_members: Vec<u32>,
+    /// Scratch: a body's neighbours, for the wake walk.
     near: Vec<u32>,
 }
 
@@ -161,9 +161,8 @@ impl<B: BroadPhase> Pipeline<B> {
             shrink: 1.0,
             workers,
             travel: Vec::new(),
-            cluster: Vec::new(),
-            cluster_mark: Vec::new(),
-            cluster_epoch: 0,
+            cluster: jam::Cluster::default(),
+            cluster_members: Vec::new(),
             near: Vec::new(),
         }
     }
@@ -186,7 +185,8 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.batch.capacity() * std::mem::size_of::<Event>()
             + self.partners.capacity() * std::mem::size_of::<(u32, u32, Window)>()
             + self.travel.capacity() * 8
-            + (self.cluster.capacity() + self.cluster_mark.capacity() + self.near.capacity()) * 4
+            + self.cluster.memory_bytes()
+            + (self.cluster_members.capacity() + self.near.capacity()) * 4
     }
 
     /// Body `i` was added or changed velocity between frames at time `t`: it enters the window
@@ -378,7 +378,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 },
                 Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
                 Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
-                Partner::Wall(wall) => self.wall_contact(bodies, physics, event.body, wall, event.time, out),
+                Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, event.time, out),
                 Partner::WallStalled => self.stalled(bodies, physics, &[event.body], event.time, out),
                 Partner::Cross(face) => {
                     bodies.wrap(i, face, event.time);
@@ -409,44 +409,7 @@ impl<B: BroadPhase> Pipeline<B> {
     fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, b: u32, t: f64, out: &mut Output) {
         let (i, j) = (a as usize, b as usize);
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
-        let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let before_j = bodies.velocity_at(j, t);
-        let still = [i, j].map(|k| bodies.rest_of(k) == Rest::Still);
-        let resolution = self.impacts.pair(bodies, physics, (a, b), t, (point, normal), out.stats);
-        // Impacts with static bodies are the level's pressure, as the walls' are: not the virial.
-        let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
-        let mut impulse = 0.0;
-        match resolution {
-            Resolution::Jammed { by_rule } => {
-                let before = bodies.velocity_at(i, t);
-                let virial = self.freeze_cluster(bodies, physics, &[a, b], t, out.stats);
-                if between_moving {
-                    out.stats.pair_virial += virial;
-                }
-                if by_rule {
-                    impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
-                }
-            }
-            Resolution::Pushed(total) => {
-                impulse = total;
-                if between_moving {
-                    out.stats.pair_virial += exchange_virial(bodies, (i, j), t, before_j);
-                }
-                // The pair itself is re-tested once, by the second body, when both proxies are
-                // fresh (a rounding residue may still approach).
-                self.retest_pair(a, b, bodies, physics, t, out.stats);
-                for (k, was_still) in [(i, still[0]), (j, still[1])] {
-                    if was_still && bodies.rest_of(k) != Rest::Still {
-                        self.wake_held(bodies, physics, k, t, out.stats);
-                    }
-                }
-            }
-            Resolution::Rested(k, total) => {
-                impulse = total;
-                self.retest(k, None, bodies, physics, t, out.stats);
-            }
-            Resolution::Parting | Resolution::Passed => {}
-        }
+        let (point, normal, resolution, impulse) = respond::pair_impact(self, bodies, physics, (a, b), t, out.stats);
         // Spinning shapes may touch again on the same motions (spheres never do): with nothing
         // changed, the pair's next contact is predicted now, as a later window would find it.
         if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
@@ -582,43 +545,9 @@ impl<B: BroadPhase> Pipeline<B> {
         out.ends.push(Contact { time: t, body, touched, point, normal, impulse: 0.0 });
     }
 
-    fn wall_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, wall: Wall, t: f64, out: &mut Output) {
-        let i = a as usize;
-        let (point, normal) = contacts::wall_geometry(bodies, i, wall, &physics.bounds, t);
-        let impulse = match self.impacts.wall(bodies, physics, (a, wall), t, (point, normal), out.stats) {
-            Resolution::Jammed { by_rule: true } => {
-                let before = bodies.velocity_at(i, t);
-                self.freeze_cluster(bodies, physics, &[a], t, out.stats);
-                bodies.mass[i] * (before - bodies.velocity(i)).length()
-            }
-            Resolution::Jammed { by_rule: false } => {
-                self.freeze_cluster(bodies, physics, &[a], t, out.stats);
-                0.0
-            }
-            Resolution::Pushed(total) => {
-                self.retest(a, None, bodies, physics, t, out.stats);
-                total
-            }
-            Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => {
-                unreachable!("a wall always turns a body back")
-            }
-        };
-        out.contacts.push(Contact {
-            time: t,
-            body: bodies.handle(i),
-            touched: Touched::Wall(wall),
-            point,
-            normal,
-            impulse,
-        });
-    }
-
-    /// The jam rule (see [`crate::response::rules`]), counted as one jammed contact: every body touching
-    /// `seeds` at `t`, directly or through each other, without separating, moves on with the
-    /// cluster's centre-of-mass velocity less any component into a wall a member touches (a
-    /// cluster pressed against static geometry stops, and its spins stop). Returns the
-    /// cluster's virial: its members' momentum changes dotted with their centres' offsets from
-    /// the first member's (what they exchanged; a stop against a wall or static body counts too).
+    /// The jam rule (see [`jam::Cluster::freeze`]) on the bodies touching `seeds` at `t`, found
+    /// through the broad phase (a body's own proxy and, across periodic faces, its ghosts) and
+    /// the static geometry; its members are re-tested. Returns the cluster's virial.
     fn freeze_cluster(
         &mut self,
         bodies: &mut Bodies,
@@ -627,88 +556,22 @@ impl<B: BroadPhase> Pipeline<B> {
         t: f64,
         stats: &mut FrameStats,
     ) -> f64 {
-        stats.jam_contacts += 1;
-        let mut cluster = std::mem::take(&mut self.cluster);
-        let mut near = std::mem::take(&mut self.near);
-        cluster.clear();
-        self.cluster_epoch = self.cluster_epoch.wrapping_add(1);
-        self.cluster_mark.resize(bodies.slots(), 0);
-        // A cluster pressed against static geometry stops: the level holds it. Under the rest
-        // rule bodies lying still hold it up too, and are not of it.
-        let resting = rest::applies(bodies, physics);
-        let support = |bodies: &Bodies, o: usize| resting && bodies.rest_of(o) == Rest::Still;
-        let (mut pinned, mut held) = (false, false);
-        for &seed in seeds {
-            if bodies.is_fixed(seed as usize) || support(bodies, seed as usize) {
-                pinned |= bodies.is_fixed(seed as usize);
-                held = true;
-                continue;
-            }
-            self.cluster_mark[seed as usize] = self.cluster_epoch;
-            cluster.push(seed);
-        }
-        let (mut mass, mut momentum) = (0.0, DVec3::ZERO);
-        let (mut touches_min, mut touches_max) = ([false; 3], [false; 3]);
-        let (walls_min, walls_max) = physics.bounds.walls();
-        let mut k = 0;
-        while k < cluster.len() {
-            let m = cluster[k] as usize;
-            k += 1;
-            let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
-            mass += bodies.mass[m];
-            momentum += bodies.mass[m] * bodies.velocity_at(m, t);
-            for axis in 0..3 {
-                let slack = 4.0 * CONTACT_TOLERANCE * rm;
-                touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
-                touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
-            }
-            self.neighbours(bodies, m, &mut near);
-            for &o in &near {
-                let o = o as usize;
-                if self.cluster_mark[o] != self.cluster_epoch && contacts::pressed_together(bodies, m, o, t) {
-                    if support(bodies, o) {
-                        held = true;
-                        continue;
-                    }
-                    self.cluster_mark[o] = self.cluster_epoch;
-                    cluster.push(o as u32);
-                }
-            }
-            if !pinned && !self.statics.is_empty() {
-                self.statics.for_each_near(pm - rm, pm + rm, |s| {
-                    pinned |= contacts::pressed_together(bodies, m, s as usize, t);
-                });
-            }
-        }
-        // Under the rest rule a cluster held up by a floor or by a body lying still lies still.
-        let g = bodies.gravity;
-        let floor = (0..3).any(|axis| (g[axis] < 0.0 && touches_min[axis]) || (g[axis] > 0.0 && touches_max[axis]));
-        let still = resting && (pinned || held || floor);
-        let mut velocity = if pinned || still || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
-        for axis in 0..3 {
-            if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {
-                velocity[axis] = 0.0;
-            }
-        }
-        // One rigid motion for all: no spin, or members would turn into each other.
-        let mut virial = 0.0;
-        let first = cluster.first().map_or(0, |&m| m as usize);
-        for &m in &cluster {
-            let m = m as usize;
-            let gained = bodies.mass[m] * (velocity - bodies.velocity_at(m, t));
-            // A cluster spans less than half a periodic side: its members' nearest images.
-            virial += bodies.offset_at(first, m, t).dot(gained);
-            self.impacts.rules.freeze(m as u32, t);
-            bodies.set_motion_at(m, t, velocity, DVec3::ZERO);
-            if still {
-                bodies.lie_still(m, t);
-            }
-        }
-        for &m in &cluster {
+        let (broad, table, statics) = (&mut self.broad, &self.proxies, &self.statics);
+        let near = |bodies: &Bodies, m: usize, near: &mut Vec<u32>| wake::neighbours(broad, table, bodies, m, near);
+        let pinned = |bodies: &Bodies, m: usize| {
+            let (pm, rm, mut pinned) = (bodies.position_at(m, t), bodies.radius(m), false);
+            statics.for_each_near(pm - rm, pm + rm, |s| pinned |= contacts::pressed_together(bodies, m, s as usize, t));
+            pinned
+        };
+        let rules = &mut self.impacts.rules;
+        let virial = self.cluster.freeze(bodies, physics, rules, seeds, t, stats, near, pinned);
+        let mut members = std::mem::take(&mut self.cluster_members);
+        members.clear();
+        members.extend_from_slice(self.cluster.members());
+        for &m in &members {
             self.retest(m, None, bodies, physics, t, stats);
         }
-        self.cluster = cluster;
-        self.near = near;
+        self.cluster_members = members;
         virial
     }
 }

@@ -8,9 +8,10 @@
 //! reported twice (through either body's ghost) is the same event, which the queue pops once. It
 //! never schedules or handles an event.
 
-use crate::bodies::Bodies;
+use crate::bodies::{Bodies, BodyState};
 use crate::broad_phase::proxy::{Proxies, ProxyTable, Reported};
 use crate::event_queue::{Event, Partner};
+use crate::motion::Motion;
 use crate::narrow_phase::contacts::{self, Parking};
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::spheres::wall_contact_time;
@@ -225,13 +226,42 @@ pub(super) fn predict_wall(
 /// Body `body`'s crossing of a periodic face of `bounds` if its canonical time lies in `window`:
 /// when its centre reaches the face (the body then comes back through the opposite one).
 #[inline]
-pub(super) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+pub(crate) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+    let i = body as usize;
+    crossing_event((body, bodies.stamp[i]), &bodies.motion(i), bodies.gravity_on(i), bounds, window)
+}
+
+/// [`predict_crossing`] of body `body` (stamped as given) on `motion` under `gravity`: a motion
+/// the store may not hold yet.
+#[inline]
+pub(crate) fn crossing_event(
+    (body, stamp): (u32, u32),
+    motion: &Motion,
+    gravity: DVec3,
+    bounds: &BoxBounds,
+    window: Window,
+) -> Option<Event> {
     if !bounds.is_periodic() {
         return None;
     }
-    let i = body as usize;
     let (low, high) = bounds.faces();
-    let (time, face) = wall_contact_time(&bodies.motion(i), 0.0, low, high, bodies.gravity_on(i))?;
-    let event = Event { time, body, partner: Partner::Cross(face), body_stamp: bodies.stamp[i], partner_stamp: 0 };
+    let (time, face) = wall_contact_time(motion, 0.0, low, high, gravity)?;
+    let event = Event { time, body, partner: Partner::Cross(face), body_stamp: stamp, partner_stamp: 0 };
+    window.contains(time).then_some(event)
+}
+
+/// [`predict_wall`] of a sphere `body` (stamped as given) of `state` under `gravity`: a motion the
+/// store may not hold yet.
+#[inline]
+pub(crate) fn sphere_wall_event(
+    (body, stamp): (u32, u32),
+    state: &BodyState,
+    gravity: DVec3,
+    bounds: &BoxBounds,
+    window: Window,
+) -> Option<Event> {
+    let walls = bounds.walls();
+    let (time, wall) = wall_contact_time(&state.motion, state.radius, walls.0, walls.1, gravity)?;
+    let event = Event { time, body, partner: Partner::Wall(wall), body_stamp: stamp, partner_stamp: 0 };
     window.contains(time).then_some(event)
 }

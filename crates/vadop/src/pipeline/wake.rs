@@ -8,23 +8,30 @@
 
 use super::Pipeline;
 use crate::bodies::{Bodies, Rest};
+use crate::broad_phase::proxy::ProxyTable;
 use crate::broad_phase::BroadPhase;
 use crate::frame::{FrameStats, Physics};
 use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
 
-impl<B: BroadPhase> Pipeline<B> {
-    /// Into `near`, the bodies whose proxies overlap body `m`'s: through its own proxy and,
-    /// across periodic faces, its ghosts.
-    pub(super) fn neighbours(&mut self, bodies: &Bodies, m: usize, near: &mut Vec<u32>) {
-        near.clear();
-        let (proxies, table) = (self.proxies.view(bodies), &self.proxies);
-        for slot in table.slots_of(m) {
-            self.broad.query(slot as u32, proxies, None, |o, _| {
-                near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
-            });
-        }
+/// Into `near`, the bodies whose proxies in `table` overlap body `m`'s: through its own proxy
+/// and, across periodic faces, its ghosts.
+pub(super) fn neighbours<B: BroadPhase>(
+    broad: &mut B,
+    table: &ProxyTable,
+    bodies: &Bodies,
+    m: usize,
+    near: &mut Vec<u32>,
+) {
+    near.clear();
+    let proxies = table.view(bodies);
+    for slot in table.slots_of(m) {
+        broad.query(slot as u32, proxies, None, |o, _| {
+            near.extend(table.owner(o.body, o.stamp).map(|(body, _, _)| body));
+        });
     }
+}
 
+impl<B: BroadPhase> Pipeline<B> {
     /// Body `woken`, which lay still, moves (or goes) at `t`: the bodies lying still on top of it
     /// (touching it, to the contact tolerance, above its centre), and on those in turn, fall
     /// again from where they are, re-tested from `t` when a window is under way.
@@ -36,13 +43,13 @@ impl<B: BroadPhase> Pipeline<B> {
         t: f64,
         stats: &mut FrameStats,
     ) {
-        let mut stack = std::mem::take(&mut self.cluster);
+        let mut stack = std::mem::take(&mut self.cluster_members);
         let mut near = std::mem::take(&mut self.near);
         stack.clear();
         stack.push(woken as u32);
         while let Some(m) = stack.pop() {
             let m = m as usize;
-            self.neighbours(bodies, m, &mut near);
+            neighbours(&mut self.broad, &self.proxies, bodies, m, &mut near);
             for &o in &near {
                 let o = o as usize;
                 let offset = bodies.offset_at(m, o, t);
@@ -55,7 +62,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 }
             }
         }
-        self.cluster = stack;
+        self.cluster_members = stack;
         self.near = near;
     }
 }

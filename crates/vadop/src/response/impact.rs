@@ -68,22 +68,45 @@ pub(crate) fn push_spheres(
     normal: DVec3,
     restitution: f64,
 ) -> f64 {
+    match spheres_pushed(bodies, (i, j), t, normal, restitution) {
+        Some((impulse, vi, vj)) => {
+            bodies.set_velocity_at(i, t, vi);
+            bodies.set_velocity_at(j, t, vj);
+            impulse
+        }
+        None => 0.0,
+    }
+}
+
+/// What [`push_spheres`] does to spheres `i` and `j`, without doing it: the impulse and their
+/// velocities after it; none when they already part.
+#[inline]
+pub(crate) fn spheres_pushed(
+    bodies: &Bodies,
+    (i, j): (usize, usize),
+    t: f64,
+    normal: DVec3,
+    restitution: f64,
+) -> Option<(f64, DVec3, DVec3)> {
     let (vi, vj) = (bodies.velocity_at(i, t), bodies.velocity_at(j, t));
     let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
     let impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
-    if impulse > 0.0 {
-        bodies.set_velocity_at(i, t, vi - impulse * wi * normal);
-        bodies.set_velocity_at(j, t, vj + impulse * wj * normal);
-    }
-    impulse
+    (impulse > 0.0).then(|| (impulse, vi - impulse * wi * normal, vj + impulse * wj * normal))
 }
 
 /// The collisional virial of an impact of bodies `i` and `j` at `t`: the separation of their
 /// centres (`j`'s minus `i`'s) dotted with the momentum `j` gained, `before` being `j`'s velocity
 /// at `t` before the impact (the impact has just set its motion at `t`). An impact conserves momentum, so taking `i` as the second body gives the same.
 pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, before: DVec3) -> f64 {
+    virial_of(bodies, (i, j), t, (before, bodies.velocity(j)))
+}
+
+/// [`exchange_virial`] of an impact that changes `j`'s velocity at `t` from `before` to `after`
+/// (which the store may not hold yet).
+#[inline]
+pub(crate) fn virial_of(bodies: &Bodies, (i, j): (usize, usize), t: f64, (before, after): (DVec3, DVec3)) -> f64 {
     let separation = bodies.offset_at(i, j, t);
-    separation.dot(bodies.mass[j] * (bodies.velocity(j) - before))
+    separation.dot(bodies.mass[j] * (after - before))
 }
 
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.

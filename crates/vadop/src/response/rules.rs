@@ -102,16 +102,26 @@ impl ContactRules {
 
     /// Counts a contact of body `i` at `t`; true once it is jammed.
     fn count(&mut self, i: usize, t: f64) -> bool {
-        if self.last_contact[i] == t {
-            self.at_instant[i] = self.at_instant[i].saturating_add(1);
-        } else {
-            self.at_instant[i] = 1;
-        }
+        let (at_instant, in_step, jammed) = self.after_count(i, t);
         if self.in_step[i] == 0 {
             self.counted.push(i as u32);
         }
-        self.in_step[i] += 1;
-        self.at_instant[i] as u32 > JAM_LIMIT || self.in_step[i] > BURST_LIMIT || self.frozen[i] == t
+        (self.at_instant[i], self.in_step[i]) = (at_instant, in_step);
+        jammed
+    }
+
+    /// Body `i`'s counts at the instant and in the step once a contact at `t` is counted, and
+    /// whether it is jammed then.
+    #[inline]
+    fn after_count(&self, i: usize, t: f64) -> (u8, u32, bool) {
+        let at_instant = if self.last_contact[i] == t { self.at_instant[i].saturating_add(1) } else { 1 };
+        let in_step = self.in_step[i] + 1;
+        (at_instant, in_step, at_instant as u32 > JAM_LIMIT || in_step > BURST_LIMIT || self.frozen[i] == t)
+    }
+
+    /// True when a contact of bodies `a` and `b` at `t` would jam them, found without counting it.
+    pub(crate) fn would_jam(&self, a: u32, b: u32, t: f64) -> bool {
+        self.after_count(a as usize, t).2 || self.after_count(b as usize, t).2
     }
 
     /// The restitution of a contact at `t` of bodies whose previous contacts were at
@@ -119,6 +129,16 @@ impl ContactRules {
     fn restitution(restitution: f64, duration: f64, t: f64, previous: f64) -> Rule {
         let recent = restitution < 1.0 && t - previous < duration;
         Rule::Impulse { restitution: if recent { 1.0 } else { restitution }, changed: recent }
+    }
+
+    /// The restitution a contact of bodies `a` and `b` at `t` gets under the TC model, unless it
+    /// jams them, without recording it: what [`Self::pair`] would apply.
+    pub(crate) fn pair_restitution(&self, a: u32, b: u32, t: f64, restitution: f64, duration: f64) -> f64 {
+        let previous = self.last_contact[a as usize].max(self.last_contact[b as usize]);
+        match ContactRules::restitution(restitution, duration, t, previous) {
+            Rule::Impulse { restitution, .. } => restitution,
+            Rule::Jam => unreachable!("the TC model never jams"),
+        }
     }
 
     /// The rule for a contact of bodies `a` and `b` at `t`, recorded in their history.

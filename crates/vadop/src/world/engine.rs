@@ -10,12 +10,14 @@ use crate::broad_phase::brute_force::BruteForce;
 use crate::broad_phase::grid::Grid;
 use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::broad_phase::BroadPhase;
-use crate::frame::{FrameStats, Output, Physics};
+use crate::event_loop::EventLoop;
+use crate::frame::{FrameStats, Mode, Output, Physics};
 use crate::parallel::Workers;
 use crate::pipeline::pseudo_dynamic::PseudoDynamic;
 use crate::pipeline::{Pipeline, WindowRule};
 use crate::response::rules::ContactRules;
 use crate::walls::BoxBounds;
+use glam::DVec3;
 use std::any::Any;
 use std::sync::Arc;
 
@@ -47,6 +49,10 @@ pub(crate) trait Engine: Send + std::fmt::Debug {
     fn memory_bytes(&self) -> usize;
     /// The broad phase, for callers that inspect it (the sweep and prune's lists).
     fn broad_phase(&self) -> Option<&dyn Any>;
+    /// True while simulate mode's event loop of spheres steps the world.
+    fn on_event_loop(&self) -> bool {
+        false
+    }
 }
 
 impl<B: BroadPhase + Send + std::fmt::Debug + 'static> Engine for Pipeline<B> {
@@ -143,9 +149,13 @@ pub(crate) fn build(
         // The oracle: one window per frame, nothing adaptive between it and the truth.
         Method::Brute => Box::new(Pipeline::new(BruteForce::default(), WindowRule::Frame, bounds, workers)),
         Method::Discrete => Box::new(PseudoDynamic::default()),
-        Method::Grid | Method::Auto => {
-            Box::new(Pipeline::new(Grid::new(min, max), WindowRule::Adaptive, bounds, workers))
+        // The default in simulate mode without gravity: the event loop of spheres while every
+        // body is one (see `crate::event_loop`), the grid's pipeline from the first that is not.
+        Method::Grid | Method::Auto if starts_on_event_loop(config) => {
+            let spheres = EventLoop::new(bounds, workers.threads());
+            Box::new(SpheresFirst { spheres: Some(spheres), general: None, bounds: *bounds, workers })
         }
+        Method::Grid | Method::Auto => Box::new(grid_pipeline(bounds, workers)),
         Method::Vadop => {
             let phi = config.phi.unwrap_or(pool.covering_radius());
             // A hair wider than phi, so rounding never costs a pair its shared axis.
@@ -161,6 +171,237 @@ pub(crate) fn build(
             let coordinate_axes = AxisPool::new(3).expect("the 3-axis pool always builds");
             let sap = SweepPrune::new(coordinate_axes, 1.0, min, max, false);
             Box::new(Pipeline::new(sap, WindowRule::Adaptive, bounds, workers))
+        }
+    }
+}
+
+/// True when a world of `config` starts on the event loop of spheres: [`Method::Auto`] in simulate
+/// mode without gravity (it keeps to it while every body is a moving sphere).
+pub(super) fn starts_on_event_loop(config: &WorldConfig) -> bool {
+    config.method == Method::Auto && config.mode == Mode::Simulate && config.gravity == DVec3::ZERO
+}
+
+/// The grid's frame pipeline: the default method's broad phase.
+fn grid_pipeline(bounds: &BoxBounds, workers: Workers) -> Pipeline<Grid> {
+    Pipeline::new(Grid::new(bounds.min, bounds.max), WindowRule::Adaptive, bounds, workers)
+}
+
+/// [`Method::Auto`] in simulate mode without gravity: the event loop of spheres while every body
+/// is a moving sphere, then, from the first shape or static body added, the grid's frame
+/// pipeline, which takes the bodies and their contact history over at the instant of the hand-over
+/// (both predict from the same canonical times, so nothing changes there).
+#[derive(Debug)]
+struct SpheresFirst {
+    spheres: Option<EventLoop>,
+    general: Option<Pipeline<Grid>>,
+    bounds: BoxBounds,
+    workers: Workers,
+}
+
+impl SpheresFirst {
+    /// The pipeline, taking the event loop's bodies over at `t` if it has not yet.
+    fn general(&mut self, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) -> &mut Pipeline<Grid> {
+        if let Some(mut spheres) = self.spheres.take() {
+            let mut pipeline = grid_pipeline(&self.bounds, self.workers);
+            pipeline.impacts.rules = std::mem::take(&mut spheres.impacts.rules);
+            for i in spheres.bodies() {
+                pipeline.enter(i, bodies, physics, t, stats);
+            }
+            self.general = Some(pipeline);
+        }
+        self.general.as_mut().expect("the pipeline takes over from the event loop")
+    }
+
+    fn engine(&self) -> &dyn Engine {
+        match (&self.spheres, &self.general) {
+            (Some(spheres), _) => spheres,
+            (None, general) => general.as_ref().expect("one of the two steps the world"),
+        }
+    }
+}
+
+impl Engine for SpheresFirst {
+    fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        // A static body added since: the level is the pipeline's.
+        if bodies.rigid.statics_revision != 0 {
+            self.general(bodies, physics, t0, out.stats);
+        }
+        match (&mut self.spheres, &mut self.general) {
+            (Some(spheres), _) => spheres.step(bodies, physics, t0, t1, out),
+            (None, Some(general)) => general.step(bodies, physics, t0, t1, out),
+            (None, None) => unreachable!("one of the two steps the world"),
+        }
+    }
+    fn enter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        match &mut self.spheres {
+            Some(spheres) if EventLoop::takes(bodies, i as usize) => spheres.enter(i, bodies, t, stats),
+            _ => self.general(bodies, physics, t, stats).enter(i, bodies, physics, t, stats),
+        }
+    }
+    fn reenter(&mut self, i: u32, bodies: &Bodies, physics: &Physics, t: f64, stats: &mut FrameStats) {
+        self.enter(i, bodies, physics, t, stats)
+    }
+    fn remove(&mut self, i: u32) {
+        match (&mut self.spheres, &mut self.general) {
+            (Some(spheres), _) => spheres.remove(i),
+            (None, Some(general)) => general.remove(i),
+            (None, None) => {}
+        }
+    }
+    fn rules(&self) -> &ContactRules {
+        self.engine().rules()
+    }
+    fn rules_mut(&mut self) -> &mut ContactRules {
+        match (&mut self.spheres, &mut self.general) {
+            (Some(spheres), _) => &mut spheres.impacts.rules,
+            (None, general) => &mut general.as_mut().expect("one of the two steps the world").impacts.rules,
+        }
+    }
+    fn touching_pairs(&self) -> Vec<(u32, u32)> {
+        self.engine().touching_pairs()
+    }
+    fn touching_since(&self) -> (Vec<(u32, u32)>, Vec<f64>) {
+        self.engine().touching_since()
+    }
+    fn restore_touching(&mut self, pairs: Vec<(u32, u32)>, since: Vec<f64>) {
+        // Simulate mode keeps no pairs in contact; the pipeline's, after a hand-over, would.
+        if let Some(general) = &mut self.general {
+            general.restore_touching(pairs, since);
+        }
+    }
+    fn can_undo(&self) -> bool {
+        true
+    }
+    fn memory_bytes(&self) -> usize {
+        self.engine().memory_bytes()
+    }
+    fn broad_phase(&self) -> Option<&dyn Any> {
+        self.engine().broad_phase()
+    }
+    fn on_event_loop(&self) -> bool {
+        self.spheres.is_some()
+    }
+}
+
+/// The event loop as an engine: simulate mode keeps no pairs in contact.
+impl Engine for EventLoop {
+    fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        EventLoop::step(self, bodies, physics, t0, t1, out)
+    }
+    fn enter(&mut self, i: u32, bodies: &Bodies, _: &Physics, t: f64, stats: &mut FrameStats) {
+        EventLoop::enter(self, i, bodies, t, stats)
+    }
+    fn reenter(&mut self, i: u32, bodies: &Bodies, _: &Physics, t: f64, stats: &mut FrameStats) {
+        EventLoop::enter(self, i, bodies, t, stats)
+    }
+    fn remove(&mut self, i: u32) {
+        EventLoop::remove(self, i)
+    }
+    fn rules(&self) -> &ContactRules {
+        &self.impacts.rules
+    }
+    fn rules_mut(&mut self) -> &mut ContactRules {
+        &mut self.impacts.rules
+    }
+    fn touching_pairs(&self) -> Vec<(u32, u32)> {
+        Vec::new()
+    }
+    fn touching_since(&self) -> (Vec<(u32, u32)>, Vec<f64>) {
+        (Vec::new(), Vec::new())
+    }
+    fn restore_touching(&mut self, _: Vec<(u32, u32)>, _: Vec<f64>) {}
+    fn can_undo(&self) -> bool {
+        true
+    }
+    fn memory_bytes(&self) -> usize {
+        EventLoop::memory_bytes(self)
+    }
+    fn broad_phase(&self) -> Option<&dyn Any> {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{GeneratedScene, Scene, Velocities, FRAMES_PER_SECOND};
+    use crate::World;
+
+    /// A gas of `bodies` spheres at `packing` (thinned when too dense to place), periodic on
+    /// `periodic`.
+    fn gas(bodies: usize, packing: f64, periodic: [bool; 3], seed: u64) -> Scene {
+        let velocities = Velocities::Maxwell { rms_speed: 0.5 };
+        let mut fraction = packing;
+        let mut scene = loop {
+            match (GeneratedScene { bodies, packing_fraction: fraction, velocities, radius: 0.5, seed }).build() {
+                Ok(scene) => break scene,
+                Err(_) => fraction *= 0.9,
+            }
+        };
+        scene.bounds = scene.bounds.with_periodic(periodic);
+        scene
+    }
+
+    /// The world of `scene`, with its engine the event loop on `workers` workers (the parallel
+    /// loop from 2 on, as it runs from [`crate::event_loop`]'s threshold of threads).
+    fn on_workers(scene: &Scene, config: WorldConfig, workers: usize) -> World {
+        let mut world = scene.world(config).unwrap();
+        let spheres = EventLoop::with_workers(&world.bounds, workers);
+        let threads = Workers::new(config.thread_count());
+        world.engine = Some(Box::new(SpheresFirst {
+            spheres: Some(spheres),
+            general: None,
+            bounds: world.bounds,
+            workers: threads,
+        }));
+        world.threads = rayon::ThreadPoolBuilder::new().num_threads(2).build().ok();
+        world
+    }
+
+    /// The parallel event loop gives the serial loop's bits, contacts and states, frame after frame,
+    /// in walled and periodic boxes, elastic and not, with frames of changing lengths.
+    #[test]
+    fn the_parallel_event_loop_gives_the_serial_loop_s_bits() {
+        let cases =
+            [(0.05, [true; 3], 1.0), (0.3, [true; 3], 1.0), (0.4, [false; 3], 1.0), (0.2, [true, false, true], 0.6)];
+        for (k, (packing, periodic, restitution)) in cases.into_iter().enumerate() {
+            let scene = gas(1500, packing, periodic, k as u64);
+            let config = WorldConfig { restitution, threads: Some(2), ..WorldConfig::default() };
+            let (mut serial, mut parallel) = (on_workers(&scene, config, 1), on_workers(&scene, config, 2));
+            let mut total = 0;
+            for frame in 0..12 {
+                let dt = [0.2, 1.0, 3.0][frame % 3] / FRAMES_PER_SECOND;
+                let expected = serial.step(dt).unwrap().to_vec();
+                assert_eq!(parallel.step(dt).unwrap(), expected, "case {k}, frame {frame}");
+                assert_eq!(parallel.stats().pair_virial.to_bits(), serial.stats().pair_virial.to_bits());
+                total += expected.len();
+            }
+            let state = |w: &World| w.spheres().map(|(_, s)| format!("{s:?}")).collect::<Vec<_>>();
+            assert_eq!(state(&parallel), state(&serial), "case {k}: final states differ");
+            assert!(total > 2000, "case {k}: {total} contacts");
+        }
+    }
+
+    /// The search's screen never changes a body's next event: with it and without it, every body
+    /// of dense and sparse gases finds the same one, after every frame of collisions.
+    #[test]
+    fn the_screen_never_changes_a_next_event() {
+        for (k, (packing, periodic)) in
+            [(0.05, [true; 3]), (0.45, [true; 3]), (0.3, [false, true, false])].into_iter().enumerate()
+        {
+            let scene = gas(2000, packing, periodic, 10 + k as u64);
+            let mut world = on_workers(&scene, WorldConfig { threads: Some(1), ..WorldConfig::default() }, 1);
+            let mut spheres = EventLoop::with_workers(&world.bounds, 1);
+            spheres.check_screen_each_step();
+            world.engine = Some(Box::new(SpheresFirst {
+                spheres: Some(spheres),
+                general: None,
+                bounds: world.bounds,
+                workers: Workers::serial(),
+            }));
+            for _ in 0..6 {
+                assert!(!world.step(1.0 / FRAMES_PER_SECOND).unwrap().is_empty());
+            }
         }
     }
 }

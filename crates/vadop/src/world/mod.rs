@@ -329,6 +329,28 @@ impl World {
             Some(_) => self.config.method.resolve(),
         }
     }
+    /// True while simulate mode's event loop of spheres steps this world (or will, at its next
+    /// step): the default method in simulate mode without gravity, while every body is a moving
+    /// sphere. It gives the same contacts, to the bit, as the grid's frame pipeline, which takes
+    /// over from the first shape or static body.
+    ///
+    /// ```
+    /// use vadop::{BoxBounds, Mode, World, WorldConfig};
+    /// let world = World::new(BoxBounds::cube(10.0)?, WorldConfig::default())?;
+    /// assert!(world.on_event_loop());
+    /// let detect = World::new(BoxBounds::cube(10.0)?, WorldConfig { mode: Mode::Detect, ..WorldConfig::default() })?;
+    /// assert!(!detect.on_event_loop());
+    /// # Ok::<(), vadop::VadopError>(())
+    /// ```
+    pub fn on_event_loop(&self) -> bool {
+        match &self.engine {
+            Some(engine) => engine.on_event_loop(),
+            None => {
+                engine::starts_on_event_loop(&self.config)
+                    && self.bodies.alive_ids().all(|i| crate::event_loop::EventLoop::takes(&self.bodies, i as usize))
+            }
+        }
+    }
     /// The axis pool (used by the VADOP method).
     pub fn pool(&self) -> &Arc<AxisPool> {
         &self.pool

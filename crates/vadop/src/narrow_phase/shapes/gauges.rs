@@ -3,22 +3,19 @@
 //! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
 //! never chooses the probe times (the searcher does).
 
+use super::chord::{axis_hold, chord_hold, Moving};
 use super::distance::{closer_points, convex_bounds, separation, Bounds};
+use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
-use super::{ceiling, guard};
+use super::{ceiling, ending, guard, starting, SLACK};
 use crate::narrow_phase::falling::bent_reach;
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
-use parry3d_f64::partitioning::BvhNode;
-use parry3d_f64::shape::{SupportMap, TriMesh, Triangle};
-use std::cell::{Cell, RefCell};
-
-/// Relative rounding allowance on support points and closest points, times the size of the
-/// coordinates involved.
-pub(super) const SLACK: f64 = 64.0 * f64::EPSILON;
+use parry3d_f64::shape::SupportMap;
+use std::cell::Cell;
 
 /// Bounds on the signed distance at one instant, and on how fast they can move (scaled units).
 #[derive(Debug, Clone, Copy)]
@@ -34,8 +31,10 @@ pub(super) struct Probe {
     /// body, and how fast it shrinks: `(-inf, 0)` when there is none. Far from contact it steps a
     /// fast spinner by its straight motion, where `lower` would step it by its spin.
     pub(super) far: (f64, f64),
-    /// Within a contact, how long the signed distance certainly stays below the search's
-    /// ceiling from here (see [`super::inner_balls`]): 0 when nothing says so.
+    /// How long the signed distance certainly stays on this side of the band the search is
+    /// crossing: within a contact below the search's ceiling (see [`super::inner_balls`] and
+    /// [`super::chord`]), before one above its guard (see [`super::chord::axis_hold`]); 0 when
+    /// nothing says so.
     pub(super) hold: f64,
     /// Every rate above (`shrink`, `grow`, `far`'s) grows at most this fast: a bound on the
     /// relative acceleration along the axes they are taken on (0 on a straight relative motion,
@@ -252,12 +251,11 @@ impl Warm {
     }
 
     /// An upper bound on the signed distance from what the last full measure found, with no
-    /// distance search: the distance of the witness points carried along with the shapes, or
-    /// less where a point lies inside both shapes. A ball about it as deep as it lies in a shape
-    /// lies in that shape, and two shapes holding balls of radii `r_a` and `r_b` about one point
-    /// must move `r_a + r_b` apart to part. The point starts at the witnesses' midpoint and is
-    /// moved a few times away from the nearer face of the shape it lies shallower in, by half
-    /// the difference of the depths: the bound holds at every point, the moves only tighten it.
+    /// distance search: less than 0 by how deep a point lies in both shapes ([`deepest_point`],
+    /// from the witness points carried along with the shapes and their midpoint: after a long
+    /// step the witnesses, each carried with its own body, may have drifted apart, one of them
+    /// still deep in the other shape), or the witnesses' distance where no point is found
+    /// inside both.
     pub(super) fn contact_upper(
         &self,
         (a, pose_a): (&Scaled, &Pose),
@@ -265,26 +263,13 @@ impl Warm {
         slack: f64,
     ) -> (f64, Deepest) {
         let (x, y) = (*pose_a * self.witness.0, *pose_b * self.witness.1);
-        let mut point = (x + y) * 0.5;
-        let mut deepest = Deepest::Witnesses(x, y);
-        let mut depth: f64 = 0.0;
-        for _ in 0..DEEP_POINT_MOVES {
-            let (in_a, inward_a) = a.depth_at(pose_a.inverse_transform_point(point));
-            let (in_b, inward_b) = b.depth_at(pose_b.inverse_transform_point(point));
-            if in_a > 0.0 && in_b > 0.0 && in_a + in_b > depth {
-                let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
-                (depth, deepest) = (in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward });
-            }
-            point += if in_a < in_b {
-                pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
-            } else {
-                pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
-            };
-        }
-        if depth > 0.0 {
-            (slack - depth, deepest)
-        } else {
-            ((y - x).length() + slack, deepest)
+        // Each shape's extreme point into the other along the axis turned with the other (a
+        // face normal turns with its face): the deepest point of a corner pushed into a face.
+        let (n_a, n_b) = (pose_a.rotation * self.axis.0, pose_b.rotation * self.axis.1);
+        let corners = [b.support_point(pose_b, -n_a), a.support_point(pose_a, n_b)];
+        match deepest_point(&[x, y, (x + y) * 0.5, corners[0], corners[1]], (a, pose_a), (b, pose_b)) {
+            Some((depth, deepest)) => (slack - depth, deepest),
+            None => ((y - x).length() + slack, Deepest::Witnesses(x, y)),
         }
     }
 
@@ -311,6 +296,46 @@ impl Warm {
             if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
         tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
     }
+}
+
+/// A point inside both shapes and how deep it lies in them together, `None` when none is found:
+/// from whichever of `seeds` lies deepest in the shape it lies shallower in, moved a few times
+/// away from the nearer face of that shape by half the difference of the depths. A ball about
+/// the point as deep as it lies in a shape lies in that shape, and two shapes holding balls of
+/// radii `r_a` and `r_b` about one point must move `r_a + r_b` apart to part: the bound holds at
+/// every point, the moves only tighten it.
+fn deepest_point(
+    seeds: &[DVec3],
+    (a, pose_a): (&Scaled, &Pose),
+    (b, pose_b): (&Scaled, &Pose),
+) -> Option<(f64, Deepest)> {
+    let depths =
+        |p: DVec3| (a.depth_at(pose_a.inverse_transform_point(p)), b.depth_at(pose_b.inverse_transform_point(p)));
+    let shallower = |((in_a, _), (in_b, _)): &((f64, DVec3), (f64, DVec3))| in_a.min(*in_b);
+    let (mut point, mut measured) = seeds.iter().map(|&p| (p, depths(p))).reduce(|best, seed| {
+        if shallower(&seed.1) > shallower(&best.1) {
+            seed
+        } else {
+            best
+        }
+    })?;
+    let mut found = None;
+    for moves in 0..=DEEP_POINT_MOVES {
+        if moves > 0 {
+            measured = depths(point);
+        }
+        let ((in_a, inward_a), (in_b, inward_b)) = measured;
+        if in_a > 0.0 && in_b > 0.0 && found.is_none_or(|(depth, _)| in_a + in_b > depth) {
+            let inward = (pose_a.rotation * inward_a, pose_b.rotation * inward_b);
+            found = Some((in_a + in_b, Deepest::Inside { point, depths: (in_a, in_b), inward }));
+        }
+        point += if in_a < in_b {
+            pose_a.rotation * inward_a * (0.5 * (in_b - in_a))
+        } else {
+            pose_b.rotation * inward_b * (0.5 * (in_a - in_b))
+        };
+    }
+    found
 }
 
 /// Where [`Warm::contact_upper`] found its bound: a point inside both shapes, as deep as given
@@ -365,10 +390,76 @@ impl ConvexPair<'_> {
         let deep_b = inside(b, pose_b, near.1 .0 + inward.1 * width(middle_b)).map(ball_b);
         let (near_a, near_b) = (Some(ball_a(near.0)), Some(ball_b(near.1)));
         let limit = ceiling(self.tol);
-        [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
+        let balls = [(near_a, near_b), (middle_a, middle_b), (deep_a, deep_b), (near_a, deep_b), (deep_a, near_b)]
             .into_iter()
             .filter_map(|(x, y)| Some(held(x?, y?, self.velocity, limit, slack)))
-            .fold(0.0, f64::max)
+            .fold(0.0, f64::max);
+        let points = match deepest {
+            Deepest::Inside { point, .. } => (point, point),
+            Deepest::Witnesses(x, y) => (x, y),
+        };
+        balls.max(self.chord(tau, (a, pose_a), (b, pose_b), points, slack))
+    }
+
+    /// How long the signed distance certainly stays below the middle of the band in which a
+    /// contact ends, by the chord certificate (see [`super::chord`]) of the point `points.0`
+    /// fixed in a and of `points.1` fixed in b: 0 when a spin does not give its angular velocity.
+    fn chord(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        points: (DVec3, DVec3),
+        slack: f64,
+    ) -> f64 {
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
+        let level = ending(self.tol);
+        let from_a = chord_hold(points.0, &moving_a, &moving_b, level, slack);
+        from_a.max(chord_hold(points.1, &moving_b, &moving_a, level, slack))
+    }
+
+    /// How long the shapes certainly stay farther apart than the middle of the band in which a
+    /// contact starts, by their separation along `axis` (from a to b) turned with either (see
+    /// [`super::chord::axis_hold`]): 0 when a spin does not give its angular velocity.
+    fn apart(
+        &self,
+        tau: f64,
+        (a, pose_a): (&Scaled, &Pose),
+        (b, pose_b): (&Scaled, &Pose),
+        axis: DVec3,
+        slack: f64,
+    ) -> f64 {
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
+        let level = starting(self.tol);
+        axis_hold(axis, &moving_a, &moving_b, level, slack).max(axis_hold(-axis, &moving_b, &moving_a, level, slack))
+    }
+
+    /// The two bodies at `tau` as the chord certificates read them; `None` when a spin does not
+    /// give its angular velocity, or when the relative motion is not straight (a body falling
+    /// past static geometry: the certificates are for a straight relative motion).
+    fn moving<'s, 'b>(
+        &self,
+        tau: f64,
+        (a, pose_a): (&'s Scaled<'b>, &'s Pose),
+        (b, pose_b): (&'s Scaled<'b>, &'s Pose),
+    ) -> Option<(Moving<'s, 'b>, Moving<'s, 'b>)> {
+        if self.acceleration != DVec3::ZERO {
+            return None;
+        }
+        let (turning_a, turning_b) = (self.a.turning(tau)?, self.b.turning(tau)?);
+        let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
+        let moving_a = Moving {
+            shape: a,
+            pose: pose_a,
+            centre: DVec3::ZERO,
+            radius: radius_a,
+            velocity: DVec3::ZERO,
+            turning: turning_a,
+        };
+        let centre = self.offset + self.velocity * tau;
+        let moving_b =
+            Moving { shape: b, pose: pose_b, centre, radius: radius_b, velocity: self.velocity, turning: turning_b };
+        Some((moving_a, moving_b))
     }
 
     /// The best spin-free bound along the line of centres: a spinning body stays in its bounding
@@ -456,9 +547,14 @@ impl Gauge for ConvexPair<'_> {
             .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
-        let hold = match bounds.witness.filter(|_| measure == Measure::Contact) {
-            Some((x, y)) => self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack),
-            None => 0.0,
+        let hold = match (measure, bounds.witness) {
+            (Measure::Contact, Some((x, y))) => {
+                self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack)
+            }
+            (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
+                self.apart(tau, (&ga, &pose_a), (&gb, &pose_b), bounds.axis, slack)
+            }
+            _ => 0.0,
         };
         Probe {
             lower: bounds.lower,
@@ -489,193 +585,6 @@ impl Gauge for ConvexPair<'_> {
     fn translating(&self) -> bool {
         // On a bent relative path the distance need not be convex in time.
         self.a.still.is_some() && self.b.still.is_some() && self.acceleration == DVec3::ZERO
-    }
-}
-
-/// A solid and a half-space. The frame has world axes and its origin at the half-space's origin.
-pub(super) struct PlanePair<'a> {
-    pub(super) body: Body<'a>,
-    pub(super) plane: Body<'a>,
-    /// The half-space's outward normal in its own frame.
-    pub(super) normal: DVec3,
-    pub(super) scale: f64,
-    /// The body's centre minus the plane origin at the reference, scaled.
-    pub(super) offset: DVec3,
-    /// The body's velocity minus the plane's, scaled.
-    pub(super) velocity: DVec3,
-    /// The body's acceleration minus the plane's, scaled.
-    pub(super) acceleration: DVec3,
-    pub(super) size: f64,
-}
-
-impl PlanePair<'_> {
-    /// World outward normal, the body's pose and its signed distance at `tau`.
-    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose, f64, f64) {
-        let n = self.plane.orientation(tau) * self.normal;
-        let centre = along(self.offset, self.velocity, self.acceleration, tau);
-        let pose = self.body.pose(self.body.orientation(tau), centre, self.scale);
-        let distance = n.dot(self.body.support(self.scale).support_point(&pose, -n));
-        (n, pose, distance, SLACK * (centre.length() + self.size))
-    }
-}
-
-impl Gauge for PlanePair<'_> {
-    fn probe(&self, tau: f64, _measure: Measure) -> Probe {
-        let (n, _, distance, slack) = self.state(tau);
-        let approach = speeding(self.velocity, self.acceleration, tau).dot(n);
-        let spin = self.body.spin_rate_along(n) * self.scale;
-        // The body's bounding sphere above the plane, which does not turn.
-        let height = n.dot(along(self.offset, self.velocity, self.acceleration, tau)) - self.size;
-        Probe {
-            lower: distance - slack,
-            upper: distance + slack,
-            shrink: (-approach).max(0.0) + spin,
-            grow: approach.max(0.0) + spin,
-            far: (height - slack, (-approach).max(0.0)),
-            hold: 0.0,
-            bend: self.acceleration.dot(n).abs(),
-        }
-    }
-
-    /// The body lies in its bounding sphere; the plane does not turn.
-    fn reach(&self, within: f64) -> Option<Reach> {
-        let n = self.plane.orientation(0.0) * self.normal;
-        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
-        Reach::below_bent(n.dot(self.offset), n.dot(self.velocity), n.dot(self.acceleration), limit)
-    }
-}
-
-/// A solid and a triangle mesh. The frame has the mesh's axes and its origin at the body's centre
-/// of mass.
-pub(super) struct MeshPair<'a> {
-    pub(super) body: Body<'a>,
-    pub(super) mesh: Body<'a>,
-    pub(super) trimesh: &'a TriMesh,
-    pub(super) scale: f64,
-    /// The body's centre minus the mesh origin at the reference, scaled.
-    pub(super) offset: DVec3,
-    pub(super) velocity: DVec3,
-    /// The body's acceleration minus the mesh's, scaled.
-    pub(super) acceleration: DVec3,
-    pub(super) spin: f64,
-    pub(super) size: f64,
-    pub(super) tol: f64,
-    /// What the last probe found for each triangle it measured, to start the next one from.
-    pub(super) warm: RefCell<Vec<(u32, Warm)>>,
-}
-
-impl MeshPair<'_> {
-    /// The body's centre in the mesh frame (unscaled) and its scaled pose about that centre.
-    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose) {
-        let q_mesh = self.mesh.orientation(tau).inverse();
-        let centre = q_mesh * along(self.offset, self.velocity, self.acceleration, tau) / self.scale;
-        let pose = self.body.pose(q_mesh * self.body.orientation(tau), DVec3::ZERO, self.scale);
-        (centre, pose)
-    }
-
-    /// Triangle `id` in the frame about `centre`, scaled.
-    pub(super) fn triangle(&self, id: u32, centre: DVec3) -> Triangle {
-        let t = self.trimesh.triangle(id);
-        let s = self.scale;
-        Triangle::new((t.a - centre) * s, (t.b - centre) * s, (t.c - centre) * s)
-    }
-
-    /// Bounds on the signed distance of the body to the mesh (the smallest of the triangles'):
-    /// the smallest lower bound of a triangle (parry's best-first search over the mesh's
-    /// hierarchy, which skips boxes farther than the best so far), and the smallest upper bound
-    /// met on the way, with its triangle's axis and points.
-    pub(super) fn closest(&self, tau: f64, depth: bool) -> Option<Bounds> {
-        let nearest: Cell<Option<Bounds>> = Cell::new(None);
-        let (_, lowest) = self.search(tau, depth, &nearest)?;
-        let nearest = nearest.get().unwrap_or(lowest);
-        Some(Bounds { lower: lowest.lower, ..nearest })
-    }
-
-    /// The triangle with the smallest lower bound on its signed distance to the body; `nearest`
-    /// keeps the bounds with the smallest upper bound.
-    pub(super) fn search(&self, tau: f64, depth: bool, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
-        let (centre, pose) = self.state(tau);
-        let body = self.body.support(self.scale);
-        let slack = SLACK * self.size;
-        let s = self.scale;
-        // The body's box in the frame, from its support points.
-        let extent = |d: DVec3| d.dot(body.support_point(&pose, d));
-        let high = DVec3::new(extent(DVec3::X), extent(DVec3::Y), extent(DVec3::Z));
-        let low = -DVec3::new(extent(-DVec3::X), extent(-DVec3::Y), extent(-DVec3::Z));
-        let mut previous = self.warm.borrow_mut();
-        let next = RefCell::new(Vec::with_capacity(previous.len()));
-        let found = self.trimesh.bvh().find_best(
-            f64::MAX,
-            |node: &BvhNode, _| {
-                // No triangle in the node's box is nearer than that box is to the body's.
-                let (mins, maxs) = ((node.mins() - centre) * s, (node.maxs() - centre) * s);
-                let outside = (mins - high).max(low - maxs).max(DVec3::ZERO);
-                let gap = outside.length() * (1.0 - 1e-12) - slack;
-                if gap > 0.0 {
-                    gap
-                } else {
-                    -f64::MAX
-                }
-            },
-            |id, _| {
-                let triangle = self.triangle(id, centre);
-                let slack = SLACK * (triangle.a.length() + self.size);
-                let support = Scaled::new(&triangle, 1.0);
-                // The triangle's frame is fixed to it at its first vertex, the body's to the body.
-                let carry = (&Pose::from_translation(triangle.a), &pose);
-                let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
-                let bounds = (warm
-                    .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
-                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack));
-                if let Some(warm) = Warm::new(&bounds, carry) {
-                    next.borrow_mut().push((id, warm));
-                }
-                if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
-                    nearest.set(Some(bounds));
-                }
-                Some(bounds)
-            },
-        );
-        *previous = next.into_inner();
-        found
-    }
-}
-
-impl Gauge for MeshPair<'_> {
-    fn probe(&self, tau: f64, measure: Measure) -> Probe {
-        let rate = speeding(self.velocity, self.acceleration, tau).length() + self.spin;
-        let (lower, upper) = match self.closest(tau, measure != Measure::Gap) {
-            Some(b) => (b.lower, b.upper),
-            None => (f64::INFINITY, f64::INFINITY),
-        };
-        let bend = self.acceleration.length();
-        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0, bend }
-    }
-
-    /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
-    /// the box grown by the sphere's radius (and more at its corners) on each axis.
-    fn reach(&self, within: f64) -> Option<Reach> {
-        let q_mesh = self.mesh.orientation(0.0).inverse();
-        let (centre, velocity, acceleration) =
-            (q_mesh * self.offset, q_mesh * self.velocity, q_mesh * self.acceleration);
-        let aabb = self.trimesh.local_aabb();
-        let (low, high) = (aabb.mins * self.scale, aabb.maxs * self.scale);
-        let extent = low.abs().max(high.abs()).max_element();
-        let grown = self.size + within + SLACK * (centre.length() + extent + self.size);
-        let mut reach = Reach { enter: 0.0, leave: f64::INFINITY };
-        for axis in 0..3 {
-            let (c, v, a) = (centre[axis], velocity[axis], acceleration[axis]);
-            reach = reach.meet(Reach::below_bent(c, v, a, high[axis] + grown)?)?;
-            reach = reach.meet(Reach::below_bent(-c, -v, -a, grown - low[axis])?)?;
-        }
-        Some(reach)
-    }
-
-    fn forget(&self) {
-        self.warm.borrow_mut().clear();
-    }
-    fn warm_start(&self) -> Option<Option<Warm>> {
-        None
     }
 }
 
@@ -728,75 +637,6 @@ impl Gauge for PairGauge<'_> {
             PairGauge::Convex(g) => g.translating(),
             PairGauge::Plane(..) | PairGauge::Mesh(..) => false,
         }
-    }
-}
-
-/// A solid and one wall of the box. The frame has world axes and its origin at the body's centre
-/// of mass.
-pub(super) struct WallGauge<'a> {
-    pub(super) body: Body<'a>,
-    /// The wall's outward normal (out of the box).
-    pub(super) normal: DVec3,
-    pub(super) scale: f64,
-    /// Distance from the centre of mass to the wall plane at `since`, scaled.
-    pub(super) gap: f64,
-    /// Velocity towards the wall at `since`, scaled.
-    pub(super) speed: f64,
-    /// Acceleration towards the wall (gravity's pull into it), scaled.
-    pub(super) pull: f64,
-    pub(super) size: f64,
-}
-
-impl WallGauge<'_> {
-    pub(super) fn distance(&self, tau: f64) -> (f64, DVec3, f64) {
-        let pose = self.body.pose(self.body.orientation(tau), DVec3::ZERO, self.scale);
-        let extreme = self.body.support(self.scale).support_point(&pose, self.normal);
-        let centre = self.centre(tau);
-        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size))
-    }
-
-    /// The centre of mass's distance from the wall plane `tau` after `since`.
-    fn centre(&self, tau: f64) -> f64 {
-        let straight = self.gap - self.speed * tau;
-        if self.pull == 0.0 {
-            straight
-        } else {
-            straight - self.pull * (0.5 * tau * tau)
-        }
-    }
-
-    /// The velocity towards the wall `tau` after `since`.
-    fn speed_at(&self, tau: f64) -> f64 {
-        if self.pull == 0.0 {
-            self.speed
-        } else {
-            self.speed + self.pull * tau
-        }
-    }
-}
-
-impl Gauge for WallGauge<'_> {
-    fn probe(&self, tau: f64, _measure: Measure) -> Probe {
-        let (distance, _, slack) = self.distance(tau);
-        // The body's bounding sphere from the wall.
-        let sphere = self.centre(tau) - self.size;
-        let spin = self.body.spin_rate_along(self.normal) * self.scale;
-        let speed = self.speed_at(tau);
-        Probe {
-            lower: distance - slack,
-            upper: distance + slack,
-            shrink: speed.max(0.0) + spin,
-            grow: (-speed).max(0.0) + spin,
-            far: (sphere - slack, speed.max(0.0)),
-            hold: 0.0,
-            bend: self.pull.abs(),
-        }
-    }
-
-    /// The body lies in its bounding sphere.
-    fn reach(&self, within: f64) -> Option<Reach> {
-        let limit = self.size + within + SLACK * (self.gap.abs() + self.size);
-        Reach::below_bent(self.gap, -self.speed, -self.pull, limit)
     }
 }
 

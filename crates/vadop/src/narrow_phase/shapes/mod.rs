@@ -67,6 +67,19 @@
 //! a centre's distance from its centre of mass); the step is the longer of that and the one on
 //! the rate bound.
 //!
+//! Steps on a rate bound shrink with the room left: a contact's end (or start) approached so
+//! takes a probe or two per halving of the depth, however fast the pair actually parts, some
+//! fifty for a tumbling pair. Where the spins give their angular velocities and a bound on the
+//! angular acceleration (the exact torque-free rotation does), each probe also predicts the
+//! motion to first order and bounds the rest (`chord`): within a contact a point fixed in either
+//! body, followed through the other's signed distance, which is convex, so that along the
+//! predicted line it stays below the larger of its ends (the chord); before one, the separation
+//! along the probe's axis turned with either body, the other's support along it convex in the
+//! turned direction. Each step goes as far as its certificate keeps the distance on its side of
+//! the band the search is crossing, aiming at the band's middle, so that the probe it lands on
+//! mostly decides: a few probes per contact start and end, by the pair's actual rate of
+//! separation, sliding along flat or round surfaces included.
+//!
 //! The bounds never rest on GJK's own accuracy. The lower bound is a separation along an axis,
 //! computed from the shapes' exact support functions: any axis gives a valid bound, and GJK (and,
 //! a hair from contact, where GJK's simplices grow ill-conditioned and its directions drift, the
@@ -141,7 +154,9 @@
 //! silently drops a contact. The world then starts the bodies' motions afresh from that time and
 //! searches on, unless they touch there (simulate mode then applies the jam rule).
 
+mod chord;
 mod distance;
+mod fixed_gauges;
 mod gauges;
 mod inner_balls;
 mod scaled;
@@ -154,7 +169,8 @@ use crate::shape::ShapeGeometry;
 use crate::walls::Wall;
 use crate::window::Window;
 use distance::{convex_bounds, Bounds};
-use gauges::{ConvexPair, Gauge, MeshPair, PairGauge, PlanePair, WallGauge, Warm};
+use fixed_gauges::{MeshPair, PlanePair, WallGauge};
+use gauges::{ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
 use parry3d_f64::shape::SupportMap;
 use scaled::Body;
@@ -263,6 +279,10 @@ pub const SHAPE_CONTACT_TOLERANCE: f64 = 1e-6;
 /// its own convergence threshold) agrees with the contract.
 const MARGIN: f64 = 0.125;
 
+/// Relative rounding allowance on support points and closest points, times the size of the
+/// coordinates involved.
+const SLACK: f64 = 64.0 * f64::EPSILON;
+
 /// The distance a search keeps above until a contact starts: `tol/2` plus the margin.
 fn guard(tol: f64) -> f64 {
     0.5 * tol * (1.0 + MARGIN)
@@ -271,6 +291,18 @@ fn guard(tol: f64) -> f64 {
 /// The signed distance a contact is kept below until it ends: `2 tol` less the margin.
 fn ceiling(tol: f64) -> f64 {
     2.0 * tol * (1.0 - MARGIN)
+}
+
+/// The middle of the band in which a contact starts: between `tol/2` plus the margin (the
+/// distance is kept above it) and `tol` less the margin (at most it, a contact starts).
+fn starting(tol: f64) -> f64 {
+    0.5 * (guard(tol) + tol * (1.0 - MARGIN))
+}
+
+/// The middle of the band in which a contact ends: between `tol` plus the margin (above it the
+/// contact has ended) and `2 tol` less the margin (below it the contact lasts).
+fn ending(tol: f64) -> f64 {
+    0.5 * (tol * (1.0 + MARGIN) + ceiling(tol))
 }
 
 /// The distance within which two shapes count as touching: [`SHAPE_CONTACT_TOLERANCE`] times the
@@ -644,6 +676,7 @@ fn wall_searcher<'a, S: Spin>(
     let gap = if wall.is_max() { max[axis] - body.position[axis] } else { body.position[axis] - min[axis] };
     let speed = if wall.is_max() { body.velocity[axis] } else { -body.velocity[axis] };
     let pull = if wall.is_max() { body.acceleration[axis] } else { -body.acceleration[axis] };
+    let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
     let gauge = WallGauge {
         normal: wall.outward_normal(),
         gap: gap * scale,
@@ -652,8 +685,9 @@ fn wall_searcher<'a, S: Spin>(
         size: size * scale,
         scale,
         body,
+        tol,
     };
-    Some(Searcher::new(gauge, motion.since, SHAPE_CONTACT_TOLERANCE * size * scale))
+    Some(Searcher::new(gauge, motion.since, tol))
 }
 
 /// The first time in `window` at which a (spinning) shape inside the box `[min, max]` begins to

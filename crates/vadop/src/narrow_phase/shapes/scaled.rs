@@ -11,6 +11,7 @@ use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::{Segment, Shape, SupportMap};
+use std::cell::Cell;
 
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
 /// for its flat features.
@@ -61,6 +62,23 @@ impl<'a> Scaled<'a> {
                 let (depth, inward) = solid_depth(self.parry, p / self.scale);
                 (depth * self.scale, inward)
             }
+        }
+    }
+
+    /// At least the signed distance of the point `p` (in the shape's frame, scaled) from the
+    /// shape, negative inside, to rounding: the closed-form depth inside (and on either side for
+    /// a ball or a capsule), outside the distance to parry's projection on the shape (a point of
+    /// the shape: exact for the primitives, a combination of a hull's points by GJK otherwise).
+    pub(super) fn signed_distance_above(&self, p: DVec3) -> f64 {
+        let (depth, _) = self.depth_at(p);
+        if depth > 0.0 || !matches!(self.core, Core::Solid(_)) {
+            return -depth;
+        }
+        let projection = self.parry.project_local_point(p / self.scale, true);
+        if projection.is_inside {
+            0.0
+        } else {
+            projection.point.distance(p / self.scale) * self.scale
         }
     }
 
@@ -273,6 +291,15 @@ impl SupportMap for Scaled<'_> {
     }
 }
 
+/// A body's turning at a probe time: its world angular velocity, and bounds on the angular
+/// speed and on the angular acceleration over all time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Turning {
+    pub(super) omega: DVec3,
+    pub(super) speed: f64,
+    pub(super) acceleration: f64,
+}
+
 /// A body as the gauges see it, relative to the reference instant.
 pub(super) struct Body<'a> {
     pub(super) geometry: &'a ShapeGeometry,
@@ -294,6 +321,9 @@ pub(super) struct Body<'a> {
     /// the axis. Without a steady axis, the rotation radius.
     pub(super) axis: Option<DVec3>,
     pub(super) reach: f64,
+    /// The angular velocity at the last time its orientation was asked for, found with it: a
+    /// probe asks for both at one time, and for a tumbling body they share an elliptic integral.
+    turned: Cell<(f64, Option<DVec3>)>,
 }
 
 /// Where a point at `position` moving at `velocity` under the uniform `acceleration` is `tau`
@@ -350,6 +380,7 @@ impl<'a> Body<'a> {
             still,
             axis,
             reach,
+            turned: Cell::new((f64::NAN, None)),
         }
     }
 
@@ -361,8 +392,29 @@ impl<'a> Body<'a> {
     pub(super) fn orientation(&self, tau: f64) -> DQuat {
         match self.still {
             Some(q) => q,
-            None => self.spin.orientation_at(self.lag + tau),
+            None => {
+                let (orientation, omega) = self.spin.orientation_and_angular_velocity_at(self.lag + tau);
+                self.turned.set((tau, omega));
+                orientation
+            }
         }
+    }
+
+    /// The body's turning at `tau` as [`super::chord`] reads it: none for a body held still,
+    /// `None` when its spin gives no angular velocity.
+    pub(super) fn turning(&self, tau: f64) -> Option<Turning> {
+        if self.still.is_some() {
+            return Some(Turning { omega: DVec3::ZERO, speed: 0.0, acceleration: 0.0 });
+        }
+        let omega = match self.turned.get() {
+            (at, omega) if at == tau => omega,
+            _ => self.spin.angular_velocity_at(self.lag + tau),
+        }?;
+        Some(Turning {
+            omega,
+            speed: self.spin.max_angular_speed(),
+            acceleration: self.spin.max_angular_acceleration(),
+        })
     }
 
     /// A bound on how fast the body's shape turns: 0 when turning leaves it where it is.

@@ -3,7 +3,7 @@
 //! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
 
 use super::gauges::{Gauge, Measure, Probe, Reach};
-use super::{ceiling, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
+use super::{ceiling, ending, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
 use crate::error::{Result, VadopError};
 use crate::window::Window;
 
@@ -140,8 +140,10 @@ impl<G: Gauge> Searcher<G> {
             if p.upper <= self.touch() {
                 return Ok(Some(tau));
             }
-            let Some(step) = p.approach_step(self.guard()) else {
-                return Err(self.stall(tau, "the distance bounds were too loose to step"));
+            let step = match p.approach_step(self.guard()) {
+                Some(step) => step.max(p.hold),
+                None if p.hold > 0.0 => p.hold,
+                None => return Err(self.stall(tau, "the distance bounds were too loose to step")),
             };
             if step == f64::INFINITY {
                 // The separation along a fixed axis never shrinks: no contact ever.
@@ -214,7 +216,7 @@ impl<G: Gauge> Searcher<G> {
             // The bounding volumes have parted: more than `2 tol` apart.
             return Ok(Some(tau));
         }
-        let target = 0.5 * (self.clear() + self.ceiling());
+        let target = ending(self.tol);
         let first = self.probe(tau, Measure::Depth)?;
         if first.lower > self.clear() {
             return Ok(Some(tau));

@@ -1,0 +1,395 @@
+//! The event calendar: one scheduled event per body, the earliest first, at O(1) cost per event.
+//!
+//! It owns Paul's scheme (J. Comput. Phys. 1975; the calendar of most event-driven MD codes):
+//! time is cut into buckets of a fixed width; the bucket being worked through is a small binary
+//! list, sorted; the buckets after it, a ring of them, are unsorted lists, each poured into the
+//! sorted list (and sorted) when its turn comes; events past the ring wait in an overflow list, sorted into the ring
+//! each time it turns. A body's event is replaced by scheduling it anew: the old entry stays where
+//! it is and is dropped when it surfaces (each body carries a version, bumped at every
+//! scheduling). The order is total and the one the frame pipeline's event queue keeps: earlier
+//! first, then (for contacts, walls and periodic crossings) the queue's own rule, so ties between
+//! simultaneous events fall as they fall there; a body's crossing into another cell, which
+//! changes nothing but the cell lists, comes before any contact at the same instant. It never
+//! predicts or handles an event.
+
+use crate::event_queue::Event;
+use std::cmp::Ordering;
+
+/// Events a bucket holds on average when the width is tuned: the sorted list stays short, and the
+/// pouring costs little per event.
+const EVENTS_PER_BUCKET: f64 = 24.0;
+/// Buckets in the ring per body: the ring then spans a few of a body's event intervals, so few
+/// events wait in the overflow list.
+const BUCKETS_PER_BODY: f64 = 0.125;
+
+/// A body's scheduled event: a predicted contact, wall contact or periodic crossing (`event`),
+/// or the crossing of its centre into another cell at `event.time`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Scheduled {
+    pub event: Event,
+    pub cell_crossing: bool,
+}
+
+impl Scheduled {
+    /// The instant it happens.
+    #[inline]
+    pub(super) fn time(&self) -> f64 {
+        self.event.time
+    }
+}
+
+/// An entry of the sorted list: the event, whose body scheduled it, and that body's version then.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Entry {
+    pub scheduled: Scheduled,
+    pub owner: u32,
+    pub version: u32,
+}
+
+impl Entry {
+    /// True when `self` comes before `other` in the calendar's order.
+    #[inline]
+    pub(super) fn precedes(&self, other: &Entry) -> bool {
+        self.order(other) == Ordering::Less
+    }
+
+    /// `Less` when `self` comes first.
+    #[inline]
+    fn order(&self, other: &Entry) -> Ordering {
+        let (a, b) = (&self.scheduled, &other.scheduled);
+        a.event.time.total_cmp(&b.event.time).then_with(|| {
+            // Cell crossings first, then the event queue's order (its `Ord` puts the earlier
+            // event last), then the owner: two owners may hold one contact.
+            b.cell_crossing
+                .cmp(&a.cell_crossing)
+                .then_with(|| if a.cell_crossing { Ordering::Equal } else { b.event.cmp(&a.event) })
+                .then_with(|| self.owner.cmp(&other.owner))
+        })
+    }
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, other: &Self) -> bool {
+        self.order(other) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+impl Ord for Entry {
+    // Reversed: a list sorted ascending ends with the earliest.
+    fn cmp(&self, other: &Self) -> Ordering {
+        other.order(self)
+    }
+}
+
+/// A bucket's entry: only what finds the body's event again.
+#[derive(Debug, Clone, Copy)]
+struct Slot {
+    time: f64,
+    owner: u32,
+    version: u32,
+}
+
+/// One scheduled event per body, earliest first.
+#[derive(Debug, Default)]
+pub(super) struct Calendar {
+    /// Per body: its scheduled event and the version it was scheduled under.
+    scheduled: Vec<Scheduled>,
+    version: Vec<u32>,
+    /// The instant bucket 0 starts at, and the buckets' width (as its inverse).
+    origin: f64,
+    inverse_width: f64,
+    /// The bucket whose events are in `near`, sorted latest first (popped from the end): most
+    /// come in all at once when the bucket's turn comes, and one sort then costs less than as
+    /// many heap pushes and pops; an event due in this bucket already is inserted in its place.
+    current: i64,
+    near: Vec<Entry>,
+    /// Bucket `k` (for `current < k < current + ring.len()`) at `ring[k % ring.len()]`.
+    ring: Vec<Vec<Slot>>,
+    in_ring: usize,
+    overflow: Vec<Slot>,
+    /// Since the last tuning: events popped, buckets poured.
+    popped: u64,
+    poured: u64,
+}
+
+impl Calendar {
+    /// Empties the calendar for `bodies` slots from `now` on, with buckets tuned to events `gap`
+    /// apart on average in the whole calendar.
+    pub(super) fn reset(&mut self, bodies: usize, now: f64, gap: f64) {
+        let buckets = ((bodies as f64 * BUCKETS_PER_BODY) as usize).next_power_of_two().max(64);
+        self.ring.resize_with(buckets, Vec::new);
+        self.ring.truncate(buckets);
+        self.ring.iter_mut().for_each(Vec::clear);
+        self.in_ring = 0;
+        self.overflow.clear();
+        self.near.clear();
+        let width = (gap * EVENTS_PER_BUCKET).max(f64::MIN_POSITIVE);
+        self.inverse_width = 1.0 / width;
+        if !self.inverse_width.is_finite() {
+            self.inverse_width = f64::MAX;
+        }
+        self.origin = now;
+        self.current = 0;
+        self.version.iter_mut().for_each(|v| *v = v.wrapping_add(1));
+        (self.popped, self.poured) = (0, 0);
+    }
+
+    /// True when the buckets hold far more or far fewer events than they were tuned for: the
+    /// event rate changed, and the calendar should be reset with a new width.
+    pub(super) fn needs_tuning(&self) -> bool {
+        self.poured >= 1024 && {
+            let per_bucket = self.popped as f64 / self.poured as f64;
+            !(EVENTS_PER_BUCKET / 8.0..=EVENTS_PER_BUCKET * 8.0).contains(&per_bucket)
+        }
+    }
+
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.scheduled.capacity() * std::mem::size_of::<Scheduled>()
+            + self.version.capacity() * 4
+            + self.near.capacity() * std::mem::size_of::<Entry>()
+            + (self.ring.iter().map(Vec::capacity).sum::<usize>() + self.overflow.capacity())
+                * std::mem::size_of::<Slot>()
+            + self.ring.capacity() * std::mem::size_of::<Vec<Slot>>()
+    }
+
+    #[inline]
+    fn bucket(&self, time: f64) -> i64 {
+        // Monotone in time (a subtraction and a product by a positive number, each rounded
+        // correctly), so every event of a bucket comes before every event of a later one.
+        // Rounded down by hand: `floor` is a library call where the target lacks SSE4.1.
+        let x = (time - self.origin) * self.inverse_width;
+        let k = x as i64;
+        k - ((k as f64) > x) as i64
+    }
+
+    /// Schedules `scheduled` as body `owner`'s event, replacing the one it had.
+    #[inline]
+    pub(super) fn schedule(&mut self, owner: u32, scheduled: Scheduled) {
+        let i = owner as usize;
+        if i >= self.version.len() {
+            self.version.resize(i + 1, 0);
+            self.scheduled.resize(i + 1, scheduled);
+        }
+        self.version[i] = self.version[i].wrapping_add(1);
+        self.scheduled[i] = scheduled;
+        let time = scheduled.time();
+        if !time.is_finite() {
+            return;
+        }
+        let slot = Slot { time, owner, version: self.version[i] };
+        let k = self.bucket(time);
+        if k <= self.current {
+            self.insert_near(Entry { scheduled, owner, version: slot.version });
+        } else if k < self.current + self.ring.len() as i64 {
+            let ring = self.ring.len() as i64;
+            self.ring[(k % ring) as usize].push(slot);
+            self.in_ring += 1;
+        } else {
+            self.overflow.push(slot);
+        }
+    }
+
+    /// Body `owner` has no event any more (it was removed).
+    pub(super) fn cancel(&mut self, owner: u32) {
+        if let Some(version) = self.version.get_mut(owner as usize) {
+            *version = version.wrapping_add(1);
+        }
+    }
+
+    /// True when `entry` is still its body's scheduled event.
+    #[inline]
+    pub(super) fn is_current_entry(&self, entry: &Entry) -> bool {
+        self.is_current(entry.owner, entry.version)
+    }
+
+    #[inline]
+    fn is_current(&self, owner: u32, version: u32) -> bool {
+        self.version[owner as usize] == version
+    }
+
+    /// The earliest scheduled event as an entry, dropping entries replaced since.
+    #[inline]
+    pub(super) fn peek_entry(&mut self) -> Option<Entry> {
+        self.peek()?;
+        self.near.last().copied()
+    }
+
+    /// The earliest scheduled event and its body, dropping entries replaced since.
+    #[inline]
+    pub(super) fn peek(&mut self) -> Option<(u32, Scheduled)> {
+        loop {
+            match self.near.last() {
+                Some(top) if self.is_current(top.owner, top.version) => return Some((top.owner, top.scheduled)),
+                Some(_) => {
+                    self.near.pop();
+                }
+                None => {
+                    if !self.pour_next() {
+                        return None;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Removes the event [`Self::peek`] returned.
+    #[inline]
+    pub(super) fn pop(&mut self) {
+        self.near.pop();
+        self.popped += 1;
+    }
+
+    /// Moves on to the next bucket holding anything and pours it into the sorted list; false when
+    /// nothing is scheduled.
+    fn pour_next(&mut self) -> bool {
+        let ring = self.ring.len() as i64;
+        loop {
+            if self.in_ring == 0 {
+                // Nothing in the ring: skip to the ring's turn that reaches the earliest of
+                // the overflow (never backwards).
+                let Some(first) = self
+                    .overflow
+                    .iter()
+                    .filter(|s| self.is_current(s.owner, s.version))
+                    .map(|s| s.time)
+                    .reduce(f64::min)
+                else {
+                    self.overflow.clear();
+                    return false;
+                };
+                let turn = self.bucket(first).div_euclid(ring) * ring - 1;
+                let next_turn = (self.current.div_euclid(ring) + 1) * ring - 1;
+                self.current = if turn > self.current { turn } else { next_turn };
+            }
+            self.current += 1;
+            if self.current.rem_euclid(ring) == 0 {
+                self.sort_overflow();
+            }
+            let bucket = std::mem::take(&mut self.ring[self.current.rem_euclid(ring) as usize]);
+            self.in_ring -= bucket.len();
+            self.poured += 1;
+            for slot in &bucket {
+                if self.is_current(slot.owner, slot.version) {
+                    let scheduled = self.scheduled[slot.owner as usize];
+                    self.near.push(Entry { scheduled, owner: slot.owner, version: slot.version });
+                }
+            }
+            // Ascending in `Ord`, which puts earlier events after later ones.
+            self.near.sort_unstable();
+            let mut bucket = bucket;
+            bucket.clear();
+            self.ring[self.current.rem_euclid(ring) as usize] = bucket;
+            if !self.near.is_empty() {
+                return true;
+            }
+        }
+    }
+
+    /// The ring turned: the overflow's events within its reach go into their buckets.
+    fn sort_overflow(&mut self) {
+        let ring = self.ring.len() as i64;
+        let mut overflow = std::mem::take(&mut self.overflow);
+        let mut kept = 0;
+        for k in 0..overflow.len() {
+            let slot = overflow[k];
+            if !self.is_current(slot.owner, slot.version) {
+                continue;
+            }
+            let bucket = self.bucket(slot.time);
+            if bucket <= self.current {
+                let scheduled = self.scheduled[slot.owner as usize];
+                self.insert_near(Entry { scheduled, owner: slot.owner, version: slot.version });
+            } else if bucket < self.current + ring {
+                self.ring[bucket.rem_euclid(ring) as usize].push(slot);
+                self.in_ring += 1;
+            } else {
+                overflow[kept] = slot;
+                kept += 1;
+            }
+        }
+        overflow.truncate(kept);
+        self.overflow = overflow;
+    }
+
+    /// Puts `entry`, due in the current bucket, in its place among the others.
+    #[inline]
+    fn insert_near(&mut self, entry: Entry) {
+        let at = self.near.partition_point(|e| e < &entry);
+        self.near.insert(at, entry);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::event_queue::Partner;
+    use rand::{Rng, SeedableRng};
+
+    fn at(time: f64, body: u32) -> Scheduled {
+        Scheduled {
+            event: Event { time, body, partner: Partner::Renew, body_stamp: 0, partner_stamp: 0 },
+            cell_crossing: false,
+        }
+    }
+
+    /// Against a sorted list: random schedules and reschedules pop in order, each body's last
+    /// event once, whatever the bucket width.
+    #[test]
+    fn pops_every_body_s_last_event_in_time_order() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for gap in [1e-4, 0.01, 1.0, 100.0] {
+            let mut calendar = Calendar::default();
+            calendar.reset(500, 0.0, gap);
+            let mut last = vec![f64::INFINITY; 500];
+            let mut now = 0.0;
+            let mut popped = Vec::new();
+            for round in 0..20_000 {
+                let owner = rng.random_range(0..500u32);
+                let time = now + rng.random_range(0.0..10.0f64).powi(3);
+                calendar.schedule(owner, at(time, owner));
+                last[owner as usize] = time;
+                if round % 3 == 0 {
+                    if let Some((owner, s)) = calendar.peek() {
+                        assert_eq!(s.time(), last[owner as usize]);
+                        assert!(s.time() >= now);
+                        now = s.time();
+                        calendar.pop();
+                        last[owner as usize] = f64::INFINITY;
+                        popped.push(now);
+                    }
+                }
+            }
+            while let Some((owner, s)) = calendar.peek() {
+                assert_eq!(s.time(), last[owner as usize]);
+                assert!(s.time() >= now);
+                now = s.time();
+                calendar.pop();
+                last[owner as usize] = f64::INFINITY;
+            }
+            assert!(last.iter().all(|t| t.is_infinite()), "gap {gap}: an event was lost");
+            assert!(popped.len() > 1000);
+        }
+    }
+
+    #[test]
+    fn simultaneous_events_pop_in_the_event_queue_s_order_cell_crossings_first() {
+        let mut calendar = Calendar::default();
+        calendar.reset(8, 0.0, 1.0);
+        calendar.schedule(5, at(2.0, 5));
+        calendar.schedule(2, at(2.0, 2));
+        calendar.schedule(7, Scheduled { cell_crossing: true, ..at(2.0, 7) });
+        calendar.schedule(1, at(3.0, 1));
+        let mut order = Vec::new();
+        while let Some((owner, _)) = calendar.peek() {
+            calendar.pop();
+            order.push(owner);
+        }
+        assert_eq!(order, [7, 2, 5, 1]);
+    }
+}

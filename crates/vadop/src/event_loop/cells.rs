@@ -1,0 +1,404 @@
+//! The cells of the event loop: the box cut into a grid of cells at least as wide as the largest
+//! pair of bodies can reach, each body listed in the cell its centre is in, and the time its
+//! centre next crosses into another.
+//!
+//! It owns the grid's sizing, the lists (one intrusive doubly linked list per cell through the
+//! bodies, so moving a body costs O(1) and nothing is allocated while stepping), a body's
+//! neighbourhood (the 27 cells around its own, or the 9 it has just come within reach of) with
+//! the whole sides that bring each neighbour cell's bodies to their nearest image across periodic
+//! faces, and the crossing times. Two bodies that touch are always in neighbouring cells, so a
+//! body need only be tested against its neighbourhood, and again against the 9 new cells each
+//! time it crosses into a new one. It never computes a contact time nor changes a body.
+
+use crate::bodies::Bodies;
+use crate::motion::Motion;
+use crate::walls::BoxBounds;
+use glam::DVec3;
+
+/// No body, or no cell.
+pub(super) const NONE: u32 = u32::MAX;
+
+/// A cell is at least this much wider than the largest sum of two radii (relative), plus this many
+/// roundings of the box's largest coordinate, so rounding in a crossing time or a position never
+/// lets two touching bodies sit two cells apart.
+const WIDTH_SLACK: f64 = 1e-6;
+const ROUNDINGS: f64 = 64.0;
+/// Bodies per cell the grid aims at: enough that a crossing rarely finds the new cells empty,
+/// few enough that a neighbourhood stays short. Measured on the equilibrium gas at n = 10^5:
+/// see BENCHMARKS.md, "The event loop".
+const BODIES_PER_CELL: f64 = 0.15;
+/// The grid never has more cells than this many per body (a few bodies in a huge box).
+const MAX_CELLS_PER_BODY: f64 = 8.0;
+
+/// When a body's centre next leaves its cell: the time, the axis, and whether upwards.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Crossing {
+    pub time: f64,
+    pub axis: u8,
+    pub up: bool,
+}
+
+impl Crossing {
+    /// No crossing (a body at rest, or in a cell it cannot leave).
+    pub(super) const NEVER: Crossing = Crossing { time: f64::INFINITY, axis: 0, up: false };
+}
+
+/// A cell of the neighbourhood: its index, and the whole sides that bring its bodies to their
+/// images near the body whose neighbourhood it is.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Neighbour {
+    pub cell: u32,
+    pub shift: DVec3,
+}
+
+/// The most cells along one axis (coordinates are kept as 16 bits).
+const MAX_PER_AXIS: f64 = 65_535.0;
+
+/// The grid and its lists.
+#[derive(Debug, Default)]
+pub(super) struct Cells {
+    min: DVec3,
+    side: DVec3,
+    width: DVec3,
+    inverse_width: DVec3,
+    counts: [i64; 3],
+    /// Cell index = x + y * strides[1] + z * strides[2].
+    strides: [i64; 3],
+    /// The index offsets of the 9 rows of cells (their middle cells) around a cell away from
+    /// every face.
+    rows: [i64; 9],
+    periodic: [bool; 3],
+    /// The widest pair of bodies the grid was sized for (the sum of two radii).
+    reach: f64,
+    /// Per cell: its first body, or [`NONE`].
+    head: Vec<u32>,
+    /// Per body: the next and previous bodies of its cell, its cell ([`NONE`] when not listed)
+    /// and the cell's coordinates.
+    next: Vec<u32>,
+    prev: Vec<u32>,
+    cell: Vec<u32>,
+    at: Vec<[u16; 3]>,
+}
+
+/// A body's neighbours along one axis: up to three (index part, shift) steps.
+type AxisSteps = ([(u32, f64); 3], usize);
+
+impl Cells {
+    /// An empty grid over `bounds` for bodies of at most `max_radius` and about `bodies` of them.
+    pub(super) fn new(bounds: &BoxBounds, max_radius: f64, bodies: usize) -> Cells {
+        let side = bounds.side();
+        let reach = 2.0 * max_radius;
+        let scale = bounds.min.abs().max(bounds.max.abs()).max_element() + side.max_element();
+        let narrowest = reach * (1.0 + WIDTH_SLACK) + ROUNDINGS * f64::EPSILON * scale;
+        // Cells of about BODIES_PER_CELL bodies each, never narrower than the reach.
+        let volume = side.x * side.y * side.z;
+        let spacing = (volume * BODIES_PER_CELL / bodies.max(1) as f64).cbrt();
+        let mut width = spacing.max(narrowest);
+        let cells_for = |width: f64| side.to_array().map(|s| ((s / width).floor().clamp(1.0, MAX_PER_AXIS)) as i64);
+        // A few bodies in a huge box: wider cells than the spacing says, to bound the memory.
+        let limit = (MAX_CELLS_PER_BODY * bodies.max(64) as f64).max(27.0);
+        while cells_for(width).iter().map(|&c| c as f64).product::<f64>() > limit {
+            width *= 1.25;
+        }
+        let mut counts = cells_for(width);
+        for (axis, count) in counts.iter_mut().enumerate() {
+            // Periodic axes keep at least 3 cells (a side holds 8 diameters), so the 27 cells of
+            // a neighbourhood are distinct and each meets one image of the others.
+            if bounds.periodic[axis] {
+                *count = (*count).max(3);
+            }
+        }
+        let width = DVec3::from_array(std::array::from_fn(|a| side[a] / counts[a] as f64));
+        let total = counts.iter().product::<i64>() as usize;
+        let strides = [1, counts[0], counts[0] * counts[1]];
+        let rows = std::array::from_fn(|k| (k as i64 % 3 - 1) * strides[1] + (k as i64 / 3 - 1) * strides[2]);
+        Cells {
+            min: bounds.min,
+            side,
+            width,
+            inverse_width: width.recip(),
+            counts,
+            strides,
+            rows,
+            periodic: bounds.periodic,
+            reach,
+            head: vec![NONE; total],
+            next: Vec::new(),
+            prev: Vec::new(),
+            cell: Vec::new(),
+            at: Vec::new(),
+        }
+    }
+
+    /// True when bodies of `radius` fit the grid: two of them never reach past a neighbour cell.
+    pub(super) fn fits(&self, radius: f64) -> bool {
+        2.0 * radius <= self.reach
+    }
+
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        (self.head.capacity() + self.next.capacity() + self.prev.capacity() + self.cell.capacity()) * 4
+            + self.at.capacity() * 6
+    }
+
+    /// The cell body `i` is listed in, or [`NONE`].
+    #[inline]
+    pub(super) fn cell_of(&self, i: usize) -> u32 {
+        self.cell.get(i).copied().unwrap_or(NONE)
+    }
+
+    /// The coordinates of the cell holding the centre `position`.
+    fn cell_at(&self, position: DVec3) -> [i64; 3] {
+        std::array::from_fn(|a| {
+            let k = ((position[a] - self.min[a]) * self.inverse_width[a]).floor();
+            // NaN-free: positions are checked; clamped for centres on (or a rounding past) a face.
+            (k.max(0.0) as i64).min(self.counts[a] - 1)
+        })
+    }
+
+    /// Lists body `i` in the cell of its centre at `t`.
+    pub(super) fn insert(&mut self, bodies: &Bodies, i: usize, t: f64) {
+        if self.cell.len() < bodies.slots() {
+            self.next.resize(bodies.slots(), NONE);
+            self.prev.resize(bodies.slots(), NONE);
+            self.cell.resize(bodies.slots(), NONE);
+            self.at.resize(bodies.slots(), [0; 3]);
+        }
+        debug_assert_eq!(self.cell[i], NONE, "body {i} listed twice");
+        let at = self.cell_at(bodies.position_at(i, t));
+        self.link(i, at);
+    }
+
+    /// Takes body `i` off its cell's list (if listed).
+    pub(super) fn remove(&mut self, i: usize) {
+        if self.cell_of(i) != NONE {
+            self.unlink(i);
+        }
+    }
+
+    /// Lists body `i` in the cell its centre is in at `t` (after a wrap across a periodic face).
+    pub(super) fn relist(&mut self, bodies: &Bodies, i: usize, t: f64) {
+        self.unlink(i);
+        let at = self.cell_at(bodies.position_at(i, t));
+        self.link(i, at);
+    }
+
+    /// Moves body `i` one cell along `crossing`'s axis.
+    pub(super) fn step_across(&mut self, i: usize, crossing: Crossing) {
+        let at = self.stepped(i, crossing).0.map(i64::from);
+        self.unlink(i);
+        self.link(i, at);
+    }
+
+    /// The coordinates and index of the cell body `i` steps into by `crossing`.
+    #[inline]
+    pub(super) fn stepped(&self, i: usize, crossing: Crossing) -> ([u16; 3], u32) {
+        let (mut at, axis) = (self.at[i], crossing.axis as usize);
+        let stride = self.strides[axis] as u32;
+        let cell = if crossing.up {
+            at[axis] += 1;
+            self.cell[i] + stride
+        } else {
+            at[axis] -= 1;
+            self.cell[i] - stride
+        };
+        (at, cell)
+    }
+
+    /// True when the cell at `at` lies on a face of the box (a wall, or a periodic face).
+    #[inline]
+    pub(super) fn at_face(&self, at: [u16; 3]) -> bool {
+        (0..3).any(|a| at[a] == 0 || at[a] as i64 == self.counts[a] - 1)
+    }
+
+    /// True when a step across `crossing` into the cell at `into` brought a body to a face of the
+    /// box on the crossing's axis.
+    #[inline]
+    pub(super) fn entered_face(&self, into: [u16; 3], crossing: Crossing) -> bool {
+        let a = crossing.axis as usize;
+        into[a] == 0 || into[a] as i64 == self.counts[a] - 1
+    }
+
+    /// Body `i`'s cell: its coordinates and index.
+    #[inline]
+    pub(super) fn place(&self, i: usize) -> ([u16; 3], u32) {
+        (self.at[i], self.cell[i])
+    }
+
+    fn link(&mut self, i: usize, at: [i64; 3]) {
+        let cell = (at[0] + at[1] * self.strides[1] + at[2] * self.strides[2]) as u32;
+        let first = self.head[cell as usize];
+        self.next[i] = first;
+        self.prev[i] = NONE;
+        if first != NONE {
+            self.prev[first as usize] = i as u32;
+        }
+        self.head[cell as usize] = i as u32;
+        self.cell[i] = cell;
+        self.at[i] = at.map(|c| c as u16);
+    }
+
+    fn unlink(&mut self, i: usize) {
+        let (next, prev) = (self.next[i], self.prev[i]);
+        if prev == NONE {
+            self.head[self.cell[i] as usize] = next;
+        } else {
+            self.next[prev as usize] = next;
+        }
+        if next != NONE {
+            self.prev[next as usize] = prev;
+        }
+        self.cell[i] = NONE;
+    }
+
+    /// The first body of cell `cell`, or [`NONE`].
+    #[inline]
+    pub(super) fn first(&self, cell: u32) -> u32 {
+        self.head[cell as usize]
+    }
+
+    /// The body after `i` in its cell, or [`NONE`].
+    #[inline]
+    pub(super) fn after(&self, i: u32) -> u32 {
+        self.next[i as usize]
+    }
+
+    /// The cell `d` steps from coordinate `c` along axis `a`, as its part of a cell index, with
+    /// the whole side that brings its bodies next to `c` across a periodic face; none past a wall.
+    #[inline(always)]
+    fn step(&self, a: usize, c: i64, d: i64) -> Option<(u32, f64)> {
+        let (k, n) = (c + d, self.counts[a]);
+        let (k, shift) = if k < 0 {
+            (k + n, -self.side[a])
+        } else if k >= n {
+            (k - n, self.side[a])
+        } else {
+            return Some(((k * self.strides[a]) as u32, 0.0));
+        };
+        self.periodic[a].then_some(((k * self.strides[a]) as u32, shift))
+    }
+
+    /// The cells next to coordinate `c` along axis `a`, itself included.
+    #[inline(always)]
+    fn around(&self, a: usize, c: i64) -> AxisSteps {
+        let mut steps = ([(0, 0.0); 3], 0);
+        let reach = if self.counts[a] == 1 { 0..=0 } else { -1..=1 };
+        for d in reach {
+            if let Some(step) = self.step(a, c, d) {
+                steps.0[steps.1] = step;
+                steps.1 += 1;
+            }
+        }
+        steps
+    }
+
+    /// Calls `visit` with every cell of the block `xs` x `ys` x `zs`.
+    #[inline(always)]
+    fn for_each_in(xs: AxisSteps, ys: AxisSteps, zs: AxisSteps, mut visit: impl FnMut(Neighbour)) {
+        for &(z, sz) in &zs.0[..zs.1] {
+            for &(y, sy) in &ys.0[..ys.1] {
+                for &(x, sx) in &xs.0[..xs.1] {
+                    visit(Neighbour { cell: x + y + z, shift: DVec3::new(sx, sy, sz) });
+                }
+            }
+        }
+    }
+
+    /// The heads of the 27 cells around body `i`'s, as 9 rows of 3 neighbours along x, when none
+    /// of them lies across a face of the box (most bodies' case; then no shift is needed).
+    #[inline(always)]
+    pub(super) fn inner_rows(&self, i: usize) -> Option<impl Iterator<Item = &[u32]> + '_> {
+        let at = self.at[i];
+        let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
+        let cell = self.cell[i] as i64;
+        inside.then(|| {
+            self.rows.iter().map(move |&d| {
+                let first = (cell + d - 1) as usize;
+                &self.head[first..first + 3]
+            })
+        })
+    }
+
+    /// Number of cells.
+    pub(super) fn len(&self) -> usize {
+        self.head.len()
+    }
+
+    /// The first cells of the 9 rows of 3 cells along x around body `i`'s, when none of them lies
+    /// across a face of the box (most bodies' case).
+    #[inline]
+    pub(super) fn rows_around(&self, i: usize) -> Option<[usize; 9]> {
+        let at = self.at[i];
+        let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
+        let centre = self.cell[i] as i64;
+        inside.then(|| self.rows.map(|d| (centre + d - 1) as usize))
+    }
+
+    /// Calls `visit` with every cell of body `i`'s neighbourhood: the 27 cells around its own
+    /// (fewer against walls).
+    #[inline(always)]
+    pub(super) fn for_each_around(&self, i: usize, visit: impl FnMut(Neighbour)) {
+        let at = self.at[i].map(i64::from);
+        Self::for_each_in(self.around(0, at[0]), self.around(1, at[1]), self.around(2, at[2]), visit);
+    }
+
+    /// Calls `visit` with the cells a body came within reach of by a step across `crossing` into
+    /// the cell `(at, cell)`: the 9 beyond it in the direction it moved.
+    #[inline(always)]
+    pub(super) fn for_each_new(
+        &self,
+        (at, cell): ([u16; 3], u32),
+        crossing: Crossing,
+        mut visit: impl FnMut(Neighbour),
+    ) {
+        let at = at.map(i64::from);
+        let axis = crossing.axis as usize;
+        if (0..3).all(|a| at[a] >= 1 && at[a] + 2 <= self.counts[a]) {
+            // Away from every face: the 9 cells of the plane ahead, none across a face.
+            let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+            let ahead = cell as i64 + if crossing.up { self.strides[axis] } else { -self.strides[axis] };
+            for dw in [-1, 0, 1] {
+                for du in [-1, 0, 1] {
+                    let cell = (ahead + du * self.strides[u] + dw * self.strides[w]) as u32;
+                    visit(Neighbour { cell, shift: DVec3::ZERO });
+                }
+            }
+            return;
+        }
+        let mut steps: [AxisSteps; 3] = std::array::from_fn(|a| self.around(a, at[a]));
+        let ahead = self.step(axis, at[axis], if crossing.up { 1 } else { -1 });
+        steps[axis] = ([ahead.unwrap_or((0, 0.0)); 3], ahead.is_some() as usize);
+        let [xs, ys, zs] = steps;
+        Self::for_each_in(xs, ys, zs, visit);
+    }
+
+    /// When body `i`, listed in its cell, next crosses a face of it on its current motion (no
+    /// gravity: the event loop takes none), from `now` on. The outer faces of the outermost
+    /// cells are never crossed: walls turn the body back first, and a periodic face is the
+    /// body's wrap, an event of its own.
+    #[inline]
+    pub(super) fn next_crossing(&self, bodies: &Bodies, i: usize, now: f64) -> Crossing {
+        self.next_crossing_from(&bodies.motion(i), self.at[i], now)
+    }
+
+    /// [`Self::next_crossing`] of a body on `motion` in the cell at `at`.
+    #[inline]
+    pub(super) fn next_crossing_from(&self, motion: &Motion, at: [u16; 3], now: f64) -> Crossing {
+        let mut best = Crossing::NEVER;
+        for (a, &c) in at.iter().enumerate() {
+            let (v, c) = (motion.velocity[a], c as i64);
+            let (face, up) = if v > 0.0 && c + 1 < self.counts[a] {
+                (self.min[a] + (c + 1) as f64 * self.width[a], true)
+            } else if v < 0.0 && c > 0 {
+                (self.min[a] + c as f64 * self.width[a], false)
+            } else {
+                continue;
+            };
+            let time = motion.since + (face - motion.position[a]) / v;
+            if time < best.time {
+                best = Crossing { time: time.max(now), axis: a as u8, up };
+            }
+        }
+        best
+    }
+}

@@ -1,0 +1,661 @@
+//! The event loop of spheres in simulate mode, of the class of dedicated event-driven molecular
+//! dynamics (EDMD) codes: one scheduled event per body, cells with crossing events, an O(1)
+//! calendar, and no work at a frame's end for the bodies nothing touched.
+//!
+//! It owns the scheduling of a world whose every body is a moving sphere, in simulate mode and
+//! without gravity: each body's earliest event alone (a contact, a wall contact, a crossing of a
+//! periodic face, or the crossing of its centre into another cell: [`cells`]) is kept in the
+//! calendar ([`calendar`]); a body whose motion changed is tested against the bodies of the 27
+//! cells around it ([`search`]), and a body crossing into a cell against the 9 that came within
+//! reach. A body whose scheduled contact was voided by its partner's velocity change (stamps, as
+//! in the event queue) is tested again when that contact surfaces. Each body's event is the
+//! earliest of those it may still have, so the calendar's earliest is the next event of the
+//! world: the events are handled in the order the frame pipeline's queue handles them, ties
+//! included. The contact times, the impacts, the contact rules (the TC model and the jam rule,
+//! its cluster found through the cells) and the reports are the pipeline's own functions, so the
+//! contacts and states are bit-identical to the brute-force oracle's, for every frame length.
+//!
+//! Where it applies: [`crate::world`] steps a world of `Method::Auto` in simulate mode with it
+//! while every body is a moving sphere and there is no gravity, and hands the world to the grid's
+//! frame pipeline (which predicts from the same canonical times, so nothing changes at the hand-over)
+//! as soon as another shape or a static body is added. Detect mode stays with the pipeline:
+//! there no contact changes a path, so predicting every pair once per window costs less than
+//! testing a body's neighbourhood after each of its contacts. Shapes stay with it because their
+//! searches are conservative advancement, parked and resumed across windows, which the
+//! pipeline owns; gravity, because a body's path is then a parabola, and its cell crossings and
+//! resting contact belong with the pipeline's proxies. It never decides what touches (the narrow
+//! phase) nor what an impact does (the response).
+
+mod ahead;
+mod calendar;
+mod cells;
+mod search;
+
+use crate::bodies::Bodies;
+use crate::event_queue::{Event, Partner};
+use crate::frame::{Contact, FrameStats, Output, Physics, Touched};
+use crate::pipeline::jam::Cluster;
+use crate::pipeline::respond::{self, Responder};
+use crate::response::impact::{Impacts, Resolution};
+use crate::response::rules::Rule;
+use crate::walls::BoxBounds;
+use ahead::{Marks, Pushed, Seen, Worked, Worker, CELLS_PER_EVENT, MIN_PER_WORKER, PER_WORKER};
+use calendar::{Calendar, Entry, Scheduled};
+use cells::{Cells, Crossing, NONE};
+use rayon::prelude::*;
+use search::{Candidate, Eligible, Near, Overlay, Search};
+use std::time::Instant;
+
+/// The parallel loop runs from this many threads on. On 2 its workers share the searches, most
+/// of an event's cost, but an event's handling in order stays on one thread: measured with
+/// callgrind on the gas at n = 10^5 and packing 0.2, the workers execute about 10.5 k
+/// instructions per pair collision and the thread that handles the events in order 3.4 k, where
+/// the serial loop executes 11 k in all, which bounds 2 threads to 1.2x (and the batches' hand-offs
+/// took that back: 0.96x measured); from 3 threads on the bound passes 1.5x.
+const AHEAD_THREADS: usize = 3;
+/// The grid is rebuilt when the bodies have grown past this many times those it was sized for.
+const GROWTH: usize = 2;
+/// How many events pass between looks at the interrupt flag.
+const INTERRUPT_EVERY: u32 = 4096;
+
+/// The event loop (see the module documentation).
+#[derive(Debug)]
+pub(crate) struct EventLoop {
+    bounds: BoxBounds,
+    cells: Cells,
+    calendar: Calendar,
+    /// Per body: its earliest eligible contact, wall contact or periodic crossing.
+    next: Vec<Option<Event>>,
+    /// Per body: when its centre next leaves its cell.
+    crossing: Vec<Crossing>,
+    pub(crate) impacts: Impacts,
+    cluster: Cluster,
+    /// Scratch: the members of the cluster last frozen; a search's candidates.
+    members: Vec<u32>,
+    candidates: Vec<Candidate>,
+    near: Box<Near>,
+    /// Per slot: the body was entered and not removed since.
+    held: Vec<bool>,
+    /// Bodies listed in the cells, and how many the grid was sized for.
+    listed: usize,
+    sized_for: usize,
+    /// The largest coordinate of the box, and the smallest radius entered: whether the search's
+    /// screen is trusted (see [`search::screen_trusted`]).
+    scale: f64,
+    min_radius: f64,
+    /// With more than one thread: the workers of the parallel loop (see [`ahead`]), the batch
+    /// they work out, and the cells changed since it started.
+    workers: Vec<Worker>,
+    batch: Vec<Entry>,
+    marks: Marks,
+    /// Tests: every step ends checking the search's screen.
+    #[cfg(test)]
+    checking: bool,
+    /// The grid and the calendar are rebuilt at the next step (bodies were entered that the grid
+    /// does not fit, or none was entered yet).
+    stale: bool,
+}
+
+impl EventLoop {
+    /// An event loop for the box `bounds` on `threads` threads: the parallel loop (see [`ahead`])
+    /// from [`AHEAD_THREADS`] threads on, the serial loop below.
+    pub(crate) fn new(bounds: &BoxBounds, threads: usize) -> EventLoop {
+        Self::with_workers(bounds, if threads >= AHEAD_THREADS { threads } else { 1 })
+    }
+
+    /// An event loop for the box `bounds` whose searches are shared among `workers` workers (the
+    /// serial loop with one).
+    pub(crate) fn with_workers(bounds: &BoxBounds, workers: usize) -> EventLoop {
+        EventLoop {
+            bounds: *bounds,
+            cells: Cells::default(),
+            calendar: Calendar::default(),
+            next: Vec::new(),
+            crossing: Vec::new(),
+            impacts: Impacts::default(),
+            cluster: Cluster::default(),
+            members: Vec::new(),
+            candidates: Vec::new(),
+            near: Box::default(),
+            held: Vec::new(),
+            listed: 0,
+            sized_for: 0,
+            scale: bounds.min.abs().max(bounds.max.abs()).max_element() + bounds.side().max_element(),
+            min_radius: f64::INFINITY,
+            workers: if workers > 1 { (0..workers).map(|_| Worker::default()).collect() } else { Vec::new() },
+            batch: Vec::new(),
+            marks: Marks::default(),
+            #[cfg(test)]
+            checking: false,
+            stale: true,
+        }
+    }
+
+    /// True when the loop takes body `i`: a moving sphere.
+    pub(crate) fn takes(bodies: &Bodies, i: usize) -> bool {
+        bodies.is_sphere(i) && !bodies.is_fixed(i)
+    }
+
+    /// The bodies entered and not removed, ascending.
+    pub(crate) fn bodies(&self) -> impl Iterator<Item = u32> + '_ {
+        self.held.iter().enumerate().filter(|(_, &held)| held).map(|(i, _)| i as u32)
+    }
+
+    /// Bytes held: cells, calendar, each body's next events, the rules.
+    pub(crate) fn memory_bytes(&self) -> usize {
+        self.cells.memory_bytes()
+            + self.calendar.memory_bytes()
+            + self.next.capacity() * std::mem::size_of::<Option<Event>>()
+            + self.crossing.capacity() * std::mem::size_of::<Crossing>()
+            + self.impacts.rules.memory_bytes()
+            + self.cluster.memory_bytes()
+            + self.members.capacity() * 4
+            + self.held.capacity()
+            + self.marks.memory_bytes()
+            + self.batch.capacity() * std::mem::size_of::<Entry>()
+            + self.workers.iter().map(|w| w.worked.capacity() * std::mem::size_of::<Worked>()).sum::<usize>()
+            + self.candidates.capacity() * std::mem::size_of::<Candidate>()
+    }
+
+    /// Body `i` was added, or given a new motion between frames, at `t`.
+    pub(crate) fn enter(&mut self, i: u32, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
+        let i = i as usize;
+        self.impacts.rules.resize(bodies.slots());
+        if self.held.len() < bodies.slots() {
+            self.held.resize(bodies.slots(), false);
+        }
+        self.held[i] = true;
+        self.min_radius = self.min_radius.min(bodies.radius(i));
+        if self.stale {
+            return;
+        }
+        if self.cells.cell_of(i) == NONE {
+            if !self.cells.fits(bodies.radius(i)) || self.listed + 1 > GROWTH * self.sized_for.max(64) {
+                self.stale = true;
+                return;
+            }
+            self.grow(bodies.slots());
+            self.cells.insert(bodies, i, t);
+            self.listed += 1;
+        }
+        self.predict(bodies, i, t, Eligible::From(t), stats);
+    }
+
+    /// Body `i` was removed: it leaves its cell, and its event is void.
+    pub(crate) fn remove(&mut self, i: u32) {
+        if let Some(held) = self.held.get_mut(i as usize) {
+            *held = false;
+        }
+        if self.cells.cell_of(i as usize) != NONE {
+            self.cells.remove(i as usize);
+            self.listed -= 1;
+        }
+        self.calendar.cancel(i);
+        self.impacts.rules.forget(i as usize);
+    }
+
+    fn grow(&mut self, slots: usize) {
+        if self.next.len() < slots {
+            self.next.resize(slots, None);
+            self.crossing.resize(slots, Crossing::NEVER);
+        }
+    }
+
+    /// Lists every body afresh in a grid sized for them and schedules each one's earliest
+    /// event from `t` on, before any event at `t` was handled.
+    fn rebuild(&mut self, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
+        let ids: Vec<u32> = self.bodies().collect();
+        let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
+        self.cells = Cells::new(&self.bounds, max_radius, ids.len());
+        (self.listed, self.sized_for) = (ids.len(), ids.len());
+        self.next.clear();
+        self.crossing.clear();
+        self.grow(bodies.slots());
+        for &i in &ids {
+            self.min_radius = self.min_radius.min(bodies.radius(i as usize));
+            self.cells.insert(bodies, i as usize, t);
+        }
+        for &i in &ids {
+            let mut search = self.search(bodies);
+            let next = search.next_event(i as usize, t, Eligible::From(t));
+            stats.narrow_tests += search.tests;
+            self.next[i as usize] = next;
+        }
+        stats.retests += ids.len() as u64;
+        for &i in &ids {
+            self.crossing[i as usize] = self.cells.next_crossing(bodies, i as usize, t);
+        }
+        self.stale = false;
+        self.retune(t);
+    }
+
+    /// Resets the calendar with buckets sized for the events now scheduled, and schedules them.
+    fn retune(&mut self, t: f64) {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for i in 0..self.next.len() {
+            let time = self.scheduled(i).time();
+            if time.is_finite() {
+                (sum, count) = (sum + (time - t).max(0.0), count + 1);
+            }
+        }
+        // A body's events come about `sum / count` apart: the world's, that over `count`.
+        let gap = if count > 0 { sum / (count * count) as f64 } else { 1.0 };
+        self.calendar.reset(self.next.len(), t, if gap > 0.0 { gap } else { 1.0 });
+        for i in 0..self.next.len() {
+            if self.cells.cell_of(i) != NONE {
+                self.calendar.schedule(i as u32, self.scheduled(i));
+            }
+        }
+    }
+
+    /// A search of the cells, its screen on when trusted for the bodies entered so far.
+    fn search<'a>(&'a mut self, bodies: &'a Bodies) -> Search<'a> {
+        let screen = search::screen_trusted(self.scale, self.min_radius);
+        let (candidates, near) = (&mut self.candidates, &mut self.near);
+        Search {
+            bodies,
+            cells: &self.cells,
+            bounds: &self.bounds,
+            screen,
+            candidates,
+            near,
+            overlay: Overlay::default(),
+            tests: 0,
+        }
+    }
+
+    /// Body `i`'s scheduled event: its earliest contact (or wall contact, or periodic crossing)
+    /// or its next cell crossing, whichever comes first (the crossing at a tie).
+    #[inline]
+    fn scheduled(&self, i: usize) -> Scheduled {
+        let crossing = self.crossing[i];
+        match self.next[i] {
+            Some(event) if event.time < crossing.time => Scheduled { event, cell_crossing: false },
+            _ => {
+                let event = Event {
+                    time: crossing.time,
+                    body: i as u32,
+                    partner: Partner::Renew,
+                    body_stamp: 0,
+                    partner_stamp: 0,
+                };
+                Scheduled { event, cell_crossing: true }
+            }
+        }
+    }
+
+    /// Body `i`'s events at `now` found again, those `eligible`; a body whose motion is new gets
+    /// its next cell crossing too.
+    #[inline]
+    fn predict(&mut self, bodies: &Bodies, i: usize, now: f64, eligible: Eligible, stats: &mut FrameStats) {
+        let mut search = self.search(bodies);
+        let next = search.next_event(i, now, eligible);
+        stats.narrow_tests += search.tests;
+        stats.retests += 1;
+        self.next[i] = next;
+        if let Eligible::From(_) = eligible {
+            self.crossing[i] = self.cells.next_crossing(bodies, i, now);
+            self.marks.mark(self.cells.cell_of(i));
+        }
+        self.calendar.schedule(i as u32, self.scheduled(i));
+    }
+
+    /// Steps from `t0` to `t1`: every contact with a time in `[t0, t1)`, in time order.
+    pub(crate) fn step(&mut self, bodies: &mut Bodies, physics: &Physics, t0: f64, t1: f64, out: &mut Output) {
+        let start = Instant::now();
+        self.impacts.rules.resize(bodies.slots());
+        self.impacts.rules.next_step();
+        if self.stale {
+            self.rebuild(bodies, t0, out.stats);
+        } else if self.calendar.needs_tuning() {
+            self.retune(t0);
+        }
+        if self.workers.is_empty() {
+            let mut handled = 0u32;
+            while let Some(entry) = self.calendar.peek_entry() {
+                if !(entry.scheduled.time() < t1) {
+                    break;
+                }
+                handled = handled.wrapping_add(1);
+                if handled.is_multiple_of(INTERRUPT_EVERY) && crate::interrupt::raised() {
+                    break;
+                }
+                self.calendar.pop();
+                self.dispatch(bodies, physics, entry, out);
+            }
+        } else {
+            self.step_ahead(bodies, physics, t1, out);
+        }
+        out.stats.response_seconds += start.elapsed().as_secs_f64();
+        #[cfg(test)]
+        if self.checking {
+            self.check_screen(bodies, t1);
+        }
+    }
+
+    /// The calendar's event `entry`, handled.
+    fn dispatch(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, out: &mut Output) {
+        let (owner, t) = (entry.owner as usize, entry.scheduled.time());
+        if entry.scheduled.cell_crossing {
+            self.cross_cell(bodies, owner, t, out.stats);
+        } else {
+            self.handle(bodies, physics, owner, entry.scheduled.event, out);
+        }
+    }
+
+    /// [`Self::step`] on every worker: batch after batch of the next events before `t1`, worked
+    /// out on every worker, then handled in order (see [`ahead`]).
+    fn step_ahead(&mut self, bodies: &mut Bodies, physics: &Physics, t1: f64, out: &mut Output) {
+        loop {
+            let batch = self.take_batch(t1);
+            if batch.is_empty() {
+                self.batch = batch;
+                return;
+            }
+            self.marks.next_batch(self.cells.len());
+            let share = batch.len().div_ceil(self.workers.len());
+            let seen = Seen {
+                bodies,
+                cells: &self.cells,
+                bounds: &self.bounds,
+                physics,
+                rules: &self.impacts.rules,
+                screen: search::screen_trusted(self.scale, self.min_radius),
+                next: &self.next,
+                crossing: &self.crossing,
+            };
+            self.workers.par_iter_mut().enumerate().for_each(|(k, worker)| {
+                worker.worked.clear();
+                for entry in batch.iter().skip(k * share).take(share) {
+                    let worked = seen.work_out(entry, worker);
+                    worker.worked.push(worked);
+                }
+            });
+            self.commit_batch(bodies, physics, &batch, share, t1, out);
+            for worker in &mut self.workers {
+                out.stats.narrow_tests += std::mem::take(&mut worker.tests);
+            }
+            self.batch = batch;
+            if crate::interrupt::raised() {
+                return;
+            }
+        }
+    }
+
+    /// The next events before `t1` taken from the calendar, as many as the workers share.
+    #[inline(never)]
+    fn take_batch(&mut self, t1: f64) -> Vec<Entry> {
+        let mut batch = std::mem::take(&mut self.batch);
+        batch.clear();
+        // Fewer events a batch in a small world: one handled early in a batch then changes what
+        // another read less often.
+        let size = (self.cells.len() / CELLS_PER_EVENT).clamp(MIN_PER_WORKER, PER_WORKER) * self.workers.len();
+        while batch.len() < size {
+            match self.calendar.peek_entry() {
+                Some(entry) if entry.scheduled.time() < t1 => {
+                    self.calendar.pop();
+                    batch.push(entry);
+                }
+                _ => break,
+            }
+        }
+        batch
+    }
+
+    /// The events of `batch` handled in order, each with what the workers found (`share` events
+    /// each), and before each the events predicted since that are due before it. (Kept out of line:
+    /// a profile then tells the serial share of a step.)
+    #[inline(never)]
+    fn commit_batch(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        batch: &[Entry],
+        share: usize,
+        t1: f64,
+        out: &mut Output,
+    ) {
+        for (k, entry) in batch.iter().enumerate() {
+            // Events predicted since, and due before this one, come first.
+            while let Some(first) = self.calendar.peek_entry() {
+                if !(first.scheduled.time() < t1 && first.precedes(entry)) {
+                    break;
+                }
+                self.calendar.pop();
+                self.dispatch(bodies, physics, first, out);
+            }
+            if self.calendar.is_current_entry(entry) {
+                let worked = std::mem::replace(&mut self.workers[k / share].worked[k % share], Worked::Nothing);
+                self.commit(bodies, physics, *entry, worked, out);
+            }
+        }
+    }
+
+    /// Handles `entry` with what a worker found for it, when nothing it read has changed since.
+    fn commit(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, worked: Worked, out: &mut Output) {
+        let i = entry.owner as usize;
+        match worked {
+            Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
+                self.marks.mark(self.cells.cell_of(i));
+                self.cells.step_across(i, self.crossing[i]);
+                self.marks.mark(self.cells.cell_of(i));
+                (self.next[i], self.crossing[i]) = (next, crossing);
+                self.calendar.schedule(i as u32, self.scheduled(i));
+            }
+            Worked::Voided { next } if self.untouched_around(i) => {
+                out.stats.invalidations += 1;
+                out.stats.retests += 1;
+                self.next[i] = next;
+                self.calendar.schedule(i as u32, self.scheduled(i));
+            }
+            Worked::Pushed(pushed) if self.untouched_pair(bodies, &pushed, entry.scheduled.event) => {
+                self.commit_pushed(bodies, physics, pushed, entry.scheduled.event.time, out);
+            }
+            _ => self.dispatch(bodies, physics, entry, out),
+        }
+    }
+
+    /// True when the contact `event`, which a worker found `pushed` apart, can be handled as it
+    /// found: its bodies have the motions it was predicted from, no cell around either was
+    /// marked in this batch, and the contact rules would not jam them.
+    fn untouched_pair(&self, bodies: &Bodies, pushed: &Pushed, event: Event) -> bool {
+        let [a, b] = pushed.pair;
+        ahead::is_current(bodies, &event)
+            && self.untouched_around(a as usize)
+            && self.untouched_around(b as usize)
+            && !self.impacts.rules.would_jam(a, b, event.time)
+    }
+
+    /// The contact of bodies `pushed.pair` at `t`, handled with what a worker found: what
+    /// [`respond::pair_impact`] and [`Self::pair_contact`] do for two frictionless spheres pushed
+    /// apart, from the same arithmetic on the same motions.
+    fn commit_pushed(&mut self, bodies: &mut Bodies, physics: &Physics, pushed: Pushed, t: f64, out: &mut Output) {
+        let [a, b] = pushed.pair;
+        let (i, j) = (a as usize, b as usize);
+        let rule = self.impacts.rules.pair(a, b, t, physics.restitution, physics.contact_duration);
+        let Rule::Impulse { restitution, changed } = rule else { unreachable!("checked: the rules do not jam them") };
+        debug_assert_eq!(restitution.to_bits(), pushed.restitution.to_bits());
+        out.stats.tc_contacts += changed as u64;
+        bodies.set_velocity_at(i, t, pushed.velocities[0]);
+        bodies.set_velocity_at(j, t, pushed.velocities[1]);
+        out.stats.pair_virial += pushed.virial;
+        for k in 0..2 {
+            let i = pushed.pair[k] as usize;
+            debug_assert!(
+                ahead::same_bits(&bodies.motion(i), &pushed.motions[k]) && bodies.stamp[i] == pushed.stamps[k]
+            );
+            (self.next[i], self.crossing[i]) = (pushed.next[k], pushed.crossings[k]);
+            self.marks.mark(self.cells.cell_of(i));
+            self.calendar.schedule(pushed.pair[k], self.scheduled(i));
+        }
+        out.stats.retests += 2;
+        out.stats.pair_contacts += 1;
+        let (body, touched) = (bodies.handle(i), Touched::Body(bodies.handle(j)));
+        out.contacts.push(Contact {
+            time: t,
+            body,
+            touched,
+            point: pushed.point,
+            normal: pushed.normal,
+            impulse: pushed.impulse,
+        });
+    }
+
+    /// True when no cell around body `i`'s was marked in this batch.
+    fn untouched_around(&self, i: usize) -> bool {
+        match self.cells.rows_around(i) {
+            Some(rows) => !self.marks.any_in_rows(&rows),
+            None => {
+                let mut untouched = true;
+                self.cells.for_each_around(i, |n| untouched &= !self.marks.is_marked(n.cell));
+                untouched
+            }
+        }
+    }
+
+    /// True when neither body `i`'s cell nor the cells its next crossing brings within reach were
+    /// marked in this batch.
+    fn untouched_crossing(&self, i: usize) -> bool {
+        let crossing = self.crossing[i];
+        let mut untouched = !self.marks.is_marked(self.cells.cell_of(i));
+        self.cells
+            .for_each_new(self.cells.stepped(i, crossing), crossing, |n| untouched &= !self.marks.is_marked(n.cell));
+        untouched
+    }
+
+    /// Body `i` crosses into the next cell at `t`: it is listed there, and tested against the
+    /// bodies that came within reach.
+    fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
+        let crossing = self.crossing[i];
+        self.marks.mark(self.cells.cell_of(i));
+        self.cells.step_across(i, crossing);
+        self.marks.mark(self.cells.cell_of(i));
+        let into = self.cells.place(i);
+        self.crossing[i] = self.cells.next_crossing(bodies, i, t);
+        let before = self.next[i];
+        let mut search = self.search(bodies);
+        let next = search.after_crossing(i, (into, crossing), t, before);
+        stats.narrow_tests += search.tests;
+        self.next[i] = next;
+        self.calendar.schedule(i as u32, self.scheduled(i));
+    }
+
+    /// The event `event`, scheduled by body `owner`: handled if its bodies' motions are those
+    /// it was predicted from; otherwise `owner`'s events after it are found again.
+    fn handle(&mut self, bodies: &mut Bodies, physics: &Physics, owner: usize, event: Event, out: &mut Output) {
+        let i = event.body as usize;
+        if !ahead::is_current(bodies, &event) {
+            out.stats.invalidations += 1;
+            self.predict(bodies, owner, event.time, Eligible::After(event), out.stats);
+            return;
+        }
+        let t = event.time;
+        match event.partner {
+            Partner::Body(j) => self.pair_contact(bodies, physics, event, j, out),
+            Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, t, out),
+            Partner::Cross(face) => {
+                bodies.wrap(i, face, t);
+                self.marks.mark(self.cells.cell_of(i));
+                self.cells.relist(bodies, i, t);
+                self.predict(bodies, i, t, Eligible::From(t), out.stats);
+            }
+            Partner::End(_) | Partner::Stalled(_) | Partner::WallStalled | Partner::Renew => {
+                unreachable!("the event loop predicts contacts, wall contacts and periodic crossings only")
+            }
+        }
+    }
+
+    /// The contact `event` of bodies `event.body < b`, as the frame pipeline handles two moving
+    /// spheres (see [`respond`]); bodies that parted at it go on to their events after it.
+    fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, event: Event, b: u32, out: &mut Output) {
+        let (a, t) = (event.body, event.time);
+        // Their contact histories change, whatever the impact does.
+        self.marks.mark(self.cells.cell_of(a as usize));
+        self.marks.mark(self.cells.cell_of(b as usize));
+        let (point, normal, resolution, impulse) = respond::pair_impact(self, bodies, physics, (a, b), t, out.stats);
+        if resolution == Resolution::Parting {
+            // Nothing changed: each goes on to its events after this one.
+            self.predict(bodies, a as usize, t, Eligible::After(event), out.stats);
+            self.predict(bodies, b as usize, t, Eligible::After(event), out.stats);
+        }
+        out.stats.pair_contacts += 1;
+        let (body, touched) = (bodies.handle(a as usize), Touched::Body(bodies.handle(b as usize)));
+        out.contacts.push(Contact { time: t, body, touched, point, normal, impulse });
+    }
+}
+
+impl Responder for EventLoop {
+    fn impacts(&mut self) -> &mut Impacts {
+        &mut self.impacts
+    }
+
+    /// The event loop runs only without gravity, where no body lies still (see
+    /// [`crate::response::rest`]), so no impact wakes one.
+    fn woke(&mut self, _: &mut Bodies, _: &Physics, woken: usize, _: f64, _: &mut FrameStats) {
+        unreachable!("body {woken} lay still in the event loop, which runs without gravity");
+    }
+
+    /// The jam rule on the bodies touching `seeds` at `t`, found through the cells; every member's
+    /// events are found again. Returns the cluster's virial.
+    fn freeze_cluster(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        seeds: &[u32],
+        t: f64,
+        stats: &mut FrameStats,
+    ) -> f64 {
+        let cells = &self.cells;
+        let near = |_: &Bodies, m: usize, near: &mut Vec<u32>| {
+            cells.for_each_around(m, |n| {
+                let mut q = cells.first(n.cell);
+                while q != NONE {
+                    if q as usize != m {
+                        near.push(q);
+                    }
+                    q = cells.after(q);
+                }
+            })
+        };
+        let rules = &mut self.impacts.rules;
+        let virial = self.cluster.freeze(bodies, physics, rules, seeds, t, stats, near, |_, _| false);
+        let mut members = std::mem::take(&mut self.members);
+        members.clear();
+        members.extend_from_slice(self.cluster.members());
+        for &m in &members {
+            self.predict(bodies, m as usize, t, Eligible::From(t), stats);
+        }
+        self.members = members;
+        virial
+    }
+
+    fn moved(&mut self, bodies: &Bodies, _: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats) {
+        for i in [Some(a), b].into_iter().flatten() {
+            self.predict(bodies, i as usize, t, Eligible::From(t), stats);
+        }
+    }
+}
+
+#[cfg(test)]
+impl EventLoop {
+    /// From now on every step ends checking the search's screen (see [`Self::check_screen`]).
+    pub(crate) fn check_screen_each_step(&mut self) {
+        self.checking = true;
+    }
+
+    /// Every listed body's next event found again at `now`, with the screen and without it: the
+    /// screen must never change what the exact tests alone find.
+    fn check_screen(&mut self, bodies: &Bodies, now: f64) {
+        let ids: Vec<u32> = self.bodies().filter(|&i| self.cells.cell_of(i as usize) != NONE).collect();
+        assert!(!ids.is_empty());
+        for &i in &ids {
+            let found = |event_loop: &mut EventLoop, screen: bool| {
+                let mut search = event_loop.search(bodies);
+                search.screen = screen;
+                search.next_event(i as usize, now, Eligible::From(now))
+            };
+            let (screened, exact) = (found(self, true), found(self, false));
+            assert_eq!(format!("{screened:?}"), format!("{exact:?}"), "body {i}: the screen changed its next event");
+        }
+    }
+}

@@ -1,0 +1,450 @@
+//! A body's next event in the event loop: its earliest contact with a body of its neighbourhood,
+//! with a wall, or its crossing of a periodic face.
+//!
+//! It owns two things. Which events a body may still be given ([`Eligible`]): every one from
+//! now on when its motion is new, or those after the one just handled when it is unchanged (a
+//! contact that pushed nothing), which is how the event queue of the frame pipeline drops a
+//! contact it has handled. And a cheap screen before the exact test: from the two centres at
+//! the current instant, a pair moving apart, missing each other or unable to touch before the
+//! best event found so far is skipped, with margins far wider than the rounding of the screen
+//! (and the screen off in a world whose coordinates are too large for its smallest bodies to
+//! trust them), so the screen never skips a pair the exact test would schedule. The exact test
+//! is the frame pipeline's own: [`contacts::pair_start`] on the lower id's motion and the higher
+//! id's, shifted by whole sides across periodic faces, so every time is canonical and the same
+//! bits as every method's. It never schedules, handles an event or changes a body.
+
+use super::cells::{Cells, Crossing, Neighbour, NONE};
+use crate::bodies::{Bodies, BodyState};
+use crate::event_queue::{Event, Partner};
+use crate::memory::prefetch;
+use crate::narrow_phase::contacts;
+use crate::pipeline::predict::{crossing_event, sphere_wall_event};
+use crate::walls::BoxBounds;
+use crate::window::Window;
+use glam::DVec3;
+
+/// A pair whose approach rate is below this fraction of |offset| |relative velocity| counts as
+/// moving apart (the exact test's own threshold is 1e-12, on the negative side).
+const RECEDING: f64 = 1e-6;
+/// The screen's slack on a gap (relative to the radius sum squared, and to the offset squared)
+/// and on a time bound (relative): all far above its rounding (see [`screen_trusted`]).
+const GAP_SLACK: f64 = 1e-6;
+const OFFSET_SLACK: f64 = 1e-12;
+const TIME_SLACK: f64 = 1e-4;
+/// A pair whose relative speed squared is below this fraction of the sum of the two speeds
+/// squared may be rounding noise to the exact test (its own rule is 10^-12 of the sum of the
+/// speeds): it never bounds the screen.
+const NOISE: f64 = 1e-16;
+/// The screen is trusted when this many roundings of the largest coordinate are within
+/// `1e-11` of the smallest radius.
+const ROUNDINGS: f64 = 16.0;
+const TRUSTED: f64 = 1e-11;
+
+/// True when centres computed at the current instant are accurate enough, in a box whose
+/// coordinates reach `scale`, for the screen's margins to hold for radii of at least `radius`:
+/// their rounding is then below 10^-11 of the smallest radius, the margins at least 10^-6 of it.
+pub(super) fn screen_trusted(scale: f64, radius: f64) -> bool {
+    ROUNDINGS * f64::EPSILON * scale <= TRUSTED * radius
+}
+
+/// Which of a body's events may be scheduled.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Eligible {
+    /// Every event from this instant on: the body's motion is new (or the calendar is rebuilt
+    /// at a step's start, before any event of the step was handled).
+    From(f64),
+    /// The events after this one, in the event queue's order: the body's motion is unchanged,
+    /// and every event of it up to this one was handled.
+    After(Event),
+}
+
+impl Eligible {
+    #[inline]
+    fn start(&self) -> f64 {
+        match self {
+            Eligible::From(t) => *t,
+            Eligible::After(event) => event.time,
+        }
+    }
+
+    #[inline]
+    fn admits(&self, event: &Event) -> bool {
+        match self {
+            Eligible::From(t) => event.time >= *t,
+            // The queue's `Ord` puts earlier events last.
+            Eligible::After(handled) => event < handled,
+        }
+    }
+}
+
+/// True when `a` comes before `b` in the event queue's order.
+#[inline]
+pub(super) fn earlier(a: &Event, b: &Event) -> bool {
+    a > b
+}
+
+/// What a search reads: the bodies, the cells, whether the screen is trusted; its scratch; and
+/// what it counts.
+pub(super) struct Search<'a> {
+    pub bodies: &'a Bodies,
+    pub cells: &'a Cells,
+    pub bounds: &'a BoxBounds,
+    pub screen: bool,
+    /// The partners that passed the screen, waiting for their exact tests, and the cells they
+    /// came from.
+    pub candidates: &'a mut Vec<Candidate>,
+    pub near: &'a mut Near,
+    /// Motions not yet written to the store (see [`Overlay`]).
+    pub overlay: Overlay,
+    /// Exact pair tests made.
+    pub tests: u64,
+}
+
+/// The motions and stamps of up to two bodies as an impact not yet applied leaves them: a search
+/// made ahead of the impact's turn reads them instead of the store's.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Overlay {
+    bodies: [(u32, u32, BodyState); 2],
+    len: usize,
+    /// A body of the overlay a search met among the neighbours, and its cell there.
+    met: Option<(u32, u8)>,
+}
+
+impl Overlay {
+    /// Body `i` with `state` and `stamp`.
+    pub(super) fn with(mut self, i: u32, state: BodyState, stamp: u32) -> Overlay {
+        self.bodies[self.len] = (i, stamp, state);
+        self.len += 1;
+        self
+    }
+
+    #[inline(always)]
+    fn find(&self, i: usize) -> Option<&(u32, u32, BodyState)> {
+        self.bodies[..self.len].iter().find(|(k, _, _)| *k as usize == i)
+    }
+}
+
+/// A partner from the neighbourhood: once it passed the screen, its exact test waits, ordered by
+/// the earliest it could touch (after `now`; minus infinity when not bounded).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Candidate {
+    earliest: f64,
+    q: u32,
+    /// Its cell among the neighbourhood's (see [`Near`]).
+    cell: u8,
+}
+
+/// The neighbour cells a search gathered bodies from, each with the whole sides that bring its
+/// bodies next to the searching body, and the searching body's centre less those.
+#[derive(Debug)]
+pub(super) struct Near {
+    cells: usize,
+    shifts: [DVec3; 32],
+    origins: [DVec3; 32],
+}
+
+impl Default for Near {
+    fn default() -> Near {
+        Near { cells: 0, shifts: [DVec3::ZERO; 32], origins: [DVec3::ZERO; 32] }
+    }
+}
+
+/// Body `p` as its partners are screened against it, at `now`.
+#[derive(Clone, Copy)]
+struct Own {
+    p: usize,
+    position: DVec3,
+    velocity: DVec3,
+    radius: f64,
+    now: f64,
+    /// Rounding of a time near `now`, relative to it: times compared as offsets from `now`
+    /// allow for it.
+    rounding: f64,
+}
+
+/// The earliest eligible event found so far, and how long after `now` it comes (infinite when
+/// none); and how long after `now` the earliest contact of the partners screened so far comes
+/// at the latest, which bounds the screen.
+struct Best {
+    event: Option<Event>,
+    horizon: f64,
+    bound: f64,
+}
+
+impl Best {
+    fn new(event: Option<Event>, now: f64) -> Best {
+        let horizon = event.map_or(f64::INFINITY, |e| e.time - now);
+        Best { event, horizon, bound: horizon }
+    }
+
+    /// Keeps `event` when eligible and earlier.
+    #[inline]
+    fn offer(&mut self, event: Event, eligible: Eligible, now: f64) {
+        if eligible.admits(&event) && self.event.is_none_or(|b| earlier(&event, &b)) {
+            (self.event, self.horizon) = (Some(event), event.time - now);
+            self.bound = self.bound.min(self.horizon);
+        }
+    }
+}
+
+impl<'a> Search<'a> {
+    /// Body `p`'s earliest eligible event at `now`: a contact with a body of its neighbourhood,
+    /// with a wall, or its crossing of a periodic face.
+    #[inline]
+    pub(super) fn next_event(&mut self, p: usize, now: f64, eligible: Eligible) -> Option<Event> {
+        let mut best = Best::new(None, now);
+        if self.cells.at_face(self.cells.place(p).0) {
+            self.offer_own(p, now, eligible, &mut best);
+        }
+        let (own, cells) = (self.own(p, now), self.cells);
+        self.candidates.clear();
+        self.near.cells = 0;
+        match cells.inner_rows(p) {
+            Some(rows) => {
+                // No cell across a face: one origin for all.
+                (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
+                for row in rows {
+                    for &first in row {
+                        self.gather_list(own.p, first, 0);
+                    }
+                }
+            }
+            None => cells.for_each_around(p, |n| self.gather(&own, n)),
+        }
+        self.screen_all(&own, &mut best);
+        self.test_candidates(&own, eligible, &mut best);
+        best.event
+    }
+
+    /// Body `p`, which steps into the cell `into` by `crossing` at `now`: its earliest
+    /// contact with the bodies of the cells it came within reach of, or `best` when none is
+    /// earlier. (A contact with them cannot be at `now` itself: touching bodies are always in
+    /// neighbouring cells.)
+    #[inline]
+    pub(super) fn after_crossing(
+        &mut self,
+        p: usize,
+        (into, crossing): (([u16; 3], u32), Crossing),
+        now: f64,
+        best: Option<Event>,
+    ) -> Option<Event> {
+        let (own, cells) = (self.own(p, now), self.cells);
+        let mut best = Best::new(best, now);
+        if cells.entered_face(into.0, crossing) {
+            self.offer_own(p, now, Eligible::From(now), &mut best);
+        }
+        self.candidates.clear();
+        self.near.cells = 0;
+        cells.for_each_new(into, crossing, |n| self.gather(&own, n));
+        self.screen_all(&own, &mut best);
+        self.test_candidates(&own, Eligible::From(now), &mut best);
+        best.event
+    }
+
+    /// Body `p`'s own events at `now`, those `eligible`: its wall contact and its crossing of a
+    /// periodic face. Asked only of a body in a cell on a face of the box: a centre reaches no face
+    /// before it crosses into such a cell, nor a sphere a wall (a cell is wider than a diameter).
+    #[inline]
+    fn offer_own(&self, p: usize, now: f64, eligible: Eligible, best: &mut Best) {
+        let window = Window::new(eligible.start(), f64::INFINITY);
+        // A box periodic on every axis has no walls to predict against.
+        let walled = self.bounds.periodic.contains(&false);
+        let (state, stamp, gravity) = (self.state_of(p), self.stamp_of(p), self.bodies.gravity);
+        let (wall, face) = (
+            walled.then(|| sphere_wall_event((p as u32, stamp), state, gravity, self.bounds, window)).flatten(),
+            crossing_event((p as u32, stamp), &state.motion, gravity, self.bounds, window),
+        );
+        for event in [wall, face].into_iter().flatten() {
+            best.offer(event, eligible, now);
+        }
+    }
+
+    /// Body `i`'s motion and radius: the overlay's, or the store's.
+    #[inline(always)]
+    fn state_of(&self, i: usize) -> &BodyState {
+        match self.overlay.len {
+            0 => &self.bodies.state[i],
+            _ => self.overlay.find(i).map_or(&self.bodies.state[i], |(_, _, state)| state),
+        }
+    }
+
+    /// Body `i`'s stamp: the overlay's, or the store's.
+    #[inline(always)]
+    fn stamp_of(&self, i: usize) -> u32 {
+        self.overlay.find(i).map_or(self.bodies.stamp[i], |(_, stamp, _)| *stamp)
+    }
+
+    #[inline]
+    fn own(&self, p: usize, now: f64) -> Own {
+        let state = self.state_of(p);
+        let rounding = ROUNDINGS * f64::EPSILON * now.abs();
+        Own { p, position: state.motion.at(now), velocity: state.motion.velocity, radius: state.radius, now, rounding }
+    }
+
+    /// Lists the bodies of neighbour cell `n` (but `own`'s) in `self.candidates`, to be screened,
+    /// asking for their records on the way: a neighbourhood's bodies are scattered in memory,
+    /// and the records then arrive together rather than one after the other.
+    #[inline(always)]
+    fn gather(&mut self, own: &Own, n: Neighbour) {
+        if self.cells.first(n.cell) == NONE {
+            return;
+        }
+        let k = self.near.cells;
+        self.near.origins[k] = own.position - n.shift;
+        self.near.shifts[k] = n.shift;
+        self.near.cells += 1;
+        self.gather_list(own.p, self.cells.first(n.cell), k as u8);
+    }
+
+    /// [`Self::gather`] of the cell whose first body is `first`, its shift the `k`-th of the
+    /// neighbourhood's.
+    /// A body of the overlay met this way waits aside (see [`Self::screen_all`]).
+    #[inline(always)]
+    fn gather_list(&mut self, p: usize, first: u32, k: u8) {
+        let (cells, states) = (self.cells, &self.bodies.state[..]);
+        let mut q = first;
+        while q != NONE {
+            if q as usize != p {
+                if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
+                    self.overlay.met = Some((q, k));
+                } else {
+                    prefetch(&states[q as usize]);
+                    self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                }
+            }
+            q = cells.after(q);
+        }
+    }
+
+    /// Screens the bodies gathered: those that pass stay in `self.candidates`, each with the
+    /// earliest it can touch `own`.
+    #[inline(always)]
+    fn screen_all(&mut self, own: &Own, best: &mut Best) {
+        if !self.screen {
+            if let Some((q, cell)) = self.overlay.met.take() {
+                self.candidates.push(Candidate { earliest: 0.0, q, cell });
+            }
+            self.candidates.iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
+            return;
+        }
+        let (states, origins) = (&self.bodies.state[..], &self.near.origins);
+        let mut bound = best.bound;
+        let mut kept = 0;
+        for k in 0..self.candidates.len() {
+            let c = self.candidates[k];
+            if let Some(earliest) = screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound) {
+                self.candidates[kept] = Candidate { earliest, ..c };
+                kept += 1;
+            }
+        }
+        self.candidates.truncate(kept);
+        // The overlay's body met among the neighbours, by its own motion.
+        if let Some((q, k)) = self.overlay.met.take() {
+            let state = self.state_of(q as usize);
+            if let Some(earliest) = screen(own, state, origins[k as usize & 31], &mut bound) {
+                self.candidates.push(Candidate { earliest, q, cell: k });
+            }
+        }
+        best.bound = bound;
+    }
+
+    /// The candidates' exact tests, earliest first, until the next cannot come before the best.
+    #[inline]
+    fn test_candidates(&mut self, own: &Own, eligible: Eligible, best: &mut Best) {
+        let mut candidates = std::mem::take(self.candidates);
+        if candidates.len() > 1 {
+            candidates.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
+        }
+        for c in &candidates {
+            if c.earliest > best.horizon {
+                break;
+            }
+            self.exact(own, c.q as usize, self.near.shifts[c.cell as usize], eligible, best);
+        }
+        *self.candidates = candidates;
+    }
+
+    /// The exact test of `own.p` and `q` (through `q`'s image shifted by `shift`), as the frame
+    /// pipeline makes it: their contact becomes `best` when eligible and earlier.
+    #[inline]
+    fn exact(&mut self, own: &Own, q: usize, shift: DVec3, eligible: Eligible, best: &mut Best) {
+        self.tests += 1;
+        let p = own.p;
+        // The lower id's own motion against the higher id's, shifted next to it.
+        let (low, high, image_shift) = if p < q { (p, q, shift) } else { (q, p, DVec3::ZERO - shift) };
+        let (low_state, high_state) = (self.state_of(low), self.state_of(high));
+        let mut image = *high_state;
+        if image_shift != DVec3::ZERO {
+            image.motion.position += image_shift;
+        }
+        let window = Window::new(eligible.start(), f64::INFINITY);
+        let Some((time, _)) = contacts::pair_start(self.bodies, (low, low_state), (high, &image), window) else {
+            return;
+        };
+        let stamps = (self.stamp_of(low), self.stamp_of(high));
+        let event = Event {
+            time,
+            body: low as u32,
+            partner: Partner::Body(high as u32),
+            body_stamp: stamps.0,
+            partner_stamp: stamps.1,
+        };
+        best.offer(event, eligible, own.now);
+    }
+}
+
+/// The screen of the body of `state` as `own`'s partner, its centre less `origin` (`own`'s,
+/// shifted to its image) as its offset: `None` when it can be skipped (moving apart from `own`,
+/// passing wide of it, or unable to touch it within `bound` of `own.now`), else a lower bound on
+/// when it can touch, after `own.now` (minus infinity when there is none to trust, as for a pair
+/// touching now). A pair sure to touch lowers `bound` to an upper bound on when it does. Every
+/// bound allows for the rounding of the offsets (see [`screen_trusted`]): |offset|^2 falls no
+/// faster than 2 |approach| per unit time at first, and the paths' closest approach is where the
+/// discriminant says, to its slack.
+#[inline(always)]
+fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Option<f64> {
+    let motion = &state.motion;
+    // Written per component: the vector types' shuffles cost more than the arithmetic here.
+    let (p, v, dt) = (motion.position, motion.velocity, own.now - motion.since);
+    let (ox, oy, oz) = (p.x + dt * v.x - origin.x, p.y + dt * v.y - origin.y, p.z + dt * v.z - origin.z);
+    let (vx, vy, vz) = (v.x - own.velocity.x, v.y - own.velocity.y, v.z - own.velocity.z);
+    let approach = ox * vx + oy * vy + oz * vz;
+    let (d2, v2) = (ox * ox + oy * oy + oz * oz, vx * vx + vy * vy + vz * vz);
+    // |approach| clear of 10^-6 |offset| |velocity|: its sign is sure.
+    let clear = approach * approach > RECEDING * RECEDING * d2 * v2;
+    if approach > 0.0 {
+        return if clear { None } else { Some(f64::NEG_INFINITY) };
+    }
+    let reach = own.radius + state.radius;
+    let gap = d2 - reach * reach;
+    let slack = GAP_SLACK * reach * reach + OFFSET_SLACK * d2;
+    if !(clear && gap > slack) {
+        return Some(f64::NEG_INFINITY);
+    }
+    let closing = -approach;
+    if gap - slack > 2.0 * closing * (*bound + own.rounding) * (1.0 + TIME_SLACK) {
+        return None;
+    }
+    let discriminant = approach * approach - v2 * gap;
+    let spread = slack * v2;
+    if discriminant < -spread {
+        return None;
+    }
+    let earliest = (gap - slack) / (closing * (1.0 + TIME_SLACK) + (discriminant + spread).sqrt()) * (1.0 - TIME_SLACK)
+        - own.rounding;
+    if earliest > *bound {
+        return None;
+    }
+    // Sure to touch (the exact test's noise rule aside: far faster than rounding noise), and
+    // after now: the contact comes by this at the latest.
+    if discriminant > spread
+        && earliest > 0.0
+        && v2 > NOISE * (own.velocity.length_squared() + motion.velocity.length_squared())
+    {
+        let latest = (gap + slack) / (closing * (1.0 - TIME_SLACK) + (discriminant - spread).sqrt())
+            * (1.0 + TIME_SLACK)
+            + own.rounding;
+        *bound = bound.min(latest);
+    }
+    Some(earliest)
+}

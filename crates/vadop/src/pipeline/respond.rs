@@ -1,0 +1,158 @@
+//! What an impact makes an engine do, the same for the frame pipeline and the event loop: where
+//! the bodies touch, the impact (through [`Impacts`]), the jam rule's freeze, the collisional
+//! virial, the impulse reported, and which bodies must be tested again.
+//!
+//! It owns that sequence once, so both engines give the same bits for every contact; each
+//! engine says, through [`Responder`], how it finds a cluster's members and what testing a moved
+//! body again means to it (new proxies and predictions for the rest of the window, or a body's
+//! next event). It never predicts a contact nor schedules an event itself.
+
+use super::Pipeline;
+use crate::bodies::{Bodies, Rest};
+use crate::broad_phase::BroadPhase;
+use crate::frame::{Contact, FrameStats, Output, Physics, Touched};
+use crate::narrow_phase::contacts;
+use crate::response::impact::{exchange_virial, Impacts, Resolution};
+use crate::walls::Wall;
+use glam::DVec3;
+
+/// An engine, as an impact needs it.
+pub(crate) trait Responder {
+    /// The engine's impact scratch and contact history.
+    fn impacts(&mut self) -> &mut Impacts;
+    /// The jam rule on the bodies touching `seeds` at `t`, its members tested again; returns
+    /// the cluster's virial.
+    fn freeze_cluster(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        seeds: &[u32],
+        t: f64,
+        stats: &mut FrameStats,
+    ) -> f64;
+    /// Body `a` (and, given, body `b > a`) changed motion at `t`: test it again (them, the pair
+    /// once).
+    fn moved(&mut self, bodies: &Bodies, physics: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats);
+    /// Body `woken`, which lay still (see [`crate::response::rest`]), moves at `t`: the bodies
+    /// it held up fall again.
+    fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats);
+}
+
+/// The impact of bodies `a < b` touching at `t`: where, the normal from `a` to `b`, how it was
+/// resolved and the impulse to report. Pushed bodies are tested again and a jammed cluster frozen;
+/// the virial of an impact between moving bodies is added to `stats` (impacts with static
+/// bodies are the level's pressure, as the walls' are).
+pub(crate) fn pair_impact(
+    engine: &mut impl Responder,
+    bodies: &mut Bodies,
+    physics: &Physics,
+    (a, b): (u32, u32),
+    t: f64,
+    stats: &mut FrameStats,
+) -> (DVec3, DVec3, Resolution, f64) {
+    let (i, j) = (a as usize, b as usize);
+    let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
+    let before_j = bodies.velocity_at(j, t);
+    let still = [i, j].map(|k| bodies.rest_of(k) == Rest::Still);
+    let resolution = engine.impacts().pair(bodies, physics, (a, b), t, (point, normal), stats);
+    let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
+    let mut impulse = 0.0;
+    match resolution {
+        Resolution::Jammed { by_rule } => {
+            let before = bodies.velocity_at(i, t);
+            let virial = engine.freeze_cluster(bodies, physics, &[a, b], t, stats);
+            if between_moving {
+                stats.pair_virial += virial;
+            }
+            if by_rule {
+                impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
+            }
+        }
+        Resolution::Pushed(total) => {
+            impulse = total;
+            if between_moving {
+                stats.pair_virial += exchange_virial(bodies, (i, j), t, before_j);
+            }
+            engine.moved(bodies, physics, a, Some(b), t, stats);
+            for (k, was_still) in [(i, still[0]), (j, still[1])] {
+                if was_still && bodies.rest_of(k) != Rest::Still {
+                    engine.woke(bodies, physics, k, t, stats);
+                }
+            }
+        }
+        Resolution::Rested(k, total) => {
+            impulse = total;
+            engine.moved(bodies, physics, k, None, t, stats);
+        }
+        Resolution::Parting | Resolution::Passed => {}
+    }
+    (point, normal, resolution, impulse)
+}
+
+/// Body `a` touches `wall` at `t`: the impact (a jammed one freezes its cluster), the body
+/// tested again, the contact reported.
+pub(crate) fn wall_contact(
+    engine: &mut impl Responder,
+    bodies: &mut Bodies,
+    physics: &Physics,
+    a: u32,
+    wall: Wall,
+    t: f64,
+    out: &mut Output,
+) {
+    let i = a as usize;
+    let (point, normal) = contacts::wall_geometry(bodies, i, wall, &physics.bounds, t);
+    let impulse = match engine.impacts().wall(bodies, physics, (a, wall), t, (point, normal), out.stats) {
+        Resolution::Jammed { by_rule: true } => {
+            let before = bodies.velocity_at(i, t);
+            engine.freeze_cluster(bodies, physics, &[a], t, out.stats);
+            bodies.mass[i] * (before - bodies.velocity(i)).length()
+        }
+        Resolution::Jammed { by_rule: false } => {
+            engine.freeze_cluster(bodies, physics, &[a], t, out.stats);
+            0.0
+        }
+        Resolution::Pushed(total) => {
+            engine.moved(bodies, physics, a, None, t, out.stats);
+            total
+        }
+        Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => {
+            unreachable!("a wall always turns a body back")
+        }
+    };
+    out.contacts.push(Contact {
+        time: t,
+        body: bodies.handle(i),
+        touched: Touched::Wall(wall),
+        point,
+        normal,
+        impulse,
+    });
+}
+
+impl<B: BroadPhase> Responder for Pipeline<B> {
+    fn impacts(&mut self) -> &mut Impacts {
+        &mut self.impacts
+    }
+    fn freeze_cluster(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        seeds: &[u32],
+        t: f64,
+        stats: &mut FrameStats,
+    ) -> f64 {
+        Pipeline::freeze_cluster(self, bodies, physics, seeds, t, stats)
+    }
+    /// The pair is re-tested once, by the second body, when both proxies are fresh (a rounding
+    /// residue may still approach).
+    fn moved(&mut self, bodies: &Bodies, physics: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats) {
+        match b {
+            Some(b) => self.retest_pair(a, b, bodies, physics, t, stats),
+            None => self.retest(a, None, bodies, physics, t, stats),
+        }
+    }
+    fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats) {
+        self.wake_held(bodies, physics, woken, t, stats);
+    }
+}
