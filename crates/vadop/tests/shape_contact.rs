@@ -99,7 +99,7 @@ fn tumbler(
     omega: DVec3,
 ) -> Body<FreeRotation> {
     let spin = FreeRotation::new(geometry.principal_inertia_unit(), start, omega);
-    (geometry, RigidMotion { position, since: 0.0, velocity, spin })
+    (geometry, RigidMotion { position, since: 0.0, velocity, acceleration: DVec3::ZERO, spin })
 }
 
 fn fixed(geometry: ShapeGeometry, position: DVec3, orientation: DQuat) -> Body {
