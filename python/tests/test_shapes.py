@@ -214,9 +214,11 @@ def test_set_motions_and_angular_momentum() -> None:
 
 @pytest.mark.parametrize("mode", ["detect", "simulate"])
 @pytest.mark.parametrize("method", ["auto", "vadop"])
-def test_a_mixed_world_finds_the_contacts_of_brute_force(mode: Any, method: Any) -> None:
-    world = mixed_world(30, 20.0, 15.0, seed=9, method=method, mode=mode)
-    oracle = mixed_world(30, 20.0, 15.0, seed=9, method="brute", mode=mode)
+@pytest.mark.parametrize("gravity", [None, (1.0, -2.0, -15.0)])
+def test_a_mixed_world_finds_the_contacts_of_brute_force(mode: Any, method: Any, gravity: Any) -> None:
+    # Under gravity too: every shape's path is a parabola, the same bits for every method.
+    world = mixed_world(30, 20.0, 15.0, seed=9, method=method, mode=mode, gravity=gravity)
+    oracle = mixed_world(30, 20.0, 15.0, seed=9, method="brute", mode=mode, gravity=gravity)
     total = 0
     for frame in range(10):
         found, expected = world.step(0.1), oracle.step(0.1)
@@ -226,6 +228,28 @@ def test_a_mixed_world_finds_the_contacts_of_brute_force(mode: Any, method: Any)
     assert total > 5, "too few body contacts to compare"
     for column in ("ids", "positions", "velocities", "orientations", "angular_velocities"):
         np.testing.assert_array_equal(getattr(world, column), getattr(oracle, column), err_msg=column)
+
+
+def test_shapes_under_gravity_fall_and_only_spheres_come_to_rest() -> None:
+    # Elastic: a dropped cuboid bounces on the floor, keeping kinetic plus potential energy.
+    world = vadop.World(box=10.0, gravity=(0, 0, -9.81))
+    cuboid = world.add_shape("cuboid", half_extents=[0.6, 0.3, 0.2])
+    world.add_bodies([cuboid], [[5.0, 5, 4]], [[0.5, 0, 0]], [[0.1, 0.2, 0.3, 0.9]], [[1.0, 2, 0]], [1.0])
+    start = world.kinetic_energy() + world.potential_energy()
+    walls = 0
+    for _ in range(60):
+        walls += int((world.step(1 / 30).wall >= 0).sum())
+    assert walls > 0
+    assert world.kinetic_energy() + world.potential_energy() == pytest.approx(start, rel=1e-12)
+    # With restitution below 1 only spheres come to rest; static geometry is for detect mode.
+    resting = vadop.World(box=10.0, gravity=(0, 0, -9.81), restitution=0.5)
+    cuboid = resting.add_shape("cuboid", half_extents=[0.6, 0.3, 0.2])
+    with pytest.raises(ValueError, match="only spheres come to rest"):
+        resting.add_bodies([cuboid], [[5.0, 5, 4]])
+    with pytest.raises(ValueError, match="static bodies are taken in detect mode only"):
+        world.add_static(world.add_shape("halfspace", normal=[0.0, 0, 1]), [0.0, 0, 1])
+    detect = vadop.World(box=10.0, gravity=(0, 0, -9.81), mode="detect")
+    detect.add_static(detect.add_shape("halfspace", normal=[0.0, 0, 1]), [0.0, 0, 1])
 
 
 def test_elastic_frictionless_impacts_keep_energy_and_momenta() -> None:

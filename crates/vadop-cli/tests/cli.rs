@@ -430,6 +430,32 @@ fn a_periodic_gas_runs_exact_with_its_pressure() {
     assert!(stderr(&bad).contains("expected axes among x, y and z"), "{}", stderr(&bad));
 }
 
+/// Shapes fall too: exact against brute force in both modes (on a static floor in detect mode),
+/// elastic runs keep kinetic plus potential energy; a shape with restitution below 1 and a
+/// static floor in simulate mode are refused clearly.
+#[test]
+fn shapes_fall_exactly_under_gravity() {
+    let shapes = ["simulate", "--kind", "shapes", "--bodies", "60", "--frames", "20", "--gravity", "0,0,-9.81"];
+    for extra in [&["--mode", "detect", "--floor"][..], &["--mode", "simulate"]] {
+        let output = vadop(&[&shapes[..], extra].concat());
+        assert!(output.status.success(), "{}", stderr(&output));
+        let summary = stdout(&output);
+        assert!(summary.contains("0 missed, 0 extra"), "{summary}");
+        assert!(!summary.contains("0 with walls"), "{summary}");
+    }
+    let elastic = stdout(&vadop(&[&shapes[..], &["--mode", "simulate"]].concat()));
+    assert!(elastic.contains("kinetic energy (translation and spin) plus potential relative drift"), "{elastic}");
+    let refusals: [(&[&str], &str); 2] = [
+        (&["--restitution", "0.5"], "a body that is not a sphere, with restitution below 1"),
+        (&["--floor"], "a static body in simulate mode"),
+    ];
+    for (extra, why) in refusals {
+        let refused = vadop(&[&shapes[..], extra].concat());
+        assert!(!refused.status.success());
+        assert!(stderr(&refused).contains(why), "{}", stderr(&refused));
+    }
+}
+
 #[test]
 fn gravity_runs_exact_and_counts_the_potential_energy() {
     let output = vadop(&["simulate", "--bodies", "300", "--frames", "30", "--gravity", "0,0,-9.81"]);

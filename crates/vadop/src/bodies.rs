@@ -537,11 +537,12 @@ impl Bodies {
         self.rigid.spin.get(i).map_or(DVec3::ZERO, FreeRotation::angular_momentum)
     }
 
-    /// Body `i`'s motion for the shape narrow phase.
+    /// Body `i`'s motion for the shape narrow phase, under the acceleration it moves under.
     #[inline]
     pub fn rigid_motion(&self, i: usize) -> RigidMotion<FreeRotation> {
         let m = self.state[i].motion;
-        RigidMotion { position: m.position, since: m.since, velocity: m.velocity, spin: self.spin(i) }
+        let acceleration = self.gravity_on(i);
+        RigidMotion { position: m.position, since: m.since, velocity: m.velocity, acceleration, spin: self.spin(i) }
     }
 
     /// Principal moments of inertia of body `i`: its shape's for its mass (a solid ball's in a

@@ -145,8 +145,27 @@ fn unsupported_gravity_is_refused_clearly() {
         angular_velocity: DVec3::ZERO,
         mass: 1.0,
     };
-    let refused = world.add_body(body).unwrap_err();
-    assert!(refused.to_string().contains("spheres only"), "{refused}");
+    // A shape falls in an elastic world (and in detect mode), but only a sphere comes to rest:
+    // with restitution below 1 it is refused, as static geometry is in simulate mode (the rest
+    // rule knows no static floor).
+    let cube_body = world.add_body(body).unwrap();
+    world.remove_body(cube_body).unwrap();
+    let mut resting = World::new(BoxBounds::cube(4.0).unwrap(), config(DVec3::NEG_Z, 0.5)).unwrap();
+    let cube = resting.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
+    let refused = resting.add_body(vadop::Body { shape: vadop::BodyShape::Shape(cube), ..body }).unwrap_err();
+    assert!(matches!(refused, VadopError::GravityUnsupported(_)), "{refused}");
+    assert!(refused.to_string().contains("only spheres come to rest"), "{refused}");
+    let floor = world.add_shape(vadop::shape::Shape::HalfSpace { normal: DVec3::Z }).unwrap();
+    let refused = world.add_static(floor, DVec3::splat(1.0), glam::DQuat::IDENTITY).unwrap_err();
+    assert!(refused.to_string().contains("static bodies are taken in detect mode only"), "{refused}");
+    let mut detect =
+        World::new(BoxBounds::cube(4.0).unwrap(), WorldConfig { mode: Mode::Detect, ..config(DVec3::NEG_Z, 1.0) })
+            .unwrap();
+    let floor = detect.add_shape(vadop::shape::Shape::HalfSpace { normal: DVec3::Z }).unwrap();
+    assert!(
+        detect.add_static(floor, DVec3::splat(1.0), glam::DQuat::IDENTITY).is_ok(),
+        "static geometry in detect mode"
+    );
     // An elastic ball at rest on the floor would bounce ever faster (only a world with
     // restitution below 1 lets bodies rest): refused, the world left as it was.
     let ball = |z: f64| Sphere { position: DVec3::new(2.0, 2.0, z), velocity: DVec3::ZERO, radius: 0.5, mass: 1.0 };
@@ -157,4 +176,46 @@ fn unsupported_gravity_is_refused_clearly() {
     world.remove_sphere(resting).unwrap();
     world.add_sphere(ball(1.5)).unwrap();
     assert!(world.step(0.1).is_ok(), "a ball a radius above the floor falls");
+}
+
+/// An upright capsule dropped on the floor of an elastic world bounces at the closed-form
+/// instants of its lowest point's parabola (to the shape contact tolerance), straight up and
+/// down, and keeps its energy, potential included.
+#[test]
+fn a_dropped_capsule_bounces_at_the_closed_form_instants() {
+    let g = 9.81;
+    let config = WorldConfig { gravity: DVec3::new(0.0, 0.0, -g), ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(10.0).unwrap(), config).unwrap();
+    let capsule = world.add_shape(vadop::shape::Shape::Capsule { half_height: 0.4, radius: 0.2 }).unwrap();
+    let body = vadop::Body {
+        shape: vadop::BodyShape::Shape(capsule),
+        position: DVec3::new(5.0, 5.0, 3.0),
+        // Its axis (the shape's y) upright: the lowest point right under the centre.
+        orientation: glam::DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2),
+        velocity: DVec3::ZERO,
+        angular_velocity: DVec3::ZERO,
+        mass: 1.0,
+    };
+    let handle = world.add_body(body).unwrap();
+    let energy = |w: &World| w.kinetic_energy() + w.potential_energy();
+    let start = energy(&world);
+    // The lowest point falls 2.4 to the floor, then bounces back up as high: contacts at the
+    // odd multiples of the fall's duration.
+    let fall = (2.0 * 2.4 / g).sqrt();
+    let mut times = Vec::new();
+    for _ in 0..120 {
+        for contact in world.step(1.0 / 30.0).unwrap() {
+            assert_eq!(contact.touched, Touched::Wall(Wall::MinZ), "{contact:?}");
+            assert!((contact.normal - DVec3::NEG_Z).length() < 1e-9, "{contact:?}");
+            times.push(contact.time);
+        }
+        assert!((energy(&world) - start).abs() <= 1e-12 * start, "energy {} vs {start}", energy(&world));
+    }
+    assert_eq!(times.len(), 3, "{times:?}");
+    for (k, time) in times.iter().enumerate() {
+        let expected = (2 * k + 1) as f64 * fall;
+        assert!((time - expected).abs() < 1e-6, "bounce {k} at {time}, expected {expected}");
+    }
+    let now = world.body(handle).unwrap();
+    assert!(now.position.truncate().distance(glam::DVec2::new(5.0, 5.0)) < 1e-9, "it stays upright over its spot");
 }

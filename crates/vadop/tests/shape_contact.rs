@@ -62,7 +62,16 @@ impl Spin for Steady {
 type Body<S = Steady> = (ShapeGeometry, RigidMotion<S>);
 
 fn body(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, omega: DVec3) -> Body {
-    (geometry, RigidMotion { position, since: 0.0, velocity, spin: Steady { start, omega, body: None } })
+    (
+        geometry,
+        RigidMotion {
+            position,
+            since: 0.0,
+            velocity,
+            acceleration: DVec3::ZERO,
+            spin: Steady { start, omega, body: None },
+        },
+    )
 }
 
 /// A body spinning at `rate` about its shape's axis of symmetry (the body frame's image of the
@@ -77,7 +86,7 @@ fn symmetric_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, 
 /// the search may bound its turning by the shape's reach from that axis.
 fn steady_spinner(geometry: ShapeGeometry, position: DVec3, velocity: DVec3, start: DQuat, body: DVec3) -> Body {
     let spin = Steady { start, omega: start * body, body: Some(body) };
-    (geometry, RigidMotion { position, since: 0.0, velocity, spin })
+    (geometry, RigidMotion { position, since: 0.0, velocity, acceleration: DVec3::ZERO, spin })
 }
 
 /// A body tumbling by the exact torque-free rotation of its shape's inertia, from orientation
@@ -90,7 +99,7 @@ fn tumbler(
     omega: DVec3,
 ) -> Body<FreeRotation> {
     let spin = FreeRotation::new(geometry.principal_inertia_unit(), start, omega);
-    (geometry, RigidMotion { position, since: 0.0, velocity, spin })
+    (geometry, RigidMotion { position, since: 0.0, velocity, acceleration: DVec3::ZERO, spin })
 }
 
 fn fixed(geometry: ShapeGeometry, position: DVec3, orientation: DQuat) -> Body {
@@ -413,6 +422,102 @@ proptest! {
             let unit_time = scene(1.0);
             prop_assert!(unit_time.is_some());
             prop_assert_eq!(scene(s).map(f64::to_bits), unit_time.map(f64::to_bits), "kinds {} {} scale 2^{}", name(ka), name(kb), exponent);
+        }
+    }
+}
+
+/// `b` under the uniform acceleration `gravity`: its centre's path a parabola.
+fn under(mut b: Body, gravity: DVec3) -> Body {
+    b.1.acceleration = gravity;
+    b
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: cases(6), ..ProptestConfig::default() })]
+
+    /// (a) + (c) under gravity, for every pair of solid kinds: both falling under one gravity
+    /// (their relative motion stays straight: the contacts are those of the same pair without
+    /// gravity, to the bit), and one falling past the other held still (a relative motion that
+    /// bends, as past a body at rest on a pile or a static shape), thrown up or down.
+    #[test]
+    fn every_solid_pair_under_gravity(
+        pa in solid_params(),
+        pb in solid_params(),
+        direction in prop::array::uniform3(-1.0f64..1.0),
+        gap in 0.3f64..3.0,
+        speed in 0.0f64..3.0,
+        gravity in prop::array::uniform3(-4.0f64..4.0),
+        va in prop::array::uniform3(-1.0f64..1.0),
+    ) {
+        let (u, g) = (unit(direction), DVec3::from(gravity));
+        for ka in 0..6 {
+            for kb in ka..6 {
+                let ga = solid(ka, pa.0, &pa.1);
+                let gb = solid(kb, pb.0, &pb.1);
+                let reach = ga.bounding_radius().unwrap() + gb.bounding_radius().unwrap();
+                let (from_a, from_b) = (DVec3::new(0.25, -0.5, 1.0), DVec3::new(0.25, -0.5, 1.0) + u * (reach + gap));
+                let (va, vb) = (DVec3::from(va), DVec3::from(va) - u * speed);
+                let a = body(ga.clone(), from_a, va, pa.2, pa.3);
+                let b = body(gb.clone(), from_b, vb, pb.2, pb.3);
+                let what = format!("{} vs {}", name(ka), name(kb));
+                let straight = contacts(&a, &b, Window::new(0.0, 4.0));
+                let (fa, fb) = (under(a.clone(), g), under(b.clone(), g));
+                let found = check_pair(&fa, &fb, Window::new(0.0, 4.0), 800, &format!("{what}, falling together"));
+                prop_assert_eq!(&found, &straight, "{}: falling together", what);
+                // One held still, the other falling past it: thrown at it, or dropped on it from
+                // rest, neither turning (only the pull brings them together).
+                check_pair(&a, &under(b.clone(), g), Window::new(0.0, 4.0), 800, &format!("{what}, one falling"));
+                let held = body(ga.clone(), from_a, DVec3::ZERO, pa.2, DVec3::ZERO);
+                let dropped = under(body(gb.clone(), from_b, DVec3::ZERO, pb.2, DVec3::ZERO), -u * g.length().max(0.5));
+                let found = check_pair(&dropped, &held, Window::new(0.0, 4.0), 800, &format!("{what}, dropped on it"));
+                prop_assert!(!found.is_empty(), "{}: dropped on it, never touched", what);
+            }
+        }
+    }
+
+    /// (a) + (c) for every solid falling onto a static bumpy mesh and a tilted half-space, thrown
+    /// up, sideways or down.
+    #[test]
+    fn every_solid_falling_on_static_geometry(
+        p in solid_params(),
+        heights in prop::collection::vec(-0.4f64..0.4, 49),
+        normal in prop::array::uniform3(-0.3f64..0.3),
+        start in prop::array::uniform3(-2.0f64..2.0),
+        velocity in prop::array::uniform3(-2.0f64..2.0),
+        pull in 0.5f64..6.0,
+        tilt in prop::array::uniform2(-0.3f64..0.3),
+    ) {
+        let mesh = bumpy_floor(&heights, 6.0);
+        let floor = Shape::HalfSpace { normal: DVec3::new(normal[0], 1.0, normal[2]) }.geometry().unwrap();
+        let g = DVec3::new(tilt[0], -1.0, tilt[1]) * pull;
+        for kind in 0..6 {
+            let geometry = solid(kind, p.0, &p.1);
+            let r = geometry.bounding_radius().unwrap();
+            let position = DVec3::new(start[0], 1.0 + r + start[1].abs(), start[2]);
+            let a = under(body(geometry, position, DVec3::from(velocity), p.2, p.3), g);
+            let m = fixed(mesh.clone(), DVec3::new(0.0, 0.2, 0.0), DQuat::from_rotation_y(0.3));
+            check_pair(&m, &a, Window::new(0.0, 3.0), 600, &format!("mesh vs falling {}", name(kind)));
+            let h = fixed(floor.clone(), DVec3::new(0.1, -0.3, 0.0), DQuat::IDENTITY);
+            check_pair(&a, &h, Window::new(0.0, 3.0), 1000, &format!("falling {} vs half-space", name(kind)));
+            let cube = fixed(solid(1, [1.5, 0.4, 1.2], &[]), DVec3::new(0.5, -0.6, 0.0), DQuat::from_rotation_z(0.2));
+            check_pair(&cube, &a, Window::new(0.0, 3.0), 1000, &format!("static cuboid vs falling {}", name(kind)));
+        }
+    }
+
+    /// Walls: a spinning solid thrown in the box under gravity of any direction, against the
+    /// exact support distance sampled densely.
+    #[test]
+    fn every_solid_against_the_walls_under_gravity(
+        p in solid_params(),
+        start in prop::array::uniform3(-1.0f64..1.0),
+        velocity in prop::array::uniform3(-4.0f64..4.0),
+        gravity in prop::array::uniform3(-8.0f64..8.0),
+    ) {
+        let (min, max) = (DVec3::splat(-4.0), DVec3::splat(4.0));
+        for kind in 0..6 {
+            let g = solid(kind, p.0, &p.1);
+            let a = under(body(g.clone(), DVec3::from(start), DVec3::from(velocity), p.2, p.3), DVec3::from(gravity));
+            check_walls(&a, min, max, Window::new(0.0, 4.0), 2000, &format!("{}, falling", name(kind)));
         }
     }
 }

@@ -1,4 +1,4 @@
-//! Motion between velocity changes: a body's straight path ([`Motion`]), how its orientation
+//! Motion between velocity changes: a body's straight or parabolic path ([`Motion`]), how its orientation
 //! evolves ([`Spin`]: fixed, or the exact torque-free rotation of [`free_rotation`]), and the two
 //! together ([`RigidMotion`]). Every stage evaluates a body's place and orientation through these
 //! types, so all of them see the same bits; they never change a body nor know about contacts.
@@ -130,13 +130,19 @@ impl Spin for Fixed {
 }
 
 /// A body's motion since its last velocity change: centre of mass `position` at time `since`,
-/// moving with constant `velocity`, spinning per `spin`.
+/// moving with `velocity` then under the uniform `acceleration` (gravity; zero for a straight
+/// path), spinning per `spin`. A uniform acceleration exerts no torque: the spin is that of a
+/// free body whatever the acceleration.
 ///
 /// ```
 /// use glam::{DQuat, DVec3};
 /// use vadop::motion::{Fixed, RigidMotion};
-/// let m = RigidMotion { position: DVec3::ZERO, since: 1.0, velocity: DVec3::X, spin: Fixed(DQuat::IDENTITY) };
+/// let m = RigidMotion { position: DVec3::ZERO, since: 1.0, velocity: DVec3::X, acceleration: DVec3::ZERO, spin: Fixed(DQuat::IDENTITY) };
 /// assert_eq!(m.position_at(3.0), DVec3::new(2.0, 0.0, 0.0));
+/// // Thrown up under gravity: back at its height after 2 v / g, falling as fast as it rose.
+/// let thrown = RigidMotion { velocity: DVec3::new(0.0, 0.0, 4.0), acceleration: DVec3::new(0.0, 0.0, -2.0), ..m };
+/// assert_eq!(thrown.position_at(5.0), DVec3::ZERO);
+/// assert_eq!(thrown.velocity_at(5.0), DVec3::new(0.0, 0.0, -4.0));
 /// ```
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RigidMotion<S> {
@@ -144,16 +150,29 @@ pub struct RigidMotion<S> {
     pub position: DVec3,
     /// The time of the last velocity change.
     pub since: f64,
-    /// Constant velocity of the centre of mass.
+    /// Velocity of the centre of mass at `since`.
     pub velocity: DVec3,
+    /// The centre's uniform acceleration: its path is a parabola (straight when zero).
+    pub acceleration: DVec3,
     /// Orientation as a function of the time since `since`.
     pub spin: S,
 }
 
 impl<S: Spin> RigidMotion<S> {
-    /// Centre of mass at absolute time `t`.
+    /// The path of the centre of mass, without the spin.
+    #[inline]
+    pub fn path(&self) -> Motion {
+        Motion { position: self.position, since: self.since, velocity: self.velocity }
+    }
+    /// Centre of mass at absolute time `t`: the bits of [`Motion::at_under`].
+    #[inline]
     pub fn position_at(&self, t: f64) -> DVec3 {
-        self.position + (t - self.since) * self.velocity
+        self.path().at_under(t, self.acceleration)
+    }
+    /// Velocity of the centre of mass at absolute time `t`.
+    #[inline]
+    pub fn velocity_at(&self, t: f64) -> DVec3 {
+        self.path().velocity_under(t, self.acceleration)
     }
     /// Orientation at absolute time `t`.
     pub fn orientation_at(&self, t: f64) -> DQuat {
@@ -164,6 +183,6 @@ impl<S: Spin> RigidMotion<S> {
 impl RigidMotion<Fixed> {
     /// A body that never moves: at `position` with `orientation` from time `since` on.
     pub fn fixed(position: DVec3, orientation: DQuat, since: f64) -> Self {
-        RigidMotion { position, since, velocity: DVec3::ZERO, spin: Fixed(orientation) }
+        RigidMotion { position, since, velocity: DVec3::ZERO, acceleration: DVec3::ZERO, spin: Fixed(orientation) }
     }
 }

@@ -3,7 +3,8 @@
 //! p(tau) = d + w tau + c tau^2 / 2, and the gap |p|^2 - R^2 is a quartic in tau: no closed form
 //! as simple as the straight paths' of [`super::spheres`].
 //!
-//! It owns that quartic's first root and nothing else. The gap's rate is p . p', a cubic; its real
+//! It owns that quartic's roots and nothing else: the first (the contact), and for bounding
+//! volumes on bent paths the first and the last ([`bent_reach`]). The gap's rate is p . p', a cubic; its real
 //! roots split `tau >= 0` into pieces on which the gap is monotone, and the first piece that ends
 //! at or below zero holds the contact, found by bisection. Every root is bracketed and bisected to
 //! adjacent floats (over the floats' bits, so at most 64 steps), so the time is a function of the
@@ -219,6 +220,61 @@ pub fn falling_sphere_time(
     }
     // After the last turning point the gap only grows.
     None
+}
+
+/// The first and the last time `tau >= 0` at which two spheres, `offset` apart (the second's
+/// centre minus the first's) with `relative_velocity` and a non-zero `relative_acceleration`
+/// there, are at most `radius_sum` apart, if they ever are (between the two they may part and
+/// meet again). Each is the first float past its root at which the rounded gap has changed sign,
+/// a function of the arguments alone; the caller's `radius_sum` holds a margin for the rounding.
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::narrow_phase::falling::bent_reach;
+/// // Dropped from rest 3 above a ball it falls past (R = 2) under g = 2: within reach from
+/// // tau = 1 (fallen 1) to tau = sqrt(5) (fallen 5).
+/// let (enter, leave) = bent_reach(DVec3::new(0.0, 0.0, 3.0), DVec3::ZERO, DVec3::new(0.0, 0.0, -2.0), 2.0).unwrap();
+/// assert!((enter - 1.0).abs() < 1e-12 && (leave - 5f64.sqrt()).abs() < 1e-12, "{enter} {leave}");
+/// ```
+pub fn bent_reach(
+    offset: DVec3,
+    relative_velocity: DVec3,
+    relative_acceleration: DVec3,
+    radius_sum: f64,
+) -> Option<(f64, f64)> {
+    let (bent, time) = scaled(offset, relative_velocity, relative_acceleration, radius_sum);
+    let within = |tau: f64| !(bent.gap(tau) > 0.0);
+    if !bent.gap(0.0).is_finite() {
+        return None;
+    }
+    let gap = |tau: f64| bent.gap_and_slope(tau);
+    // The gap is monotone between turning points and grows for good after the last: each piece
+    // that starts apart and ends within holds an entry, each that starts within and ends apart
+    // an exit.
+    let (turns, count) = bent.turning_points();
+    let (mut enter, mut leave) = (within(0.0).then_some(0.0), None);
+    let mut lo = 0.0;
+    for &hi in &turns[..count] {
+        match (within(lo), within(hi)) {
+            (false, true) => enter = enter.or_else(|| first_change(lo, hi, gap)),
+            (true, false) => leave = first_change(lo, hi, gap),
+            _ => {}
+        }
+        lo = hi;
+    }
+    if within(lo) {
+        // The last piece leaves: bracket its exit by doubling.
+        let mut hi = 2.0 * lo.max(1.0);
+        for _ in 0..64 {
+            if !within(hi) {
+                break;
+            }
+            hi *= 2.0;
+        }
+        leave = if within(hi) { Some(f64::INFINITY) } else { first_change(lo, hi, gap) };
+    }
+    let back = |tau: f64| scale_by_power_of_two(tau, time);
+    Some((back(enter?), leave.map_or(f64::INFINITY, back)))
 }
 
 /// Whether two spheres on motions `a` and `b` under the accelerations `ga` and `gb` may touch

@@ -122,9 +122,10 @@ pub struct WorldConfig {
     #[serde(default)]
     pub contact_ends: bool,
     /// Uniform acceleration of every moving body (e.g. `[0, 0, -9.81]`); zero by default. Paths
-    /// are then parabolas, exact in both modes and for every method; this first version takes
-    /// spheres only (no other shapes, no static bodies). With restitution below 1 in simulate
-    /// mode bodies come to rest on the floor and on each other ([`crate::response::rest`]).
+    /// are then parabolas, exact in both modes and for every method and shape. With restitution
+    /// below 1 in simulate mode bodies come to rest on the floor and on each other
+    /// ([`crate::response::rest`]); for now only spheres do (other shapes are refused there),
+    /// and static bodies are taken in detect mode only.
     #[serde(default)]
     pub gravity: DVec3,
 }

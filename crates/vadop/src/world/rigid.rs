@@ -223,11 +223,14 @@ impl World {
             return Err(VadopError::PeriodicUnsupported("a static body"));
         }
         if self.config.gravity != DVec3::ZERO {
-            if fixed {
-                return Err(VadopError::GravityUnsupported("a static body"));
+            let simulate = self.config.mode == crate::Mode::Simulate;
+            if fixed && simulate {
+                return Err(VadopError::GravityUnsupported("a static body in simulate mode"));
             }
-            if !matches!(body.shape, BodyShape::Sphere { .. }) {
-                return Err(VadopError::GravityUnsupported("a body that is not a sphere"));
+            // Only a sphere comes to rest: the rest rule lays a resting body on its floor by its
+            // radius.
+            if simulate && self.config.restitution < 1.0 && !matches!(body.shape, BodyShape::Sphere { .. }) {
+                return Err(VadopError::GravityUnsupported("a body that is not a sphere, with restitution below 1"));
             }
         }
         check_vector("position", body.position)?;

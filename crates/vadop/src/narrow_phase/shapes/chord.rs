@@ -220,7 +220,7 @@ mod tests {
             let velocity = random_vector(rng, 3.0);
             // Fast tumbles about every axis, the world's exact torque-free rotation.
             let spin = FreeRotation::new(DVec3::ONE, turn, random_vector(rng, 12.0));
-            RigidMotion { position: at - velocity * tau, since: 0.0, velocity, spin }
+            RigidMotion { position: at - velocity * tau, since: 0.0, velocity, acceleration: DVec3::ZERO, spin }
         });
         let motion = [0, 1].map(|i| RigidMotion {
             spin: FreeRotation::new(

@@ -3,18 +3,19 @@
 //! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
 //! never chooses the probe times (the searcher does).
 
-use super::chord::{axis_hold, chord_hold, wall_hold, Moving};
+use super::chord::{axis_hold, chord_hold, Moving};
 use super::distance::{closer_points, convex_bounds, separation, Bounds};
+use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
-use super::scaled::{Body, Scaled};
+use super::scaled::{along, speeding, Body, Scaled};
 use super::{ceiling, ending, guard, starting, SLACK};
+use crate::narrow_phase::falling::bent_reach;
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
-use parry3d_f64::partitioning::BvhNode;
-use parry3d_f64::shape::{SupportMap, TriMesh, Triangle};
-use std::cell::{Cell, RefCell};
+use parry3d_f64::shape::SupportMap;
+use std::cell::Cell;
 
 /// Bounds on the signed distance at one instant, and on how fast they can move (scaled units).
 #[derive(Debug, Clone, Copy)]
@@ -35,6 +36,10 @@ pub(super) struct Probe {
     /// [`super::chord`]), before one above its guard (see [`super::chord::axis_hold`]); 0 when
     /// nothing says so.
     pub(super) hold: f64,
+    /// Every rate above (`shrink`, `grow`, `far`'s) grows at most this fast: a bound on the
+    /// relative acceleration along the axes they are taken on (0 on a straight relative motion,
+    /// as between two bodies falling under one gravity).
+    pub(super) bend: f64,
 }
 
 /// No spin-free bound.
@@ -74,12 +79,23 @@ impl Probe {
     pub(super) fn approach_step(&self, guard: f64) -> Option<f64> {
         let step = |(lower, shrink): (f64, f64)| {
             let room = lower - guard;
-            (room > 0.0).then(|| if shrink > 0.0 { room / shrink } else { f64::INFINITY })
+            (room > 0.0).then(|| self.time_to(room, shrink))
         };
         match (step((self.lower, self.shrink)), step(self.far)) {
             (Some(near), Some(far)) => Some(near.max(far)),
             (near, far) => near.or(far),
         }
+    }
+
+    /// How long a quantity `room` short of a bound stays short of it, moving towards it at
+    /// `rate` (at least 0) now, a rate that grows at most by [`Self::bend`] per unit of time: the
+    /// root of `rate s + bend s^2 / 2 = room` (`room / rate` on a straight motion), infinite when
+    /// it never moves.
+    pub(super) fn time_to(&self, room: f64, rate: f64) -> f64 {
+        if self.bend == 0.0 {
+            return if rate > 0.0 { room / rate } else { f64::INFINITY };
+        }
+        2.0 * room / (rate + (rate * rate + 2.0 * self.bend * room).sqrt())
     }
 }
 
@@ -130,6 +146,32 @@ impl Reach {
         }
     }
 
+    /// The times `tau >= 0` with `height + rate tau + accel tau^2 / 2 <= limit`: a height over
+    /// a plane on a parabola. Where those times are two intervals (a height that dips below the
+    /// limit, rises above it and comes back) the one interval holds both.
+    pub(super) fn below_bent(height: f64, rate: f64, accel: f64, limit: f64) -> Option<Reach> {
+        if accel == 0.0 {
+            return Reach::below(height, rate, limit);
+        }
+        // The roots of accel tau^2 / 2 + rate tau + gap, free of cancellation.
+        let gap = height - limit;
+        let discriminant = rate * rate - 2.0 * accel * gap;
+        if !(discriminant >= 0.0) {
+            // Never at the limit: always below it (bending down) or above it.
+            return (accel < 0.0).then_some(Reach { enter: 0.0, leave: f64::INFINITY });
+        }
+        let q = -0.5 * (rate + discriminant.sqrt().copysign(rate));
+        let roots = if q == 0.0 { (0.0, 0.0) } else { (2.0 * q / accel, gap / q) };
+        let (first, last) = (roots.0.min(roots.1), roots.0.max(roots.1));
+        if accel > 0.0 {
+            // Below the limit between the roots.
+            return (last >= 0.0).then_some(Reach { enter: first.max(0.0), leave: last });
+        }
+        // Below it outside them.
+        let enter = if first < 0.0 && last > 0.0 { last } else { 0.0 };
+        Some(Reach { enter, leave: f64::INFINITY })
+    }
+
     /// The times `tau >= 0` with `|offset + velocity * tau| <= limit`: the closed forms of two
     /// spheres of radii summing to `limit`.
     pub(super) fn sphere(offset: DVec3, velocity: DVec3, limit: f64) -> Option<Reach> {
@@ -141,6 +183,17 @@ impl Reach {
         // None when receding or missing, with a margin far below the `limit` this is called with.
         let enter = sphere_sphere_time(offset, velocity, limit)?;
         Some(Reach { enter, leave: leave.max(enter) })
+    }
+
+    /// The times `tau >= 0` with `|offset + velocity tau + acceleration tau^2 / 2| <= limit`:
+    /// two spheres on a bent relative path, from the first time they come within `limit` to
+    /// the last (see [`bent_reach`]).
+    pub(super) fn bent_sphere(offset: DVec3, velocity: DVec3, acceleration: DVec3, limit: f64) -> Option<Reach> {
+        if acceleration == DVec3::ZERO {
+            return Reach::sphere(offset, velocity, limit);
+        }
+        let (enter, leave) = bent_reach(offset, velocity, acceleration, limit)?;
+        Some(Reach { enter, leave })
     }
 
     /// The times in both.
@@ -159,6 +212,9 @@ pub(super) struct ConvexPair<'a> {
     pub(super) offset: DVec3,
     /// b's velocity minus a's, scaled.
     pub(super) velocity: DVec3,
+    /// b's acceleration minus a's, scaled: zero for two bodies falling under one gravity, whose
+    /// relative motion stays straight.
+    pub(super) acceleration: DVec3,
     /// Scaled bound on how fast turning moves the two surfaces.
     pub(super) spin: f64,
     /// Scaled sum of the bounding radii.
@@ -302,6 +358,11 @@ impl ConvexPair<'_> {
         deepest: Deepest,
         slack: f64,
     ) -> f64 {
+        // The balls' certificate is for a straight relative motion (a pair passing through each
+        // other in detect mode falls under one gravity).
+        if self.acceleration != DVec3::ZERO {
+            return 0.0;
+        }
         let (mass_a, mass_b) = (DVec3::ZERO, self.offset + self.velocity * tau);
         let ball_a = |(centre, radius)| InnerBall { centre, radius, drift: self.a.drift_of(centre, mass_a) };
         let ball_b = |(centre, radius)| InnerBall { centre, radius, drift: self.b.drift_of(centre, mass_b) };
@@ -374,13 +435,17 @@ impl ConvexPair<'_> {
     }
 
     /// The two bodies at `tau` as the chord certificates read them; `None` when a spin does not
-    /// give its angular velocity.
+    /// give its angular velocity, or when the relative motion is not straight (a body falling
+    /// past static geometry: the certificates are for a straight relative motion).
     fn moving<'s, 'b>(
         &self,
         tau: f64,
         (a, pose_a): (&'s Scaled<'b>, &'s Pose),
         (b, pose_b): (&'s Scaled<'b>, &'s Pose),
     ) -> Option<(Moving<'s, 'b>, Moving<'s, 'b>)> {
+        if self.acceleration != DVec3::ZERO {
+            return None;
+        }
         let (turning_a, turning_b) = (self.a.turning(tau)?, self.b.turning(tau)?);
         let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
         let moving_a = Moving {
@@ -408,11 +473,11 @@ impl ConvexPair<'_> {
         slack: f64,
     ) -> (f64, f64) {
         // The centres of mass: a's at the origin of the frame.
-        let centre = self.offset + self.velocity * tau;
+        let centre = self.centre(tau);
         let Some(n) = direction(centre).filter(|_| self.spin > 0.0) else { return NO_FAR };
         let (radius_a, radius_b) = (self.a.geometry.size() * self.scale, self.b.geometry.size() * self.scale);
         let (spin_a, spin_b) = (self.a.spin_rate_along(n) * self.scale, self.b.spin_rate_along(n) * self.scale);
-        let closing = (-self.velocity.dot(n)).max(0.0);
+        let closing = (-self.velocity_at(tau).dot(n)).max(0.0);
         let centres = n.dot(centre);
         let near_b = n.dot(b.support_point(pose_b, -n));
         let near_a = n.dot(a.support_point(pose_a, n));
@@ -437,8 +502,18 @@ impl ConvexPair<'_> {
         (self.a.spin_rate_along(n) + self.b.spin_rate_along(n)) * self.scale
     }
 
+    /// b's centre of mass in the frame (a's at its origin) `tau` after the reference.
+    pub(super) fn centre(&self, tau: f64) -> DVec3 {
+        along(self.offset, self.velocity, self.acceleration, tau)
+    }
+
+    /// b's velocity relative to a's `tau` after the reference.
+    fn velocity_at(&self, tau: f64) -> DVec3 {
+        speeding(self.velocity, self.acceleration, tau)
+    }
+
     pub(super) fn poses(&self, tau: f64) -> (Pose, Pose) {
-        let centre = self.offset + self.velocity * tau;
+        let centre = self.centre(tau);
         (
             self.a.pose(self.a.orientation(tau), DVec3::ZERO, self.scale),
             self.b.pose(self.b.orientation(tau), centre, self.scale),
@@ -451,7 +526,9 @@ impl Gauge for ConvexPair<'_> {
         let (pose_a, pose_b) = self.poses(tau);
         let slack = SLACK * (pose_b.translation.length() + self.size);
         let (ga, gb) = (self.a.support(self.scale), self.b.support(self.scale));
-        let grow = self.velocity.length() + self.spin;
+        let velocity = self.velocity_at(tau);
+        let grow = velocity.length() + self.spin;
+        let bend = self.acceleration.length();
         if measure == Measure::Contact {
             if let Some(warm) = self.warm.get() {
                 let (upper, deepest) = warm.contact_upper((&ga, &pose_a), (&gb, &pose_b), slack);
@@ -459,7 +536,7 @@ impl Gauge for ConvexPair<'_> {
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= STALE_ROOM * room(warm.upper) {
                     // Far from the contact's end: nothing else is needed, and the warm start stays.
                     let hold = self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), deepest, slack);
-                    return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold };
+                    return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
             }
         }
@@ -482,17 +559,18 @@ impl Gauge for ConvexPair<'_> {
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
-            shrink: (-self.velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
+            shrink: (-velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
             grow,
             far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
             hold,
+            bend,
         }
     }
 
     /// The shapes lie in their bounding spheres about the centres of mass.
     fn reach(&self, within: f64) -> Option<Reach> {
         let limit = self.size + within + SLACK * (self.offset.length() + self.size);
-        Reach::sphere(self.offset, self.velocity, limit)
+        Reach::bent_sphere(self.offset, self.velocity, self.acceleration, limit)
     }
 
     fn forget(&self) {
@@ -505,187 +583,8 @@ impl Gauge for ConvexPair<'_> {
         self.warm.set(warm);
     }
     fn translating(&self) -> bool {
-        self.a.still.is_some() && self.b.still.is_some()
-    }
-}
-
-/// A solid and a half-space. The frame has world axes and its origin at the half-space's origin.
-pub(super) struct PlanePair<'a> {
-    pub(super) body: Body<'a>,
-    pub(super) plane: Body<'a>,
-    /// The half-space's outward normal in its own frame.
-    pub(super) normal: DVec3,
-    pub(super) scale: f64,
-    /// The body's centre minus the plane origin at the reference, scaled.
-    pub(super) offset: DVec3,
-    /// The body's velocity minus the plane's, scaled.
-    pub(super) velocity: DVec3,
-    pub(super) size: f64,
-}
-
-impl PlanePair<'_> {
-    /// World outward normal, the body's pose and its signed distance at `tau`.
-    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose, f64, f64) {
-        let n = self.plane.orientation(tau) * self.normal;
-        let centre = self.offset + self.velocity * tau;
-        let pose = self.body.pose(self.body.orientation(tau), centre, self.scale);
-        let distance = n.dot(self.body.support(self.scale).support_point(&pose, -n));
-        (n, pose, distance, SLACK * (centre.length() + self.size))
-    }
-}
-
-impl Gauge for PlanePair<'_> {
-    fn probe(&self, tau: f64, _measure: Measure) -> Probe {
-        let (n, _, distance, slack) = self.state(tau);
-        let approach = self.velocity.dot(n);
-        let spin = self.body.spin_rate_along(n) * self.scale;
-        // The body's bounding sphere above the plane, which does not turn.
-        let height = n.dot(self.offset + self.velocity * tau) - self.size;
-        Probe {
-            lower: distance - slack,
-            upper: distance + slack,
-            shrink: (-approach).max(0.0) + spin,
-            grow: approach.max(0.0) + spin,
-            far: (height - slack, (-approach).max(0.0)),
-            hold: 0.0,
-        }
-    }
-
-    /// The body lies in its bounding sphere; the plane does not turn.
-    fn reach(&self, within: f64) -> Option<Reach> {
-        let n = self.plane.orientation(0.0) * self.normal;
-        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
-        Reach::below(n.dot(self.offset), n.dot(self.velocity), limit)
-    }
-}
-
-/// A solid and a triangle mesh. The frame has the mesh's axes and its origin at the body's centre
-/// of mass.
-pub(super) struct MeshPair<'a> {
-    pub(super) body: Body<'a>,
-    pub(super) mesh: Body<'a>,
-    pub(super) trimesh: &'a TriMesh,
-    pub(super) scale: f64,
-    /// The body's centre minus the mesh origin at the reference, scaled.
-    pub(super) offset: DVec3,
-    pub(super) velocity: DVec3,
-    pub(super) spin: f64,
-    pub(super) size: f64,
-    pub(super) tol: f64,
-    /// What the last probe found for each triangle it measured, to start the next one from.
-    pub(super) warm: RefCell<Vec<(u32, Warm)>>,
-}
-
-impl MeshPair<'_> {
-    /// The body's centre in the mesh frame (unscaled) and its scaled pose about that centre.
-    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose) {
-        let q_mesh = self.mesh.orientation(tau).inverse();
-        let centre = q_mesh * (self.offset + self.velocity * tau) / self.scale;
-        let pose = self.body.pose(q_mesh * self.body.orientation(tau), DVec3::ZERO, self.scale);
-        (centre, pose)
-    }
-
-    /// Triangle `id` in the frame about `centre`, scaled.
-    pub(super) fn triangle(&self, id: u32, centre: DVec3) -> Triangle {
-        let t = self.trimesh.triangle(id);
-        let s = self.scale;
-        Triangle::new((t.a - centre) * s, (t.b - centre) * s, (t.c - centre) * s)
-    }
-
-    /// Bounds on the signed distance of the body to the mesh (the smallest of the triangles'):
-    /// the smallest lower bound of a triangle (parry's best-first search over the mesh's
-    /// hierarchy, which skips boxes farther than the best so far), and the smallest upper bound
-    /// met on the way, with its triangle's axis and points.
-    pub(super) fn closest(&self, tau: f64, depth: bool) -> Option<Bounds> {
-        let nearest: Cell<Option<Bounds>> = Cell::new(None);
-        let (_, lowest) = self.search(tau, depth, &nearest)?;
-        let nearest = nearest.get().unwrap_or(lowest);
-        Some(Bounds { lower: lowest.lower, ..nearest })
-    }
-
-    /// The triangle with the smallest lower bound on its signed distance to the body; `nearest`
-    /// keeps the bounds with the smallest upper bound.
-    pub(super) fn search(&self, tau: f64, depth: bool, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
-        let (centre, pose) = self.state(tau);
-        let body = self.body.support(self.scale);
-        let slack = SLACK * self.size;
-        let s = self.scale;
-        // The body's box in the frame, from its support points.
-        let extent = |d: DVec3| d.dot(body.support_point(&pose, d));
-        let high = DVec3::new(extent(DVec3::X), extent(DVec3::Y), extent(DVec3::Z));
-        let low = -DVec3::new(extent(-DVec3::X), extent(-DVec3::Y), extent(-DVec3::Z));
-        let mut previous = self.warm.borrow_mut();
-        let next = RefCell::new(Vec::with_capacity(previous.len()));
-        let found = self.trimesh.bvh().find_best(
-            f64::MAX,
-            |node: &BvhNode, _| {
-                // No triangle in the node's box is nearer than that box is to the body's.
-                let (mins, maxs) = ((node.mins() - centre) * s, (node.maxs() - centre) * s);
-                let outside = (mins - high).max(low - maxs).max(DVec3::ZERO);
-                let gap = outside.length() * (1.0 - 1e-12) - slack;
-                if gap > 0.0 {
-                    gap
-                } else {
-                    -f64::MAX
-                }
-            },
-            |id, _| {
-                let triangle = self.triangle(id, centre);
-                let slack = SLACK * (triangle.a.length() + self.size);
-                let support = Scaled::new(&triangle, 1.0);
-                // The triangle's frame is fixed to it at its first vertex, the body's to the body.
-                let carry = (&Pose::from_translation(triangle.a), &pose);
-                let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
-                let bounds = (warm
-                    .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
-                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack));
-                if let Some(warm) = Warm::new(&bounds, carry) {
-                    next.borrow_mut().push((id, warm));
-                }
-                if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
-                    nearest.set(Some(bounds));
-                }
-                Some(bounds)
-            },
-        );
-        *previous = next.into_inner();
-        found
-    }
-}
-
-impl Gauge for MeshPair<'_> {
-    fn probe(&self, tau: f64, measure: Measure) -> Probe {
-        let rate = self.velocity.length() + self.spin;
-        let (lower, upper) = match self.closest(tau, measure != Measure::Gap) {
-            Some(b) => (b.lower, b.upper),
-            None => (f64::INFINITY, f64::INFINITY),
-        };
-        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0 }
-    }
-
-    /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
-    /// the box grown by the sphere's radius (and more at its corners) on each axis.
-    fn reach(&self, within: f64) -> Option<Reach> {
-        let q_mesh = self.mesh.orientation(0.0).inverse();
-        let (centre, velocity) = (q_mesh * self.offset, q_mesh * self.velocity);
-        let aabb = self.trimesh.local_aabb();
-        let (low, high) = (aabb.mins * self.scale, aabb.maxs * self.scale);
-        let extent = low.abs().max(high.abs()).max_element();
-        let grown = self.size + within + SLACK * (centre.length() + extent + self.size);
-        let mut reach = Reach { enter: 0.0, leave: f64::INFINITY };
-        for axis in 0..3 {
-            let (c, v) = (centre[axis], velocity[axis]);
-            reach = reach.meet(Reach::below(c, v, high[axis] + grown)?)?;
-            reach = reach.meet(Reach::below(-c, -v, grown - low[axis])?)?;
-        }
-        Some(reach)
-    }
-
-    fn forget(&self) {
-        self.warm.borrow_mut().clear();
-    }
-    fn warm_start(&self) -> Option<Option<Warm>> {
-        None
+        // On a bent relative path the distance need not be convex in time.
+        self.a.still.is_some() && self.b.still.is_some() && self.acceleration == DVec3::ZERO
     }
 }
 
@@ -738,78 +637,6 @@ impl Gauge for PairGauge<'_> {
             PairGauge::Convex(g) => g.translating(),
             PairGauge::Plane(..) | PairGauge::Mesh(..) => false,
         }
-    }
-}
-
-/// A solid and one wall of the box. The frame has world axes and its origin at the body's centre
-/// of mass.
-pub(super) struct WallGauge<'a> {
-    pub(super) body: Body<'a>,
-    /// The wall's outward normal (out of the box).
-    pub(super) normal: DVec3,
-    pub(super) scale: f64,
-    /// Distance from the centre of mass to the wall plane at `since`, scaled.
-    pub(super) gap: f64,
-    /// Velocity towards the wall, scaled.
-    pub(super) speed: f64,
-    pub(super) size: f64,
-    pub(super) tol: f64,
-}
-
-impl WallGauge<'_> {
-    pub(super) fn distance(&self, tau: f64) -> (f64, DVec3, f64) {
-        let (distance, extreme, slack, _) = self.measure(tau);
-        (distance, extreme, slack)
-    }
-
-    /// [`Self::distance`] with the shape's pose.
-    fn measure(&self, tau: f64) -> (f64, DVec3, f64, Pose) {
-        let pose = self.body.pose(self.body.orientation(tau), DVec3::ZERO, self.scale);
-        let extreme = self.body.support(self.scale).support_point(&pose, self.normal);
-        let centre = self.gap - self.speed * tau;
-        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size), pose)
-    }
-
-    /// How long the shape certainly stays farther from the wall than the middle of the band in
-    /// which a contact starts, its extreme point towards the wall followed as it turns (see
-    /// [`super::chord::wall_hold`]): 0 when its spin does not give its angular velocity.
-    fn apart(&self, tau: f64, pose: &Pose, slack: f64) -> f64 {
-        let Some(turning) = self.body.turning(tau) else { return 0.0 };
-        let shape = self.body.support(self.scale);
-        let body = Moving {
-            shape: &shape,
-            pose,
-            centre: DVec3::ZERO,
-            radius: self.size,
-            velocity: self.normal * self.speed,
-            turning,
-        };
-        let on_wall = self.normal * (self.gap - self.speed * tau);
-        wall_hold(self.normal, on_wall, &body, starting(self.tol), slack)
-    }
-}
-
-impl Gauge for WallGauge<'_> {
-    fn probe(&self, tau: f64, measure: Measure) -> Probe {
-        let (distance, _, slack, pose) = self.measure(tau);
-        // The body's bounding sphere from the wall.
-        let sphere = self.gap - self.speed * tau - self.size;
-        let spin = self.body.spin_rate_along(self.normal) * self.scale;
-        let lower = distance - slack;
-        Probe {
-            lower,
-            upper: distance + slack,
-            shrink: self.speed.max(0.0) + spin,
-            grow: (-self.speed).max(0.0) + spin,
-            far: (sphere - slack, self.speed.max(0.0)),
-            // A hold away from the wall steps a start search only, never a contact's end.
-            hold: if measure == Measure::Gap && lower > guard(self.tol) { self.apart(tau, &pose, slack) } else { 0.0 },
-        }
-    }
-
-    /// The body lies in its bounding sphere.
-    fn reach(&self, within: f64) -> Option<Reach> {
-        Reach::below(self.gap, -self.speed, self.size + within + SLACK * (self.gap.abs() + self.size))
     }
 }
 

@@ -156,6 +156,7 @@
 
 mod chord;
 mod distance;
+mod fixed_gauges;
 mod gauges;
 mod inner_balls;
 mod scaled;
@@ -168,7 +169,8 @@ use crate::shape::ShapeGeometry;
 use crate::walls::Wall;
 use crate::window::Window;
 use distance::{convex_bounds, Bounds};
-use gauges::{ConvexPair, Gauge, MeshPair, PairGauge, PlanePair, WallGauge, Warm};
+use fixed_gauges::{MeshPair, PlanePair, WallGauge};
+use gauges::{ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
 use parry3d_f64::shape::SupportMap;
 use scaled::Body;
@@ -346,6 +348,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
             middles: (a.support(scale).middle_ball(), b.support(scale).middle_ball()),
             offset: (b.position - a.position) * scale,
             velocity: (b.velocity - a.velocity) * scale,
+            acceleration: (b.acceleration - a.acceleration) * scale,
             a,
             b,
             scale,
@@ -358,10 +361,12 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
             let (body, fixed) = if first_static { (b, a) } else { (a, b) };
             let offset = (body.position - fixed.position) * scale;
             let velocity = (body.velocity - fixed.velocity) * scale;
+            let acceleration = (body.acceleration - fixed.acceleration) * scale;
             let parry = fixed.geometry.parry_shape();
             if let Some(half_space) = parry.as_halfspace() {
                 let normal = half_space.normal;
-                let pair = PlanePair { body, plane: fixed, normal, scale, offset, velocity, size: size * scale };
+                let size = size * scale;
+                let pair = PlanePair { body, plane: fixed, normal, scale, offset, velocity, acceleration, size };
                 PairGauge::Plane(pair, first_static)
             } else {
                 let trimesh = parry.as_trimesh().expect("static-only shapes are half-spaces or meshes");
@@ -373,6 +378,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
                     scale,
                     offset,
                     velocity,
+                    acceleration,
                     spin,
                     size: size * scale,
                     tol,
@@ -555,7 +561,7 @@ pub fn contact_in_progress_end_time<S: Spin, T: Spin>(
 /// let ball = Shape::Sphere { radius: 0.2 }.geometry().unwrap();
 /// // A plank spinning about z beside a ball: its end sweeps past the ball twice a turn.
 /// let spin = FreeRotation::new(plank.principal_inertia_unit(), DQuat::IDENTITY, DVec3::new(0.0, 0.0, 6.0));
-/// let spinning = RigidMotion { position: DVec3::ZERO, since: 0.0, velocity: DVec3::ZERO, spin };
+/// let spinning = RigidMotion { position: DVec3::ZERO, since: 0.0, velocity: DVec3::ZERO, acceleration: DVec3::ZERO, spin };
 /// let ball_motion = RigidMotion::fixed(DVec3::new(0.0, 1.1, 0.0), DQuat::IDENTITY, 0.0);
 /// let window = Window::new(0.0, 5.0);
 /// let first = shape_contact_time((&plank, &spinning), (&ball, &ball_motion), window).unwrap().unwrap();
@@ -618,7 +624,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
             let (pose_a, pose_b) = pair.poses(tau);
             let (ga, gb) = (pair.a.support(pair.scale), pair.b.support(pair.scale));
             let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, true, pair.tol, 0.0);
-            let origin = pair.a.position + pair.a.velocity * tau;
+            let origin = pair.a.centre(tau);
             let witness = bounds
                 .witness
                 .unwrap_or_else(|| (ga.support_point(&pose_a, bounds.axis), gb.support_point(&pose_b, -bounds.axis)));
@@ -627,7 +633,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
         PairGauge::Plane(pair, flipped) => {
             let (n, pose, distance, _) = pair.state(tau);
             let deepest = pair.body.support(pair.scale).support_point(&pose, -n);
-            let origin = pair.plane.position + pair.plane.velocity * tau;
+            let origin = pair.plane.centre(tau);
             let point = origin + (deepest - n * (0.5 * distance)) / pair.scale;
             let normal = if *flipped { n } else { -n };
             Some(ContactPoint { point, normal, distance: distance / pair.scale })
@@ -640,7 +646,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
                 let point = pair.body.support(pair.scale).support_point(&pose, -bounds.axis);
                 (point, point)
             });
-            let origin = pair.body.position + pair.body.velocity * tau;
+            let origin = pair.body.centre(tau);
             let c = contact_point(origin, witness, bounds, pair.mesh.orientation(tau), pair.scale);
             Some(if *flipped { c } else { ContactPoint { normal: -c.normal, ..c } })
         }
@@ -669,11 +675,13 @@ fn wall_searcher<'a, S: Spin>(
     let axis = wall.axis();
     let gap = if wall.is_max() { max[axis] - body.position[axis] } else { body.position[axis] - min[axis] };
     let speed = if wall.is_max() { body.velocity[axis] } else { -body.velocity[axis] };
+    let pull = if wall.is_max() { body.acceleration[axis] } else { -body.acceleration[axis] };
     let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
     let gauge = WallGauge {
         normal: wall.outward_normal(),
         gap: gap * scale,
         speed: speed * scale,
+        pull: pull * scale,
         size: size * scale,
         scale,
         body,
@@ -754,7 +762,7 @@ pub fn wall_contact_geometry<S: Spin>(
     let g = &searcher.gauge;
     let tau = time - searcher.reference;
     let (distance, extreme, _) = g.distance(tau);
-    let centre = g.body.position + g.body.velocity * tau;
+    let centre = g.body.centre(tau);
     let point = centre + (extreme + g.normal * (0.5 * distance)) / g.scale;
     Some(ContactPoint { point, normal: g.normal, distance: distance / g.scale })
 }

@@ -305,8 +305,11 @@ pub(super) struct Body<'a> {
     pub(super) geometry: &'a ShapeGeometry,
     pub(super) spin: &'a dyn Spin,
     pub(super) lag: f64,
+    /// The centre of mass and its velocity at the reference, on the body's path.
     pub(super) position: DVec3,
     pub(super) velocity: DVec3,
+    /// The centre's uniform acceleration (gravity; none on a straight path).
+    pub(super) acceleration: DVec3,
     /// The orientation of a body whose turning leaves its shape where it is: a ball, a body that
     /// does not turn, or a steady spin about the shape's axis of symmetry (see [`still`]). Its
     /// shape is then the same set at every time, taken at this orientation; `None` for a body
@@ -321,6 +324,28 @@ pub(super) struct Body<'a> {
     /// The angular velocity at the last time its orientation was asked for, found with it: a
     /// probe asks for both at one time, and for a tumbling body they share an elliptic integral.
     turned: Cell<(f64, Option<DVec3>)>,
+}
+
+/// Where a point at `position` moving at `velocity` under the uniform `acceleration` is `tau`
+/// later: a parabola, and the straight path's bits without acceleration.
+#[inline]
+pub(super) fn along(position: DVec3, velocity: DVec3, acceleration: DVec3, tau: f64) -> DVec3 {
+    let straight = position + velocity * tau;
+    if acceleration == DVec3::ZERO {
+        straight
+    } else {
+        straight + acceleration * (0.5 * tau * tau)
+    }
+}
+
+/// The velocity `tau` later of a point moving at `velocity` under the uniform `acceleration`.
+#[inline]
+pub(super) fn speeding(velocity: DVec3, acceleration: DVec3, tau: f64) -> DVec3 {
+    if acceleration == DVec3::ZERO {
+        velocity
+    } else {
+        velocity + acceleration * tau
+    }
 }
 
 /// The orientation at which a body of `geometry` turning by `spin` always shows the same shape,
@@ -349,13 +374,19 @@ impl<'a> Body<'a> {
             geometry,
             spin: &motion.spin,
             lag,
-            position: motion.position + lag * motion.velocity,
-            velocity: motion.velocity,
+            position: motion.position_at(reference),
+            velocity: motion.velocity_at(reference),
+            acceleration: motion.acceleration,
             still,
             axis,
             reach,
             turned: Cell::new((f64::NAN, None)),
         }
+    }
+
+    /// The centre of mass `tau` after the reference (unscaled).
+    pub(super) fn centre(&self, tau: f64) -> DVec3 {
+        along(self.position, self.velocity, self.acceleration, tau)
     }
 
     pub(super) fn orientation(&self, tau: f64) -> DQuat {

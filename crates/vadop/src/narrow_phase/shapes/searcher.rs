@@ -188,11 +188,11 @@ impl<G: Gauge> Searcher<G> {
             if !(room > 0.0) {
                 return Err(self.stall(tau, "the distance bounds were too loose to step"));
             }
-            if !(p.grow > 0.0) {
+            if !(p.grow > 0.0 || p.bend > 0.0) {
                 return Ok(self.done());
             }
             // In contact until the step's end, and apart from `leave` on.
-            match self.advance(tau, (room / p.grow).max(p.hold))? {
+            match self.advance(tau, p.time_to(room, p.grow).max(p.hold))? {
                 Some(next) => tau = next.min(self.leave()),
                 None => return Ok(self.done()),
             }
@@ -289,8 +289,7 @@ impl<G: Gauge> Searcher<G> {
             if !(room > 0.0) {
                 return Err(self.stall(tau, "the distance bounds were too loose to step"));
             }
-            let down = if p.shrink > 0.0 { (p.lower - floor) / p.shrink } else { f64::INFINITY };
-            let up = if p.grow > 0.0 { room / p.grow } else { f64::INFINITY };
+            let (down, up) = (p.time_to(p.lower - floor, p.shrink), p.time_to(room, p.grow));
             match self.advance(tau, down.min(up))? {
                 // Neither deeper nor apart before the bounding volumes part.
                 Some(next) if next >= self.leave() => return Ok(AtReference::Ended(self.leave())),

@@ -1,0 +1,302 @@
+//! Gauges of a shape against fixed geometry: a half-space, a triangle mesh (static bodies) and a
+//! wall of the box. Each measures the body's distance at a probe time and bounds how fast it can
+//! change, with the arc of a falling body; it never chooses probe times (the searcher does) and
+//! never sees another moving body (the pair gauges in [`super::gauges`] do).
+
+use super::chord::{wall_hold, Moving};
+use super::distance::{convex_bounds, Bounds};
+use super::gauges::{Gauge, Measure, Probe, Reach, Warm, NO_FAR};
+use super::scaled::{along, speeding, Body, Scaled};
+use super::{guard, starting, SLACK};
+use glam::DVec3;
+use parry3d_f64::math::Pose;
+use parry3d_f64::partitioning::BvhNode;
+use parry3d_f64::shape::{SupportMap, TriMesh, Triangle};
+use std::cell::{Cell, RefCell};
+
+/// A solid and a half-space. The frame has world axes and its origin at the half-space's origin.
+pub(super) struct PlanePair<'a> {
+    pub(super) body: Body<'a>,
+    pub(super) plane: Body<'a>,
+    /// The half-space's outward normal in its own frame.
+    pub(super) normal: DVec3,
+    pub(super) scale: f64,
+    /// The body's centre minus the plane origin at the reference, scaled.
+    pub(super) offset: DVec3,
+    /// The body's velocity minus the plane's, scaled.
+    pub(super) velocity: DVec3,
+    /// The body's acceleration minus the plane's, scaled.
+    pub(super) acceleration: DVec3,
+    pub(super) size: f64,
+}
+
+impl PlanePair<'_> {
+    /// World outward normal, the body's pose and its signed distance at `tau`.
+    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose, f64, f64) {
+        let n = self.plane.orientation(tau) * self.normal;
+        let centre = along(self.offset, self.velocity, self.acceleration, tau);
+        let pose = self.body.pose(self.body.orientation(tau), centre, self.scale);
+        let distance = n.dot(self.body.support(self.scale).support_point(&pose, -n));
+        (n, pose, distance, SLACK * (centre.length() + self.size))
+    }
+}
+
+impl Gauge for PlanePair<'_> {
+    fn probe(&self, tau: f64, _measure: Measure) -> Probe {
+        let (n, _, distance, slack) = self.state(tau);
+        let approach = speeding(self.velocity, self.acceleration, tau).dot(n);
+        let spin = self.body.spin_rate_along(n) * self.scale;
+        // The body's bounding sphere above the plane, which does not turn.
+        let height = n.dot(along(self.offset, self.velocity, self.acceleration, tau)) - self.size;
+        Probe {
+            lower: distance - slack,
+            upper: distance + slack,
+            shrink: (-approach).max(0.0) + spin,
+            grow: approach.max(0.0) + spin,
+            far: (height - slack, (-approach).max(0.0)),
+            hold: 0.0,
+            bend: self.acceleration.dot(n).abs(),
+        }
+    }
+
+    /// The body lies in its bounding sphere; the plane does not turn.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let n = self.plane.orientation(0.0) * self.normal;
+        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
+        Reach::below_bent(n.dot(self.offset), n.dot(self.velocity), n.dot(self.acceleration), limit)
+    }
+}
+
+/// A solid and a triangle mesh. The frame has the mesh's axes and its origin at the body's centre
+/// of mass.
+pub(super) struct MeshPair<'a> {
+    pub(super) body: Body<'a>,
+    pub(super) mesh: Body<'a>,
+    pub(super) trimesh: &'a TriMesh,
+    pub(super) scale: f64,
+    /// The body's centre minus the mesh origin at the reference, scaled.
+    pub(super) offset: DVec3,
+    pub(super) velocity: DVec3,
+    /// The body's acceleration minus the mesh's, scaled.
+    pub(super) acceleration: DVec3,
+    pub(super) spin: f64,
+    pub(super) size: f64,
+    pub(super) tol: f64,
+    /// What the last probe found for each triangle it measured, to start the next one from.
+    pub(super) warm: RefCell<Vec<(u32, Warm)>>,
+}
+
+impl MeshPair<'_> {
+    /// The body's centre in the mesh frame (unscaled) and its scaled pose about that centre.
+    pub(super) fn state(&self, tau: f64) -> (DVec3, Pose) {
+        let q_mesh = self.mesh.orientation(tau).inverse();
+        let centre = q_mesh * along(self.offset, self.velocity, self.acceleration, tau) / self.scale;
+        let pose = self.body.pose(q_mesh * self.body.orientation(tau), DVec3::ZERO, self.scale);
+        (centre, pose)
+    }
+
+    /// Triangle `id` in the frame about `centre`, scaled.
+    pub(super) fn triangle(&self, id: u32, centre: DVec3) -> Triangle {
+        let t = self.trimesh.triangle(id);
+        let s = self.scale;
+        Triangle::new((t.a - centre) * s, (t.b - centre) * s, (t.c - centre) * s)
+    }
+
+    /// Bounds on the signed distance of the body to the mesh (the smallest of the triangles'):
+    /// the smallest lower bound of a triangle (parry's best-first search over the mesh's
+    /// hierarchy, which skips boxes farther than the best so far), and the smallest upper bound
+    /// met on the way, with its triangle's axis and points.
+    pub(super) fn closest(&self, tau: f64, depth: bool) -> Option<Bounds> {
+        let nearest: Cell<Option<Bounds>> = Cell::new(None);
+        let (_, lowest) = self.search(tau, depth, &nearest)?;
+        let nearest = nearest.get().unwrap_or(lowest);
+        Some(Bounds { lower: lowest.lower, ..nearest })
+    }
+
+    /// The triangle with the smallest lower bound on its signed distance to the body; `nearest`
+    /// keeps the bounds with the smallest upper bound.
+    pub(super) fn search(&self, tau: f64, depth: bool, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
+        let (centre, pose) = self.state(tau);
+        let body = self.body.support(self.scale);
+        let slack = SLACK * self.size;
+        let s = self.scale;
+        // The body's box in the frame, from its support points.
+        let extent = |d: DVec3| d.dot(body.support_point(&pose, d));
+        let high = DVec3::new(extent(DVec3::X), extent(DVec3::Y), extent(DVec3::Z));
+        let low = -DVec3::new(extent(-DVec3::X), extent(-DVec3::Y), extent(-DVec3::Z));
+        let mut previous = self.warm.borrow_mut();
+        let next = RefCell::new(Vec::with_capacity(previous.len()));
+        let found = self.trimesh.bvh().find_best(
+            f64::MAX,
+            |node: &BvhNode, _| {
+                // No triangle in the node's box is nearer than that box is to the body's.
+                let (mins, maxs) = ((node.mins() - centre) * s, (node.maxs() - centre) * s);
+                let outside = (mins - high).max(low - maxs).max(DVec3::ZERO);
+                let gap = outside.length() * (1.0 - 1e-12) - slack;
+                if gap > 0.0 {
+                    gap
+                } else {
+                    -f64::MAX
+                }
+            },
+            |id, _| {
+                let triangle = self.triangle(id, centre);
+                let slack = SLACK * (triangle.a.length() + self.size);
+                let support = Scaled::new(&triangle, 1.0);
+                // The triangle's frame is fixed to it at its first vertex, the body's to the body.
+                let carry = (&Pose::from_translation(triangle.a), &pose);
+                let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
+                let bounds = (warm
+                    .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
+                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack));
+                if let Some(warm) = Warm::new(&bounds, carry) {
+                    next.borrow_mut().push((id, warm));
+                }
+                if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
+                    nearest.set(Some(bounds));
+                }
+                Some(bounds)
+            },
+        );
+        *previous = next.into_inner();
+        found
+    }
+}
+
+impl Gauge for MeshPair<'_> {
+    fn probe(&self, tau: f64, measure: Measure) -> Probe {
+        let rate = speeding(self.velocity, self.acceleration, tau).length() + self.spin;
+        let (lower, upper) = match self.closest(tau, measure != Measure::Gap) {
+            Some(b) => (b.lower, b.upper),
+            None => (f64::INFINITY, f64::INFINITY),
+        };
+        let bend = self.acceleration.length();
+        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0, bend }
+    }
+
+    /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
+    /// the box grown by the sphere's radius (and more at its corners) on each axis.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let q_mesh = self.mesh.orientation(0.0).inverse();
+        let (centre, velocity, acceleration) =
+            (q_mesh * self.offset, q_mesh * self.velocity, q_mesh * self.acceleration);
+        let aabb = self.trimesh.local_aabb();
+        let (low, high) = (aabb.mins * self.scale, aabb.maxs * self.scale);
+        let extent = low.abs().max(high.abs()).max_element();
+        let grown = self.size + within + SLACK * (centre.length() + extent + self.size);
+        let mut reach = Reach { enter: 0.0, leave: f64::INFINITY };
+        for axis in 0..3 {
+            let (c, v, a) = (centre[axis], velocity[axis], acceleration[axis]);
+            reach = reach.meet(Reach::below_bent(c, v, a, high[axis] + grown)?)?;
+            reach = reach.meet(Reach::below_bent(-c, -v, -a, grown - low[axis])?)?;
+        }
+        Some(reach)
+    }
+
+    fn forget(&self) {
+        self.warm.borrow_mut().clear();
+    }
+    fn warm_start(&self) -> Option<Option<Warm>> {
+        None
+    }
+}
+
+/// A solid and one wall of the box. The frame has world axes and its origin at the body's centre
+/// of mass.
+pub(super) struct WallGauge<'a> {
+    pub(super) body: Body<'a>,
+    /// The wall's outward normal (out of the box).
+    pub(super) normal: DVec3,
+    pub(super) scale: f64,
+    /// Distance from the centre of mass to the wall plane at `since`, scaled.
+    pub(super) gap: f64,
+    /// Velocity towards the wall at `since`, scaled.
+    pub(super) speed: f64,
+    /// Acceleration towards the wall (gravity's pull into it), scaled.
+    pub(super) pull: f64,
+    pub(super) size: f64,
+    pub(super) tol: f64,
+}
+
+impl WallGauge<'_> {
+    pub(super) fn distance(&self, tau: f64) -> (f64, DVec3, f64) {
+        let (distance, extreme, slack, _) = self.measure(tau);
+        (distance, extreme, slack)
+    }
+
+    /// [`Self::distance`] with the shape's pose.
+    fn measure(&self, tau: f64) -> (f64, DVec3, f64, Pose) {
+        let pose = self.body.pose(self.body.orientation(tau), DVec3::ZERO, self.scale);
+        let extreme = self.body.support(self.scale).support_point(&pose, self.normal);
+        let centre = self.centre(tau);
+        (centre - self.normal.dot(extreme), extreme, SLACK * (centre.abs() + self.size), pose)
+    }
+
+    /// How long the shape certainly stays farther from the wall than the middle of the band in
+    /// which a contact starts, its extreme point towards the wall followed as it turns (see
+    /// [`super::chord::wall_hold`]): 0 when its spin does not give its angular velocity, or when
+    /// gravity pulls it along the wall's normal (the certificate is for a straight motion).
+    fn apart(&self, tau: f64, pose: &Pose, slack: f64) -> f64 {
+        if self.pull != 0.0 {
+            return 0.0;
+        }
+        let Some(turning) = self.body.turning(tau) else { return 0.0 };
+        let shape = self.body.support(self.scale);
+        let body = Moving {
+            shape: &shape,
+            pose,
+            centre: DVec3::ZERO,
+            radius: self.size,
+            velocity: self.normal * self.speed,
+            turning,
+        };
+        let on_wall = self.normal * (self.gap - self.speed * tau);
+        wall_hold(self.normal, on_wall, &body, starting(self.tol), slack)
+    }
+
+    /// The centre of mass's distance from the wall plane `tau` after `since`.
+    fn centre(&self, tau: f64) -> f64 {
+        let straight = self.gap - self.speed * tau;
+        if self.pull == 0.0 {
+            straight
+        } else {
+            straight - self.pull * (0.5 * tau * tau)
+        }
+    }
+
+    /// The velocity towards the wall `tau` after `since`.
+    fn speed_at(&self, tau: f64) -> f64 {
+        if self.pull == 0.0 {
+            self.speed
+        } else {
+            self.speed + self.pull * tau
+        }
+    }
+}
+
+impl Gauge for WallGauge<'_> {
+    fn probe(&self, tau: f64, measure: Measure) -> Probe {
+        let (distance, _, slack, pose) = self.measure(tau);
+        // The body's bounding sphere from the wall.
+        let sphere = self.centre(tau) - self.size;
+        let spin = self.body.spin_rate_along(self.normal) * self.scale;
+        let speed = self.speed_at(tau);
+        let lower = distance - slack;
+        Probe {
+            lower,
+            upper: distance + slack,
+            shrink: speed.max(0.0) + spin,
+            grow: (-speed).max(0.0) + spin,
+            far: (sphere - slack, speed.max(0.0)),
+            // A hold away from the wall steps a start search only, never a contact's end.
+            hold: if measure == Measure::Gap && lower > guard(self.tol) { self.apart(tau, &pose, slack) } else { 0.0 },
+            bend: self.pull.abs(),
+        }
+    }
+
+    /// The body lies in its bounding sphere.
+    fn reach(&self, within: f64) -> Option<Reach> {
+        let limit = self.size + within + SLACK * (self.gap.abs() + self.size);
+        Reach::below_bent(self.gap, -self.speed, -self.pull, limit)
+    }
+}
