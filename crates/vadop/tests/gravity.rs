@@ -219,3 +219,22 @@ fn a_dropped_capsule_bounces_at_the_closed_form_instants() {
     let now = world.body(handle).unwrap();
     assert!(now.position.truncate().distance(glam::DVec2::new(5.0, 5.0)) < 1e-9, "it stays upright over its spot");
 }
+
+/// A saved world is checked as a built one: a file edited to put static geometry or a resting
+/// shape under gravity in simulate mode is refused on loading, naming the slot, not stepped.
+#[test]
+fn a_save_file_edited_past_the_gravity_refusals_is_refused() {
+    let config = WorldConfig { restitution: 0.5, ..WorldConfig::default() };
+    let mut world = World::new(BoxBounds::cube(4.0).unwrap(), config).unwrap();
+    let floor = world.add_shape(vadop::shape::Shape::HalfSpace { normal: DVec3::Z }).unwrap();
+    world.add_static(floor, DVec3::new(2.0, 2.0, 0.5), glam::DQuat::IDENTITY).unwrap();
+    let path = std::env::temp_dir().join(format!("vadop-gravity-edit-{}.json", std::process::id()));
+    world.save(&path).unwrap();
+    assert!(World::load(&path).is_ok(), "saved without gravity: loads");
+    let mut saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    saved["config"]["gravity"] = serde_json::json!([0.0, 0.0, -9.81]);
+    std::fs::write(&path, saved.to_string()).unwrap();
+    let refused = World::load(&path).unwrap_err().to_string();
+    std::fs::remove_file(&path).unwrap();
+    assert!(refused.contains("slot 0") && refused.contains("static"), "{refused}");
+}

@@ -216,9 +216,10 @@ impl World {
         Ok(&self.bodies.rigid.shapes[slot as usize])
     }
 
-    /// The store's form of `body`, validated: the centre of mass and principal axes from the
-    /// shape's frame.
-    fn rigid_state(&self, body: &Body, fixed: bool) -> Result<RigidState> {
+    /// Refuses a body this world cannot step exactly yet: a static body in a periodic box or, under
+    /// gravity, in simulate mode; a body that is not a sphere coming to rest (simulate mode under
+    /// gravity with restitution below 1). Asked of every body added and of every body loaded.
+    pub(super) fn check_supported(&self, sphere: bool, fixed: bool) -> Result<()> {
         if self.bounds.is_periodic() && fixed {
             return Err(VadopError::PeriodicUnsupported("a static body"));
         }
@@ -229,10 +230,17 @@ impl World {
             }
             // Only a sphere comes to rest: the rest rule lays a resting body on its floor by its
             // radius.
-            if simulate && self.config.restitution < 1.0 && !matches!(body.shape, BodyShape::Sphere { .. }) {
+            if simulate && self.config.restitution < 1.0 && !sphere {
                 return Err(VadopError::GravityUnsupported("a body that is not a sphere, with restitution below 1"));
             }
         }
+        Ok(())
+    }
+
+    /// The store's form of `body`, validated: the centre of mass and principal axes from the
+    /// shape's frame.
+    fn rigid_state(&self, body: &Body, fixed: bool) -> Result<RigidState> {
+        self.check_supported(matches!(body.shape, BodyShape::Sphere { .. }), fixed)?;
         check_vector("position", body.position)?;
         check_vector("velocity", body.velocity)?;
         check_vector("angular velocity", body.angular_velocity)?;
