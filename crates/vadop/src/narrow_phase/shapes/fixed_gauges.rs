@@ -250,7 +250,7 @@ impl WallGauge<'_> {
             velocity: self.normal * self.speed,
             turning,
         };
-        let on_wall = self.normal * (self.gap - self.speed * tau);
+        let on_wall = self.normal * self.centre(tau);
         wall_hold(self.normal, on_wall, &body, starting(self.tol), slack)
     }
 
