@@ -102,7 +102,7 @@ pub enum VadopError {
     #[error("body {body} rests on a wall under gravity: its bounces rise {height:e}, so it would bounce more than {limit:e} times in this step; bodies come to rest only in simulate mode with restitution below 1, so such a body is refused rather than left to sink or to bounce without end")]
     RestingUnderGravity { body: BodyHandle, height: f64, limit: f64 },
     /// Gravity with what it does not support yet.
-    #[error("under gravity, for now, static bodies are taken in detect mode only (in simulate mode the rest rule knows only walls and bodies lying still: a body resting on static geometry would bounce without end), and only spheres come to rest in simulate mode with restitution below 1 (the rest rule lays a resting body on its floor by its radius); shapes fall in detect mode and in elastic worlds: {0}")]
+    #[error("under gravity, for now, only spheres come to rest in simulate mode with restitution below 1 (the rest rule lays a resting body on its floor by its radius); shapes fall in detect mode and in elastic worlds, and rest on static geometry nowhere yet: {0}")]
     GravityUnsupported(&'static str),
     /// A periodic box with what it does not support yet.
     #[error(

@@ -128,6 +128,18 @@ fn a_dense_pack_settles_the_same_way_for_every_method() {
     }
 }
 
+/// A unit-mass body of `shape` at rest at (2, 2, 2), upright.
+fn at_rest(shape: vadop::ShapeId) -> vadop::Body {
+    vadop::Body {
+        shape: vadop::BodyShape::Shape(shape),
+        position: DVec3::splat(2.0),
+        orientation: glam::DQuat::IDENTITY,
+        velocity: DVec3::ZERO,
+        angular_velocity: DVec3::ZERO,
+        mass: 1.0,
+    }
+}
+
 #[test]
 fn unsupported_gravity_is_refused_clearly() {
     let config = |gravity, restitution| WorldConfig { gravity, restitution, ..WorldConfig::default() };
@@ -137,17 +149,9 @@ fn unsupported_gravity_is_refused_clearly() {
     assert!(World::new(BoxBounds::cube(1.0).unwrap(), config(DVec3::NEG_Z, 0.5)).is_ok());
     let mut world = World::new(BoxBounds::cube(4.0).unwrap(), config(DVec3::NEG_Z, 1.0)).unwrap();
     let cube = world.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
-    let body = vadop::Body {
-        shape: vadop::BodyShape::Shape(cube),
-        position: DVec3::splat(2.0),
-        orientation: glam::DQuat::IDENTITY,
-        velocity: DVec3::ZERO,
-        angular_velocity: DVec3::ZERO,
-        mass: 1.0,
-    };
+    let body = at_rest(cube);
     // A shape falls in an elastic world (and in detect mode), but only a sphere comes to rest:
-    // with restitution below 1 it is refused, as static geometry is in simulate mode (the rest
-    // rule knows no static floor).
+    // with restitution below 1 it is refused. Static geometry is taken in both modes.
     let cube_body = world.add_body(body).unwrap();
     world.remove_body(cube_body).unwrap();
     let mut resting = World::new(BoxBounds::cube(4.0).unwrap(), config(DVec3::NEG_Z, 0.5)).unwrap();
@@ -155,9 +159,6 @@ fn unsupported_gravity_is_refused_clearly() {
     let refused = resting.add_body(vadop::Body { shape: vadop::BodyShape::Shape(cube), ..body }).unwrap_err();
     assert!(matches!(refused, VadopError::GravityUnsupported(_)), "{refused}");
     assert!(refused.to_string().contains("only spheres come to rest"), "{refused}");
-    let floor = world.add_shape(vadop::shape::Shape::HalfSpace { normal: DVec3::Z }).unwrap();
-    let refused = world.add_static(floor, DVec3::splat(1.0), glam::DQuat::IDENTITY).unwrap_err();
-    assert!(refused.to_string().contains("static bodies are taken in detect mode only"), "{refused}");
     let mut detect =
         World::new(BoxBounds::cube(4.0).unwrap(), WorldConfig { mode: Mode::Detect, ..config(DVec3::NEG_Z, 1.0) })
             .unwrap();
@@ -220,14 +221,14 @@ fn a_dropped_capsule_bounces_at_the_closed_form_instants() {
     assert!(now.position.truncate().distance(glam::DVec2::new(5.0, 5.0)) < 1e-9, "it stays upright over its spot");
 }
 
-/// A saved world is checked as a built one: a file edited to put static geometry or a resting
-/// shape under gravity in simulate mode is refused on loading, naming the slot, not stepped.
+/// A saved world is checked as a built one: a file edited to put a shape that would come to rest
+/// under gravity in simulate mode is refused on loading, naming the slot, not stepped.
 #[test]
 fn a_save_file_edited_past_the_gravity_refusals_is_refused() {
     let config = WorldConfig { restitution: 0.5, ..WorldConfig::default() };
     let mut world = World::new(BoxBounds::cube(4.0).unwrap(), config).unwrap();
-    let floor = world.add_shape(vadop::shape::Shape::HalfSpace { normal: DVec3::Z }).unwrap();
-    world.add_static(floor, DVec3::new(2.0, 2.0, 0.5), glam::DQuat::IDENTITY).unwrap();
+    let cube = world.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
+    world.add_body(at_rest(cube)).unwrap();
     let path = std::env::temp_dir().join(format!("vadop-gravity-edit-{}.json", std::process::id()));
     world.save(&path).unwrap();
     assert!(World::load(&path).is_ok(), "saved without gravity: loads");
@@ -236,5 +237,5 @@ fn a_save_file_edited_past_the_gravity_refusals_is_refused() {
     std::fs::write(&path, saved.to_string()).unwrap();
     let refused = World::load(&path).unwrap_err().to_string();
     std::fs::remove_file(&path).unwrap();
-    assert!(refused.contains("slot 0") && refused.contains("static"), "{refused}");
+    assert!(refused.contains("slot 0") && refused.contains("only spheres come to rest"), "{refused}");
 }

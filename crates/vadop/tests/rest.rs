@@ -307,15 +307,7 @@ fn a_world_at_rest_resumes_bit_exactly() {
         world.step(DT).unwrap();
     }
     assert!(world.spheres().any(|(h, _)| world.rest(h).unwrap() == Rest::Still));
-    let path = std::env::temp_dir().join(format!("vadop-rest-{}.json", std::process::id()));
-    world.save(&path).unwrap();
-    let mut resumed = World::load(&path).unwrap();
-    std::fs::remove_file(&path).ok();
-    for frame in 0..60 {
-        let (a, b) = (world.step(DT).unwrap().to_vec(), resumed.step(DT).unwrap().to_vec());
-        assert_eq!(common::contact_bits(&a), common::contact_bits(&b), "frame {frame}");
-    }
-    assert_eq!(common::state_bits(&world), common::state_bits(&resumed));
+    common::assert_resumes_bit_exactly(&mut world, "rest", 60, DT);
 }
 
 /// The quartic's pairs against straight-line brute force: a resting body and a falling one meet

@@ -19,6 +19,11 @@
 //!   stays as it was, so a pile settles from the floor up. This is where the rule changes the
 //!   physics most: a body that slow sticks where it touches, even on a steep side, as static
 //!   friction would hold it; it loses at most `m v^2 / 2` at the rest speed.
+//! - **On static geometry** (a half-space, a mesh, any static body), which holds still as a body
+//!   lying still does and is never woken: the same, but a body rests there when its bounce would
+//!   be slower than the rest speed, as on a wall, so a ball lands there as often as on the floor.
+//!   It cannot slide along a surface that need not be a wall's plane: moving on faster, it hops
+//!   along it as below.
 //! - **Sliding and slow**: after any impact, a sliding body slower than the rest speed with no
 //!   pull left lies still.
 //!
@@ -74,10 +79,11 @@ fn rest_speed(bodies: &Bodies, i: usize) -> f64 {
     (2.0 * bodies.gravity.length() * REST_HEIGHT * bodies.radius(i)).sqrt()
 }
 
-/// Whether body `i` lies still.
+/// Whether body `i` holds still as a support: it lies still, or it is static (level geometry is
+/// a body lying still that nothing wakes).
 #[inline]
 fn is_still(bodies: &Bodies, i: usize) -> bool {
-    bodies.rest_of(i) == Rest::Still
+    bodies.is_fixed(i) || bodies.rest_of(i) == Rest::Still
 }
 
 /// How a body held on the walls across `axes` with `velocity` (none into them) rests: still
@@ -141,9 +147,9 @@ pub(crate) fn against_still(
     normal: DVec3,
     (restitution, quick): (f64, [bool; 2]),
 ) -> Option<(usize, f64)> {
-    let (k, out, quick) = match (is_still(bodies, i), is_still(bodies, j)) {
-        (true, false) => (j, normal, quick[1]),
-        (false, true) => (i, -normal, quick[0]),
+    let (k, out, quick, support) = match (is_still(bodies, i), is_still(bodies, j)) {
+        (true, false) => (j, normal, quick[1], i),
+        (false, true) => (i, -normal, quick[0], j),
         _ => return None,
     };
     let (velocity, limit, pull) = (bodies.velocity_at(k, t), rest_speed(bodies, k), bodies.gravity_on(k));
@@ -151,11 +157,17 @@ pub(crate) fn against_still(
     // presses `k` onto it, or more.
     let pressed = out.dot(pull) < 0.0;
     let on_top = pressed && -out.dot(pull) >= ON_TOP * pull.length();
-    if pressed && (quick || velocity.length() < limit) {
+    let normal_speed = velocity.dot(out);
+    // Static geometry is a floor as the walls are: `k` rests on it when its bounce would be
+    // slower than the rest speed, so a ball lands there as often as on a wall.
+    let speed = match bodies.is_fixed(support) {
+        true => (velocity - (1.0 + restitution) * normal_speed * out).length(),
+        false => velocity.length(),
+    };
+    if pressed && (quick || speed < limit) {
         bodies.lie_still(k, t);
         return Some((k, bodies.mass[k] * velocity.length()));
     }
-    let normal_speed = velocity.dot(out);
     if !(on_top || -restitution * normal_speed < limit) {
         return None;
     }

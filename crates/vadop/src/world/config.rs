@@ -124,8 +124,8 @@ pub struct WorldConfig {
     /// Uniform acceleration of every moving body (e.g. `[0, 0, -9.81]`); zero by default. Paths
     /// are then parabolas, exact in both modes and for every method and shape. With restitution
     /// below 1 in simulate mode bodies come to rest on the floor and on each other
-    /// ([`crate::response::rest`]); for now only spheres do (other shapes are refused there),
-    /// and static bodies are taken in detect mode only.
+    /// and on static geometry ([`crate::response::rest`]); for now only spheres do (other shapes
+    /// are refused there).
     #[serde(default)]
     pub gravity: DVec3,
 }

@@ -216,23 +216,19 @@ impl World {
         Ok(&self.bodies.rigid.shapes[slot as usize])
     }
 
-    /// Refuses a body this world cannot step exactly yet: a static body in a periodic box or, under
-    /// gravity, in simulate mode; a body that is not a sphere coming to rest (simulate mode under
-    /// gravity with restitution below 1). Asked of every body added and of every body loaded.
+    /// Refuses a body this world cannot step exactly yet: a static body in a periodic box (level
+    /// geometry is not periodic), and a body that is not a sphere coming to rest (simulate mode
+    /// under gravity with restitution below 1). Asked of every body added and of every body
+    /// loaded.
     pub(super) fn check_supported(&self, sphere: bool, fixed: bool) -> Result<()> {
         if self.bounds.is_periodic() && fixed {
             return Err(VadopError::PeriodicUnsupported("a static body"));
         }
-        if self.config.gravity != DVec3::ZERO {
-            let simulate = self.config.mode == crate::Mode::Simulate;
-            if fixed && simulate {
-                return Err(VadopError::GravityUnsupported("a static body in simulate mode"));
-            }
-            // Only a sphere comes to rest: the rest rule lays a resting body on its floor by its
-            // radius.
-            if simulate && self.config.restitution < 1.0 && !sphere {
-                return Err(VadopError::GravityUnsupported("a body that is not a sphere, with restitution below 1"));
-            }
+        let simulate = self.config.mode == crate::Mode::Simulate;
+        // Only a sphere comes to rest: the rest rule lays a resting body on its floor by its
+        // radius.
+        if self.config.gravity != DVec3::ZERO && simulate && self.config.restitution < 1.0 && !sphere && !fixed {
+            return Err(VadopError::GravityUnsupported("a body that is not a sphere, with restitution below 1"));
         }
         Ok(())
     }

@@ -141,3 +141,17 @@ pub fn step_beside_oracle(
     assert_eq!(state_bits(found), state_bits(oracle), "{method:?}: final states differ");
     refused
 }
+
+/// Saves `world` (under `name` in the temporary directory), loads it back, and steps both for
+/// `frames` frames of `dt`: the resumed world's contacts and final state must match to the bit.
+pub fn assert_resumes_bit_exactly(world: &mut World, name: &str, frames: usize, dt: f64) {
+    let path = std::env::temp_dir().join(format!("vadop-{name}-{}.json", std::process::id()));
+    world.save(&path).unwrap();
+    let mut resumed = World::load(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    for frame in 0..frames {
+        let (a, b) = (world.step(dt).unwrap().to_vec(), resumed.step(dt).unwrap().to_vec());
+        assert_eq!(contact_bits(&a), contact_bits(&b), "frame {frame}");
+    }
+    assert_eq!(state_bits(world), state_bits(&resumed));
+}
