@@ -113,14 +113,14 @@ impl Cluster {
             }
         }
         // Under the rest rule a cluster held up by a floor or by a body lying still lies still.
-        // Under gravity a cluster pinned against static geometry lies still in every mode: it
-        // stops, and gravity would press it into the level again at once, touch after touch
-        // closer together without end (an elastic world has no rest rule to end that; a body
-        // resting on a wall there is refused before the step, which static geometry is too
-        // costly to check for).
+        // Under gravity a cluster pinned against static geometry or on a floor lies still in
+        // every mode: it stops, and gravity would press it into what holds it again at once,
+        // touch after touch closer together without end (an elastic world or detect mode has no
+        // rest rule to end that; a ball resting on a wall there is refused before the step, which
+        // shapes and static geometry are too costly to check for).
         let g = bodies.gravity;
         let floor = (0..3).any(|axis| (g[axis] < 0.0 && touches_min[axis]) || (g[axis] > 0.0 && touches_max[axis]));
-        let still = (resting && (held || floor)) || (pinned && g != DVec3::ZERO);
+        let still = (resting && held) || ((pinned || floor) && g != DVec3::ZERO);
         let mut velocity = if pinned || still || mass == 0.0 { DVec3::ZERO } else { momentum / mass };
         for axis in 0..3 {
             if (velocity[axis] < 0.0 && touches_min[axis]) || (velocity[axis] > 0.0 && touches_max[axis]) {

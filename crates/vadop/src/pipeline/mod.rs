@@ -492,10 +492,14 @@ impl<B: BroadPhase> Pipeline<B> {
     /// their motions began (nothing gained by going on), their motions start afresh from `t`
     /// (the same paths, a new reference instant and a fresh search budget), so the next search
     /// begins there; bodies apart are never jammed. In simulate mode the jam rule freezes the
-    /// others (no spin, the cluster's velocity); in detect mode, where bodies keep their paths,
-    /// they start afresh all the same. Every method stalls at the same instant: canonical.
+    /// others (no spin, the cluster's velocity), and in detect mode too when one side is a wall or
+    /// static geometry, which turns bodies back there as well (started afresh, a body collapsing
+    /// onto the floor would sink through it while each new search stalled again); two moving
+    /// bodies in detect mode, which keep their paths, start afresh all the same. Every method
+    /// stalls at the same instant: canonical.
     fn stalled(&mut self, bodies: &mut Bodies, physics: &Physics, stuck: &[u32], t: f64, out: &mut Output) {
-        if physics.mode == Mode::Simulate {
+        let level = stuck.len() == 1 || stuck.iter().any(|&k| bodies.is_fixed(k as usize));
+        if physics.mode == Mode::Simulate || level {
             let progressed =
                 stuck.iter().all(|&k| bodies.is_fixed(k as usize) || t > bodies.state[k as usize].motion.since);
             let touching = match *stuck {

@@ -685,13 +685,14 @@ impl World {
     /// Under gravity where bodies may not come to rest (an elastic world, detect mode), no body
     /// may rest on a wall it is pulled towards: it would bounce without end. The height h a body's bounce reaches above touching is its
     /// distance plus v^2 / 2g along each pulled axis, a bounce lasts 2 sqrt(2 h / g), and a body
-    /// that would bounce more than [`MAX_BOUNCES_PER_STEP`] times in the step is refused.
+    /// that would bounce more than [`MAX_BOUNCES_PER_STEP`] times in the step is refused. A body
+    /// the jam rule stopped there lies still, and bounces no more.
     fn check_not_resting(&self, dt: f64) -> Result<()> {
         let g = self.config.gravity;
         if g == DVec3::ZERO || (self.config.mode == Mode::Simulate && self.config.restitution < 1.0) {
             return Ok(());
         }
-        for i in self.moving_ids() {
+        for i in self.moving_ids().filter(|&i| self.bodies.rest_of(i) != Rest::Still) {
             let (p, v, r) =
                 (self.bodies.position_at(i, self.time), self.bodies.velocity_at(i, self.time), self.bodies.radius(i));
             // A periodic axis has no floor to rest on.
