@@ -330,6 +330,9 @@ impl EventLoop {
                 if let Some(following) = self.calendar.following(PREFETCH_AHEAD) {
                     self.prefetch(bodies, following);
                 }
+                if let Some(following) = self.calendar.following(1) {
+                    self.prefetch_cells(following);
+                }
                 self.dispatch(bodies, physics, entry, out);
             }
         } else {
@@ -350,6 +353,31 @@ impl EventLoop {
         self.prefetch_body(bodies, entry.owner as usize);
         if let (false, Partner::Body(partner)) = (entry.scheduled.cell_crossing, entry.scheduled.event.partner) {
             self.prefetch_body(bodies, partner as usize);
+        }
+    }
+
+    /// Asks for the heads of the cells the event `entry` will search, ahead of its turn: those a
+    /// cell crossing brings within reach, or those around a contact's bodies. (Its bodies' records
+    /// were asked for earlier, see [`PREFETCH_AHEAD`]: they tell which cells.)
+    #[inline]
+    fn prefetch_cells(&self, entry: &Entry) {
+        let owner = entry.owner as usize;
+        if self.cells.cell_of(owner) == NONE {
+            return;
+        }
+        if entry.scheduled.cell_crossing {
+            // The entry may be stale: the body's crossing is the one of the cell it is in.
+            let crossing = self.crossing[owner];
+            if crossing.time.is_finite() {
+                self.cells.prefetch_new(owner, crossing);
+            }
+        } else {
+            self.cells.prefetch_around(owner);
+            if let Partner::Body(partner) = entry.scheduled.event.partner {
+                if self.cells.cell_of(partner as usize) != NONE {
+                    self.cells.prefetch_around(partner as usize);
+                }
+            }
         }
     }
 
