@@ -14,6 +14,8 @@
 //! included. The contact times, the impacts, the contact rules (the TC model and the jam rule,
 //! its cluster found through the cells) and the reports are the pipeline's own functions, so the
 //! contacts and states are bit-identical to the brute-force oracle's, for every frame length.
+//! The events come in time order, so each reaches bodies far in memory from the last one's: the
+//! loop asks for the records and cells of the events a few places ahead while it handles the next.
 //!
 //! Where it applies: [`crate::world`] steps a world of `Method::Auto` in simulate mode with it
 //! while every body is a moving sphere and there is no gravity, and hands the world to the grid's
