@@ -94,12 +94,19 @@ struct Slot {
     version: u32,
 }
 
+/// A body's scheduled event and its version, kept side by side: a bucket poured reads both for
+/// each of its bodies, scattered in memory, and then pays one cache miss per body, not two.
+#[derive(Debug, Clone, Copy)]
+struct Booked {
+    scheduled: Scheduled,
+    version: u32,
+}
+
 /// One scheduled event per body, earliest first.
 #[derive(Debug, Default)]
 pub(super) struct Calendar {
     /// Per body: its scheduled event and the version it was scheduled under.
-    scheduled: Vec<Scheduled>,
-    version: Vec<u32>,
+    booked: Vec<Booked>,
     /// The instant bucket 0 starts at, and the buckets' width (as its inverse).
     origin: f64,
     inverse_width: f64,
@@ -135,7 +142,7 @@ impl Calendar {
         }
         self.origin = now;
         self.current = 0;
-        self.version.iter_mut().for_each(|v| *v = v.wrapping_add(1));
+        self.booked.iter_mut().for_each(|b| b.version = b.version.wrapping_add(1));
         (self.popped, self.poured) = (0, 0);
     }
 
@@ -150,8 +157,7 @@ impl Calendar {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.scheduled.capacity() * std::mem::size_of::<Scheduled>()
-            + self.version.capacity() * 4
+        self.booked.capacity() * std::mem::size_of::<Booked>()
             + self.near.capacity() * std::mem::size_of::<Entry>()
             + (self.ring.iter().map(Vec::capacity).sum::<usize>() + self.overflow.capacity())
                 * std::mem::size_of::<Slot>()
@@ -172,17 +178,16 @@ impl Calendar {
     #[inline]
     pub(super) fn schedule(&mut self, owner: u32, scheduled: Scheduled) {
         let i = owner as usize;
-        if i >= self.version.len() {
-            self.version.resize(i + 1, 0);
-            self.scheduled.resize(i + 1, scheduled);
+        if i >= self.booked.len() {
+            self.booked.resize(i + 1, Booked { scheduled, version: 0 });
         }
-        self.version[i] = self.version[i].wrapping_add(1);
-        self.scheduled[i] = scheduled;
+        let version = self.booked[i].version.wrapping_add(1);
+        self.booked[i] = Booked { scheduled, version };
         let time = scheduled.time();
         if !time.is_finite() {
             return;
         }
-        let slot = Slot { time, owner, version: self.version[i] };
+        let slot = Slot { time, owner, version };
         let k = self.bucket(time);
         if k <= self.current {
             self.insert_near(Entry { scheduled, owner, version: slot.version });
@@ -197,8 +202,8 @@ impl Calendar {
 
     /// Body `owner` has no event any more (it was removed).
     pub(super) fn cancel(&mut self, owner: u32) {
-        if let Some(version) = self.version.get_mut(owner as usize) {
-            *version = version.wrapping_add(1);
+        if let Some(booked) = self.booked.get_mut(owner as usize) {
+            booked.version = booked.version.wrapping_add(1);
         }
     }
 
@@ -210,7 +215,7 @@ impl Calendar {
 
     #[inline]
     fn is_current(&self, owner: u32, version: u32) -> bool {
-        self.version[owner as usize] == version
+        self.booked[owner as usize].version == version
     }
 
     /// The earliest scheduled event as an entry, dropping entries replaced since.
@@ -235,6 +240,22 @@ impl Calendar {
                     }
                 }
             }
+        }
+    }
+
+    /// The entry `ahead` places after the earliest in the sorted list, if any: likely the event
+    /// `ahead` after the next (it may have been replaced since), whose records can be asked for
+    /// ahead of its turn.
+    #[inline]
+    pub(super) fn following(&self, ahead: usize) -> Option<&Entry> {
+        self.near.len().checked_sub(1 + ahead).map(|k| &self.near[k])
+    }
+
+    /// Asks for body `owner`'s scheduled event ahead of its use (see [`crate::memory::prefetch`]).
+    #[inline]
+    pub(super) fn prefetch(&self, owner: usize) {
+        if let Some(booked) = self.booked.get(owner) {
+            crate::memory::prefetch(booked);
         }
     }
 
@@ -276,7 +297,7 @@ impl Calendar {
             self.poured += 1;
             for slot in &bucket {
                 if self.is_current(slot.owner, slot.version) {
-                    let scheduled = self.scheduled[slot.owner as usize];
+                    let scheduled = self.booked[slot.owner as usize].scheduled;
                     self.near.push(Entry { scheduled, owner: slot.owner, version: slot.version });
                 }
             }
@@ -303,7 +324,7 @@ impl Calendar {
             }
             let bucket = self.bucket(slot.time);
             if bucket <= self.current {
-                let scheduled = self.scheduled[slot.owner as usize];
+                let scheduled = self.booked[slot.owner as usize].scheduled;
                 self.insert_near(Entry { scheduled, owner: slot.owner, version: slot.version });
             } else if bucket < self.current + ring {
                 self.ring[bucket.rem_euclid(ring) as usize].push(slot);

@@ -11,6 +11,7 @@
 //! time it crosses into a new one. It never computes a contact time nor changes a body.
 
 use crate::bodies::Bodies;
+use crate::memory::prefetch;
 use crate::motion::Motion;
 use crate::walls::BoxBounds;
 use glam::DVec3;
@@ -72,12 +73,24 @@ pub(super) struct Cells {
     reach: f64,
     /// Per cell: its first body, or [`NONE`].
     head: Vec<u32>,
-    /// Per body: the next and previous bodies of its cell, its cell ([`NONE`] when not listed)
-    /// and the cell's coordinates.
-    next: Vec<u32>,
-    prev: Vec<u32>,
-    cell: Vec<u32>,
-    at: Vec<[u16; 3]>,
+    /// Per body: its place in the lists (see [`Listing`]).
+    listing: Vec<Listing>,
+}
+
+/// A body's place in the lists: the next and previous bodies of its cell, its cell ([`NONE`]
+/// when not listed) and the cell's coordinates. Kept together, not as one array each: the events
+/// come in time order, so each reaches a body far from the last one's, and every field read
+/// then costs a cache miss of its own when the fields lie in separate arrays.
+#[derive(Debug, Clone, Copy)]
+struct Listing {
+    next: u32,
+    prev: u32,
+    cell: u32,
+    at: [u16; 3],
+}
+
+impl Listing {
+    const UNLISTED: Listing = Listing { next: NONE, prev: NONE, cell: NONE, at: [0; 3] };
 }
 
 /// A body's neighbours along one axis: up to three (index part, shift) steps.
@@ -123,10 +136,7 @@ impl Cells {
             periodic: bounds.periodic,
             reach,
             head: vec![NONE; total],
-            next: Vec::new(),
-            prev: Vec::new(),
-            cell: Vec::new(),
-            at: Vec::new(),
+            listing: Vec::new(),
         }
     }
 
@@ -137,14 +147,39 @@ impl Cells {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        (self.head.capacity() + self.next.capacity() + self.prev.capacity() + self.cell.capacity()) * 4
-            + self.at.capacity() * 6
+        self.head.capacity() * 4 + self.listing.capacity() * std::mem::size_of::<Listing>()
     }
 
     /// The cell body `i` is listed in, or [`NONE`].
     #[inline]
     pub(super) fn cell_of(&self, i: usize) -> u32 {
-        self.cell.get(i).copied().unwrap_or(NONE)
+        self.listing.get(i).map_or(NONE, |l| l.cell)
+    }
+
+    /// Asks for body `i`'s place in the lists ahead of its use (see [`crate::memory::prefetch`]).
+    #[inline]
+    pub(super) fn prefetch(&self, i: usize) {
+        if let Some(listing) = self.listing.get(i) {
+            prefetch(listing);
+        }
+    }
+
+    /// Asks for the heads of the cells around body `i`'s ahead of a search (when none lies across
+    /// a face of the box).
+    #[inline]
+    pub(super) fn prefetch_around(&self, i: usize) {
+        if let Some(rows) = self.rows_around(i) {
+            for first in rows {
+                prefetch(&self.head[first]);
+            }
+        }
+    }
+
+    /// Asks for the heads of the cells body `i`, listed, comes within reach of by `crossing` (a
+    /// crossing out of its cell), ahead of the search that follows it.
+    #[inline]
+    pub(super) fn prefetch_new(&self, i: usize, crossing: Crossing) {
+        self.for_each_new(self.stepped(i, crossing), crossing, |n| prefetch(&self.head[n.cell as usize]));
     }
 
     /// The coordinates of the cell holding the centre `position`.
@@ -158,13 +193,10 @@ impl Cells {
 
     /// Lists body `i` in the cell of its centre at `t`.
     pub(super) fn insert(&mut self, bodies: &Bodies, i: usize, t: f64) {
-        if self.cell.len() < bodies.slots() {
-            self.next.resize(bodies.slots(), NONE);
-            self.prev.resize(bodies.slots(), NONE);
-            self.cell.resize(bodies.slots(), NONE);
-            self.at.resize(bodies.slots(), [0; 3]);
+        if self.listing.len() < bodies.slots() {
+            self.listing.resize(bodies.slots(), Listing::UNLISTED);
         }
-        debug_assert_eq!(self.cell[i], NONE, "body {i} listed twice");
+        debug_assert_eq!(self.listing[i].cell, NONE, "body {i} listed twice");
         let at = self.cell_at(bodies.position_at(i, t));
         self.link(i, at);
     }
@@ -193,14 +225,14 @@ impl Cells {
     /// The coordinates and index of the cell body `i` steps into by `crossing`.
     #[inline]
     pub(super) fn stepped(&self, i: usize, crossing: Crossing) -> ([u16; 3], u32) {
-        let (mut at, axis) = (self.at[i], crossing.axis as usize);
+        let (mut at, axis) = (self.listing[i].at, crossing.axis as usize);
         let stride = self.strides[axis] as u32;
         let cell = if crossing.up {
             at[axis] += 1;
-            self.cell[i] + stride
+            self.listing[i].cell + stride
         } else {
             at[axis] -= 1;
-            self.cell[i] - stride
+            self.listing[i].cell - stride
         };
         (at, cell)
     }
@@ -222,33 +254,30 @@ impl Cells {
     /// Body `i`'s cell: its coordinates and index.
     #[inline]
     pub(super) fn place(&self, i: usize) -> ([u16; 3], u32) {
-        (self.at[i], self.cell[i])
+        (self.listing[i].at, self.listing[i].cell)
     }
 
     fn link(&mut self, i: usize, at: [i64; 3]) {
         let cell = (at[0] + at[1] * self.strides[1] + at[2] * self.strides[2]) as u32;
         let first = self.head[cell as usize];
-        self.next[i] = first;
-        self.prev[i] = NONE;
+        self.listing[i] = Listing { next: first, prev: NONE, cell, at: at.map(|c| c as u16) };
         if first != NONE {
-            self.prev[first as usize] = i as u32;
+            self.listing[first as usize].prev = i as u32;
         }
         self.head[cell as usize] = i as u32;
-        self.cell[i] = cell;
-        self.at[i] = at.map(|c| c as u16);
     }
 
     fn unlink(&mut self, i: usize) {
-        let (next, prev) = (self.next[i], self.prev[i]);
+        let Listing { next, prev, cell, .. } = self.listing[i];
         if prev == NONE {
-            self.head[self.cell[i] as usize] = next;
+            self.head[cell as usize] = next;
         } else {
-            self.next[prev as usize] = next;
+            self.listing[prev as usize].next = next;
         }
         if next != NONE {
-            self.prev[next as usize] = prev;
+            self.listing[next as usize].prev = prev;
         }
-        self.cell[i] = NONE;
+        self.listing[i].cell = NONE;
     }
 
     /// The first body of cell `cell`, or [`NONE`].
@@ -260,7 +289,7 @@ impl Cells {
     /// The body after `i` in its cell, or [`NONE`].
     #[inline]
     pub(super) fn after(&self, i: u32) -> u32 {
-        self.next[i as usize]
+        self.listing[i as usize].next
     }
 
     /// The cell `d` steps from coordinate `c` along axis `a`, as its part of a cell index, with
@@ -308,9 +337,9 @@ impl Cells {
     /// of them lies across a face of the box (most bodies' case; then no shift is needed).
     #[inline(always)]
     pub(super) fn inner_rows(&self, i: usize) -> Option<impl Iterator<Item = &[u32]> + '_> {
-        let at = self.at[i];
+        let at = self.listing[i].at;
         let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
-        let cell = self.cell[i] as i64;
+        let cell = self.listing[i].cell as i64;
         inside.then(|| {
             self.rows.iter().map(move |&d| {
                 let first = (cell + d - 1) as usize;
@@ -328,9 +357,9 @@ impl Cells {
     /// across a face of the box (most bodies' case).
     #[inline]
     pub(super) fn rows_around(&self, i: usize) -> Option<[usize; 9]> {
-        let at = self.at[i];
+        let at = self.listing[i].at;
         let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
-        let centre = self.cell[i] as i64;
+        let centre = self.listing[i].cell as i64;
         inside.then(|| self.rows.map(|d| (centre + d - 1) as usize))
     }
 
@@ -338,7 +367,7 @@ impl Cells {
     /// (fewer against walls).
     #[inline(always)]
     pub(super) fn for_each_around(&self, i: usize, visit: impl FnMut(Neighbour)) {
-        let at = self.at[i].map(i64::from);
+        let at = self.listing[i].at.map(i64::from);
         Self::for_each_in(self.around(0, at[0]), self.around(1, at[1]), self.around(2, at[2]), visit);
     }
 
@@ -378,7 +407,7 @@ impl Cells {
     /// body's wrap, an event of its own.
     #[inline]
     pub(super) fn next_crossing(&self, bodies: &Bodies, i: usize, now: f64) -> Crossing {
-        self.next_crossing_from(&bodies.motion(i), self.at[i], now)
+        self.next_crossing_from(&bodies.motion(i), self.listing[i].at, now)
     }
 
     /// [`Self::next_crossing`] of a body on `motion` in the cell at `at`.

@@ -14,6 +14,8 @@
 //! included. The contact times, the impacts, the contact rules (the TC model and the jam rule,
 //! its cluster found through the cells) and the reports are the pipeline's own functions, so the
 //! contacts and states are bit-identical to the brute-force oracle's, for every frame length.
+//! The events come in time order, so each reaches bodies far in memory from the last one's: the
+//! loop asks for the records and cells of the events a few places ahead while it handles the next.
 //!
 //! Where it applies: [`crate::world`] steps a world of `Method::Auto` in simulate mode with it
 //! while every body is a moving sphere and there is no gravity, and hands the world to the grid's
@@ -34,6 +36,7 @@ mod search;
 use crate::bodies::Bodies;
 use crate::event_queue::{Event, Partner};
 use crate::frame::{Contact, FrameStats, Output, Physics, Touched};
+use crate::memory::prefetch;
 use crate::pipeline::jam::Cluster;
 use crate::pipeline::respond::{self, Responder};
 use crate::response::impact::{Impacts, Resolution};
@@ -55,6 +58,11 @@ use std::time::Instant;
 const AHEAD_THREADS: usize = 3;
 /// The grid is rebuilt when the bodies have grown past this many times those it was sized for.
 const GROWTH: usize = 2;
+/// The records of the event this many after the next are asked for while the next is handled
+/// (see [`EventLoop::prefetch`]). Measured on the sparse gas at n = 10^5 (packing 0.05), where
+/// most events are cell crossings of bodies far apart in memory: 2 and 4 both cut the time per
+/// event by about a tenth, 1 by less.
+const PREFETCH_AHEAD: usize = 4;
 /// How many events pass between looks at the interrupt flag.
 const INTERRUPT_EVERY: u32 = 4096;
 
@@ -321,6 +329,12 @@ impl EventLoop {
                     break;
                 }
                 self.calendar.pop();
+                if let Some(following) = self.calendar.following(PREFETCH_AHEAD) {
+                    self.prefetch(bodies, following);
+                }
+                if let Some(following) = self.calendar.following(1) {
+                    self.prefetch_cells(following);
+                }
                 self.dispatch(bodies, physics, entry, out);
             }
         } else {
@@ -330,6 +344,57 @@ impl EventLoop {
         #[cfg(test)]
         if self.checking {
             self.check_screen(bodies, t1);
+        }
+    }
+
+    /// Asks for the records the event `entry` will read, ahead of its turn: the events come in
+    /// time order, so each reaches bodies far in memory from the last one's, and the event handled
+    /// meanwhile hides the wait.
+    #[inline]
+    fn prefetch(&self, bodies: &Bodies, entry: &Entry) {
+        self.prefetch_body(bodies, entry.owner as usize);
+        if let (false, Partner::Body(partner)) = (entry.scheduled.cell_crossing, entry.scheduled.event.partner) {
+            self.prefetch_body(bodies, partner as usize);
+        }
+    }
+
+    /// Asks for the heads of the cells the event `entry` will search, ahead of its turn: those a
+    /// cell crossing brings within reach, or those around a contact's bodies. (Its bodies' records
+    /// were asked for earlier, see [`PREFETCH_AHEAD`]: they tell which cells.)
+    #[inline]
+    fn prefetch_cells(&self, entry: &Entry) {
+        let owner = entry.owner as usize;
+        if self.cells.cell_of(owner) == NONE {
+            return;
+        }
+        if entry.scheduled.cell_crossing {
+            // The entry may be stale: the body's crossing is the one of the cell it is in.
+            let crossing = self.crossing[owner];
+            if crossing.time.is_finite() {
+                self.cells.prefetch_new(owner, crossing);
+            }
+        } else {
+            self.cells.prefetch_around(owner);
+            if let Partner::Body(partner) = entry.scheduled.event.partner {
+                if self.cells.cell_of(partner as usize) != NONE {
+                    self.cells.prefetch_around(partner as usize);
+                }
+            }
+        }
+    }
+
+    /// [`Self::prefetch`] of body `i`'s records: its motion, stamp, events, place in the cells.
+    #[inline]
+    fn prefetch_body(&self, bodies: &Bodies, i: usize) {
+        if let (Some(state), Some(stamp), Some(next), Some(crossing)) =
+            (bodies.state.get(i), bodies.stamp.get(i), self.next.get(i), self.crossing.get(i))
+        {
+            prefetch(state);
+            prefetch(stamp);
+            prefetch(next);
+            prefetch(crossing);
+            self.cells.prefetch(i);
+            self.calendar.prefetch(i);
         }
     }
 
