@@ -47,8 +47,8 @@ use vadop::{Body, BodyHandle, BodyShape, Rest, VadopError, World};
 /// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
 /// ``touching()`` — started and stopped events) and ``gravity`` (x, y, z: the uniform
 /// acceleration of every moving body; None: none; bodies of any shape; with restitution below
-/// 1 in simulate mode bodies come to rest, ``rest``, and only spheres are taken then, for now;
-/// static bodies in detect mode only) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
+/// 1 in simulate mode bodies come to rest, ``rest``, on static geometry too, and only spheres
+/// are taken then, for now) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
 /// ``'xy'``; the others keep their walls: a body leaving through one face comes back through the
 /// opposite one, bodies meet across the faces, and ``crossings`` counts each body's passages;
 /// bodies of any shape, no static bodies yet, and each periodic side at least 8 largest bounding

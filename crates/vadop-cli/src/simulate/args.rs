@@ -187,8 +187,8 @@ pub struct SimulateArgs {
     pub(super) contact_duration: f64,
     /// Uniform acceleration of every moving body, as x,y,z (e.g. 0,0,-9.81): parabolic paths,
     /// exact for every method and shape; with restitution below 1 in simulate mode bodies come
-    /// to rest on the floor and on each other (the rest rule; spheres only, for now); static
-    /// bodies in detect mode only [default: none; 0,0,-9.81 with --kind pile]
+    /// to rest on the floor, on each other and on static geometry (the rest rule; spheres only,
+    /// for now) [default: none; 0,0,-9.81 with --kind pile]
     #[arg(long, value_name = "X,Y,Z", value_parser = parse_vector, allow_negative_numbers = true, help_heading = "World")]
     pub(super) gravity: Option<glam::DVec3>,
     /// Periodic axes of the box, e.g. xyz or xy (the others keep their walls): a body leaving
