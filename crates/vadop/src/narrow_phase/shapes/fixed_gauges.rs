@@ -4,7 +4,7 @@
 //! never sees another moving body (the pair gauges in [`super::gauges`] do).
 
 use super::chord::{wall_hold, Moving};
-use super::distance::{convex_bounds, Bounds};
+use super::distance::{convex_bounds, Bounds, PROBE_DEPTH_SHARE};
 use super::gauges::{Gauge, Measure, Probe, Reach, Warm, NO_FAR};
 use super::scaled::{along, speeding, Body, Scaled};
 use super::{guard, starting, SLACK};
@@ -106,7 +106,7 @@ impl MeshPair<'_> {
     /// the smallest lower bound of a triangle (parry's best-first search over the mesh's
     /// hierarchy, which skips boxes farther than the best so far), and the smallest upper bound
     /// met on the way, with its triangle's axis and points.
-    pub(super) fn closest(&self, tau: f64, depth: bool) -> Option<Bounds> {
+    pub(super) fn closest(&self, tau: f64, depth: Option<f64>) -> Option<Bounds> {
         let nearest: Cell<Option<Bounds>> = Cell::new(None);
         let (_, lowest) = self.search(tau, depth, &nearest)?;
         let nearest = nearest.get().unwrap_or(lowest);
@@ -115,7 +115,7 @@ impl MeshPair<'_> {
 
     /// The triangle with the smallest lower bound on its signed distance to the body; `nearest`
     /// keeps the bounds with the smallest upper bound.
-    pub(super) fn search(&self, tau: f64, depth: bool, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
+    pub(super) fn search(&self, tau: f64, depth: Option<f64>, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
         let (centre, pose) = self.state(tau);
         let body = self.body.support(self.scale);
         let slack = SLACK * self.size;
@@ -166,7 +166,7 @@ impl MeshPair<'_> {
 impl Gauge for MeshPair<'_> {
     fn probe(&self, tau: f64, measure: Measure) -> Probe {
         let rate = speeding(self.velocity, self.acceleration, tau).length() + self.spin;
-        let (lower, upper) = match self.closest(tau, measure != Measure::Gap) {
+        let (lower, upper) = match self.closest(tau, (measure != Measure::Gap).then_some(PROBE_DEPTH_SHARE)) {
             Some(b) => (b.lower, b.upper),
             None => (f64::INFINITY, f64::INFINITY),
         };

@@ -156,6 +156,7 @@
 
 mod chord;
 mod distance;
+mod epa;
 mod fixed_gauges;
 mod gauges;
 mod inner_balls;
@@ -623,7 +624,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
         PairGauge::Convex(pair) => {
             let (pose_a, pose_b) = pair.poses(tau);
             let (ga, gb) = (pair.a.support(pair.scale), pair.b.support(pair.scale));
-            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, true, pair.tol, 0.0);
+            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, Some(0.0), pair.tol, 0.0);
             let origin = pair.a.centre(tau);
             let witness = bounds
                 .witness
@@ -639,7 +640,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
             Some(ContactPoint { point, normal, distance: distance / pair.scale })
         }
         PairGauge::Mesh(pair, flipped) => {
-            let bounds = pair.closest(tau, true)?;
+            let bounds = pair.closest(tau, Some(0.0))?;
             let (_, pose) = pair.state(tau);
             let witness = bounds.witness.unwrap_or_else(|| {
                 // The body's extreme point towards the mesh, on both sides.
