@@ -164,17 +164,6 @@ impl Cells {
         }
     }
 
-    /// Asks for the heads of the cells around body `i`'s ahead of a search (when none lies across
-    /// a face of the box).
-    #[inline]
-    pub(super) fn prefetch_around(&self, i: usize) {
-        if let Some(rows) = self.rows_around(i) {
-            for first in rows {
-                prefetch(&self.head[first]);
-            }
-        }
-    }
-
     /// Asks for the heads of the cells body `i`, listed, comes within reach of by `crossing` (a
     /// crossing out of its cell), ahead of the search that follows it.
     #[inline]

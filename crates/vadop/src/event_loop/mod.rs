@@ -359,8 +359,9 @@ impl EventLoop {
     }
 
     /// Asks for the heads of the cells the event `entry` will search, ahead of its turn: those a
-    /// cell crossing brings within reach, or those around a contact's bodies. (Its bodies' records
-    /// were asked for earlier, see [`PREFETCH_AHEAD`]: they tell which cells.)
+    /// cell crossing brings within reach. (Its bodies' records were asked for earlier, see
+    /// [`PREFETCH_AHEAD`]: they tell which cells.) The cells around a contact's bodies are not
+    /// asked for: that measured no faster in the dense gas, where contacts are most events.
     #[inline]
     fn prefetch_cells(&self, entry: &Entry) {
         let owner = entry.owner as usize;
@@ -372,13 +373,6 @@ impl EventLoop {
             let crossing = self.crossing[owner];
             if crossing.time.is_finite() {
                 self.cells.prefetch_new(owner, crossing);
-            }
-        } else {
-            self.cells.prefetch_around(owner);
-            if let Partner::Body(partner) = entry.scheduled.event.partner {
-                if self.cells.cell_of(partner as usize) != NONE {
-                    self.cells.prefetch_around(partner as usize);
-                }
             }
         }
     }
