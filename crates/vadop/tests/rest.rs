@@ -41,17 +41,13 @@ fn a_dropped_ball_bounces_as_the_closed_form_says_then_lies_still() {
         contacts.extend(world.step(DT).unwrap().iter().copied());
         rests += world.stats().rest_contacts;
     }
-    let v0 = (2.0 * G * 4.0f64).sqrt();
-    let rest_speed = (2.0 * G * REST_HEIGHT * 0.5).sqrt();
     // Landing k comes at speed v0 e^k; the last is the first whose bounce e v0 e^k is below the
     // rest speed.
-    let landings = (0..).find(|&k| e * v0 * e.powi(k) < rest_speed).unwrap() + 1;
-    assert_eq!(contacts.len(), landings as usize, "{contacts:?}");
-    let mut time = (2.0 * 4.0 / G).sqrt();
-    for (k, c) in contacts.iter().enumerate() {
+    let landings = common::closed_form_landings(4.0, G, e, 0.5);
+    assert_eq!(contacts.len(), landings.len(), "{contacts:?}");
+    for (k, (c, time)) in contacts.iter().zip(landings).enumerate() {
         assert_eq!(c.touched, Touched::Wall(Wall::MinZ));
         assert!((c.time - time).abs() <= 1e-9, "landing {k} at {} not {time}", c.time);
-        time += 2.0 * e * v0 * e.powi(k as i32) / G;
     }
     assert_eq!(world.rest(b).unwrap(), Rest::Still);
     assert_eq!(rests, 1, "only the last landing is the rest rule's");

@@ -8,7 +8,6 @@
 mod common;
 
 use glam::{DQuat, DVec3};
-use vadop::response::rest::REST_HEIGHT;
 use vadop::scene::{PaperScene, ShapesScene, FRAMES_PER_SECOND};
 use vadop::shape::Shape;
 use vadop::{Body, BodyHandle, BodyShape, BoxBounds, Method, Mode, Rest, Sphere, Touched, World, WorldConfig};
@@ -87,15 +86,11 @@ fn balls_rest_on_static_geometry() {
     for _ in 0..150 {
         contacts.extend(world.step(DT).unwrap().iter().copied());
     }
-    let v0 = (2.0 * G * 4.0f64).sqrt();
-    let rest_speed = (2.0 * G * REST_HEIGHT * 0.5).sqrt();
-    let landings = (0..).find(|&k| e * v0 * e.powi(k) < rest_speed).unwrap() + 1;
-    assert_eq!(contacts.len(), landings as usize, "{contacts:?}");
-    let mut time = (2.0 * 4.0 / G).sqrt();
-    for (k, c) in contacts.iter().enumerate() {
+    let landings = common::closed_form_landings(4.0, G, e, 0.5);
+    assert_eq!(contacts.len(), landings.len(), "{contacts:?}");
+    for (k, (c, time)) in contacts.iter().zip(landings).enumerate() {
         assert!(matches!(c.touched, Touched::Body(_)));
         assert!((c.time - time).abs() <= 1e-6, "landing {k} at {} not {time}", c.time);
-        time += 2.0 * e * v0 * e.powi(k as i32) / G;
     }
     assert_eq!(world.rest(b).unwrap(), Rest::Still);
     let s = world.sphere(b).unwrap();

@@ -155,3 +155,20 @@ pub fn assert_resumes_bit_exactly(world: &mut World, name: &str, frames: usize, 
     }
     assert_eq!(state_bits(world), state_bits(&resumed));
 }
+
+/// The instants (from the drop) at which a ball of `radius` dropped from rest `height` above its
+/// floor under gravity `g` lands, each landing at `restitution` times the last's speed, until the
+/// rest rule takes the first landing whose bounce would be slower than the rest speed (the last).
+pub fn closed_form_landings(height: f64, g: f64, restitution: f64, radius: f64) -> Vec<f64> {
+    let v0 = (2.0 * g * height).sqrt();
+    let rest_speed = (2.0 * g * vadop::response::rest::REST_HEIGHT * radius).sqrt();
+    let mut time = (2.0 * height / g).sqrt();
+    let mut landings = vec![time];
+    let mut speed = v0;
+    while restitution * speed >= rest_speed {
+        time += 2.0 * restitution * speed / g;
+        speed *= restitution;
+        landings.push(time);
+    }
+    landings
+}
