@@ -162,6 +162,16 @@ pub(crate) struct Physics {
     pub report_ends: bool,
 }
 
+impl Physics {
+    /// Whether a contact turns its bodies back, `level` when one side is a wall or static
+    /// geometry: every contact in simulate mode; in detect mode, where moving bodies pass through
+    /// each other, only one against the level.
+    #[inline]
+    pub fn turns_back(&self, level: bool) -> bool {
+        self.mode == Mode::Simulate || level
+    }
+}
+
 /// What a frame produces.
 pub(crate) struct Output<'a> {
     pub contacts: &'a mut Vec<Contact>,

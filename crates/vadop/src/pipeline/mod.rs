@@ -498,8 +498,7 @@ impl<B: BroadPhase> Pipeline<B> {
     /// bodies in detect mode, which keep their paths, start afresh all the same. Every method
     /// stalls at the same instant: canonical.
     fn stalled(&mut self, bodies: &mut Bodies, physics: &Physics, stuck: &[u32], t: f64, out: &mut Output) {
-        let level = stuck.len() == 1 || stuck.iter().any(|&k| bodies.is_fixed(k as usize));
-        if physics.mode == Mode::Simulate || level {
+        if physics.turns_back(stuck.len() == 1 || stuck.iter().any(|&k| bodies.is_fixed(k as usize))) {
             let progressed =
                 stuck.iter().all(|&k| bodies.is_fixed(k as usize) || t > bodies.state[k as usize].motion.since);
             let touching = match *stuck {

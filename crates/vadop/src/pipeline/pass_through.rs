@@ -14,7 +14,7 @@ use super::Pipeline;
 use crate::bodies::Bodies;
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, Partner};
-use crate::frame::{Mode, Physics};
+use crate::frame::Physics;
 use crate::narrow_phase::contacts::{self, Found, Parking};
 use glam::DVec3;
 
@@ -39,7 +39,7 @@ pub(super) struct Searched {
 fn passes_through(bodies: &Bodies, physics: &Physics, event: &Event) -> bool {
     let Partner::Body(j) = event.partner else { return false };
     let (i, j) = (event.body as usize, j as usize);
-    physics.mode == Mode::Detect && !(bodies.are_spheres(i, j) || bodies.is_fixed(i) || bodies.is_fixed(j))
+    !(physics.turns_back(bodies.is_fixed(i) || bodies.is_fixed(j)) || bodies.are_spheres(i, j))
 }
 
 impl<B: BroadPhase> Pipeline<B> {

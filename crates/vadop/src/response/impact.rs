@@ -138,8 +138,7 @@ impl Impacts {
     ) -> Resolution {
         let (i, j) = (a as usize, b as usize);
         let fixed = (bodies.is_fixed(i), bodies.is_fixed(j));
-        // Static level geometry turns bodies back in detect mode too, as the walls do.
-        if physics.mode != Mode::Simulate && fixed == (false, false) {
+        if !physics.turns_back(fixed != (false, false)) {
             return Resolution::Passed;
         }
         let duration = tc_duration(physics);

@@ -129,7 +129,7 @@ pub(super) fn closer_points(
 }
 
 /// How tight a depth must be: EPA may stop once its bound is within `share` of the depth plus
-/// `tol` of the true one (0: converged, to rounding).
+/// `tol` of the true one ([`EXACT_DEPTH`]: converged, to rounding).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct DepthNeed {
     pub(super) share: f64,
@@ -140,6 +140,9 @@ pub(super) struct DepthNeed {
 /// contact on a bound this much short goes at most this much less far. EPA run to convergence
 /// took 17 support points a call on mixed shapes (the CLI's crowd), about 5 at this share.
 pub(super) const PROBE_DEPTH_SHARE: f64 = 1.0 / 32.0;
+
+/// The depth share of a measure that must be exact: EPA run to convergence (contact geometry).
+pub(super) const EXACT_DEPTH: f64 = 0.0;
 
 /// Bounds on the signed distance of two shapes at one instant (scaled lengths, in the frame of
 /// their poses).

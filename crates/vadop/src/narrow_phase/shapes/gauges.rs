@@ -644,6 +644,7 @@ impl Gauge for PairGauge<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::narrow_phase::shapes::distance::EXACT_DEPTH;
     use glam::DQuat;
     use rand::{Rng, SeedableRng};
 
@@ -664,7 +665,7 @@ mod tests {
             let offset =
                 DVec3::new(random(), random(), random()).normalize_or(DVec3::X) * (0.1 + 0.6 * (random() + 0.5));
             let (pose_a, pose_b) = (Pose::from_parts(DVec3::ZERO, qa), Pose::from_parts(offset, qb));
-            let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Some(0.0), 1e-6, 1e-14);
+            let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Some(EXACT_DEPTH), 1e-6, 1e-14);
             let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b)) else { continue };
             let (here, _) = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
             if bounds.upper < -1e-3 {

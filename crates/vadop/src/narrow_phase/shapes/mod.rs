@@ -169,7 +169,7 @@ use crate::numeric::unit_scale;
 use crate::shape::ShapeGeometry;
 use crate::walls::Wall;
 use crate::window::Window;
-use distance::{convex_bounds, Bounds};
+use distance::{convex_bounds, Bounds, EXACT_DEPTH};
 use fixed_gauges::{MeshPair, PlanePair, WallGauge};
 use gauges::{ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
@@ -624,7 +624,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
         PairGauge::Convex(pair) => {
             let (pose_a, pose_b) = pair.poses(tau);
             let (ga, gb) = (pair.a.support(pair.scale), pair.b.support(pair.scale));
-            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, Some(0.0), pair.tol, 0.0);
+            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, Some(EXACT_DEPTH), pair.tol, 0.0);
             let origin = pair.a.centre(tau);
             let witness = bounds
                 .witness
@@ -640,7 +640,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
             Some(ContactPoint { point, normal, distance: distance / pair.scale })
         }
         PairGauge::Mesh(pair, flipped) => {
-            let bounds = pair.closest(tau, Some(0.0))?;
+            let bounds = pair.closest(tau, Some(EXACT_DEPTH))?;
             let (_, pose) = pair.state(tau);
             let witness = bounds.witness.unwrap_or_else(|| {
                 // The body's extreme point towards the mesh, on both sides.
