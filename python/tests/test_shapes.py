@@ -230,7 +230,7 @@ def test_a_mixed_world_finds_the_contacts_of_brute_force(mode: Any, method: Any,
         np.testing.assert_array_equal(getattr(world, column), getattr(oracle, column), err_msg=column)
 
 
-def test_shapes_under_gravity_fall_and_only_spheres_come_to_rest() -> None:
+def test_shapes_under_gravity_fall_and_come_to_rest() -> None:
     # Elastic: a dropped cuboid bounces on the floor, keeping kinetic plus potential energy.
     world = vadop.World(box=10.0, gravity=(0, 0, -9.81))
     cuboid = world.add_shape("cuboid", half_extents=[0.6, 0.3, 0.2])
@@ -241,12 +241,16 @@ def test_shapes_under_gravity_fall_and_only_spheres_come_to_rest() -> None:
         walls += int((world.step(1 / 30).wall >= 0).sum())
     assert walls > 0
     assert world.kinetic_energy() + world.potential_energy() == pytest.approx(start, rel=1e-12)
-    # With restitution below 1 only spheres come to rest; they rest on static geometry too.
-    resting = vadop.World(box=10.0, gravity=(0, 0, -9.81), restitution=0.5)
+    # With restitution below 1 a shape comes to rest: on a static half-space, it lies still on its
+    # face there, its spin stopped.
+    resting = vadop.World(box=10.0, gravity=(0, 0, -9.81), restitution=0.5, friction=0.3)
     cuboid = resting.add_shape("cuboid", half_extents=[0.6, 0.3, 0.2])
-    with pytest.raises(ValueError, match="only spheres come to rest"):
-        resting.add_bodies([cuboid], [[5.0, 5, 4]])
     resting.add_static(resting.add_shape("halfspace", normal=[0.0, 0, 1]), [0.0, 0, 1])
+    resting.add_bodies([cuboid], [[5.0, 5, 4]])
+    resting.step(3.0)
+    assert resting.rest == ["still", "still"]
+    assert resting.positions[1, 2] == pytest.approx(1.2, abs=1e-6)
+    np.testing.assert_array_equal(resting.angular_velocities[1], [0.0, 0, 0])
     detect = vadop.World(box=10.0, gravity=(0, 0, -9.81), mode="detect")
     detect.add_static(detect.add_shape("halfspace", normal=[0.0, 0, 1]), [0.0, 0, 1])
 

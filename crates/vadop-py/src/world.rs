@@ -47,8 +47,7 @@ use vadop::{Body, BodyHandle, BodyShape, Rest, VadopError, World};
 /// each contact between bodies ends, ``contact_ends()``, and keep the pairs in contact,
 /// ``touching()`` — started and stopped events) and ``gravity`` (x, y, z: the uniform
 /// acceleration of every moving body; None: none; bodies of any shape; with restitution below
-/// 1 in simulate mode bodies come to rest, ``rest``, on static geometry too, and only spheres
-/// are taken then, for now) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
+/// 1 in simulate mode bodies of every shape come to rest, ``rest``, on static geometry too) and ``periodic`` (the box's periodic axes as letters, e.g. ``'xyz'`` or
 /// ``'xy'``; the others keep their walls: a body leaving through one face comes back through the
 /// opposite one, bodies meet across the faces, and ``crossings`` counts each body's passages;
 /// bodies of any shape, no static bodies yet, and each periodic side at least 8 largest bounding
@@ -512,8 +511,9 @@ impl PyWorld {
     }
 
     /// How each body is held up under gravity (see the Rust ``vadop::Rest``): ``'falling'``,
-    /// ``'sliding'`` (along walls gravity presses it into: the floor, or a corner under tilted
-    /// gravity) or ``'still'`` (on walls or on bodies lying still). Bodies come to rest only in
+    /// ``'sliding'`` (a ball along walls gravity presses it into: the floor, or a corner under
+    /// tilted gravity) or ``'still'`` (on walls, on bodies lying still or on static geometry; a
+    /// shape other than a ball lies still rather than slides). Bodies come to rest only in
     /// simulate mode with restitution below 1; static bodies are ``'still'``.
     ///
     /// >>> import vadop

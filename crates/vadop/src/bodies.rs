@@ -13,6 +13,7 @@
 //! narrow phase reads for a candidate pair, and the proxy table reads it from here rather than
 //! keeping a copy.
 
+use crate::frame::Mode;
 use crate::handle::BodyHandle;
 use crate::memory::prefetch;
 use crate::motion::free_rotation::FreeRotation;
@@ -130,6 +131,9 @@ pub struct Bodies {
     pub gravity: DVec3,
     /// The box's periodic axes: pairs meet through their nearest image across them.
     pub periodic: Periodic,
+    /// Whether contacts turn bodies back ([`Mode::turns_back`]): a pair's search needs it to
+    /// tell a contact in progress from one to turn back.
+    pub mode: Mode,
     /// Per slot, in a periodic box: how many times the body's centre crossed each periodic
     /// axis's faces (+1 out through the max face, -1 through the min face), so its unwrapped
     /// position is its position plus these times the sides. Empty until a first crossing.
@@ -285,8 +289,8 @@ pub fn speed(velocity: DVec3) -> f64 {
 
 impl Bodies {
     /// An empty store whose moving bodies fall under `gravity` in a box of `periodic` axes.
-    pub(crate) fn new(gravity: DVec3, periodic: Periodic) -> Bodies {
-        Bodies { gravity, periodic, ..Bodies::default() }
+    pub(crate) fn new(gravity: DVec3, periodic: Periodic, mode: Mode) -> Bodies {
+        Bodies { gravity, periodic, mode, ..Bodies::default() }
     }
 
     /// Centre of body `j` minus centre of body `i` at `t`, through the nearest image in a

@@ -101,9 +101,6 @@ pub enum VadopError {
     /// A body that (nearly) rests on a wall under gravity: it would bounce without end.
     #[error("body {body} rests on a wall under gravity: its bounces rise {height:e}, so it would bounce more than {limit:e} times in this step; bodies come to rest only in simulate mode with restitution below 1, so such a body is refused rather than left to sink or to bounce without end")]
     RestingUnderGravity { body: BodyHandle, height: f64, limit: f64 },
-    /// Gravity with what it does not support yet.
-    #[error("under gravity, for now, only spheres come to rest in simulate mode with restitution below 1 (the rest rule lays a resting body on its floor by its radius); shapes fall in detect mode and in elastic worlds, and rest on static geometry nowhere yet: {0}")]
-    GravityUnsupported(&'static str),
     /// A periodic box with what it does not support yet.
     #[error(
         "periodic boxes take moving bodies of any shape but no static bodies yet (level geometry is not periodic): {0}"

@@ -7,9 +7,10 @@ use crate::walls::{BoxBounds, Wall};
 use glam::DVec3;
 
 /// Whether bodies collide with each other or only report contacts.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Mode {
     /// Full response between bodies and with the walls.
+    #[default]
     Simulate,
     /// Bodies pass through each other (contacts are reported, not resolved) and bounce only off
     /// the walls, so every method sees exactly the same paths.
@@ -162,13 +163,27 @@ pub(crate) struct Physics {
     pub report_ends: bool,
 }
 
-impl Physics {
+impl Mode {
     /// Whether a contact turns its bodies back, `level` when one side is a wall or static
     /// geometry: every contact in simulate mode; in detect mode, where moving bodies pass through
     /// each other, only one against the level.
+    ///
+    /// ```
+    /// use vadop::Mode;
+    /// assert!(Mode::Simulate.turns_back(false) && Mode::Detect.turns_back(true));
+    /// assert!(!Mode::Detect.turns_back(false));
+    /// ```
+    #[inline]
+    pub fn turns_back(self, level: bool) -> bool {
+        self == Mode::Simulate || level
+    }
+}
+
+impl Physics {
+    /// [`Mode::turns_back`] in this world's mode.
     #[inline]
     pub fn turns_back(&self, level: bool) -> bool {
-        self.mode == Mode::Simulate || level
+        self.mode.turns_back(level)
     }
 }
 

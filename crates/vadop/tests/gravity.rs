@@ -150,15 +150,13 @@ fn unsupported_gravity_is_refused_clearly() {
     let mut world = World::new(BoxBounds::cube(4.0).unwrap(), config(DVec3::NEG_Z, 1.0)).unwrap();
     let cube = world.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
     let body = at_rest(cube);
-    // A shape falls in an elastic world (and in detect mode), but only a sphere comes to rest:
-    // with restitution below 1 it is refused. Static geometry is taken in both modes.
+    // A shape falls in an elastic world, in detect mode, and comes to rest with restitution below
+    // 1 (tests/rest_shapes.rs). Static geometry is taken in both modes.
     let cube_body = world.add_body(body).unwrap();
     world.remove_body(cube_body).unwrap();
     let mut resting = World::new(BoxBounds::cube(4.0).unwrap(), config(DVec3::NEG_Z, 0.5)).unwrap();
     let cube = resting.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
-    let refused = resting.add_body(vadop::Body { shape: vadop::BodyShape::Shape(cube), ..body }).unwrap_err();
-    assert!(matches!(refused, VadopError::GravityUnsupported(_)), "{refused}");
-    assert!(refused.to_string().contains("only spheres come to rest"), "{refused}");
+    assert!(resting.add_body(vadop::Body { shape: vadop::BodyShape::Shape(cube), ..body }).is_ok());
     let mut detect =
         World::new(BoxBounds::cube(4.0).unwrap(), WorldConfig { mode: Mode::Detect, ..config(DVec3::NEG_Z, 1.0) })
             .unwrap();
@@ -221,21 +219,21 @@ fn a_dropped_capsule_bounces_at_the_closed_form_instants() {
     assert!(now.position.truncate().distance(glam::DVec2::new(5.0, 5.0)) < 1e-9, "it stays upright over its spot");
 }
 
-/// A saved world is checked as a built one: a file edited to put a shape that would come to rest
-/// under gravity in simulate mode is refused on loading, naming the slot, not stepped.
+/// A saved world is checked as a built one: a file edited to make the box periodic around a
+/// static body (level geometry is not periodic) is refused on loading, naming the slot, not
+/// stepped.
 #[test]
-fn a_save_file_edited_past_the_gravity_refusals_is_refused() {
-    let config = WorldConfig { restitution: 0.5, ..WorldConfig::default() };
-    let mut world = World::new(BoxBounds::cube(4.0).unwrap(), config).unwrap();
+fn a_save_file_edited_past_the_refusals_is_refused() {
+    let mut world = World::new(BoxBounds::cube(4.0).unwrap(), WorldConfig::default()).unwrap();
     let cube = world.add_shape(vadop::shape::Shape::Cuboid { half_extents: DVec3::splat(0.5) }).unwrap();
-    world.add_body(at_rest(cube)).unwrap();
-    let path = std::env::temp_dir().join(format!("vadop-gravity-edit-{}.json", std::process::id()));
+    world.add_static(cube, DVec3::splat(2.0), glam::DQuat::IDENTITY).unwrap();
+    let path = std::env::temp_dir().join(format!("vadop-refusal-edit-{}.json", std::process::id()));
     world.save(&path).unwrap();
-    assert!(World::load(&path).is_ok(), "saved without gravity: loads");
+    assert!(World::load(&path).is_ok(), "saved with walls: loads");
     let mut saved: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    saved["config"]["gravity"] = serde_json::json!([0.0, 0.0, -9.81]);
+    saved["bounds"]["periodic"] = serde_json::json!([true, false, false]);
     std::fs::write(&path, saved.to_string()).unwrap();
     let refused = World::load(&path).unwrap_err().to_string();
     std::fs::remove_file(&path).unwrap();
-    assert!(refused.contains("slot 0") && refused.contains("only spheres come to rest"), "{refused}");
+    assert!(refused.contains("slot 0") && refused.contains("no static bodies"), "{refused}");
 }

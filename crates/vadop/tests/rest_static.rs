@@ -10,7 +10,7 @@ mod common;
 use glam::{DQuat, DVec3};
 use vadop::scene::{PaperScene, ShapesScene, FRAMES_PER_SECOND};
 use vadop::shape::Shape;
-use vadop::{Body, BodyHandle, BodyShape, BoxBounds, Method, Mode, Rest, Sphere, Touched, World, WorldConfig};
+use vadop::{BoxBounds, Method, Mode, Rest, Sphere, Touched, World, WorldConfig};
 
 const DT: f64 = 1.0 / FRAMES_PER_SECOND;
 const G: f64 = 9.81;
@@ -21,51 +21,6 @@ fn config(method: Method, mode: Mode, restitution: f64, friction: f64) -> WorldC
 
 fn ball(position: DVec3, velocity: DVec3) -> Sphere {
     Sphere { position, velocity, radius: 0.5, mass: 1.0 }
-}
-
-/// The deepest overlap at the frame end, if beyond `tolerance` times the pair's sizes: between
-/// two bodies (moving or static) or a moving body and a wall, measured by parry on the bodies'
-/// poses, independently of vadop's searches.
-fn sunk(world: &World, tolerance: f64) -> Option<String> {
-    let bodies: Vec<(BodyHandle, Body)> = world.bodies().collect();
-    let geometry = |b: &Body| match b.shape {
-        BodyShape::Sphere { radius } => Shape::Sphere { radius }.geometry().unwrap(),
-        BodyShape::Shape(id) => world.shape(id).unwrap().clone(),
-    };
-    let pose = |b: &Body| parry3d_f64::math::Pose::from_parts(b.position, b.orientation);
-    let size = |b: &Body| geometry(b).bounding_radius().unwrap_or(1.0);
-    let bounds = world.bounds();
-    for (k, (i, a)) in bodies.iter().enumerate() {
-        if a.mass.is_finite() {
-            // The shape's farthest points along the axes (its bounding box would be loose for a
-            // turned cylinder or cone).
-            let (g, slack) = (geometry(a), tolerance * size(a));
-            let support = g.parry_shape().as_support_map().expect("moving bodies are convex");
-            let pose = parry3d_f64::math::Pose::from_parts(a.position, a.orientation);
-            for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
-                let [high, low] =
-                    [axis, -axis].map(|d| pose * support.local_support_point(pose.rotation.inverse() * d));
-                if low.dot(axis) < bounds.min.dot(axis) - slack || high.dot(axis) > bounds.max.dot(axis) + slack {
-                    return Some(format!("body {i} through a wall: it spans {low}..{high}"));
-                }
-            }
-        }
-        for (j, b) in &bodies[k + 1..] {
-            // Static geometry turns bodies back in detect mode too; moving bodies pass through.
-            let moving = a.mass.is_finite() && b.mass.is_finite();
-            if !(a.mass.is_finite() || b.mass.is_finite()) || (moving && world.config().mode == Mode::Detect) {
-                continue;
-            }
-            let (ga, gb) = (geometry(a), geometry(b));
-            let (sa, sb) = (ga.parry_shape().as_ref(), gb.parry_shape().as_ref());
-            if let Ok(Some(c)) = parry3d_f64::query::contact(&pose(a), sa, &pose(b), sb, 0.0) {
-                if c.dist < -tolerance * size(a).min(size(b)) {
-                    return Some(format!("bodies {i} and {j} overlap by {:e}", -c.dist));
-                }
-            }
-        }
-    }
-    None
 }
 
 fn resting(world: &World) -> usize {
@@ -110,7 +65,7 @@ fn balls_rest_on_static_geometry() {
     }
     for frame in 0..300 {
         world.step(DT).unwrap();
-        let violation = sunk(&world, 1e-5);
+        let violation = common::sunk(&world, 1e-5);
         assert!(violation.is_none(), "frame {frame}: {violation:?}");
     }
     let moving: Vec<_> = world.spheres().filter(|(h, _)| world.rest(*h).unwrap() == Rest::Falling).collect();
@@ -129,7 +84,7 @@ fn a_spinning_shape_chattering_on_the_floor_stays_out_of_it() {
     let mut world = scene.world(config(Method::Auto, Mode::Detect, 0.5, 0.3)).unwrap();
     for frame in 0..45 {
         world.step(DT).unwrap();
-        let violation = sunk(&world, 1e-5);
+        let violation = common::sunk(&world, 1e-5);
         assert!(violation.is_none(), "frame {frame}: {violation:?}");
     }
 }
@@ -190,14 +145,7 @@ fn balls_settling_on_static_geometry_match_brute_force_and_resume_bit_exactly() 
         }
         world
     };
-    let mut settled = None;
-    for method in [Method::Vadop, Method::Grid, Method::SweptAabb] {
-        let (mut found, mut oracle) = (build(method), build(Method::Brute));
-        let refused = common::step_beside_oracle(&mut found, &mut oracle, 150, DT, |_, _| {});
-        assert!(refused.is_none(), "{method:?}: {refused:?}");
-        settled = Some(oracle);
-    }
-    let mut oracle = settled.expect("three methods ran");
+    let mut oracle = common::every_method_beside_oracle(build, 150, DT);
     assert!(resting(&oracle) > 0, "some balls rest");
     common::assert_resumes_bit_exactly(&mut oracle, "rest-static", 60, DT);
 }

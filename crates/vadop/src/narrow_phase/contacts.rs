@@ -17,7 +17,7 @@ use crate::narrow_phase::falling::may_touch_within;
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
-use crate::narrow_phase::shapes::{shape_contact_after_parked, shape_contact_resumed, shape_wall_time, Resume};
+use crate::narrow_phase::shapes::{pair_first_start, shape_contact_after_parked, shape_wall_time, Resume};
 use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, wall_contact_time, CONTACT_TOLERANCE};
 use crate::numeric::{direction, unit_scale};
 use crate::walls::BoxBounds;
@@ -96,8 +96,9 @@ pub(crate) fn pair_start_parked(
     let across = shift != DVec3::ZERO;
     let (key, epochs) = parking_key(bodies, a, b);
     let resume = parked.filter(|_| !across).and_then(|p| p.get(key.0, key.1, epochs));
-    let (found, parks) =
-        settled_parked(shape_contact_resumed((ga, &ma), (gb, &mb), window, resume).map(|(s, p)| (s.found, p)), window);
+    let turns_back = bodies.mode.turns_back(bodies.is_fixed(a) || bodies.is_fixed(b));
+    let search = pair_first_start((ga, &ma), (gb, &mb), window, resume, turns_back);
+    let (found, parks) = settled_parked(search.map(|(s, p)| (s.found, p)), window);
     (found, parks.filter(|_| !across).map(|r| (key, epochs, r)))
 }
 

@@ -26,6 +26,12 @@
 //!   along it as below.
 //! - **Sliding and slow**: after any impact, a sliding body slower than the rest speed with no
 //!   pull left lies still.
+//! - **A shape other than a ball** cannot slide or roll on (it would turn into what holds it):
+//!   where a ball would rest it lies still, where it touches, its spin stopped, and its speed
+//!   counts its spin too (the speed its farthest points get from it), so a body only lies still
+//!   once every point of it is slower than the rest speed. It never bounces off a body lying
+//!   still by its centre's velocity alone (a turning shape's point could still approach): it
+//!   takes the ordinary impact, which moves the body lying still, or not if it is static.
 //!
 //! A body lying still is held up by what it lies on, so it does not move when a body lands on
 //! top of it (the normal from it to the other within 60 degrees of the other's pull, [`ON_TOP`]:
@@ -86,6 +92,16 @@ fn is_still(bodies: &Bodies, i: usize) -> bool {
     bodies.is_fixed(i) || bodies.rest_of(i) == Rest::Still
 }
 
+/// `speed`, body `i`'s centre's at `t`, and for a shape other than a sphere the speed its spin
+/// gives its farthest points too: such a shape lies still with its spin stopped, so the rest
+/// speed bounds the spin's share as well (a sphere's spin moves no point off its surface).
+fn with_spin(bodies: &Bodies, i: usize, t: f64, speed: f64) -> f64 {
+    match bodies.is_sphere(i) {
+        true => speed,
+        false => speed + bodies.angular_velocity_at(i, t).length() * bodies.radius(i),
+    }
+}
+
 /// How a body held on the walls across `axes` with `velocity` (none into them) rests: still
 /// when slower than `limit` with no pull left along the walls, sliding otherwise.
 fn held(gravity: DVec3, velocity: DVec3, axes: u8, limit: f64) -> Rest {
@@ -113,6 +129,14 @@ pub(crate) fn on_wall(
         return false;
     }
     let (velocity, limit) = (bodies.velocity_at(i, t), rest_speed(bodies, i));
+    if !bodies.is_sphere(i) {
+        // Any other shape would turn into the wall as it slid: it lies still where it touches.
+        if !(quick || restitution * with_spin(bodies, i, t, velocity.length()) < limit) {
+            return false;
+        }
+        bodies.lie_still(i, t);
+        return true;
+    }
     if !(quick || restitution * velocity[axis].abs() < limit) {
         return false;
     }
@@ -164,11 +188,14 @@ pub(crate) fn against_still(
         true => (velocity - (1.0 + restitution) * normal_speed * out).length(),
         false => velocity.length(),
     };
+    let speed = with_spin(bodies, k, t, speed);
     if pressed && (quick || speed < limit) {
         bodies.lie_still(k, t);
         return Some((k, bodies.mass[k] * velocity.length()));
     }
-    if !(on_top || -restitution * normal_speed < limit) {
+    // Bouncing off by its centre's velocity suits a ball only: a turning shape's point may still
+    // approach, so any other shape takes the ordinary impact (a static support holds it anyway).
+    if !(on_top || -restitution * normal_speed < limit) || !bodies.is_sphere(k) {
         return None;
     }
     // It holds: `k` bounces off it, and parts at least at half the rest speed when pressed.
@@ -205,7 +232,12 @@ pub(crate) fn part(bodies: &mut Bodies, (i, j): (usize, usize), t: f64, normal: 
         return 0.0;
     }
     let impulse = (least - parting) / (wi + wj);
-    bodies.set_velocity_at(i, t, vi - impulse * wi * normal);
-    bodies.set_velocity_at(j, t, vj + impulse * wj * normal);
+    // A static body keeps its motion and its stamp: its predictions stand, as it is never
+    // tested again.
+    for (k, velocity) in [(i, vi - impulse * wi * normal), (j, vj + impulse * wj * normal)] {
+        if !bodies.is_fixed(k) {
+            bodies.set_velocity_at(k, t, velocity);
+        }
+    }
     impulse
 }

@@ -123,9 +123,8 @@ pub struct WorldConfig {
     pub contact_ends: bool,
     /// Uniform acceleration of every moving body (e.g. `[0, 0, -9.81]`); zero by default. Paths
     /// are then parabolas, exact in both modes and for every method and shape. With restitution
-    /// below 1 in simulate mode bodies come to rest on the floor and on each other
-    /// and on static geometry ([`crate::response::rest`]); for now only spheres do (other shapes
-    /// are refused there).
+    /// below 1 in simulate mode bodies of every shape come to rest on the floor, on each other
+    /// and on static geometry ([`crate::response::rest`]).
     #[serde(default)]
     pub gravity: DVec3,
 }

@@ -129,7 +129,7 @@ impl World {
         Ok(World {
             config,
             bounds,
-            bodies: Bodies::new(config.gravity, bounds.periodic_part()),
+            bodies: Bodies::new(config.gravity, bounds.periodic_part(), config.mode),
             live: 0,
             free_slots: Vec::new(),
             unplaced: Vec::new(),

@@ -217,18 +217,10 @@ impl World {
     }
 
     /// Refuses a body this world cannot step exactly yet: a static body in a periodic box (level
-    /// geometry is not periodic), and a body that is not a sphere coming to rest (simulate mode
-    /// under gravity with restitution below 1). Asked of every body added and of every body
-    /// loaded.
-    pub(super) fn check_supported(&self, sphere: bool, fixed: bool) -> Result<()> {
+    /// geometry is not periodic). Asked of every body added and of every body loaded.
+    pub(super) fn check_supported(&self, fixed: bool) -> Result<()> {
         if self.bounds.is_periodic() && fixed {
             return Err(VadopError::PeriodicUnsupported("a static body"));
-        }
-        let simulate = self.config.mode == crate::Mode::Simulate;
-        // Only a sphere comes to rest: the rest rule lays a resting body on its floor by its
-        // radius.
-        if self.config.gravity != DVec3::ZERO && simulate && self.config.restitution < 1.0 && !sphere && !fixed {
-            return Err(VadopError::GravityUnsupported("a body that is not a sphere, with restitution below 1"));
         }
         Ok(())
     }
@@ -236,7 +228,7 @@ impl World {
     /// The store's form of `body`, validated: the centre of mass and principal axes from the
     /// shape's frame.
     fn rigid_state(&self, body: &Body, fixed: bool) -> Result<RigidState> {
-        self.check_supported(matches!(body.shape, BodyShape::Sphere { .. }), fixed)?;
+        self.check_supported(fixed)?;
         check_vector("position", body.position)?;
         check_vector("velocity", body.velocity)?;
         check_vector("angular velocity", body.angular_velocity)?;

@@ -246,16 +246,8 @@ impl World {
                 )));
             }
             if slot.alive {
-                let sphere = slot.spin.as_ref().is_none_or(|spin| {
-                    world
-                        .bodies
-                        .rigid
-                        .shapes
-                        .get(spin.shape as usize)
-                        .is_none_or(|g| matches!(g.shape(), crate::shape::Shape::Sphere { .. }))
-                });
                 let fixed = slot.spin.as_ref().is_some_and(|spin| spin.fixed);
-                world.check_supported(sphere, fixed).map_err(|e| bad(format!("slot {i}: {e}")))?;
+                world.check_supported(fixed).map_err(|e| bad(format!("slot {i}: {e}")))?;
             }
             let now = motion.at_under(time, slot.rest.acceleration(world.config.gravity));
             let checked = match &slot.spin {

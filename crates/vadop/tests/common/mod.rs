@@ -7,7 +7,8 @@ use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use vadop::narrow_phase::spheres::CONTACT_TOLERANCE;
-use vadop::{BodyHandle, Contact, Mode, Sphere, VadopError, World};
+use vadop::shape::Shape;
+use vadop::{Body, BodyHandle, BodyShape, Contact, Method, Mode, Sphere, VadopError, World};
 
 /// Every field of every contact as bits: a difference in the last bit, or in the sign of a zero,
 /// shows.
@@ -142,6 +143,19 @@ pub fn step_beside_oracle(
     refused
 }
 
+/// [`step_beside_oracle`] for each continuous method (`build` makes the worlds), none refusing
+/// a step; returns the oracle of the last, stepped `frames` frames of `dt`.
+pub fn every_method_beside_oracle(build: impl Fn(Method) -> World, frames: usize, dt: f64) -> World {
+    let mut settled = None;
+    for method in [Method::Vadop, Method::Grid, Method::SweptAabb] {
+        let (mut found, mut oracle) = (build(method), build(Method::Brute));
+        let refused = step_beside_oracle(&mut found, &mut oracle, frames, dt, |_, _| {});
+        assert!(refused.is_none(), "{method:?}: {refused:?}");
+        settled = Some(oracle);
+    }
+    settled.expect("three methods ran")
+}
+
 /// Saves `world` (under `name` in the temporary directory), loads it back, and steps both for
 /// `frames` frames of `dt`: the resumed world's contacts and final state must match to the bit.
 pub fn assert_resumes_bit_exactly(world: &mut World, name: &str, frames: usize, dt: f64) {
@@ -171,4 +185,60 @@ pub fn closed_form_landings(height: f64, g: f64, restitution: f64, radius: f64) 
         landings.push(time);
     }
     landings
+}
+
+/// The deepest overlap at the frame end, if beyond `tolerance` times the sizes (see
+/// [`deepest_overlap`]).
+pub fn sunk(world: &World, tolerance: f64) -> Option<String> {
+    let (depth, what) = deepest_overlap(world);
+    (depth > tolerance).then_some(what)
+}
+
+/// The deepest overlap at the frame end, relative to the sizes (bounding radii; the smaller of
+/// a pair's), and what overlaps: between two bodies (moving or static; moving ones only in
+/// simulate mode, where they turn back) or a moving body and a wall, measured by parry on the
+/// bodies' poses, independently of vadop's searches.
+pub fn deepest_overlap(world: &World) -> (f64, String) {
+    let bodies: Vec<(BodyHandle, Body)> = world.bodies().collect();
+    let geometry = |b: &Body| match b.shape {
+        BodyShape::Sphere { radius } => Shape::Sphere { radius }.geometry().unwrap(),
+        BodyShape::Shape(id) => world.shape(id).unwrap().clone(),
+    };
+    let pose = |b: &Body| parry3d_f64::math::Pose::from_parts(b.position, b.orientation);
+    let size = |b: &Body| geometry(b).bounding_radius().unwrap_or(1.0);
+    let bounds = world.bounds();
+    let mut deepest = (0.0, String::new());
+    let mut keep = |depth: f64, what: &dyn Fn() -> String| {
+        if depth > deepest.0 {
+            deepest = (depth, what());
+        }
+    };
+    for (k, (i, a)) in bodies.iter().enumerate() {
+        if a.mass.is_finite() {
+            // The shape's farthest points along the axes (its bounding box would be loose for a
+            // turned cylinder or cone).
+            let g = geometry(a);
+            let support = g.parry_shape().as_support_map().expect("moving bodies are convex");
+            let pose = pose(a);
+            for axis in [DVec3::X, DVec3::Y, DVec3::Z] {
+                let [high, low] =
+                    [axis, -axis].map(|d| pose * support.local_support_point(pose.rotation.inverse() * d));
+                let depth = (bounds.min.dot(axis) - low.dot(axis)).max(high.dot(axis) - bounds.max.dot(axis));
+                keep(depth / size(a), &|| format!("body {i} through a wall: it spans {low}..{high}"));
+            }
+        }
+        for (j, b) in &bodies[k + 1..] {
+            // Static geometry turns bodies back in detect mode too; moving bodies pass through.
+            let moving = a.mass.is_finite() && b.mass.is_finite();
+            if !(a.mass.is_finite() || b.mass.is_finite()) || (moving && world.config().mode == Mode::Detect) {
+                continue;
+            }
+            let (ga, gb) = (geometry(a), geometry(b));
+            let (sa, sb) = (ga.parry_shape().as_ref(), gb.parry_shape().as_ref());
+            if let Ok(Some(c)) = parry3d_f64::query::contact(&pose(a), sa, &pose(b), sb, 0.0) {
+                keep(-c.dist / size(a).min(size(b)), &|| format!("bodies {i} and {j} overlap by {:e}", -c.dist));
+            }
+        }
+    }
+    deepest
 }

@@ -118,8 +118,13 @@
 //! * At the reference instant itself, a touching pair is a new contact only if it is
 //!   approaching: if it goes on to penetrate `tol` deeper than it is before it separates beyond
 //!   `tol`. (A pair just resolved in simulate mode separates: its next contact is a new one.) A
-//!   pair already deeper than `tol` is a contact in progress, as for spheres in detect mode;
-//!   against the walls, which always turn a body back, depth does not matter.
+//!   pair already deeper than `tol` is a contact in progress where bodies pass through each
+//!   other (detect mode), as for spheres; where contacts turn them back (simulate mode, static
+//!   geometry, the walls) depth does not matter: a rule that stops bodies touching may leave
+//!   them that deep, and they must not then pass into each other. Such a pair that the search
+//!   cannot decide (it neither goes deeper nor parts) stalls at the reference, where it was
+//!   found touching, so that the jam rule stops it there and not up to `tol` deeper, stall after
+//!   stall.
 //!
 //! The search works a little inside the band: it stops at `(1 - 1/8) tol` and keeps the
 //! distance above `(1 + 1/8) tol/2`, so that an independent oracle (parry's own distance query)
@@ -434,8 +439,22 @@ pub fn shape_contact_resumed<S: Spin, T: Spin>(
     window: Window,
     resume: Option<&Resume>,
 ) -> Result<(Search<f64>, Option<Resume>)> {
+    pair_first_start(a, b, window, resume, false)
+}
+
+/// [`shape_contact_resumed`], for a pair whose contacts turn it back when `turns_back` (see
+/// [`crate::Mode::turns_back`]): then a pair deeper than the tolerance at the reference is not a
+/// contact in progress but one more to turn back if it goes deeper, as against a wall (a rule
+/// that stops bodies touching, the jam rule or a stalled search, may leave them that deep).
+pub(crate) fn pair_first_start<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    window: Window,
+    resume: Option<&Resume>,
+    turns_back: bool,
+) -> Result<(Search<f64>, Option<Resume>)> {
     let Some(mut searcher) = pair_searcher(a, b)? else { return Ok((Search { found: None, iterations: 0 }, None)) };
-    let (found, parked) = Resume::first_start(&mut searcher, resume, window, true)?;
+    let (found, parked) = Resume::first_start(&mut searcher, resume, window, !turns_back)?;
     Ok((Search { found, iterations: searcher.probes() }, parked))
 }
 

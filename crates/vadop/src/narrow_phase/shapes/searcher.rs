@@ -297,7 +297,10 @@ impl<G: Gauge> Searcher<G> {
                 None => return Ok(AtReference::Resting),
             }
             if self.iterations >= budget {
-                return Err(self.stall(tau, "resting or sliding in contact: neither deeper nor apart"));
+                // A pair that turns back stops where it was found touching, not up to `tol`
+                // deeper where the search gave up: stall after stall, it would sink that far each.
+                let at = if deep_is_contact { tau } else { 0.0 };
+                return Err(self.stall(at, "resting or sliding in contact: neither deeper nor apart"));
             }
             p = self.probe(tau, Measure::Depth)?;
         }
