@@ -144,6 +144,40 @@ pub(super) const PROBE_DEPTH_SHARE: f64 = 1.0 / 32.0;
 /// The depth share of a measure that must be exact: EPA run to convergence (contact geometry).
 pub(super) const EXACT_DEPTH: f64 = 0.0;
 
+/// A gap probe this many tolerances or more from contact needs its distance only to a share
+/// ([`GAP_SHARE`]): it steps the search by the distance over a rate, and no bound there decides.
+pub(super) const ROUGH_FLOOR: f64 = 64.0;
+
+/// The share of a distance beyond [`ROUGH_FLOOR`] tolerances a gap probe leaves GJK: a step on a
+/// lower bound this much short goes at most this much less far. parry's GJK refines every
+/// distance to about 5e-8 of itself, some 11 support points a call far from contact on the CLI's
+/// crowd of mixed shapes; the searches' probes there are as many at this share, and half as dear.
+pub(super) const GAP_SHARE: f64 = 1.0 / 16.0;
+
+/// GJK's iterations before a rough query hands its simplex to parry's converged GJK.
+const ROUGH_ITERATIONS: usize = 8;
+
+/// What a distance query must measure, beyond bounds tight enough to decide near contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Need {
+    /// `None`: an intersection need only be recognised; otherwise the share of its depth EPA may
+    /// leave (see [`DepthNeed`]).
+    pub(super) depth: Option<f64>,
+    /// Beyond [`ROUGH_FLOOR`] tolerances from contact, the share of the distance GJK's bounds may
+    /// leave between them: 0 to converge.
+    pub(super) gap_share: f64,
+    /// Where GJK starts: a unit axis from the first shape to the second (world frame), the last
+    /// probe's on a chain; `None` to start from the line between the shapes' middles.
+    pub(super) start: Option<DVec3>,
+}
+
+impl Need {
+    /// Converged bounds, with the depth to `depth`'s share, GJK started between the middles.
+    pub(super) fn converged(depth: Option<f64>) -> Need {
+        Need { depth, gap_share: 0.0, start: None }
+    }
+}
+
 /// Bounds on the signed distance of two shapes at one instant (scaled lengths, in the frame of
 /// their poses).
 #[derive(Debug, Clone, Copy)]
@@ -209,28 +243,79 @@ pub(super) fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) 
     })
 }
 
+/// How far a rough GJK may stop short (see [`rough_closest`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Rough {
+    share: f64,
+    floor: f64,
+}
+
+/// GJK's iterations (the sets `a` and `b` at `pos12`, grown by `margins`) from `simplex`, while
+/// the grown sets lie more than `rough.floor` apart, until the separation along a direction it
+/// tried lies within `rough.share` of the distance of the simplex's nearest points, points of
+/// the two sets: those points then, `None` if that does not come within [`ROUGH_ITERATIONS`] (the
+/// simplex is then left for parry's converged GJK to go on from).
+fn rough_closest<A: SupportMap, B: SupportMap>(
+    pos12: &Pose,
+    (a, b): (&A, &B),
+    margins: (f64, f64),
+    rough: Rough,
+    simplex: &mut VoronoiSimplex,
+) -> Option<GJKResult> {
+    let margin = margins.0 + margins.1;
+    let mut lower = f64::NEG_INFINITY;
+    for _ in 0..ROUGH_ITERATIONS {
+        // The point of the simplex nearest the origin: a - b for a point of each set.
+        let nearest = simplex.project_origin_and_reduce();
+        let upper = nearest.length();
+        if simplex.dimension() == 3 || upper - margin <= rough.floor {
+            return None;
+        }
+        // The sets lie at least this far apart along `dir`, by the difference's support point.
+        let dir = -nearest / upper;
+        let support = CsoPoint::from_shapes(pos12, a, b, dir);
+        lower = lower.max(-dir.dot(support.point));
+        if lower - margin > rough.floor && upper - lower <= rough.share * (upper - margin) {
+            let (mut on_a, mut on_b) = (DVec3::ZERO, DVec3::ZERO);
+            for i in 0..=simplex.dimension() {
+                let (weight, vertex) = (simplex.proj_coord(i), simplex.point(i));
+                on_a += vertex.orig1 * weight;
+                on_b += vertex.orig2 * weight;
+            }
+            return Some(GJKResult::ClosestPoints(on_a, on_b, dir));
+        }
+        if !simplex.add_point(support) {
+            return None;
+        }
+    }
+    None
+}
+
 /// GJK's estimate (EPA's when the sets intersect and `depth` asks for it) from the sets `a` and
 /// `b` at `pos12` (b's pose in a's frame), grown by `margins` into the shapes; `toward` (in a's
-/// frame) is where GJK starts from and the axis to fall back on.
+/// frame) is where GJK starts from and the axis to fall back on. With `rough`, GJK may stop short
+/// far from contact ([`rough_closest`]).
 pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     (a, pose_a): (&A, &Pose),
     (b, pose_b): (&B, &Pose),
     margins: (f64, f64),
     toward: DVec3,
     depth: Option<DepthNeed>,
+    rough: Option<Rough>,
 ) -> Estimate {
     let pos12 = pose_a.inv_mul(pose_b);
     let mut estimate = Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
-    let gjk_from = |dir: DVec3| {
+    let gjk_from = |dir: DVec3, rough: Option<Rough>| {
         let mut simplex = VoronoiSimplex::new();
         simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
-        (gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex), simplex)
+        let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
+        (stopped.unwrap_or_else(|| gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)), simplex)
     };
-    let (mut result, mut simplex) = gjk_from(-toward);
+    let (mut result, mut simplex) = gjk_from(-toward, rough);
     if !matches!(result, GJKResult::ClosestPoints(..)) {
         // GJK's verdict is not reliable a hair from contact: ask again from the other side.
-        let again = gjk_from(toward);
+        let again = gjk_from(toward, None);
         if matches!(again.0, GJKResult::ClosestPoints(..)) {
             (result, simplex) = again;
         }
@@ -284,37 +369,41 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
 /// or GJK, and each shape's extreme point along the axis projected on the other), or EPA's depth
 /// when they intersect (EPA's polytope lies inside the Minkowski difference, so its depth never
 /// exceeds the true one); the lower bound is a separation along an axis, computed from the exact
-/// support functions. With `depth` `None`, an intersection only needs to be recognised, not
+/// support functions. With `need.depth` `None`, an intersection only needs to be recognised, not
 /// measured; otherwise a deep one is measured to within that share of the depth plus `tol` (see
-/// [`DepthNeed`]), a shallow one to rounding. GJK runs on the cores, and on the shapes too where
-/// their distance is a small part of the cores' (its precision is relative to the distance it
-/// measures). The bounds are tightened
-/// where it matters: within a few `tol` of contact.
+/// [`DepthNeed`]), a shallow one to rounding. Far from contact the bounds may lie `need.gap_share`
+/// of the distance apart. GJK runs on the cores, and on the shapes too where their distance is a
+/// small part of the cores' (its precision is relative to the distance it measures). The bounds
+/// are tightened where it matters: within a few `tol` of contact.
 pub(super) fn convex_bounds(
     a: &Scaled,
     pose_a: &Pose,
     b: &Scaled,
     pose_b: &Pose,
-    depth: Option<f64>,
+    need: Need,
     tol: f64,
     slack: f64,
 ) -> Bounds {
     let band = BAND * tol;
-    let depth = depth.map(|share| DepthNeed { share, tol });
-    // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
-    // fall back on if it fails.
-    let toward = (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
+    let depth = need.depth.map(|share| DepthNeed { share, tol });
+    // The last probe's axis, or from the middle of a to the middle of b, in a's frame: where GJK
+    // starts, and the axis to fall back on if it fails.
+    let toward = match need.start {
+        Some(axis) => pose_a.rotation.inverse() * axis,
+        None => (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X),
+    };
+    let rough = (need.gap_share > 0.0).then_some(Rough { share: need.gap_share, floor: ROUGH_FLOOR * tol });
     let (first, second) = match closed_form(a, pose_a, b, pose_b) {
         Some(exact) => (exact, None),
         None => {
             let margins = (a.margin, b.margin);
-            let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth);
+            let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth, rough);
             let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
             // GJK's precision is relative to the distance it measures, the cores' with the
             // margins: where the shapes' own is a small part of it, GJK runs on them too, and the
             // tighter estimate counts (either fails at times a hair from contact).
             let near = distance.abs() < (margins.0 + margins.1) / 16.0;
-            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth)))
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None)))
         }
     };
     let estimates = || std::iter::once(&first).chain(&second);

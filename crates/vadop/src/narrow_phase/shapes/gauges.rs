@@ -4,7 +4,7 @@
 //! never chooses the probe times (the searcher does).
 
 use super::chord::{axis_hold, chord_hold, Moving};
-use super::distance::{closer_points, convex_bounds, separation, Bounds, PROBE_DEPTH_SHARE};
+use super::distance::{closer_points, convex_bounds, separation, Bounds, Need, GAP_SHARE, PROBE_DEPTH_SHARE};
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
@@ -543,10 +543,18 @@ impl Gauge for ConvexPair<'_> {
         }
         // Each shape's frame moves with its body.
         let carry = (&pose_a, &pose_b);
-        let depth = (measure != Measure::Gap).then_some(PROBE_DEPTH_SHARE);
-        let bounds = (self.warm.get())
+        let warm = self.warm.get();
+        // GJK starts from the last probe's axis turned with a; a gap far from contact needs its
+        // distance only to a share (it steps the search and decides nothing).
+        let gap = measure == Measure::Gap;
+        let need = Need {
+            depth: (!gap).then_some(PROBE_DEPTH_SHARE),
+            gap_share: if gap { GAP_SHARE } else { 0.0 },
+            start: warm.map(|warm| pose_a.rotation * warm.axis.0),
+        };
+        let bounds = warm
             .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
-            .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
+            .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, need, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
         let hold = match (measure, bounds.witness) {
             (Measure::Contact, Some((x, y))) => {
@@ -644,7 +652,7 @@ impl Gauge for PairGauge<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::narrow_phase::shapes::distance::EXACT_DEPTH;
+    use crate::narrow_phase::shapes::distance::{Need, EXACT_DEPTH};
     use glam::DQuat;
     use rand::{Rng, SeedableRng};
 
@@ -665,7 +673,7 @@ mod tests {
             let offset =
                 DVec3::new(random(), random(), random()).normalize_or(DVec3::X) * (0.1 + 0.6 * (random() + 0.5));
             let (pose_a, pose_b) = (Pose::from_parts(DVec3::ZERO, qa), Pose::from_parts(offset, qb));
-            let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Some(EXACT_DEPTH), 1e-6, 1e-14);
+            let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Need::converged(Some(EXACT_DEPTH)), 1e-6, 1e-14);
             let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b)) else { continue };
             let (here, _) = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
             if bounds.upper < -1e-3 {

@@ -169,7 +169,7 @@ use crate::numeric::unit_scale;
 use crate::shape::ShapeGeometry;
 use crate::walls::Wall;
 use crate::window::Window;
-use distance::{convex_bounds, Bounds, EXACT_DEPTH};
+use distance::{convex_bounds, Bounds, Need, EXACT_DEPTH};
 use fixed_gauges::{MeshPair, PlanePair, WallGauge};
 use gauges::{ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
@@ -624,7 +624,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
         PairGauge::Convex(pair) => {
             let (pose_a, pose_b) = pair.poses(tau);
             let (ga, gb) = (pair.a.support(pair.scale), pair.b.support(pair.scale));
-            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, Some(EXACT_DEPTH), pair.tol, 0.0);
+            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, Need::converged(Some(EXACT_DEPTH)), pair.tol, 0.0);
             let origin = pair.a.centre(tau);
             let witness = bounds
                 .witness
