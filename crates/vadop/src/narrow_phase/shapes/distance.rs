@@ -312,22 +312,23 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
         let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
         (stopped.unwrap_or_else(|| gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)), simplex)
     };
-    let (mut result, mut simplex) = gjk_from(-toward, rough);
-    if !matches!(result, GJKResult::ClosestPoints(..)) {
-        // GJK's verdict is not reliable a hair from contact: ask again from the other side.
-        let again = gjk_from(toward, None);
-        if matches!(again.0, GJKResult::ClosestPoints(..)) {
-            (result, simplex) = again;
-        }
-    }
+    let (mut result, simplex) = gjk_from(-toward, rough);
     // Deep inside each other a depth need only be as tight as asked: EPA from GJK's simplex,
     // stopped early. Shallower, where GJK's verdict is not reliable, parry's converged one.
-    let deep = |need: DepthNeed| {
+    let deep = |need: DepthNeed, simplex: &VoronoiSimplex| {
         let allowance = |depth: f64| need.share * (depth + margins.0 + margins.1 + need.tol);
-        let found = (need.share > 0.0).then(|| penetration(&pos12, a, b, &simplex, allowance))??;
+        let found = (need.share > 0.0).then(|| penetration(&pos12, a, b, simplex, allowance))??;
         (found.depth + margins.0 + margins.1 >= BAND * need.tol).then_some(found)
     };
-    let early = (result == GJKResult::Intersection).then(|| depth.and_then(deep)).flatten();
+    let early = (result == GJKResult::Intersection).then(|| depth.and_then(|need| deep(need, &simplex))).flatten();
+    // GJK's verdict is not reliable a hair from contact: ask again from the other side, unless
+    // EPA's polytope, points of the difference about the origin, already proved them deep inside.
+    if early.is_none() && !matches!(result, GJKResult::ClosestPoints(..)) {
+        let (again, _) = gjk_from(toward, None);
+        if matches!(again, GJKResult::ClosestPoints(..)) {
+            result = again;
+        }
+    }
     match (result, early) {
         (GJKResult::ClosestPoints(p1, p2, dir), _) => {
             let d = p2 - p1;
