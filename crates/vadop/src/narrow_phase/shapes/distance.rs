@@ -169,12 +169,47 @@ pub(super) struct Need {
     /// Where GJK starts: a unit axis from the first shape to the second (world frame), the last
     /// probe's on a chain; `None` to start from the line between the shapes' middles.
     pub(super) start: Option<DVec3>,
+    /// Points of the two cores whose differences GJK starts from instead: the last probe's
+    /// simplex on a chain, carried along with the bodies.
+    pub(super) simplex: Option<Simplex>,
+}
+
+/// Pairs of points, one of each core in that shape's own frame, whose differences are points of
+/// the cores' Minkowski difference: the vertices of GJK's last simplex. Fixed in the bodies they
+/// stay points of the cores wherever the bodies go, so the next probe's GJK (or EPA, where they
+/// still hold the origin) starts from them, near where the last one ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Simplex {
+    points: [(DVec3, DVec3); 4],
+    count: usize,
+}
+
+impl Simplex {
+    /// GJK's `simplex` of the sets at `pos12` (the second's pose in the first's frame).
+    fn of(simplex: &VoronoiSimplex, pos12: &Pose) -> Simplex {
+        let pair = |i: usize| {
+            let vertex = simplex.point(i.min(simplex.dimension()));
+            (vertex.orig1, pos12.inverse_transform_point(vertex.orig2))
+        };
+        Simplex { points: std::array::from_fn(pair), count: simplex.dimension() + 1 }
+    }
+
+    /// The pairs as GJK's simplex of the sets at `pos12`, less any that would make it degenerate.
+    fn voronoi(&self, pos12: &Pose) -> VoronoiSimplex {
+        let vertex = |(x, y): (DVec3, DVec3)| CsoPoint::new(x, pos12 * y);
+        let mut simplex = VoronoiSimplex::new();
+        simplex.reset(vertex(self.points[0]));
+        for &pair in &self.points[1..self.count] {
+            simplex.add_point(vertex(pair));
+        }
+        simplex
+    }
 }
 
 impl Need {
     /// Converged bounds, with the depth to `depth`'s share, GJK started between the middles.
     pub(super) fn converged(depth: Option<f64>) -> Need {
-        Need { depth, gap_share: 0.0, start: None }
+        Need { depth, gap_share: 0.0, start: None, simplex: None }
     }
 }
 
@@ -191,6 +226,8 @@ pub(super) struct Bounds {
     /// Points of the first and second shape whose distance is `upper` (or EPA's deepest points),
     /// when known.
     pub(super) witness: Option<(DVec3, DVec3)>,
+    /// GJK's last simplex on the cores, when it ran.
+    pub(super) simplex: Option<Simplex>,
 }
 
 /// A first estimate of the distance of two shapes (scaled, in the frame of their poses): closed
@@ -206,6 +243,8 @@ pub(super) struct Estimate {
     pub(super) search: Option<DVec3>,
     /// EPA's depth (negative) and deepest points when the shapes intersect.
     pub(super) penetration: Option<(f64, (DVec3, DVec3))>,
+    /// GJK's last simplex.
+    pub(super) simplex: Option<Simplex>,
 }
 
 /// The estimate from closed forms when both cores are points or segments, or one is a point
@@ -240,6 +279,7 @@ pub(super) fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) 
         witness: Some((x + axis * a.margin, y - axis * b.margin)),
         search: None,
         penetration: None,
+        simplex: None,
     })
 }
 
@@ -302,17 +342,23 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     toward: DVec3,
     depth: Option<DepthNeed>,
     rough: Option<Rough>,
+    seed: Option<&Simplex>,
 ) -> Estimate {
     let pos12 = pose_a.inv_mul(pose_b);
-    let mut estimate = Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None };
+    let mut estimate =
+        Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None, simplex: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
-    let gjk_from = |dir: DVec3, rough: Option<Rough>| {
-        let mut simplex = VoronoiSimplex::new();
-        simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+    let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<&Simplex>| {
+        let mut simplex = seed.map(|seed| seed.voronoi(&pos12)).unwrap_or_else(|| {
+            let mut simplex = VoronoiSimplex::new();
+            simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+            simplex
+        });
         let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
         (stopped.unwrap_or_else(|| gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)), simplex)
     };
-    let (mut result, simplex) = gjk_from(-toward, rough);
+    let (mut result, simplex) = gjk_from(-toward, rough, seed);
+    estimate.simplex = Some(Simplex::of(&simplex, &pos12));
     // Deep inside each other a depth need only be as tight as asked: EPA from GJK's simplex,
     // stopped early. Shallower, where GJK's verdict is not reliable, parry's converged one.
     let deep = |need: DepthNeed, simplex: &VoronoiSimplex| {
@@ -324,7 +370,7 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     // GJK's verdict is not reliable a hair from contact: ask again from the other side, unless
     // EPA's polytope, points of the difference about the origin, already proved them deep inside.
     if early.is_none() && !matches!(result, GJKResult::ClosestPoints(..)) {
-        let (again, _) = gjk_from(toward, None);
+        let (again, _) = gjk_from(toward, None, None);
         if matches!(again, GJKResult::ClosestPoints(..)) {
             result = again;
         }
@@ -398,13 +444,14 @@ pub(super) fn convex_bounds(
         Some(exact) => (exact, None),
         None => {
             let margins = (a.margin, b.margin);
-            let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth, rough);
+            let (cores, seed) = ((&a.core(), pose_a), need.simplex.as_ref());
+            let cores = gjk_estimate(cores, (&b.core(), pose_b), margins, toward, depth, rough, seed);
             let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
             // GJK's precision is relative to the distance it measures, the cores' with the
             // margins: where the shapes' own is a small part of it, GJK runs on them too, and the
             // tighter estimate counts (either fails at times a hair from contact).
             let near = distance.abs() < (margins.0 + margins.1) / 16.0;
-            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None)))
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None, None)))
         }
     };
     let estimates = || std::iter::once(&first).chain(&second);
@@ -459,7 +506,7 @@ pub(super) fn convex_bounds(
         // Both GJK runs found the shapes intersecting and no depth was measured.
         upper = 0.0;
     }
-    Bounds { lower: best.0 - slack, upper: upper + slack, axis: best.1, witness }
+    Bounds { lower: best.0 - slack, upper: upper + slack, axis: best.1, witness, simplex: first.simplex }
 }
 
 /// One triangle's bounds rank by their lower bound in parry's best-first search of the mesh.

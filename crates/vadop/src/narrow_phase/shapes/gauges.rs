@@ -4,7 +4,7 @@
 //! never chooses the probe times (the searcher does).
 
 use super::chord::{axis_hold, chord_hold, Moving};
-use super::distance::{closer_points, convex_bounds, separation, Bounds, Need, GAP_SHARE, PROBE_DEPTH_SHARE};
+use super::distance::{closer_points, convex_bounds, separation, Bounds, Need, Simplex, GAP_SHARE, PROBE_DEPTH_SHARE};
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
@@ -237,6 +237,8 @@ pub(super) struct Warm {
     pub(super) witness: (DVec3, DVec3),
     /// The upper bound that probe found.
     pub(super) upper: f64,
+    /// GJK's simplex from the last probe that ran it, its points fixed in the bodies.
+    pub(super) simplex: Option<Simplex>,
 }
 
 impl Warm {
@@ -248,6 +250,7 @@ impl Warm {
             axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
             witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
             upper: bounds.upper,
+            simplex: bounds.simplex,
         })
     }
 
@@ -295,7 +298,8 @@ impl Warm {
         let carried = ((witness.1 - witness.0).length(), Some(witness));
         let (upper, witness) =
             if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
-        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
+        let simplex = self.simplex;
+        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness, simplex })
     }
 }
 
@@ -551,6 +555,7 @@ impl Gauge for ConvexPair<'_> {
             depth: (!gap).then_some(PROBE_DEPTH_SHARE),
             gap_share: if gap { GAP_SHARE } else { 0.0 },
             start: warm.map(|warm| pose_a.rotation * warm.axis.0),
+            simplex: warm.and_then(|warm| warm.simplex),
         };
         let bounds = warm
             .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
