@@ -4,7 +4,7 @@
 //! relative far from it; it owns that arithmetic and never decides a contact time.
 
 use super::epa::penetration;
-use super::scaled::{refine, Core, Scaled};
+use super::scaled::{refine, Core, Kind, Scaled};
 use super::MARGIN;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
@@ -80,20 +80,14 @@ pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64,
     // Everything in scaled lengths, where parry's absolute tolerances mean the same at any scale:
     // closed forms on a scaled copy of a primitive, GJK on the scaled support map otherwise.
     let (p, s) = (shape.parry, shape.scale);
-    let projection = if let Some(ball) = p.as_ball() {
-        Ball::new(ball.radius * s).project_local_point(local, true)
-    } else if let Some(cuboid) = p.as_cuboid() {
-        Cuboid::new(cuboid.half_extents * s).project_local_point(local, true)
-    } else if let Some(c) = p.as_capsule() {
-        Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true)
-    } else if let Some(c) = p.as_cylinder() {
-        Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true)
-    } else if let Some(c) = p.as_cone() {
-        Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true)
-    } else if s == 1.0 {
-        p.project_local_point(local, true)
-    } else {
-        local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true)
+    let projection = match shape.kind {
+        Kind::Ball(ball) => Ball::new(ball.radius * s).project_local_point(local, true),
+        Kind::Cuboid(cuboid) => Cuboid::new(cuboid.half_extents * s).project_local_point(local, true),
+        Kind::Capsule(c) => Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true),
+        Kind::Cylinder(c) => Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true),
+        Kind::Cone(c) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
+        _ if s == 1.0 => p.project_local_point(local, true),
+        _ => local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true),
     };
     (!projection.is_inside).then(|| ((local - projection.point).length(), pose * projection.point))
 }
