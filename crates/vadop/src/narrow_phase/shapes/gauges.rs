@@ -208,6 +208,8 @@ impl Reach {
 pub(super) struct ConvexPair<'a> {
     pub(super) a: Body<'a>,
     pub(super) b: Body<'a>,
+    /// Their shapes as the distance bounds read them, at `scale`.
+    pub(super) shapes: (Scaled<'a>, Scaled<'a>),
     pub(super) scale: f64,
     /// b's centre minus a's at the reference, scaled.
     pub(super) offset: DVec3,
@@ -530,17 +532,17 @@ impl Gauge for ConvexPair<'_> {
     fn probe(&self, tau: f64, measure: Measure) -> Probe {
         let (pose_a, pose_b) = self.poses(tau);
         let slack = SLACK * (pose_b.translation.length() + self.size);
-        let (ga, gb) = (self.a.support(self.scale), self.b.support(self.scale));
+        let (ga, gb) = (&self.shapes.0, &self.shapes.1);
         let velocity = self.velocity_at(tau);
         let grow = velocity.length() + self.spin;
         let bend = self.acceleration.length();
         if measure == Measure::Contact {
             if let Some(warm) = self.warm.get() {
-                let (upper, deepest) = warm.contact_upper((&ga, &pose_a), (&gb, &pose_b), slack);
+                let (upper, deepest) = warm.contact_upper((ga, &pose_a), (gb, &pose_b), slack);
                 let room = |upper: f64| 2.0 * self.tol - upper;
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= STALE_ROOM * room(warm.upper) {
                     // Far from the contact's end: nothing else is needed, and the warm start stays.
-                    let hold = self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), deepest, slack);
+                    let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slack);
                     return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
             }
@@ -558,15 +560,15 @@ impl Gauge for ConvexPair<'_> {
             simplex: warm.and_then(|warm| warm.simplex),
         };
         let bounds = warm
-            .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
-            .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, need, self.tol, slack));
+            .and_then(|warm| warm.bounds((ga, &pose_a), (gb, &pose_b), carry, self.tol, slack))
+            .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
         let hold = match (measure, bounds.witness) {
             (Measure::Contact, Some((x, y))) => {
-                self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack)
+                self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slack)
             }
             (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
-                self.apart(tau, (&ga, &pose_a), (&gb, &pose_b), bounds.axis, slack)
+                self.apart(tau, (ga, &pose_a), (gb, &pose_b), bounds.axis, slack)
             }
             _ => 0.0,
         };
@@ -575,7 +577,7 @@ impl Gauge for ConvexPair<'_> {
             upper: bounds.upper,
             shrink: (-velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
             grow,
-            far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
+            far: self.far(tau, (ga, &pose_a), (gb, &pose_b), slack),
             hold,
             bend,
         }
