@@ -83,7 +83,9 @@ pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64,
     let projection = match shape.kind {
         Kind::Ball(ball) => Ball::new(ball.radius * s).project_local_point(local, true),
         Kind::Cuboid(cuboid) => Cuboid::new(cuboid.half_extents * s).project_local_point(local, true),
-        Kind::Capsule(c) => Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true),
+        Kind::Capsule(c) => {
+            Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true)
+        }
         Kind::Cylinder(c) => Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true),
         Kind::Cone(c) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
         _ if s == 1.0 => p.project_local_point(local, true),
@@ -149,6 +151,27 @@ pub(super) const ROUGH_FLOOR: f64 = 64.0;
 /// crowd of mixed shapes; the searches' probes there are as many at this share, and half as dear.
 pub(super) const GAP_SHARE: f64 = 1.0 / 16.0;
 
+/// Points GJK starts from instead of a support point: not themselves support points, so GJK may
+/// stop where a new support point falls in their plane, short of converging (its bounds stay
+/// bounds, looser, which a chain's probes then tighten where it matters). With `verify`, a result
+/// that did not converge is measured again from a support point.
+#[derive(Clone, Copy)]
+pub(super) struct Seed<'s> {
+    simplex: &'s Simplex,
+    verify: bool,
+}
+
+/// How close to the distance of GJK's closest points the separation along their line must come
+/// for a GJK started from carried points to count as converged (see [`converged`]).
+const SEEDED_PRECISION: f64 = 1e-6;
+
+/// Whether the points `p1` of `a` and `p2` of `b` (at `pos12`) lie within [`SEEDED_PRECISION`]
+/// of their distance of the sets' separation along the line through them.
+fn converged<A: SupportMap, B: SupportMap>(pos12: &Pose, (a, b): (&A, &B), (p1, p2): (DVec3, DVec3)) -> bool {
+    let (n, distance) = (p2 - p1).normalize_and_length();
+    distance == 0.0 || distance + n.dot(CsoPoint::from_shapes(pos12, a, b, n).point) <= SEEDED_PRECISION * distance
+}
+
 /// GJK's iterations before a rough query hands its simplex to parry's converged GJK.
 const ROUGH_ITERATIONS: usize = 8;
 
@@ -180,6 +203,12 @@ pub(super) struct Simplex {
 }
 
 impl Simplex {
+    /// Each pair's points moved by `grow`: points of the two shapes again where the moves keep
+    /// them in their shapes (a core's point moved by at most the shape's margin).
+    fn mapped(&self, grow_a: impl Fn(DVec3) -> DVec3, grow_b: impl Fn(DVec3) -> DVec3) -> Simplex {
+        Simplex { points: self.points.map(|(x, y)| (grow_a(x), grow_b(y))), count: self.count }
+    }
+
     /// GJK's `simplex` of the sets at `pos12` (the second's pose in the first's frame).
     fn of(simplex: &VoronoiSimplex, pos12: &Pose) -> Simplex {
         let pair = |i: usize| {
@@ -337,20 +366,29 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     toward: DVec3,
     depth: Option<DepthNeed>,
     rough: Option<Rough>,
-    seed: Option<&Simplex>,
+    seed: Option<Seed>,
 ) -> Estimate {
     let pos12 = pose_a.inv_mul(pose_b);
     let mut estimate =
         Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None, simplex: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
-    let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<&Simplex>| {
-        let mut simplex = seed.map(|seed| seed.voronoi(&pos12)).unwrap_or_else(|| {
+    let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<Seed>| {
+        let mut simplex = seed.map(|seed| seed.simplex.voronoi(&pos12)).unwrap_or_else(|| {
             let mut simplex = VoronoiSimplex::new();
             simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
             simplex
         });
         let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
-        (stopped.unwrap_or_else(|| gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)), simplex)
+        let result = stopped.unwrap_or_else(|| match gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex) {
+            GJKResult::ClosestPoints(p1, p2, _)
+                if seed.is_some_and(|seed| seed.verify) && !converged(&pos12, (a, b), (p1, p2)) =>
+            {
+                simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+                gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)
+            }
+            found => found,
+        });
+        (result, simplex)
     };
     let (mut result, simplex) = gjk_from(-toward, rough, seed);
     estimate.simplex = Some(Simplex::of(&simplex, &pos12));
@@ -448,14 +486,25 @@ pub(super) fn convex_bounds(
         Some(exact) => (exact, None),
         None => {
             let margins = (a.margin, b.margin);
-            let (cores, seed) = ((&a.core(), pose_a), need.simplex.as_ref());
+            let seed = need.simplex.as_ref().map(|simplex| Seed { simplex, verify: false });
+            let cores = (&a.core(), pose_a);
             let cores = gjk_estimate(cores, (&b.core(), pose_b), margins, toward, depth, rough, seed);
             let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
             // GJK's precision is relative to the distance it measures, the cores' with the
             // margins: where the shapes' own is a small part of it, GJK runs on them too, and the
             // tighter estimate counts (either fails at times a hair from contact).
             let near = distance.abs() < (margins.0 + margins.1) / 16.0;
-            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None, None)))
+            // It starts from the cores' last simplex grown into the shapes along their axis.
+            let grown = |simplex: &Simplex| {
+                let (along_a, along_b) =
+                    (pose_a.rotation.inverse() * cores.axis, pose_b.rotation.inverse() * cores.axis);
+                simplex.mapped(|x| x + along_a * margins.0, |y| y - along_b * margins.1)
+            };
+            let grown = cores.simplex.as_ref().map(grown);
+            // A lone measure (a contact's geometry, reported as measured) must converge as if
+            // GJK had started afresh.
+            let seed = grown.as_ref().map(|simplex| Seed { simplex, verify: need.simplex.is_none() });
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None, seed)))
         }
     };
     let estimates = || std::iter::once(&first).chain(&second);

@@ -148,7 +148,9 @@ impl MeshPair<'_> {
                 let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
                 let bounds = (warm
                     .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
-                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, Need::converged(depth), self.tol, slack));
+                .unwrap_or_else(|| {
+                    convex_bounds(&support, &Pose::IDENTITY, &body, &pose, Need::converged(depth), self.tol, slack)
+                });
                 if let Some(warm) = Warm::new(&bounds, carry) {
                     next.borrow_mut().push((id, warm));
                 }
