@@ -604,7 +604,9 @@ impl Gauge for ConvexPair<'_> {
     }
 }
 
-/// The pair-specific gauge of two shapes.
+/// The pair-specific gauge of two shapes. Kept unboxed: one per search, on the stack, and a box
+/// would allocate per search.
+#[allow(clippy::large_enum_variant)]
 pub(super) enum PairGauge<'a> {
     Convex(ConvexPair<'a>),
     /// `flipped`: the plane is the pair's first body.
