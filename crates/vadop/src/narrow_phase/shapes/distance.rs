@@ -10,7 +10,6 @@ use glam::DVec3;
 use parry3d_f64::math::Pose;
 use parry3d_f64::partitioning::BvhLeafCost;
 use parry3d_f64::query::details::{closest_points_segment_segment_with_locations_nD, contact_support_map_support_map};
-use parry3d_f64::query::epa::EPA;
 use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d_f64::query::point::local_point_projection_on_support_map;
 use parry3d_f64::query::PointQuery;
@@ -408,7 +407,6 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
             result = again;
         }
     }
-    let intersecting = result == GJKResult::Intersection;
     match (result, early) {
         (GJKResult::ClosestPoints(p1, p2, dir), _) => {
             let d = p2 - p1;
@@ -423,21 +421,13 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
             let points = grown((*pose_a * found.points.0, *pose_a * found.points.1), pose_a.rotation * estimate.axis);
             estimate.penetration = Some((-found.depth - margins.0 - margins.1, points));
         }
-        // Intersecting (measure the depth: parry's converged EPA from GJK's simplex about the
-        // origin), or GJK did not converge (try again).
+        // Intersecting (measure the depth), or GJK did not converge (try again).
         _ => {
-            let converged = intersecting
-                .then(|| EPA::new().closest_points(&pos12, a, b, &simplex))
-                .flatten()
-                .map(|(p1, p2, n)| (p1, p2, n, (p2 - p1).dot(n)))
-                .or_else(|| {
-                    let contact = contact_support_map_support_map(&pos12, a, b, f64::MAX)?;
-                    Some((contact.point1, pos12 * contact.point2, contact.normal1, contact.dist))
-                });
-            if let Some((point1, point2, normal1, dist)) = converged {
-                estimate.axis = normal1.try_normalize().unwrap_or(toward);
-                let points = grown((*pose_a * point1, *pose_a * point2), pose_a.rotation * estimate.axis);
-                let dist = dist - margins.0 - margins.1;
+            if let Some(contact) = contact_support_map_support_map(&pos12, a, b, f64::MAX) {
+                estimate.axis = contact.normal1.try_normalize().unwrap_or(toward);
+                let points =
+                    grown((*pose_a * contact.point1, *pose_b * contact.point2), pose_a.rotation * estimate.axis);
+                let dist = contact.dist - margins.0 - margins.1;
                 if dist >= 0.0 {
                     estimate.upper = (points.1 - points.0).length();
                     estimate.witness = Some(points);
