@@ -97,7 +97,9 @@ fn sphere_event(
 }
 
 /// What predicting a pair in a world of shapes gives: an event for the queue, or where a shape
-/// search parked, for [`ParkedSearches`].
+/// search parked, for [`ParkedSearches`]. Kept unboxed: the predictions' vector is reused from
+/// frame to frame, and a box would allocate per parked search.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug)]
 pub(super) enum Prediction {
     Event(Event),

@@ -4,7 +4,7 @@
 //! relative far from it; it owns that arithmetic and never decides a contact time.
 
 use super::epa::penetration;
-use super::scaled::{refine, Core, Scaled};
+use super::scaled::{refine, Core, Kind, Scaled};
 use super::MARGIN;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
@@ -79,20 +79,16 @@ pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64,
     // Everything in scaled lengths, where parry's absolute tolerances mean the same at any scale:
     // closed forms on a scaled copy of a primitive, GJK on the scaled support map otherwise.
     let (p, s) = (shape.parry, shape.scale);
-    let projection = if let Some(ball) = p.as_ball() {
-        Ball::new(ball.radius * s).project_local_point(local, true)
-    } else if let Some(cuboid) = p.as_cuboid() {
-        Cuboid::new(cuboid.half_extents * s).project_local_point(local, true)
-    } else if let Some(c) = p.as_capsule() {
-        Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true)
-    } else if let Some(c) = p.as_cylinder() {
-        Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true)
-    } else if let Some(c) = p.as_cone() {
-        Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true)
-    } else if s == 1.0 {
-        p.project_local_point(local, true)
-    } else {
-        local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true)
+    let projection = match shape.kind {
+        Kind::Ball(ball) => Ball::new(ball.radius * s).project_local_point(local, true),
+        Kind::Cuboid(cuboid) => Cuboid::new(cuboid.half_extents * s).project_local_point(local, true),
+        Kind::Capsule(c) => {
+            Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true)
+        }
+        Kind::Cylinder(c) => Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true),
+        Kind::Cone(c) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
+        _ if s == 1.0 => p.project_local_point(local, true),
+        _ => local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true),
     };
     (!projection.is_inside).then(|| ((local - projection.point).length(), pose * projection.point))
 }
@@ -144,6 +140,102 @@ pub(super) const PROBE_DEPTH_SHARE: f64 = 1.0 / 32.0;
 /// The depth share of a measure that must be exact: EPA run to convergence (contact geometry).
 pub(super) const EXACT_DEPTH: f64 = 0.0;
 
+/// A gap probe this many tolerances or more from contact needs its distance only to a share
+/// ([`GAP_SHARE`]): it steps the search by the distance over a rate, and no bound there decides.
+pub(super) const ROUGH_FLOOR: f64 = 64.0;
+
+/// The share of a distance beyond [`ROUGH_FLOOR`] tolerances a gap probe leaves GJK: a step on a
+/// lower bound this much short goes at most this much less far. parry's GJK refines every
+/// distance to about 5e-8 of itself, some 11 support points a call far from contact on the CLI's
+/// crowd of mixed shapes; the searches' probes there are as many at this share, and half as dear.
+pub(super) const GAP_SHARE: f64 = 1.0 / 16.0;
+
+/// Points GJK starts from instead of a support point: not themselves support points, so GJK may
+/// stop where a new support point falls in their plane, short of converging (its bounds stay
+/// bounds, looser, which a chain's probes then tighten where it matters). With `verify`, a result
+/// that did not converge is measured again from a support point.
+#[derive(Clone, Copy)]
+pub(super) struct Seed<'s> {
+    simplex: &'s Simplex,
+    verify: bool,
+}
+
+/// How close to the distance of GJK's closest points the separation along their line must come
+/// for a GJK started from carried points to count as converged (see [`converged`]).
+const SEEDED_PRECISION: f64 = 1e-6;
+
+/// Whether the points `p1` of `a` and `p2` of `b` (at `pos12`) lie within [`SEEDED_PRECISION`]
+/// of their distance of the sets' separation along the line through them.
+fn converged<A: SupportMap, B: SupportMap>(pos12: &Pose, (a, b): (&A, &B), (p1, p2): (DVec3, DVec3)) -> bool {
+    let (n, distance) = (p2 - p1).normalize_and_length();
+    distance == 0.0 || distance + n.dot(CsoPoint::from_shapes(pos12, a, b, n).point) <= SEEDED_PRECISION * distance
+}
+
+/// GJK's iterations before a rough query hands its simplex to parry's converged GJK.
+const ROUGH_ITERATIONS: usize = 8;
+
+/// What a distance query must measure, beyond bounds tight enough to decide near contact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Need {
+    /// `None`: an intersection need only be recognised; otherwise the share of its depth EPA may
+    /// leave (see [`DepthNeed`]).
+    pub(super) depth: Option<f64>,
+    /// Beyond [`ROUGH_FLOOR`] tolerances from contact, the share of the distance GJK's bounds may
+    /// leave between them: 0 to converge.
+    pub(super) gap_share: f64,
+    /// Where GJK starts: a unit axis from the first shape to the second (world frame), the last
+    /// probe's on a chain; `None` to start from the line between the shapes' middles.
+    pub(super) start: Option<DVec3>,
+    /// Points of the two cores whose differences GJK starts from instead: the last probe's
+    /// simplex on a chain, carried along with the bodies.
+    pub(super) simplex: Option<Simplex>,
+}
+
+/// Pairs of points, one of each core in that shape's own frame, whose differences are points of
+/// the cores' Minkowski difference: the vertices of GJK's last simplex. Fixed in the bodies they
+/// stay points of the cores wherever the bodies go, so the next probe's GJK (or EPA, where they
+/// still hold the origin) starts from them, near where the last one ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Simplex {
+    points: [(DVec3, DVec3); 4],
+    count: usize,
+}
+
+impl Simplex {
+    /// Each pair's points moved by `grow`: points of the two shapes again where the moves keep
+    /// them in their shapes (a core's point moved by at most the shape's margin).
+    fn mapped(&self, grow_a: impl Fn(DVec3) -> DVec3, grow_b: impl Fn(DVec3) -> DVec3) -> Simplex {
+        Simplex { points: self.points.map(|(x, y)| (grow_a(x), grow_b(y))), count: self.count }
+    }
+
+    /// GJK's `simplex` of the sets at `pos12` (the second's pose in the first's frame).
+    fn of(simplex: &VoronoiSimplex, pos12: &Pose) -> Simplex {
+        let pair = |i: usize| {
+            let vertex = simplex.point(i.min(simplex.dimension()));
+            (vertex.orig1, pos12.inverse_transform_point(vertex.orig2))
+        };
+        Simplex { points: std::array::from_fn(pair), count: simplex.dimension() + 1 }
+    }
+
+    /// The pairs as GJK's simplex of the sets at `pos12`, less any that would make it degenerate.
+    fn voronoi(&self, pos12: &Pose) -> VoronoiSimplex {
+        let vertex = |(x, y): (DVec3, DVec3)| CsoPoint::new(x, pos12 * y);
+        let mut simplex = VoronoiSimplex::new();
+        simplex.reset(vertex(self.points[0]));
+        for &pair in &self.points[1..self.count] {
+            simplex.add_point(vertex(pair));
+        }
+        simplex
+    }
+}
+
+impl Need {
+    /// Converged bounds, with the depth to `depth`'s share, GJK started between the middles.
+    pub(super) fn converged(depth: Option<f64>) -> Need {
+        Need { depth, gap_share: 0.0, start: None, simplex: None }
+    }
+}
+
 /// Bounds on the signed distance of two shapes at one instant (scaled lengths, in the frame of
 /// their poses).
 #[derive(Debug, Clone, Copy)]
@@ -157,6 +249,8 @@ pub(super) struct Bounds {
     /// Points of the first and second shape whose distance is `upper` (or EPA's deepest points),
     /// when known.
     pub(super) witness: Option<(DVec3, DVec3)>,
+    /// GJK's last simplex on the cores, when it ran.
+    pub(super) simplex: Option<Simplex>,
 }
 
 /// A first estimate of the distance of two shapes (scaled, in the frame of their poses): closed
@@ -172,6 +266,8 @@ pub(super) struct Estimate {
     pub(super) search: Option<DVec3>,
     /// EPA's depth (negative) and deepest points when the shapes intersect.
     pub(super) penetration: Option<(f64, (DVec3, DVec3))>,
+    /// GJK's last simplex.
+    pub(super) simplex: Option<Simplex>,
 }
 
 /// The estimate from closed forms when both cores are points or segments, or one is a point
@@ -206,43 +302,111 @@ pub(super) fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) 
         witness: Some((x + axis * a.margin, y - axis * b.margin)),
         search: None,
         penetration: None,
+        simplex: None,
     })
+}
+
+/// How far a rough GJK may stop short (see [`rough_closest`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Rough {
+    share: f64,
+    floor: f64,
+}
+
+/// GJK's iterations (the sets `a` and `b` at `pos12`, grown by `margins`) from `simplex`, while
+/// the grown sets lie more than `rough.floor` apart, until the separation along a direction it
+/// tried lies within `rough.share` of the distance of the simplex's nearest points, points of
+/// the two sets: those points then, `None` if that does not come within [`ROUGH_ITERATIONS`] (the
+/// simplex is then left for parry's converged GJK to go on from).
+fn rough_closest<A: SupportMap, B: SupportMap>(
+    pos12: &Pose,
+    (a, b): (&A, &B),
+    margins: (f64, f64),
+    rough: Rough,
+    simplex: &mut VoronoiSimplex,
+) -> Option<GJKResult> {
+    let margin = margins.0 + margins.1;
+    let mut lower = f64::NEG_INFINITY;
+    for _ in 0..ROUGH_ITERATIONS {
+        // The point of the simplex nearest the origin: a - b for a point of each set.
+        let nearest = simplex.project_origin_and_reduce();
+        let upper = nearest.length();
+        if simplex.dimension() == 3 || upper - margin <= rough.floor {
+            return None;
+        }
+        // The sets lie at least this far apart along `dir`, by the difference's support point.
+        let dir = -nearest / upper;
+        let support = CsoPoint::from_shapes(pos12, a, b, dir);
+        lower = lower.max(-dir.dot(support.point));
+        if lower - margin > rough.floor && upper - lower <= rough.share * (upper - margin) {
+            let (mut on_a, mut on_b) = (DVec3::ZERO, DVec3::ZERO);
+            for i in 0..=simplex.dimension() {
+                let (weight, vertex) = (simplex.proj_coord(i), simplex.point(i));
+                on_a += vertex.orig1 * weight;
+                on_b += vertex.orig2 * weight;
+            }
+            return Some(GJKResult::ClosestPoints(on_a, on_b, dir));
+        }
+        if !simplex.add_point(support) {
+            return None;
+        }
+    }
+    None
 }
 
 /// GJK's estimate (EPA's when the sets intersect and `depth` asks for it) from the sets `a` and
 /// `b` at `pos12` (b's pose in a's frame), grown by `margins` into the shapes; `toward` (in a's
-/// frame) is where GJK starts from and the axis to fall back on.
+/// frame) is where GJK starts from and the axis to fall back on. With `rough`, GJK may stop short
+/// far from contact ([`rough_closest`]).
 pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     (a, pose_a): (&A, &Pose),
     (b, pose_b): (&B, &Pose),
     margins: (f64, f64),
     toward: DVec3,
     depth: Option<DepthNeed>,
+    rough: Option<Rough>,
+    seed: Option<Seed>,
 ) -> Estimate {
     let pos12 = pose_a.inv_mul(pose_b);
-    let mut estimate = Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None };
+    let mut estimate =
+        Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None, simplex: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
-    let gjk_from = |dir: DVec3| {
-        let mut simplex = VoronoiSimplex::new();
-        simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
-        (gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex), simplex)
+    let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<Seed>| {
+        let mut simplex = seed.map(|seed| seed.simplex.voronoi(&pos12)).unwrap_or_else(|| {
+            let mut simplex = VoronoiSimplex::new();
+            simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+            simplex
+        });
+        let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
+        let result = stopped.unwrap_or_else(|| match gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex) {
+            GJKResult::ClosestPoints(p1, p2, _)
+                if seed.is_some_and(|seed| seed.verify) && !converged(&pos12, (a, b), (p1, p2)) =>
+            {
+                simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+                gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)
+            }
+            found => found,
+        });
+        (result, simplex)
     };
-    let (mut result, mut simplex) = gjk_from(-toward);
-    if !matches!(result, GJKResult::ClosestPoints(..)) {
-        // GJK's verdict is not reliable a hair from contact: ask again from the other side.
-        let again = gjk_from(toward);
-        if matches!(again.0, GJKResult::ClosestPoints(..)) {
-            (result, simplex) = again;
-        }
-    }
+    let (mut result, simplex) = gjk_from(-toward, rough, seed);
+    estimate.simplex = Some(Simplex::of(&simplex, &pos12));
     // Deep inside each other a depth need only be as tight as asked: EPA from GJK's simplex,
     // stopped early. Shallower, where GJK's verdict is not reliable, parry's converged one.
-    let deep = |need: DepthNeed| {
+    let deep = |need: DepthNeed, simplex: &VoronoiSimplex| {
         let allowance = |depth: f64| need.share * (depth + margins.0 + margins.1 + need.tol);
-        let found = (need.share > 0.0).then(|| penetration(&pos12, a, b, &simplex, allowance))??;
+        let found = (need.share > 0.0).then(|| penetration(&pos12, a, b, simplex, allowance))??;
         (found.depth + margins.0 + margins.1 >= BAND * need.tol).then_some(found)
     };
-    let early = (result == GJKResult::Intersection).then(|| depth.and_then(deep)).flatten();
+    let early = (result == GJKResult::Intersection).then(|| depth.and_then(|need| deep(need, &simplex))).flatten();
+    // GJK's verdict is not reliable a hair from contact: ask again from the other side, unless
+    // EPA's polytope, points of the difference about the origin, already proved them deep inside.
+    if early.is_none() && !matches!(result, GJKResult::ClosestPoints(..)) {
+        let (again, _) = gjk_from(toward, None, None);
+        if matches!(again, GJKResult::ClosestPoints(..)) {
+            result = again;
+        }
+    }
     match (result, early) {
         (GJKResult::ClosestPoints(p1, p2, dir), _) => {
             let d = p2 - p1;
@@ -284,37 +448,53 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
 /// or GJK, and each shape's extreme point along the axis projected on the other), or EPA's depth
 /// when they intersect (EPA's polytope lies inside the Minkowski difference, so its depth never
 /// exceeds the true one); the lower bound is a separation along an axis, computed from the exact
-/// support functions. With `depth` `None`, an intersection only needs to be recognised, not
+/// support functions. With `need.depth` `None`, an intersection only needs to be recognised, not
 /// measured; otherwise a deep one is measured to within that share of the depth plus `tol` (see
-/// [`DepthNeed`]), a shallow one to rounding. GJK runs on the cores, and on the shapes too where
-/// their distance is a small part of the cores' (its precision is relative to the distance it
-/// measures). The bounds are tightened
-/// where it matters: within a few `tol` of contact.
+/// [`DepthNeed`]), a shallow one to rounding. Far from contact the bounds may lie `need.gap_share`
+/// of the distance apart. GJK runs on the cores, and on the shapes too where their distance is a
+/// small part of the cores' (its precision is relative to the distance it measures). The bounds
+/// are tightened where it matters: within a few `tol` of contact.
 pub(super) fn convex_bounds(
     a: &Scaled,
     pose_a: &Pose,
     b: &Scaled,
     pose_b: &Pose,
-    depth: Option<f64>,
+    need: Need,
     tol: f64,
     slack: f64,
 ) -> Bounds {
     let band = BAND * tol;
-    let depth = depth.map(|share| DepthNeed { share, tol });
-    // From the middle of a to the middle of b, in a's frame: where GJK starts, and the axis to
-    // fall back on if it fails.
-    let toward = (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X);
+    let depth = need.depth.map(|share| DepthNeed { share, tol });
+    // The last probe's axis, or from the middle of a to the middle of b, in a's frame: where GJK
+    // starts, and the axis to fall back on if it fails.
+    let toward = match need.start {
+        Some(axis) => pose_a.rotation.inverse() * axis,
+        None => (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X),
+    };
+    let rough = (need.gap_share > 0.0).then_some(Rough { share: need.gap_share, floor: ROUGH_FLOOR * tol });
     let (first, second) = match closed_form(a, pose_a, b, pose_b) {
         Some(exact) => (exact, None),
         None => {
             let margins = (a.margin, b.margin);
-            let cores = gjk_estimate((&a.core(), pose_a), (&b.core(), pose_b), margins, toward, depth);
+            let seed = need.simplex.as_ref().map(|simplex| Seed { simplex, verify: false });
+            let cores = (&a.core(), pose_a);
+            let cores = gjk_estimate(cores, (&b.core(), pose_b), margins, toward, depth, rough, seed);
             let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);
             // GJK's precision is relative to the distance it measures, the cores' with the
             // margins: where the shapes' own is a small part of it, GJK runs on them too, and the
             // tighter estimate counts (either fails at times a hair from contact).
             let near = distance.abs() < (margins.0 + margins.1) / 16.0;
-            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth)))
+            // It starts from the cores' last simplex grown into the shapes along their axis.
+            let grown = |simplex: &Simplex| {
+                let (along_a, along_b) =
+                    (pose_a.rotation.inverse() * cores.axis, pose_b.rotation.inverse() * cores.axis);
+                simplex.mapped(|x| x + along_a * margins.0, |y| y - along_b * margins.1)
+            };
+            let grown = cores.simplex.as_ref().map(grown);
+            // A lone measure (a contact's geometry, reported as measured) must converge as if
+            // GJK had started afresh.
+            let seed = grown.as_ref().map(|simplex| Seed { simplex, verify: need.simplex.is_none() });
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None, seed)))
         }
     };
     let estimates = || std::iter::once(&first).chain(&second);
@@ -369,7 +549,7 @@ pub(super) fn convex_bounds(
         // Both GJK runs found the shapes intersecting and no depth was measured.
         upper = 0.0;
     }
-    Bounds { lower: best.0 - slack, upper: upper + slack, axis: best.1, witness }
+    Bounds { lower: best.0 - slack, upper: upper + slack, axis: best.1, witness, simplex: first.simplex }
 }
 
 /// One triangle's bounds rank by their lower bound in parry's best-first search of the mesh.

@@ -4,7 +4,7 @@
 //! never sees another moving body (the pair gauges in [`super::gauges`] do).
 
 use super::chord::{wall_hold, Moving};
-use super::distance::{convex_bounds, Bounds, PROBE_DEPTH_SHARE};
+use super::distance::{convex_bounds, Bounds, Need, PROBE_DEPTH_SHARE};
 use super::gauges::{Gauge, Measure, Probe, Reach, Warm, NO_FAR};
 use super::scaled::{along, speeding, Body, Scaled};
 use super::{guard, starting, SLACK};
@@ -148,7 +148,9 @@ impl MeshPair<'_> {
                 let warm = previous.iter().find(|(k, _)| *k == id).map(|(_, warm)| warm);
                 let bounds = (warm
                     .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
-                .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, depth, self.tol, slack));
+                .unwrap_or_else(|| {
+                    convex_bounds(&support, &Pose::IDENTITY, &body, &pose, Need::converged(depth), self.tol, slack)
+                });
                 if let Some(warm) = Warm::new(&bounds, carry) {
                     next.borrow_mut().push((id, warm));
                 }

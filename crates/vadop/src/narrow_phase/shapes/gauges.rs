@@ -4,7 +4,7 @@
 //! never chooses the probe times (the searcher does).
 
 use super::chord::{axis_hold, chord_hold, Moving};
-use super::distance::{closer_points, convex_bounds, separation, Bounds, PROBE_DEPTH_SHARE};
+use super::distance::{closer_points, convex_bounds, separation, Bounds, Need, Simplex, GAP_SHARE, PROBE_DEPTH_SHARE};
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
@@ -208,6 +208,8 @@ impl Reach {
 pub(super) struct ConvexPair<'a> {
     pub(super) a: Body<'a>,
     pub(super) b: Body<'a>,
+    /// Their shapes as the distance bounds read them, at `scale`.
+    pub(super) shapes: (Scaled<'a>, Scaled<'a>),
     pub(super) scale: f64,
     /// b's centre minus a's at the reference, scaled.
     pub(super) offset: DVec3,
@@ -237,6 +239,8 @@ pub(super) struct Warm {
     pub(super) witness: (DVec3, DVec3),
     /// The upper bound that probe found.
     pub(super) upper: f64,
+    /// GJK's simplex from the last probe that ran it, its points fixed in the bodies.
+    pub(super) simplex: Option<Simplex>,
 }
 
 impl Warm {
@@ -248,6 +252,7 @@ impl Warm {
             axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
             witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
             upper: bounds.upper,
+            simplex: bounds.simplex,
         })
     }
 
@@ -295,7 +300,8 @@ impl Warm {
         let carried = ((witness.1 - witness.0).length(), Some(witness));
         let (upper, witness) =
             if tight(carried.0) { carried } else { closer_points((a, pose_a), (b, pose_b), carried, None, 1) };
-        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness })
+        let simplex = self.simplex;
+        tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness, simplex })
     }
 }
 
@@ -526,34 +532,43 @@ impl Gauge for ConvexPair<'_> {
     fn probe(&self, tau: f64, measure: Measure) -> Probe {
         let (pose_a, pose_b) = self.poses(tau);
         let slack = SLACK * (pose_b.translation.length() + self.size);
-        let (ga, gb) = (self.a.support(self.scale), self.b.support(self.scale));
+        let (ga, gb) = (&self.shapes.0, &self.shapes.1);
         let velocity = self.velocity_at(tau);
         let grow = velocity.length() + self.spin;
         let bend = self.acceleration.length();
         if measure == Measure::Contact {
             if let Some(warm) = self.warm.get() {
-                let (upper, deepest) = warm.contact_upper((&ga, &pose_a), (&gb, &pose_b), slack);
+                let (upper, deepest) = warm.contact_upper((ga, &pose_a), (gb, &pose_b), slack);
                 let room = |upper: f64| 2.0 * self.tol - upper;
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= STALE_ROOM * room(warm.upper) {
                     // Far from the contact's end: nothing else is needed, and the warm start stays.
-                    let hold = self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), deepest, slack);
+                    let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slack);
                     return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
             }
         }
         // Each shape's frame moves with its body.
         let carry = (&pose_a, &pose_b);
-        let depth = (measure != Measure::Gap).then_some(PROBE_DEPTH_SHARE);
-        let bounds = (self.warm.get())
-            .and_then(|warm| warm.bounds((&ga, &pose_a), (&gb, &pose_b), carry, self.tol, slack))
-            .unwrap_or_else(|| convex_bounds(&ga, &pose_a, &gb, &pose_b, depth, self.tol, slack));
+        let warm = self.warm.get();
+        // GJK starts from the last probe's axis turned with a; a gap far from contact needs its
+        // distance only to a share (it steps the search and decides nothing).
+        let gap = measure == Measure::Gap;
+        let need = Need {
+            depth: (!gap).then_some(PROBE_DEPTH_SHARE),
+            gap_share: if gap { GAP_SHARE } else { 0.0 },
+            start: warm.map(|warm| pose_a.rotation * warm.axis.0),
+            simplex: warm.and_then(|warm| warm.simplex),
+        };
+        let bounds = warm
+            .and_then(|warm| warm.bounds((ga, &pose_a), (gb, &pose_b), carry, self.tol, slack))
+            .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
         let hold = match (measure, bounds.witness) {
             (Measure::Contact, Some((x, y))) => {
-                self.hold(tau, (&ga, &pose_a), (&gb, &pose_b), Deepest::Witnesses(x, y), slack)
+                self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slack)
             }
             (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
-                self.apart(tau, (&ga, &pose_a), (&gb, &pose_b), bounds.axis, slack)
+                self.apart(tau, (ga, &pose_a), (gb, &pose_b), bounds.axis, slack)
             }
             _ => 0.0,
         };
@@ -562,7 +577,7 @@ impl Gauge for ConvexPair<'_> {
             upper: bounds.upper,
             shrink: (-velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
             grow,
-            far: self.far(tau, (&ga, &pose_a), (&gb, &pose_b), slack),
+            far: self.far(tau, (ga, &pose_a), (gb, &pose_b), slack),
             hold,
             bend,
         }
@@ -589,7 +604,9 @@ impl Gauge for ConvexPair<'_> {
     }
 }
 
-/// The pair-specific gauge of two shapes.
+/// The pair-specific gauge of two shapes. Kept unboxed: one per search, on the stack, and a box
+/// would allocate per search.
+#[allow(clippy::large_enum_variant)]
 pub(super) enum PairGauge<'a> {
     Convex(ConvexPair<'a>),
     /// `flipped`: the plane is the pair's first body.
@@ -644,7 +661,7 @@ impl Gauge for PairGauge<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::narrow_phase::shapes::distance::EXACT_DEPTH;
+    use crate::narrow_phase::shapes::distance::{Need, EXACT_DEPTH};
     use glam::DQuat;
     use rand::{Rng, SeedableRng};
 
@@ -665,7 +682,7 @@ mod tests {
             let offset =
                 DVec3::new(random(), random(), random()).normalize_or(DVec3::X) * (0.1 + 0.6 * (random() + 0.5));
             let (pose_a, pose_b) = (Pose::from_parts(DVec3::ZERO, qa), Pose::from_parts(offset, qb));
-            let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Some(EXACT_DEPTH), 1e-6, 1e-14);
+            let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Need::converged(Some(EXACT_DEPTH)), 1e-6, 1e-14);
             let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b)) else { continue };
             let (here, _) = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
             if bounds.upper < -1e-3 {

@@ -174,7 +174,7 @@ use crate::numeric::unit_scale;
 use crate::shape::ShapeGeometry;
 use crate::walls::Wall;
 use crate::window::Window;
-use distance::{convex_bounds, Bounds, EXACT_DEPTH};
+use distance::{convex_bounds, Bounds, Need, EXACT_DEPTH};
 use fixed_gauges::{MeshPair, PlanePair, WallGauge};
 use gauges::{ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
@@ -352,6 +352,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
     let gauge = match (a.geometry.is_static_only(), b.geometry.is_static_only()) {
         (false, false) => PairGauge::Convex(ConvexPair {
             middles: (a.support(scale).middle_ball(), b.support(scale).middle_ball()),
+            shapes: (a.support(scale), b.support(scale)),
             offset: (b.position - a.position) * scale,
             velocity: (b.velocity - a.velocity) * scale,
             acceleration: (b.acceleration - a.acceleration) * scale,
@@ -642,8 +643,8 @@ pub fn contact_geometry<S: Spin, T: Spin>(
     match &searcher.gauge {
         PairGauge::Convex(pair) => {
             let (pose_a, pose_b) = pair.poses(tau);
-            let (ga, gb) = (pair.a.support(pair.scale), pair.b.support(pair.scale));
-            let bounds = convex_bounds(&ga, &pose_a, &gb, &pose_b, Some(EXACT_DEPTH), pair.tol, 0.0);
+            let (ga, gb) = &pair.shapes;
+            let bounds = convex_bounds(ga, &pose_a, gb, &pose_b, Need::converged(Some(EXACT_DEPTH)), pair.tol, 0.0);
             let origin = pair.a.centre(tau);
             let witness = bounds
                 .witness

@@ -10,7 +10,7 @@ use crate::shape::ShapeGeometry;
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query::PointQuery;
-use parry3d_f64::shape::{Segment, Shape, SupportMap};
+use parry3d_f64::shape::{Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, Segment, Shape, SupportMap};
 use std::cell::Cell;
 
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
@@ -20,7 +20,43 @@ pub(super) struct Scaled<'a> {
     pub(super) core: Core<'a>,
     pub(super) margin: f64,
     pub(super) parry: &'a dyn Shape,
+    /// Which primitive `parry` is, asked once.
+    pub(super) kind: Kind<'a>,
     pub(super) scale: f64,
+}
+
+/// The primitive a parry shape is, for the closed forms that depend on it: asked of the shape once
+/// per search's view of it, not at every depth or projection.
+#[derive(Clone, Copy)]
+pub(super) enum Kind<'a> {
+    Ball(&'a Ball),
+    Capsule(&'a Capsule),
+    Cuboid(&'a Cuboid),
+    Cylinder(&'a Cylinder),
+    Cone(&'a Cone),
+    Hull(&'a ConvexPolyhedron),
+    /// Any other shape (a triangle of a mesh): no closed form.
+    Other,
+}
+
+impl<'a> Kind<'a> {
+    fn of(shape: &'a dyn Shape) -> Kind<'a> {
+        if let Some(ball) = shape.as_ball() {
+            Kind::Ball(ball)
+        } else if let Some(capsule) = shape.as_capsule() {
+            Kind::Capsule(capsule)
+        } else if let Some(cuboid) = shape.as_cuboid() {
+            Kind::Cuboid(cuboid)
+        } else if let Some(cylinder) = shape.as_cylinder() {
+            Kind::Cylinder(cylinder)
+        } else if let Some(cone) = shape.as_cone() {
+            Kind::Cone(cone)
+        } else if let Some(hull) = shape.as_convex_polyhedron() {
+            Kind::Hull(hull)
+        } else {
+            Kind::Other
+        }
+    }
 }
 
 /// The convex set a shape is the neighbourhood of, in the shape frame and scaled: a ball's
@@ -36,15 +72,16 @@ pub(super) enum Core<'a> {
 impl<'a> Scaled<'a> {
     /// The shape `parry`, scaled by `scale`.
     pub(super) fn new(parry: &'a dyn Shape, scale: f64) -> Self {
-        let (core, margin) = if let Some(ball) = parry.as_ball() {
-            (Core::Point, ball.radius)
-        } else if let Some(capsule) = parry.as_capsule() {
-            let segment = Segment::new(capsule.segment.a * scale, capsule.segment.b * scale);
-            (Core::Segment(segment), capsule.radius)
-        } else {
-            (Core::Solid(parry.as_support_map().expect("solid shapes have support maps")), 0.0)
+        let kind = Kind::of(parry);
+        let (core, margin) = match kind {
+            Kind::Ball(ball) => (Core::Point, ball.radius),
+            Kind::Capsule(capsule) => {
+                let segment = Segment::new(capsule.segment.a * scale, capsule.segment.b * scale);
+                (Core::Segment(segment), capsule.radius)
+            }
+            _ => (Core::Solid(parry.as_support_map().expect("solid shapes have support maps")), 0.0),
         };
-        Scaled { core, margin: margin * scale, parry, scale }
+        Scaled { core, margin: margin * scale, parry, kind, scale }
     }
 
     /// How deep the point `p` (in the shape's frame, scaled) lies inside the shape: the radius of
@@ -59,7 +96,7 @@ impl<'a> Scaled<'a> {
                 (self.margin - on.distance(p), (on - p).normalize_or_zero())
             }
             Core::Solid(_) => {
-                let (depth, inward) = solid_depth(self.parry, p / self.scale);
+                let (depth, inward) = solid_depth(self.kind, p / self.scale);
                 (depth * self.scale, inward)
             }
         }
@@ -91,22 +128,22 @@ impl<'a> Scaled<'a> {
 /// How deep `p` lies inside a solid without a core, in the shape's own lengths, and the
 /// direction away from the nearest face: the nearest of the planes of its faces, and for round
 /// sides the exact distance to them; 0 for a kind without a closed form.
-fn solid_depth(shape: &dyn Shape, p: DVec3) -> (f64, DVec3) {
+fn solid_depth(kind: Kind, p: DVec3) -> (f64, DVec3) {
     let nearest = |faces: &mut dyn Iterator<Item = (f64, DVec3)>| {
         faces.fold((f64::INFINITY, DVec3::ZERO), |x, y| if y.0 < x.0 { y } else { x })
     };
-    if let Some(cuboid) = shape.as_cuboid() {
+    if let Kind::Cuboid(cuboid) = kind {
         let inward = |axis: usize| -DVec3::AXES[axis] * p[axis].signum();
         return nearest(&mut (0..3).map(|k| (cuboid.half_extents[k] - p[k].abs(), inward(k))));
     }
     let across = DVec3::new(p.x, 0.0, p.z);
     let (radius, outward) = (across.length(), across.normalize_or_zero());
-    if let Some(cylinder) = shape.as_cylinder() {
+    if let Kind::Cylinder(cylinder) = kind {
         let faces =
             [(cylinder.radius - radius, -outward), (cylinder.half_height - p.y.abs(), -DVec3::Y * p.y.signum())];
         return nearest(&mut faces.into_iter());
     }
-    if let Some(cone) = shape.as_cone() {
+    if let Kind::Cone(cone) = kind {
         // Apex at +h, base of radius r at -h: a point inside is nearest the base or the side's
         // generator through it, whose line it meets at right angles (the half angle is acute).
         let (h, r) = (cone.half_height, cone.radius);
@@ -115,7 +152,7 @@ fn solid_depth(shape: &dyn Shape, p: DVec3) -> (f64, DVec3) {
         let side_inward = -(outward * (2.0 * h) + DVec3::Y * r) / slant;
         return nearest(&mut [(side, side_inward), (p.y + h, DVec3::Y)].into_iter());
     }
-    if let Some(hull) = shape.as_convex_polyhedron() {
+    if let Kind::Hull(hull) = kind {
         let (points, corners) = (hull.points(), hull.vertices_adj_to_face());
         let face = |normal: DVec3, corner: u32| (normal.dot(points[corners[corner as usize] as usize] - p), -normal);
         return nearest(&mut hull.faces().iter().map(|f| face(f.normal, f.first_vertex_or_edge)));
