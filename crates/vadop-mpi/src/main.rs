@@ -20,7 +20,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use run::{FrameFigures, Plan, Start};
 use std::io::{BufWriter, Write};
 use std::path::PathBuf;
-use vadop::scene::{GeneratedScene, Scene, Velocities, FRAMES_PER_SECOND};
+use vadop::scene::{GeneratedScene, Scene, SphereScene, FRAMES_PER_SECOND};
 use vadop::{BodyHandle, Contact, Method, Mode, World, WorldConfig};
 
 #[derive(Debug, Parser)]
@@ -240,16 +240,13 @@ fn records(world: &World) -> Result<Vec<(BodyHandle, vadop::SphereRecord)>, Stri
 }
 
 fn generate(args: &Args) -> Result<(Scene, String), String> {
-    let (velocities, what) = match args.kind {
-        Kind::Paper => (Velocities::Uniform { max_speed: args.max_speed }, "paper scene (speeds up to"),
-        Kind::Gas => (Velocities::Maxwell { rms_speed: args.max_speed }, "equilibrium gas (rms speed"),
-        Kind::Stream => {
-            (Velocities::Stream { speed: args.max_speed, spread: args.spread.to_radians() }, "stream (speed")
-        }
-        Kind::HeavyTail => {
-            (Velocities::HeavyTail { median_speed: args.max_speed, tail_index: 1.5 }, "heavy-tailed speeds (median")
-        }
+    let scene = match args.kind {
+        Kind::Paper => SphereScene::Paper,
+        Kind::Gas => SphereScene::Gas,
+        Kind::Stream => SphereScene::Stream,
+        Kind::HeavyTail => SphereScene::HeavyTail,
     };
+    let (velocities, what) = scene.velocities(args.max_speed, args.spread);
     let generated = GeneratedScene {
         bodies: args.bodies,
         packing_fraction: args.packing,
@@ -258,7 +255,7 @@ fn generate(args: &Args) -> Result<(Scene, String), String> {
         seed: args.seed,
     };
     let scene = generated.build().map_err(|e| e.to_string())?;
-    Ok((scene, format!("{what} {} diameters/frame, seed {})", args.max_speed, args.seed)))
+    Ok((scene, format!("{what}, seed {})", args.seed)))
 }
 
 /// `VADOP_MPI_FAIL=RANK:FRAME`: that rank dies at the start of that frame, as a machine failing

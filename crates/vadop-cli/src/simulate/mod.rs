@@ -23,7 +23,7 @@ use outputs::{ContactWriter, Files, Outputs};
 use std::path::Path;
 use std::time::{Duration, Instant};
 use vadop::memory;
-use vadop::scene::{GeneratedScene, Scene, SceneLayout, ShapesScene, Velocities, MAX_SCENE_BODIES};
+use vadop::scene::{GeneratedScene, Scene, SceneLayout, ShapesScene, SphereScene, MAX_SCENE_BODIES};
 use vadop::{BodyHandle, Contact, Method, Mode, Rest, Touched, VadopError, World, WorldConfig};
 
 /// Scenes up to this many moving bodies are checked against brute force unless told otherwise.
@@ -110,24 +110,12 @@ pub fn run(args: &SimulateArgs) -> CliResult<()> {
 /// The scene `--kind` asks for, and where it came from, for the summary.
 fn generate(args: &SimulateArgs) -> CliResult<(Scene, String)> {
     let (velocities, what) = match args.kind {
-        KindArg::Paper => (
-            Velocities::Uniform { max_speed: args.max_speed },
-            format!("paper scene (speeds up to {} diameters/frame", args.max_speed),
-        ),
-        KindArg::Gas => (
-            Velocities::Maxwell { rms_speed: args.max_speed },
-            format!("equilibrium gas (rms speed {} diameters/frame", args.max_speed),
-        ),
-        KindArg::Stream => (
-            Velocities::Stream { speed: args.max_speed, spread: args.spread.to_radians() },
-            format!("stream ({} diameters/frame within {} degrees of +x", args.max_speed, args.spread),
-        ),
-        KindArg::HeavyTail => (
-            Velocities::HeavyTail { median_speed: args.max_speed, tail_index: 1.5 },
-            format!("heavy-tailed speeds (median {} diameters/frame, tail index 1.5", args.max_speed),
-        ),
+        KindArg::Paper => SphereScene::Paper.velocities(args.max_speed, args.spread),
+        KindArg::Gas => SphereScene::Gas.velocities(args.max_speed, args.spread),
+        KindArg::Stream => SphereScene::Stream.velocities(args.max_speed, args.spread),
+        KindArg::HeavyTail => SphereScene::HeavyTail.velocities(args.max_speed, args.spread),
         KindArg::Pile => (
-            Velocities::Uniform { max_speed: args.max_speed },
+            SphereScene::Paper.velocities(args.max_speed, args.spread).0,
             format!("granular pile (falling from the paper scene, speeds up to {} diameters/frame", args.max_speed),
         ),
         KindArg::Shapes => {

@@ -60,7 +60,7 @@ mod shapes;
 
 pub use crate::error::SceneEntry;
 pub use file::{NamedShape, Scene, SceneBody, SceneLayout, StaticBody};
-pub use paper::{GeneratedScene, PaperScene, Velocities};
+pub use paper::{GeneratedScene, PaperScene, SphereScene, Velocities, HEAVY_TAIL_INDEX};
 pub use shapes::{ShapesScene, DEFAULT_MAX_SPIN};
 
 /// Most bodies a generated scene holds: more would not fit in memory, and generating them would

@@ -30,6 +30,56 @@ pub enum Velocities {
     HeavyTail { median_speed: f64, tail_index: f64 },
 }
 
+/// The scenes of equal spheres the command-line tools generate, by how their velocities are
+/// drawn from one speed (see [`SphereScene::velocities`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SphereScene {
+    /// The paper's: speeds uniform up to the speed.
+    Paper,
+    /// An equilibrium gas of that root-mean-square speed.
+    Gas,
+    /// A stream at that speed.
+    Stream,
+    /// Heavy-tailed speeds of that median, tail index [`HEAVY_TAIL_INDEX`].
+    HeavyTail,
+}
+
+/// The tail index of [`SphereScene::HeavyTail`]: one body in a hundred is 20 times faster than
+/// the median.
+pub const HEAVY_TAIL_INDEX: f64 = 1.5;
+
+impl SphereScene {
+    /// Its velocities at `speed` diameters per frame, a stream's directions within `spread`
+    /// degrees of +x, and what the scene is for a summary, its parenthesis left open for the
+    /// caller to add to and close.
+    ///
+    /// ```
+    /// use vadop::scene::{SphereScene, Velocities};
+    /// let (velocities, what) = SphereScene::Stream.velocities(2.0, 90.0);
+    /// assert_eq!(velocities, Velocities::Stream { speed: 2.0, spread: std::f64::consts::FRAC_PI_2 });
+    /// assert_eq!(format!("{what})"), "stream (2 diameters/frame within 90 degrees of +x)");
+    /// ```
+    pub fn velocities(self, speed: f64, spread: f64) -> (Velocities, String) {
+        match self {
+            SphereScene::Paper => {
+                (Velocities::Uniform { max_speed: speed }, format!("paper scene (speeds up to {speed} diameters/frame"))
+            }
+            SphereScene::Gas => (
+                Velocities::Maxwell { rms_speed: speed },
+                format!("equilibrium gas (rms speed {speed} diameters/frame"),
+            ),
+            SphereScene::Stream => (
+                Velocities::Stream { speed, spread: spread.to_radians() },
+                format!("stream ({speed} diameters/frame within {spread} degrees of +x"),
+            ),
+            SphereScene::HeavyTail => (
+                Velocities::HeavyTail { median_speed: speed, tail_index: HEAVY_TAIL_INDEX },
+                format!("heavy-tailed speeds (median {speed} diameters/frame, tail index {HEAVY_TAIL_INDEX}"),
+            ),
+        }
+    }
+}
+
 impl Velocities {
     /// Checks the parameters.
     pub(super) fn check(&self) -> Result<()> {
