@@ -6,15 +6,12 @@
 mod common;
 
 use glam::{DQuat, DVec3};
+use vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
 use vadop::scene::{ShapesScene, FRAMES_PER_SECOND};
 use vadop::shape::Shape;
 use vadop::{Body, BodyShape, BoxBounds, Method, Mode, Rest, World, WorldConfig};
 
 const DT: f64 = 1.0 / FRAMES_PER_SECOND;
-
-/// The shapes' contact tolerance relative to their sizes
-/// (`vadop::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE`): touching allows no deeper overlap.
-const TOUCHING: f64 = 1e-6;
 
 fn config(method: Method, gravity: DVec3) -> WorldConfig {
     WorldConfig { gravity, restitution: 0.5, friction: 0.3, method, mode: Mode::Simulate, ..WorldConfig::default() }
@@ -46,7 +43,7 @@ fn a_crowd_of_every_shape_settles_with_nothing_sinking() {
         for frame in 0..150 {
             world.step(DT).unwrap();
             let (depth, what) = common::deepest_overlap(&world);
-            assert!(depth <= TOUCHING, "seed {seed}, frame {frame}: {what} ({depth:e} of the sizes)");
+            assert!(depth <= SHAPE_CONTACT_TOLERANCE, "seed {seed}, frame {frame}: {what} ({depth:e} of the sizes)");
         }
         // Balls may still roll on the floor; every other shape lies still.
         for (handle, body) in world.bodies().filter(|(_, b)| b.mass.is_finite()) {
@@ -86,7 +83,7 @@ fn a_dropped_box_lies_still_on_its_face() {
     assert_eq!(world.rest(handle).unwrap(), Rest::Still);
     let lying = world.body(handle).unwrap();
     assert!(landings >= 4, "it bounces before it rests: {landings} landings");
-    assert!((lying.position.z - 0.2).abs() <= TOUCHING, "{lying:?}");
+    assert!((lying.position.z - 0.2).abs() <= SHAPE_CONTACT_TOLERANCE, "{lying:?}");
     assert!(lying.velocity == DVec3::ZERO && lying.angular_velocity == DVec3::ZERO, "{lying:?}");
 }
 

@@ -372,9 +372,10 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
         Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None, simplex: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
     let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<Seed>| {
+        let fresh = |simplex: &mut VoronoiSimplex| simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
         let mut simplex = seed.map(|seed| seed.simplex.voronoi(&pos12)).unwrap_or_else(|| {
             let mut simplex = VoronoiSimplex::new();
-            simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+            fresh(&mut simplex);
             simplex
         });
         let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
@@ -382,7 +383,7 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
             GJKResult::ClosestPoints(p1, p2, _)
                 if seed.is_some_and(|seed| seed.verify) && !converged(&pos12, (a, b), (p1, p2)) =>
             {
-                simplex.reset(CsoPoint::from_shapes(&pos12, a, b, dir));
+                fresh(&mut simplex);
                 gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex)
             }
             found => found,

@@ -350,20 +350,23 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
         return Err(stall("the angular speed bound is not finite"));
     }
     let gauge = match (a.geometry.is_static_only(), b.geometry.is_static_only()) {
-        (false, false) => PairGauge::Convex(ConvexPair {
-            middles: (a.support(scale).middle_ball(), b.support(scale).middle_ball()),
-            shapes: (a.support(scale), b.support(scale)),
-            offset: (b.position - a.position) * scale,
-            velocity: (b.velocity - a.velocity) * scale,
-            acceleration: (b.acceleration - a.acceleration) * scale,
-            a,
-            b,
-            scale,
-            spin,
-            size: size * scale,
-            tol,
-            warm: Cell::new(None),
-        }),
+        (false, false) => {
+            let shapes = (a.support(scale), b.support(scale));
+            PairGauge::Convex(ConvexPair {
+                middles: (shapes.0.middle_ball(), shapes.1.middle_ball()),
+                shapes,
+                offset: (b.position - a.position) * scale,
+                velocity: (b.velocity - a.velocity) * scale,
+                acceleration: (b.acceleration - a.acceleration) * scale,
+                a,
+                b,
+                scale,
+                spin,
+                size: size * scale,
+                tol,
+                warm: Cell::new(None),
+            })
+        }
         (first_static, _) => {
             let (body, fixed) = if first_static { (b, a) } else { (a, b) };
             let offset = (body.position - fixed.position) * scale;
