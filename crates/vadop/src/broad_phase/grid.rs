@@ -72,6 +72,8 @@ struct Level {
     cell: f64,
     inverse: f64,
     dims: [usize; 3],
+    /// The last cell coordinate along each axis (`dims - 1`), as a float.
+    last: [f64; 3],
     /// Binned pieces of cell c: slots `first + cell_start[c]..first + cell_start[c + 1]`.
     first: usize,
     /// Cells of the levels before this one: its cell c is cell `cells_before + c` of the grid.
@@ -95,6 +97,7 @@ impl Level {
         self.cell = cell;
         self.inverse = 1.0 / cell;
         self.dims = [0, 1, 2].map(|k| ((extent[k] / cell).floor() as usize + 1).max(1));
+        self.last = self.dims.map(|d| (d - 1) as f64);
         let cells = self.dims.iter().product::<usize>();
         self.cell_start.clear();
         self.cell_start.resize(cells + 1, 0);
@@ -105,8 +108,12 @@ impl Level {
 
     #[inline]
     fn coordinate(&self, value: f64, axis: usize) -> usize {
-        // Truncation is the floor of a non-negative value; `as` saturates huge ones (and NaN to 0).
-        ((value * self.inverse).max(0.0) as usize).min(self.dims[axis] - 1)
+        // Clamped first (`max` takes NaN to 0), so the truncation, the floor of a non-negative
+        // value, needs none of the checks a saturating `as` makes: binning and every query pay
+        // for this conversion, three times per box.
+        let clamped = (value * self.inverse).max(0.0).min(self.last[axis]);
+        // SAFETY: `clamped` is finite and within [0, 2^20], so it fits a u32.
+        unsafe { clamped.to_int_unchecked::<u32>() as usize }
     }
 
     /// Cell coordinates of a point given relative to the grid origin.
@@ -202,9 +209,10 @@ impl Grid {
     #[inline]
     fn plan_pieces(&self, proxies: Proxies, i: usize) -> (u32, i32) {
         let radius = proxies.radius(i);
-        let length = proxies.velocity(i).length() * proxies.window_of(i).duration();
+        let (origin, velocity) = proxies.origin_and_velocity(i);
+        let length = velocity.length() * proxies.window_of(i).duration();
         let scale = 1.0 + 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING;
-        let widening = 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING * proxies.origin(i).abs().max_element()
+        let widening = 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING * origin.abs().max_element()
             + 4.0 * f32::EPSILON as f64 * (self.extent.max_element() + 2.0 * radius + length);
         // A hair shorter than the room left in a base cell, so rounding never pushes a piece up.
         let limit = (((self.base_cell - widening) / scale - 2.0 * radius) * (1.0 - 1e-6)).max(2.0 * radius);
@@ -221,7 +229,7 @@ impl Grid {
             f(proxies.bbox(i), window);
             return;
         }
-        let (origin, velocity, radius) = (proxies.origin(i), proxies.velocity(i), proxies.radius(i));
+        let ((origin, velocity), radius) = (proxies.origin_and_velocity(i), proxies.radius(i));
         let step = window.duration() / count as f64;
         let (mut from, mut start) = (origin, window.start);
         for k in 1..=count {

@@ -543,6 +543,14 @@ impl<'a> Proxies<'a> {
         self.state(i).motion.at_under(self.table.spans[i].start, self.gravity_on(i))
     }
 
+    /// Centre and velocity of proxy `i` at its start, from one read of its motion: what cutting
+    /// a path into pieces needs for every proxy at a window's start.
+    #[inline(always)]
+    pub fn origin_and_velocity(&self, i: usize) -> (DVec3, DVec3) {
+        let (motion, start, gravity) = (&self.state(i).motion, self.table.spans[i].start, self.gravity_on(i));
+        (motion.at_under(start, gravity), motion.velocity_under(start, gravity))
+    }
+
     /// The acceleration proxy `i`'s body moves under (a ghost's is its owner's).
     #[inline]
     fn gravity_on(&self, i: usize) -> DVec3 {

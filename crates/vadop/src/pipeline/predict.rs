@@ -41,8 +41,9 @@ pub(super) fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: W
 /// from: a prediction made from a proxy not yet refreshed after a velocity change is void when
 /// it pops. Across a periodic face (a ghost reported) it is the lower id's own motion against the
 /// higher id's shifted by the difference of the two shifts: the same arithmetic through whichever
-/// ghost the pair was reported (see [`crate::broad_phase::ghosts`]).
-#[inline]
+/// ghost the pair was reported (see [`crate::broad_phase::ghosts`]). Always inlined into the pair
+/// sweeps and re-tests that call it for every candidate pair.
+#[inline(always)]
 pub(super) fn predict_pair(
     bodies: &Bodies,
     proxies: &ProxyTable,
