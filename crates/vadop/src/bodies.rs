@@ -297,12 +297,19 @@ impl Bodies {
     /// periodic box.
     #[inline]
     pub fn offset_at(&self, i: usize, j: usize, t: f64) -> DVec3 {
-        let offset = self.position_at(j, t) - self.position_at(i, t);
-        if self.periodic.any() {
-            self.periodic.nearest(offset)
-        } else {
-            offset
+        self.nearest_offset(self.position_at(i, t), self.position_at(j, t)).0
+    }
+
+    /// `to - from` through the nearest image of `to` in a periodic box, and the whole sides that
+    /// take `to` to that image (zero in a box without).
+    #[inline]
+    pub fn nearest_offset(&self, from: DVec3, to: DVec3) -> (DVec3, DVec3) {
+        let offset = to - from;
+        if !self.periodic.any() {
+            return (offset, DVec3::ZERO);
         }
+        let shift = self.periodic.shift(offset);
+        (offset + shift, shift)
     }
 
     /// Body `i`'s centre at `t` unwrapped: its position plus its crossings times the sides.
@@ -319,7 +326,7 @@ impl Bodies {
         if !self.periodic.any() {
             return DVec3::ZERO;
         }
-        self.periodic.shift(self.position_at(j, t) - self.position_at(i, t))
+        self.nearest_offset(self.position_at(i, t), self.position_at(j, t)).1
     }
 
     /// Body `i`'s crossings of the periodic faces (see [`Bodies::crossings`]).

@@ -193,9 +193,10 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
             }
         }
     }
-    let pi = bodies.position_at(i, t);
+    let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
+    let (offset, shift) = bodies.nearest_offset(pi, pj);
     // Coincident centres have no normal; the relative velocity gives one.
-    let normal = direction(bodies.offset_at(i, j, t))
+    let normal = direction(offset)
         .or_else(|| direction(bodies.velocity_at(i, t) - bodies.velocity_at(j, t)))
         .unwrap_or(DVec3::X);
     // Midway between the two surface points (which coincide at a contact, up to rounding), so
@@ -203,8 +204,7 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
     // commutes, and negating the normal is exact. Two processes that hold a pair under different
     // local ids then agree on its contact (vadop-mpi). Across a periodic face the point lies by
     // the lower id's image, as before.
-    let pj = bodies.position_at(j, t) + bodies.image_shift(i, j, t);
-    let point = 0.5 * ((pi + normal * bodies.radius(i)) + (pj - normal * bodies.radius(j)));
+    let point = 0.5 * ((pi + normal * bodies.radius(i)) + ((pj + shift) - normal * bodies.radius(j)));
     (point, normal)
 }
 

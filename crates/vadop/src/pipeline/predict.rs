@@ -230,6 +230,10 @@ pub(super) fn predict_wall(
 /// when its centre reaches the face (the body then comes back through the opposite one).
 #[inline]
 pub(crate) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, window: Window) -> Option<Event> {
+    // Asked of every body at every window start: a walled box answers before reading the body.
+    if !bounds.is_periodic() {
+        return None;
+    }
     let i = body as usize;
     crossing_event((body, bodies.stamp[i]), &bodies.motion(i), bodies.gravity_on(i), bounds, window)
 }
