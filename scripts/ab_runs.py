@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Before and after: two builds of the `vadop` CLI run alternately on the same commands.
 
-Usage: python3 scripts/ab_runs.py BASE NEW OUT.json [gas] [shapes]
+Usage: python3 scripts/ab_runs.py BASE NEW OUT.json [detect] [gas] [shapes]
 
 BASE and NEW are two `vadop` binaries (e.g. one built at an older commit in a git worktree, and
 this one). Every case runs BASE then NEW, REPS times (3 unless the environment says otherwise),
@@ -14,7 +14,8 @@ comparison is void: the script stops then. In simulate mode a change that moves 
 within the tolerance (bit-identical across methods still) sends the paths apart, so the contacts
 may differ there: read ms per 1000 contacts beside ms per frame.
 
-Cases: `gas` is the periodic equilibrium gas at n = 1e5 (packing 0.05, 0.2, 0.4) and 1e4
+Cases: `detect` is the paper scene in detect mode at n = 1e4 and 1e5 and 0.05, 0.5 and 5 diameters
+per frame, each over frames that cover several broad-phase windows; `gas` is the periodic equilibrium gas at n = 1e5 (packing 0.05, 0.2, 0.4) and 1e4
 (packing 0.2) in simulate mode; `shapes` is issue 25's crowd of 1e4 shapes in detect mode and
 the shapes scene in simulate mode with a floor, restitution 0.5 and friction 0.3 at 1e3 and 1e4.
 """
@@ -25,6 +26,8 @@ import subprocess
 import sys
 import tempfile
 
+# (n, speed in diameters per frame, frames): enough frames for several windows at every speed.
+DETECT = [(10000, 0.05, 240), (10000, 0.5, 120), (10000, 5, 60), (100000, 0.05, 240), (100000, 0.5, 60), (100000, 5, 20)]
 GAS = [(100000, 0.05, 57, 150), (100000, 0.2, 10, 30), (100000, 0.4, 3, 8), (10000, 0.2, 10, 300)]
 SHAPES = [
     ["--bodies", "10000", "--max-speed", "0.5", "--mode", "detect", "--frames", "20"],
@@ -34,6 +37,10 @@ SHAPES = [
 
 
 def cases(kinds):
+    if "detect" in kinds:
+        for n, speed, frames in DETECT:
+            args = ["--bodies", str(n), "--max-speed", str(speed), "--mode", "detect", "--frames", str(frames)]
+            yield f"detect n={n} speed={speed}", args, 0
     if "gas" in kinds:
         for n, packing, warm, measured in GAS:
             args = ["--kind", "gas", "--periodic", "xyz", "--bodies", str(n), "--packing", str(packing),
