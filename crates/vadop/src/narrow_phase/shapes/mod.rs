@@ -53,6 +53,11 @@
 //! each other, the step on them goes at least two thirds as far as on exact bounds, and GJK is not
 //! needed.
 //!
+//! A probe against a mesh measures only the triangles that may be the nearest: one whose lower
+//! bound at an earlier probe, less how far the body's points can have moved since (at `|v_a -
+//! v_b|` plus the spin's), or whose plane's separation from the body, is above the smallest upper
+//! bound met so far can neither hold the smallest lower bound nor lower the upper one.
+//!
 //! Inside a contact, while the search looks for its end, only an upper bound on the signed
 //! distance steps it (the distance must stay below `2 tol` until the end), and far from the end
 //! the last full measure's witness points, carried along, give one with no search: their
@@ -380,7 +385,6 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
                 PairGauge::Plane(pair, first_static)
             } else {
                 let trimesh = parry.as_trimesh().expect("static-only shapes are half-spaces or meshes");
-                let warm = RefCell::new(Vec::new());
                 let pair = MeshPair {
                     body,
                     mesh: fixed,
@@ -392,7 +396,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
                     spin,
                     size: size * scale,
                     tol,
-                    warm,
+                    measures: RefCell::default(),
                 };
                 PairGauge::Mesh(pair, first_static)
             }
