@@ -534,13 +534,13 @@ impl<'a> Proxies<'a> {
     /// Velocity of proxy `i` at its start.
     #[inline]
     pub fn velocity(&self, i: usize) -> DVec3 {
-        self.state(i).motion.velocity_under(self.table.spans[i].start, self.gravity_on(i))
+        self.origin_and_velocity(i).1
     }
 
     /// Centre of proxy `i` at its start.
     #[inline]
     pub fn origin(&self, i: usize) -> DVec3 {
-        self.state(i).motion.at_under(self.table.spans[i].start, self.gravity_on(i))
+        self.origin_and_velocity(i).0
     }
 
     /// Centre and velocity of proxy `i` at its start, from one read of its motion: what cutting

@@ -168,8 +168,7 @@ impl MeshPair<'_> {
         next.clear();
         let next = RefCell::new(next);
         let (rate, bend) = (self.rate(tau), self.acceleration.length());
-        let measure = |id: u32, before: Option<&Measured>| {
-            let triangle = self.triangle(id, centre);
+        let measure = |id: u32, triangle: Triangle, before: Option<&Measured>| {
             let slack = SLACK * (triangle.a.length() + self.size);
             let support = Scaled::new(&triangle, 1.0);
             // The triangle's frame is fixed to it at its first vertex, the body's to the body.
@@ -202,11 +201,13 @@ impl MeshPair<'_> {
             },
             |id, _| {
                 let before = last.iter().find(|m| m.id == id);
+                // Built once, and only when a plane test or a measure needs it.
+                let mut triangle = None;
                 if let Some(near) = nearest.get() {
                     let floor = match before {
                         Some(m) => m.lower_at(tau, bend, self.size),
                         // One support point, where a measure would cost a distance query.
-                        None => self.plane_separation(&self.triangle(id, centre), &body, &pose),
+                        None => self.plane_separation(triangle.insert(self.triangle(id, centre)), &body, &pose),
                     };
                     if floor > near.upper {
                         if let Some(m) = before {
@@ -215,7 +216,7 @@ impl MeshPair<'_> {
                         return None;
                     }
                 }
-                Some(measure(id, before))
+                Some(measure(id, triangle.unwrap_or_else(|| self.triangle(id, centre)), before))
             },
         );
         std::mem::swap(last, next.into_inner());
