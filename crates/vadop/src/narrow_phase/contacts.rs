@@ -17,7 +17,9 @@ use crate::narrow_phase::falling::may_touch_within;
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
-use crate::narrow_phase::shapes::{pair_first_start, shape_contact_after_parked, shape_wall_time, Resume};
+use crate::narrow_phase::shapes::{
+    pair_first_start, shape_contact_after_parked, shape_wall_time, walls_in_reach, Resume,
+};
 use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, wall_contact_time, CONTACT_TOLERANCE};
 use crate::numeric::{direction, unit_scale};
 use crate::walls::BoxBounds;
@@ -170,6 +172,8 @@ pub(crate) fn wall_start(
     let walls = bounds.walls();
     let found = match shape {
         None => Ok(wall_contact_time(&bodies.motion(i), bodies.radius(i), walls.0, walls.1, bodies.gravity_on(i))?),
+        // Most bodies are far from every wall: told from the centre's path, before the spin.
+        Some(g) if !walls_in_reach(g, &bodies.motion(i), bodies.gravity_on(i), walls, window.end) => return None,
         Some(g) => match shape_wall_time(g, &bodies.rigid_motion(i), walls.0, walls.1, window) {
             Ok(found) => Ok(found?),
             Err(VadopError::ContactSearchStalled { time, .. }) => Err(time),

@@ -350,6 +350,14 @@ impl WallGauge<'_> {
     }
 }
 
+/// The times a body whose centre of mass is `gap` from a wall, closing in at `speed` under `pull`,
+/// comes within `within` of it: the body lies in its bounding sphere of radius `size`. It needs no
+/// pose, so a wall search asks it before building its body (see `shape_wall_search`).
+pub(super) fn wall_reach(gap: f64, speed: f64, pull: f64, size: f64, within: f64) -> Option<Reach> {
+    let limit = size + within + SLACK * (gap.abs() + size);
+    Reach::below_bent(gap, -speed, -pull, limit)
+}
+
 impl Gauge for WallGauge<'_> {
     fn probe(&self, tau: f64, measure: Measure) -> Probe {
         let (distance, _, slack, pose) = self.measure(tau);
@@ -370,10 +378,8 @@ impl Gauge for WallGauge<'_> {
         }
     }
 
-    /// The body lies in its bounding sphere.
     fn reach(&self, within: f64) -> Option<Reach> {
-        let limit = self.size + within + SLACK * (self.gap.abs() + self.size);
-        Reach::below_bent(self.gap, -self.speed, -self.pull, limit)
+        wall_reach(self.gap, self.speed, self.pull, self.size, within)
     }
 }
 

@@ -172,21 +172,23 @@ mod gauges;
 mod inner_balls;
 mod scaled;
 mod searcher;
+mod walls;
 
 use crate::error::{Result, VadopError};
 use crate::motion::{RigidMotion, Spin};
 use crate::numeric::unit_scale;
 use crate::shape::ShapeGeometry;
-use crate::walls::Wall;
 use crate::window::Window;
 use distance::{convex_bounds, Bounds, Need, EXACT_DEPTH};
-use fixed_gauges::{MeshPair, PlanePair, WallGauge};
+use fixed_gauges::{MeshPair, PlanePair};
 use gauges::{ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
 use parry3d_f64::shape::SupportMap;
 use scaled::Body;
 use searcher::{Parked, Searcher};
 use std::cell::{Cell, RefCell};
+pub(crate) use walls::walls_in_reach;
+pub use walls::{shape_wall_search, shape_wall_time, wall_contact_geometry};
 
 /// Where and how two shapes (or a shape and a wall) touch at a contact time.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -687,112 +689,6 @@ fn contact_point(origin: DVec3, witness: (DVec3, DVec3), bounds: Bounds, rotatio
     let midpoint = rotation * ((witness.0 + witness.1) * 0.5) / scale;
     let distance = if bounds.upper.is_finite() { bounds.upper } else { bounds.lower };
     ContactPoint { point: origin + midpoint, normal: (rotation * bounds.axis).normalize(), distance: distance / scale }
-}
-
-/// The searcher of a body against one wall of the box `[min, max]`.
-fn wall_searcher<'a, S: Spin>(
-    geometry: &'a ShapeGeometry,
-    motion: &'a RigidMotion<S>,
-    wall: Wall,
-    min: DVec3,
-    max: DVec3,
-) -> Option<Searcher<WallGauge<'a>>> {
-    let size = geometry.bounding_radius()?;
-    let body = Body::new(geometry, motion, motion.since);
-    let scale = unit_scale(size);
-    let axis = wall.axis();
-    let gap = if wall.is_max() { max[axis] - body.position[axis] } else { body.position[axis] - min[axis] };
-    let speed = if wall.is_max() { body.velocity[axis] } else { -body.velocity[axis] };
-    let pull = if wall.is_max() { body.acceleration[axis] } else { -body.acceleration[axis] };
-    let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
-    let gauge = WallGauge {
-        normal: wall.outward_normal(),
-        gap: gap * scale,
-        speed: speed * scale,
-        pull: pull * scale,
-        size: size * scale,
-        scale,
-        body,
-        tol,
-    };
-    Some(Searcher::new(gauge, motion.since, tol))
-}
-
-/// The first time in `window` at which a (spinning) shape inside the box `[min, max]` begins to
-/// touch one of its six walls while moving into it, with the wall; canonical from `since`, with
-/// the tolerance `SHAPE_CONTACT_TOLERANCE * r` (r the bounding radius) and the rules of the module
-/// documentation. A body touching a wall at `since` touches it then only if it goes on into the
-/// wall, however deep it already is. Ties go to the lowest wall ([`Wall::ALL`] order).
-/// Static-only shapes have no walls: `None`.
-///
-/// ```
-/// use glam::{DQuat, DVec3};
-/// use vadop::shape::Shape;
-/// use vadop::narrow_phase::shapes::shape_wall_time;
-/// use vadop::motion::RigidMotion;
-/// use vadop::{Wall, Window};
-/// let cube = Shape::Cuboid { half_extents: DVec3::splat(1.0) }.geometry().unwrap();
-/// let motion = RigidMotion { velocity: DVec3::new(0.0, 0.0, -3.0), ..RigidMotion::fixed(DVec3::splat(5.0), DQuat::IDENTITY, 0.0) };
-/// let (t, wall) = shape_wall_time(&cube, &motion, DVec3::ZERO, DVec3::splat(10.0), Window::new(0.0, 5.0)).unwrap().unwrap();
-/// assert_eq!(wall, Wall::MinZ);
-/// assert!((t - 4.0 / 3.0).abs() < 1e-5);
-/// ```
-pub fn shape_wall_time<S: Spin>(
-    geometry: &ShapeGeometry,
-    motion: &RigidMotion<S>,
-    min: DVec3,
-    max: DVec3,
-    window: Window,
-) -> Result<Option<(f64, Wall)>> {
-    Ok(shape_wall_search(geometry, motion, min, max, window)?.found)
-}
-
-/// [`shape_wall_time`] with the number of distance evaluations it took (over the six walls).
-pub fn shape_wall_search<S: Spin>(
-    geometry: &ShapeGeometry,
-    motion: &RigidMotion<S>,
-    min: DVec3,
-    max: DVec3,
-    window: Window,
-) -> Result<Search<(f64, Wall)>> {
-    let mut best: Option<(f64, Wall)> = None;
-    let mut iterations = 0;
-    // A periodic axis has no walls: its corners are at infinity.
-    let walled = |wall: &Wall| if wall.is_max() { max[wall.axis()].is_finite() } else { min[wall.axis()].is_finite() };
-    for wall in Wall::ALL.into_iter().filter(walled) {
-        let Some(mut searcher) = wall_searcher(geometry, motion, wall, min, max) else { break };
-        // A later wall only matters before the best time so far.
-        let window = Window::new(window.start, best.map_or(window.end, |(t, _)| t.next_up().min(window.end)));
-        let found = searcher.first_start_in(window, false);
-        iterations += searcher.probes();
-        if let Some(tau) = found? {
-            let time = searcher.reference + tau;
-            if best.is_none_or(|(t, _)| time < t) {
-                best = Some((time, wall));
-            }
-        }
-    }
-    Ok(Search { found: best, iterations })
-}
-
-/// Where a shape touches `wall` of the box `[min, max]` at `time`: its extreme point towards the
-/// wall moved halfway to it, the wall's outward normal, and the signed distance. `None` for
-/// static-only shapes.
-pub fn wall_contact_geometry<S: Spin>(
-    geometry: &ShapeGeometry,
-    motion: &RigidMotion<S>,
-    wall: Wall,
-    min: DVec3,
-    max: DVec3,
-    time: f64,
-) -> Option<ContactPoint> {
-    let searcher = wall_searcher(geometry, motion, wall, min, max)?;
-    let g = &searcher.gauge;
-    let tau = time - searcher.reference;
-    let (distance, extreme, _) = g.distance(tau);
-    let centre = g.body.centre(tau);
-    let point = centre + (extreme + g.normal * (0.5 * distance)) / g.scale;
-    Some(ContactPoint { point, normal: g.normal, distance: distance / g.scale })
 }
 
 #[cfg(test)]
