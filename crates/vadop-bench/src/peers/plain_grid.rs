@@ -1,7 +1,7 @@
 //! `plain-grid`: the plainest exact continuous broad phase, a *reference* pipeline of `vadop-bench
 //! peers` that stands beside the libraries so the table says what a few hundred straightforward
 //! lines achieve. It is not a product method and uses nothing of vadop's engine but the closed-form
-//! sphere time ([`pair_contact_time`]).
+//! sphere time ([`straight_pair_contact_time`]).
 //!
 //! Each frame starts from nothing (only the buffers are kept, so a steady run allocates nothing):
 //! every body's box around its whole path in the frame (the polyline through its start, its wall
@@ -20,7 +20,7 @@ use std::path::Path;
 use std::time::Instant;
 use vadop::glam::DVec3;
 use vadop::motion::Motion;
-use vadop::narrow_phase::spheres::pair_contact_time;
+use vadop::narrow_phase::spheres::straight_pair_contact_time;
 
 /// The cell edge over the mean box edge.
 const CELL_OVER_EDGE: f32 = 1.5;
@@ -280,9 +280,7 @@ impl PlainGrid {
         loop {
             let (end_a, end_b) = (next(a_pieces, a), next(b_pieces, b));
             let end = end_a.min(end_b);
-            if let Some(t) =
-                pair_contact_time(&a_pieces[a], &b_pieces[b], 2.0 * self.radius, (DVec3::ZERO, DVec3::ZERO))
-            {
+            if let Some(t) = straight_pair_contact_time(&a_pieces[a], &b_pieces[b], 2.0 * self.radius) {
                 if t < end && (t > 0.0 || a > 0 || b > 0 || fresh) {
                     return true;
                 }

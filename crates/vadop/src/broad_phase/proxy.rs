@@ -409,18 +409,20 @@ impl ProxyTable {
     }
 
     /// The body a report from slot `slot` is of, the stamp of the motion its state was made
-    /// from, and the whole sides its state is shifted by (zero but for a ghost); `None` for a
-    /// ghost retired since `stamp` was entered.
+    /// from, and, for a ghost, the whole sides its state is shifted by (never zero; `None` for
+    /// the body's own slot, so the common case compares no vector); `None` for a ghost retired
+    /// since `stamp` was entered.
     #[inline]
-    pub fn owner(&self, slot: u32, stamp: u32) -> Option<(u32, u32, DVec3)> {
+    pub fn owner(&self, slot: u32, stamp: u32) -> Option<(u32, u32, Option<DVec3>)> {
         let k = slot as usize;
         if k < self.ghosts.base() {
-            return Some((slot, stamp, DVec3::ZERO));
+            return Some((slot, stamp, None));
         }
         if !self.is_current(k, stamp) {
             return None;
         }
-        Some(self.ghosts.owner(k))
+        let (body, stamp, shift) = self.ghosts.owner(k);
+        Some((body, stamp, Some(shift)))
     }
 
     /// Body `i`'s ghosts from its proxy, into fresh slots.

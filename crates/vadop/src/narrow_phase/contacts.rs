@@ -20,7 +20,8 @@ use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAP
 use crate::narrow_phase::shapes::{
     pair_first_start, shape_contact_after_parked, shape_wall_time, walls_in_reach, Resume,
 };
-use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, wall_contact_time, CONTACT_TOLERANCE};
+use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, straight_pair_contact_time};
+use crate::narrow_phase::spheres::{wall_contact_time, CONTACT_TOLERANCE};
 use crate::numeric::{direction, unit_scale};
 use crate::walls::BoxBounds;
 use crate::walls::Wall;
@@ -65,12 +66,17 @@ pub(crate) fn pair_start(
     window: Window,
 ) -> Found {
     if bodies.are_spheres(a, b) {
-        let (ga, gb) = (bodies.gravity_on(a), bodies.gravity_on(b));
         let (ma, mb, radius_sum) = (&state_a.motion, &state_b.motion, state_a.radius + state_b.radius);
-        if ga != gb && !may_touch_within(ma, ga, mb, gb, radius_sum, window) {
-            return None;
-        }
-        let time = pair_contact_time(ma, mb, radius_sum, (ga, gb))?;
+        // Without gravity (most worlds) every path is straight: no pull to read or compare.
+        let time = if bodies.gravity == DVec3::ZERO {
+            straight_pair_contact_time(ma, mb, radius_sum)?
+        } else {
+            let (ga, gb) = (bodies.gravity_on(a), bodies.gravity_on(b));
+            if ga != gb && !may_touch_within(ma, ga, mb, gb, radius_sum, window) {
+                return None;
+            }
+            pair_contact_time(ma, mb, radius_sum, (ga, gb))?
+        };
         return window.contains(time).then_some((time, false));
     }
     shape_pair_start(bodies, a, b, window)

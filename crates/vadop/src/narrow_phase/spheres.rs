@@ -127,19 +127,44 @@ fn scaled_time(offset: DVec3, relative_velocity: DVec3, radius_sum: f64) -> Opti
 /// ```
 #[inline(always)]
 pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, (ga, gb): (DVec3, DVec3)) -> Option<f64> {
+    if ga == DVec3::ZERO && gb == DVec3::ZERO {
+        return straight_pair_contact_time(a, b, radius_sum);
+    }
     let reference = a.since.max(b.since);
-    // Without gravity (most worlds) the straight paths, the same bits `at_under` gives then,
-    // without asking each of four times whether there is any: every candidate pair comes here.
-    let ((va, vb), offset) = if ga == DVec3::ZERO && gb == DVec3::ZERO {
-        ((a.velocity, b.velocity), b.at(reference) - a.at(reference))
-    } else {
-        let velocities = (a.velocity_under(reference, ga), b.velocity_under(reference, gb));
-        (velocities, b.at_under(reference, gb) - a.at_under(reference, ga))
-    };
+    let (va, vb) = (a.velocity_under(reference, ga), b.velocity_under(reference, gb));
+    let offset = b.at_under(reference, gb) - a.at_under(reference, ga);
     if ga != gb {
         let time = reference + falling_sphere_time(offset, vb - va, gb - ga, radius_sum)?;
         return time.is_finite().then_some(time);
     }
+    approach_time(reference, (va, vb), offset, radius_sum)
+}
+
+/// [`pair_contact_time`] of two spheres on straight paths (no pull on either), the same bits:
+/// a world without gravity asks this of every candidate pair, with no pull to read or compare.
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::motion::Motion;
+/// use vadop::narrow_phase::spheres::{pair_contact_time, straight_pair_contact_time};
+/// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
+/// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.5, velocity: DVec3::new(-1.5, 0.0, 0.0) };
+/// let straight = straight_pair_contact_time(&a, &b, 1.0);
+/// assert_eq!(straight, pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)));
+/// assert_eq!(straight, Some(1.75));
+/// ```
+#[inline(always)]
+pub fn straight_pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+    let reference = a.since.max(b.since);
+    // `at` is `at_under` without a pull, to the bit.
+    approach_time(reference, (a.velocity, b.velocity), b.at(reference) - a.at(reference), radius_sum)
+}
+
+/// The contact time of two spheres `offset` apart at `reference` with velocities `(va, vb)` and
+/// no relative acceleration: [`sphere_sphere_time`] from `reference`, unless the relative
+/// velocity is rounding noise.
+#[inline(always)]
+fn approach_time(reference: f64, (va, vb): (DVec3, DVec3), offset: DVec3, radius_sum: f64) -> Option<f64> {
     let tau = sphere_sphere_time(offset, vb - va, radius_sum)?;
     // Checked only for predicted contacts, which are far fewer than candidate pairs.
     let scale = unit_scale(va.abs().max_element().max(vb.abs().max_element()));

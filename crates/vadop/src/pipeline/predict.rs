@@ -56,14 +56,14 @@ pub(super) fn predict_pair(
 }
 
 /// Two reports as the bodies they are of, the lower id first, each with the stamp its motion was
-/// made with and the whole sides its state is shifted by; `None` for a ghost retired since it was
-/// entered, or a body against its own image.
+/// made with and, for a ghost, the whole sides its state is shifted by; `None` for a ghost
+/// retired since it was entered, or a body against its own image.
 #[inline(always)]
 fn resolved<'a>(
     proxies: &ProxyTable,
     x: Reported<'a>,
     y: Reported<'a>,
-) -> Option<((Reported<'a>, DVec3), (Reported<'a>, DVec3))> {
+) -> Option<((Reported<'a>, Option<DVec3>), (Reported<'a>, Option<DVec3>))> {
     let own = |r: Reported<'a>| {
         let (body, stamp, shift) = proxies.owner(r.body, r.stamp)?;
         Some((Reported { body, stamp, state: r.state }, shift))
@@ -79,22 +79,33 @@ fn resolved<'a>(
 #[inline(always)]
 fn sphere_event(
     bodies: &Bodies,
-    (a, shift_a): (Reported, DVec3),
-    (b, shift_b): (Reported, DVec3),
+    (a, shift_a): (Reported, Option<DVec3>),
+    (b, shift_b): (Reported, Option<DVec3>),
     window: Window,
 ) -> Option<Event> {
     let (i, j) = (a.body as usize, b.body as usize);
-    let found = if shift_a == DVec3::ZERO && shift_b == DVec3::ZERO {
+    let found = if shift_a.is_none() && shift_b.is_none() {
         contacts::pair_start(bodies, (i, a.state), (j, b.state), window)?
     } else {
         // Two ghosts of one shift are the bodies themselves.
+        let shift = relative_shift(shift_a, shift_b);
         let mut image = bodies.state[j];
-        if shift_a != shift_b {
-            image.motion.position += shift_b - shift_a;
+        if shift != DVec3::ZERO {
+            image.motion.position += shift;
         }
         contacts::pair_start(bodies, (i, &bodies.state[i]), (j, &image), window)?
     };
     Some(pair_event((a.body, a.stamp), (b.body, b.stamp), found))
+}
+
+/// The whole sides the second of two reports is shifted by relative to the first: zero for two
+/// ghosts of one shift (the bodies themselves), each own slot counting as unshifted.
+#[inline]
+fn relative_shift(shift_a: Option<DVec3>, shift_b: Option<DVec3>) -> DVec3 {
+    if shift_a == shift_b {
+        return DVec3::ZERO;
+    }
+    shift_b.unwrap_or(DVec3::ZERO) - shift_a.unwrap_or(DVec3::ZERO)
 }
 
 /// What predicting a pair in a world of shapes gives: an event for the queue, or where a shape
@@ -123,7 +134,7 @@ pub(super) fn predict_pair_parked(
     if bodies.are_spheres(i, j) {
         return (sphere_event(bodies, (a, shift_a), (b, shift_b), window), None);
     }
-    let shift = if shift_a == shift_b { DVec3::ZERO } else { shift_b - shift_a };
+    let shift = relative_shift(shift_a, shift_b);
     let (found, parks) = contacts::pair_start_parked(bodies, (i, j, shift), window, Some(parked));
     (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
 }
