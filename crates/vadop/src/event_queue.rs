@@ -119,6 +119,88 @@ pub struct EventQueue {
     bulk: Vec<Event>,
     /// The last event popped, to drop repeats of it.
     last: Option<Event>,
+    /// Buffers of the bulk part's radix sort, reused window after window.
+    radix: RadixBuffers,
+}
+
+/// Below this many events the bulk part is sorted by comparisons: a radix pass costs its bins.
+const RADIX_MIN: usize = 1024;
+/// Bits of the time key sorted per radix pass: 2^11 bins fit the first-level cache.
+const DIGIT_BITS: u32 = 11;
+
+/// An event's time as an unsigned key that ascends as the bulk part does, latest first: the
+/// bits `f64::total_cmp` orders by, made unsigned and reversed.
+#[inline]
+fn latest_first_key(time: f64) -> u64 {
+    let bits = time.to_bits() as i64;
+    let total = bits ^ ((((bits >> 63) as u64) >> 1) as i64);
+    !((total as u64) ^ (1 << 63))
+}
+
+/// The radix sort's reused storage: each event's key with its place, the pass's output, the
+/// bins, and the events in their new order.
+#[derive(Debug, Default)]
+struct RadixBuffers {
+    keyed: Vec<(u64, u32)>,
+    spare: Vec<(u64, u32)>,
+    bins: Vec<u32>,
+    sorted: Vec<Event>,
+}
+
+impl RadixBuffers {
+    /// Sorts `events` ascending in `Ord` (latest first), to the same order `sort_unstable` gives
+    /// (the order is total, so there is one): a least-significant-digit radix sort of the times,
+    /// skipping the digits they all share (a window's times share their leading bits), then each
+    /// run of equal times by comparisons. A window start sorts thousands of events, and a pass
+    /// over them costs less than the dozen comparisons each takes otherwise.
+    fn sort(&mut self, events: &mut Vec<Event>) {
+        let n = events.len();
+        self.keyed.clear();
+        self.keyed.extend(events.iter().enumerate().map(|(k, e)| (latest_first_key(e.time), k as u32)));
+        let first = self.keyed.first().map_or(0, |&(key, _)| key);
+        let varying = self.keyed.iter().fold(0, |bits, &(key, _)| bits | (key ^ first));
+        let mask = (1u64 << DIGIT_BITS) - 1;
+        self.bins.resize(1 << DIGIT_BITS, 0);
+        self.spare.resize(n, (0, 0));
+        for shift in (0..64).step_by(DIGIT_BITS as usize) {
+            if (varying >> shift) & mask == 0 {
+                continue;
+            }
+            self.bins.fill(0);
+            for &(key, _) in &self.keyed {
+                self.bins[((key >> shift) & mask) as usize] += 1;
+            }
+            let mut start = 0;
+            for bin in self.bins.iter_mut() {
+                (*bin, start) = (start, start + *bin);
+            }
+            for &item in &self.keyed {
+                let bin = &mut self.bins[((item.0 >> shift) & mask) as usize];
+                self.spare[*bin as usize] = item;
+                *bin += 1;
+            }
+            std::mem::swap(&mut self.keyed, &mut self.spare);
+        }
+        self.sorted.clear();
+        self.sorted.extend(self.keyed.iter().map(|&(_, k)| events[k as usize]));
+        // Equal times (rare) in the order of the rest of the key.
+        let mut start = 0;
+        while start < n {
+            let key = self.keyed[start].0;
+            let end = start + self.keyed[start..].iter().take_while(|&&(k, _)| k == key).count();
+            if end - start > 1 {
+                self.sorted[start..end].sort_unstable();
+            }
+            start = end;
+        }
+        std::mem::swap(events, &mut self.sorted);
+    }
+
+    fn memory_bytes(&self) -> usize {
+        (self.keyed.capacity() + self.spare.capacity()) * std::mem::size_of::<(u64, u32)>()
+            + self.bins.capacity() * 4
+            + self.sorted.capacity() * std::mem::size_of::<Event>()
+    }
 }
 
 impl EventQueue {
@@ -138,8 +220,13 @@ impl EventQueue {
     pub fn set_bulk(&mut self, events: Vec<Event>, workers: &Workers) {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
-        // total, so no two events are equal unless they are the same prediction: unstable is fine.
-        workers.sort_unstable(&mut self.bulk);
+        // total, so no two events are equal unless they are the same prediction: unstable is
+        // fine, and every way of sorting gives the same order.
+        if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
+            self.radix.sort(&mut self.bulk);
+        } else {
+            workers.sort_unstable(&mut self.bulk);
+        }
     }
     /// The earliest event (valid or not), from whichever part holds it.
     #[inline]
@@ -212,7 +299,7 @@ impl EventQueue {
     }
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        (self.heap.capacity() + self.bulk.capacity()) * std::mem::size_of::<Event>()
+        (self.heap.capacity() + self.bulk.capacity()) * std::mem::size_of::<Event>() + self.radix.memory_bytes()
     }
     /// Number of queued events, void ones included.
     #[cfg(test)]
@@ -261,6 +348,49 @@ mod tests {
             ]
         );
         assert!(q.is_empty());
+    }
+
+    /// The radix sort of the bulk part gives `sort_unstable`'s order, bit for bit, on times of
+    /// every sign and scale, many ties among them (resolved by the rest of the key), repeats
+    /// and NaN; and over a window's times, which share their leading bits.
+    #[test]
+    fn radix_sort_orders_as_the_comparisons_do() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let mut radix = RadixBuffers::default();
+        for case in 0..40 {
+            let n = rng.random_range(0..3000);
+            let events: Vec<Event> = (0..n)
+                .map(|_| {
+                    let time = match case % 4 {
+                        0 => rng.random_range(-1e3..1e3),
+                        1 => 12.5 + rng.random_range(0.0..0.03),
+                        2 => [0.0, -0.0, 1.0, f64::NAN, -2.5, 1e-300, f64::INFINITY][rng.random_range(0..7)],
+                        _ => rng.random_range(0..20) as f64 * 0.25,
+                    };
+                    let partner = match rng.random_range(0..3) {
+                        0 => Partner::Body(rng.random_range(0..50)),
+                        1 => Partner::Wall(Wall::ALL[rng.random_range(0..6)]),
+                        _ => Partner::Renew,
+                    };
+                    Event {
+                        time,
+                        body: rng.random_range(0..50),
+                        partner,
+                        body_stamp: rng.random_range(0..3),
+                        partner_stamp: 0,
+                    }
+                })
+                .collect();
+            let mut expected = events.clone();
+            expected.sort_unstable();
+            let mut sorted = events;
+            radix.sort(&mut sorted);
+            let bits = |v: &[Event]| -> Vec<(u64, u32, u64, u32)> {
+                v.iter().map(|e| (e.time.to_bits(), e.body, e.partner.key(), e.body_stamp)).collect()
+            };
+            assert_eq!(bits(&sorted), bits(&expected), "case {case}, {n} events");
+        }
     }
 
     #[test]

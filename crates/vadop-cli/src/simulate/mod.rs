@@ -390,8 +390,8 @@ fn step_frames(
                 break;
             }
         }
-        let pairs = pair_contacts(contacts);
         if let (Some(reference), Some(accuracy)) = (&mut reference, &mut accuracy) {
+            let pairs = pair_contacts(contacts);
             match reference.step(args.dt) {
                 Ok(expected) => {
                     let expected = pair_contacts(expected);
