@@ -55,15 +55,14 @@ pub(super) fn predict_pair(
     sphere_event(bodies, (a, shift_a), (b, shift_b), window)
 }
 
-/// Two reports as the bodies they are of, the lower id first, each with the stamp its motion was
-/// made with and, for a ghost, the whole sides its state is shifted by; `None` for a ghost
+/// A report as the body it is of, with the stamp its motion was made with and, for a ghost, the
+/// whole sides its state is shifted by.
+type Resolved<'a> = (Reported<'a>, Option<DVec3>);
+
+/// Two reports as the bodies they are of ([`Resolved`]), the lower id first; `None` for a ghost
 /// retired since it was entered, or a body against its own image.
 #[inline(always)]
-fn resolved<'a>(
-    proxies: &ProxyTable,
-    x: Reported<'a>,
-    y: Reported<'a>,
-) -> Option<((Reported<'a>, Option<DVec3>), (Reported<'a>, Option<DVec3>))> {
+fn resolved<'a>(proxies: &ProxyTable, x: Reported<'a>, y: Reported<'a>) -> Option<(Resolved<'a>, Resolved<'a>)> {
     let own = |r: Reported<'a>| {
         let (body, stamp, shift) = proxies.owner(r.body, r.stamp)?;
         Some((Reported { body, stamp, state: r.state }, shift))
@@ -77,12 +76,7 @@ fn resolved<'a>(
 /// [`predict_pair`] of two resolved spheres (or any two bodies, by their shapes' search, but
 /// without parking it).
 #[inline(always)]
-fn sphere_event(
-    bodies: &Bodies,
-    (a, shift_a): (Reported, Option<DVec3>),
-    (b, shift_b): (Reported, Option<DVec3>),
-    window: Window,
-) -> Option<Event> {
+fn sphere_event(bodies: &Bodies, (a, shift_a): Resolved, (b, shift_b): Resolved, window: Window) -> Option<Event> {
     let (i, j) = (a.body as usize, b.body as usize);
     let found = if shift_a.is_none() && shift_b.is_none() {
         contacts::pair_start(bodies, (i, a.state), (j, b.state), window)?
