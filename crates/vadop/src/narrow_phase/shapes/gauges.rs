@@ -204,6 +204,19 @@ impl Reach {
     }
 }
 
+/// The times two solids whose centres of mass are `offset` apart, with the relative `velocity`
+/// and `acceleration`, may come within `within` of each other: they lie in their bounding spheres
+/// of radii summing to `size`. It needs no pose, so a pair's search asks it before building its
+/// bodies (see `super::convex_pair_in_reach`).
+pub(super) fn spheres_reach(
+    (offset, velocity, acceleration): (DVec3, DVec3, DVec3),
+    size: f64,
+    within: f64,
+) -> Option<Reach> {
+    let limit = size + within + SLACK * (offset.length() + size);
+    Reach::bent_sphere(offset, velocity, acceleration, limit)
+}
+
 /// Two solid shapes. The frame has world axes and its origin at a's centre of mass.
 pub(super) struct ConvexPair<'a> {
     pub(super) a: Body<'a>,
@@ -583,10 +596,8 @@ impl Gauge for ConvexPair<'_> {
         }
     }
 
-    /// The shapes lie in their bounding spheres about the centres of mass.
     fn reach(&self, within: f64) -> Option<Reach> {
-        let limit = self.size + within + SLACK * (self.offset.length() + self.size);
-        Reach::bent_sphere(self.offset, self.velocity, self.acceleration, limit)
+        spheres_reach((self.offset, self.velocity, self.acceleration), self.size, within)
     }
 
     fn forget(&self) {

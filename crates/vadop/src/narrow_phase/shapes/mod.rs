@@ -181,7 +181,7 @@ use crate::shape::ShapeGeometry;
 use crate::window::Window;
 use distance::{convex_bounds, Bounds, Need, EXACT_DEPTH};
 use fixed_gauges::{MeshPair, PlanePair};
-use gauges::{ConvexPair, Gauge, PairGauge, Warm};
+use gauges::{spheres_reach, ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
 use parry3d_f64::shape::SupportMap;
 use scaled::Body;
@@ -456,6 +456,36 @@ pub fn shape_contact_resumed<S: Spin, T: Spin>(
 /// [`crate::Mode::turns_back`]): then a pair deeper than the tolerance at the reference is not a
 /// contact in progress but one more to turn back if it goes deeper, as against a wall (a rule
 /// that stops bodies touching, the jam rule or a stalled search, may leave them that deep).
+/// False when two solids (neither static-only) cannot start touching before the absolute time
+/// `until`, from their centre paths and bounding spheres alone: the first test of the search
+/// [`pair_searcher`] would build (`Searcher::first_start_in`), on the same numbers, asked before
+/// the bodies' poses are; most candidate pairs of a window start end there. True whenever the
+/// search could end otherwise: a static-only shape, or spins too fast to bound (which stall).
+fn convex_pair_in_reach<S: Spin, T: Spin>(
+    (ga, ma): (&ShapeGeometry, &RigidMotion<S>),
+    (gb, mb): (&ShapeGeometry, &RigidMotion<T>),
+    until: f64,
+) -> bool {
+    let size = ga.size() + gb.size();
+    if ga.is_static_only() || gb.is_static_only() || !(size > 0.0) {
+        return true;
+    }
+    let scale = unit_scale(size);
+    let spins = ma.spin.max_angular_speed() * ga.rotation_radius() + mb.spin.max_angular_speed() * gb.rotation_radius();
+    if !(spins * scale).is_finite() {
+        return true;
+    }
+    // As `Body::new` takes the centres, at the pair's reference.
+    let reference = ma.since.max(mb.since);
+    let relative = (
+        (mb.position_at(reference) - ma.position_at(reference)) * scale,
+        (mb.velocity_at(reference) - ma.velocity_at(reference)) * scale,
+        (mb.acceleration - ma.acceleration) * scale,
+    );
+    let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
+    spheres_reach(relative, size * scale, 2.0 * tol).is_some_and(|reach| reference + reach.enter < until)
+}
+
 pub(crate) fn pair_first_start<S: Spin, T: Spin>(
     a: (&ShapeGeometry, &RigidMotion<S>),
     b: (&ShapeGeometry, &RigidMotion<T>),
@@ -463,7 +493,13 @@ pub(crate) fn pair_first_start<S: Spin, T: Spin>(
     resume: Option<&Resume>,
     turns_back: bool,
 ) -> Result<(Search<f64>, Option<Resume>)> {
-    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok((Search { found: None, iterations: 0 }, None)) };
+    let nothing = Ok((Search { found: None, iterations: 0 }, None));
+    let reference = a.1.since.max(b.1.since);
+    let resumed = resume.is_some_and(|r| r.reference == reference && r.searched_to <= window.start);
+    if !resumed && !convex_pair_in_reach(a, b, window.end) {
+        return nothing;
+    }
+    let Some(mut searcher) = pair_searcher(a, b)? else { return nothing };
     let (found, parked) = Resume::first_start(&mut searcher, resume, window, !turns_back)?;
     Ok((Search { found, iterations: searcher.probes() }, parked))
 }
@@ -735,6 +771,49 @@ mod tests {
             shape_contact_time((&floor, &floor_motion), (&cube, &on_floor), Window::new(0.0, 10.0)).unwrap(),
             None
         );
+    }
+
+    /// A pair search skipped because the bounding spheres stay out of reach
+    /// (`convex_pair_in_reach`) would have found nothing: the full search agrees on spinning
+    /// solids near and far, straight and falling, and most pairs far apart are skipped.
+    #[test]
+    fn pairs_out_of_reach_have_no_contact() {
+        use crate::motion::FreeRotation;
+        use rand::{Rng, SeedableRng};
+        let solids = crate::shape::one_solid_of_each_kind().map(|s| s.geometry().unwrap());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+        let (mut skipped, mut found) = (0, 0);
+        for case in 0..600 {
+            let mut random = |low: f64, high: f64| rng.random_range(low..high);
+            let mut body = |kind: usize, falling: bool| {
+                let position = DVec3::new(random(-1.5, 1.5), random(-1.5, 1.5), random(-1.5, 1.5));
+                let velocity = DVec3::new(random(-8.0, 8.0), random(-8.0, 8.0), random(-8.0, 8.0));
+                let start =
+                    DQuat::from_scaled_axis(DVec3::new(random(-3.0, 3.0), random(-3.0, 3.0), random(-3.0, 3.0)));
+                let omega = DVec3::new(random(-20.0, 20.0), random(-20.0, 20.0), random(-20.0, 20.0));
+                let spin = FreeRotation::new(solids[kind].principal_inertia_unit(), start, omega);
+                let acceleration = if falling { DVec3::new(0.0, -9.81, 0.0) } else { DVec3::ZERO };
+                RigidMotion { position, since: random(0.0, 0.2), velocity, acceleration, spin }
+            };
+            let (a, mut b) = (body(case % 6, case % 3 == 0), body((case / 6) % 6, case % 5 == 0));
+            if case % 2 == 0 {
+                // Aimed at each other: many of these touch.
+                b.velocity = (a.position - b.position) * rng.random_range(1.0..6.0);
+            }
+            let from = a.since.max(b.since) + rng.random_range(-0.1..0.3);
+            let window = Window::new(from, from + rng.random_range(0.01..0.5));
+            let (ga, gb) = (&solids[case % 6], &solids[(case / 6) % 6]);
+            let full = pair_first_start((ga, &a), (gb, &b), window, None, false).map(|(search, _)| search.found);
+            found += usize::from(matches!(full, Ok(Some(_))));
+            if !convex_pair_in_reach((ga, &a), (gb, &b), window.end) {
+                skipped += 1;
+                let searcher = pair_searcher((ga, &a), (gb, &b)).unwrap().unwrap();
+                let mut searcher = searcher;
+                assert_eq!(searcher.first_start_in(window, true).unwrap(), None, "case {case}: skipped, but found");
+                assert_eq!(searcher.probes(), 0, "case {case}: skipped, but the search probed");
+            }
+        }
+        assert!(skipped > 200 && found > 20, "{skipped} skipped, {found} contacts found");
     }
 
     #[test]
