@@ -25,7 +25,9 @@ if [ "${1:-}" = --mpi ]; then
   mpi=()
   command -v mpirun >/dev/null 2>&1 || mpi+=(openmpi-bin)
   command -v mpicc >/dev/null 2>&1 || mpi+=(libopenmpi-dev)
-  compgen -G "/usr/lib/llvm-*/lib/libclang*.so*" >/dev/null || compgen -G "/usr/lib/x86_64-linux-gnu/libclang*.so*" >/dev/null || mpi+=(libclang-dev)
+  # libclang itself (libclang.so, libclang-14.so.1), not libclang-cpp, which some images carry
+  # without it and which the bindings' generator cannot load.
+  compgen -G "/usr/lib/llvm-*/lib/libclang.so*" >/dev/null || compgen -G "/usr/lib/x86_64-linux-gnu/libclang-[0-9]*.so*" >/dev/null || mpi+=(libclang-dev)
   if [ ${#mpi[@]} -gt 0 ]; then
     install_packages "${mpi[@]}"
   fi
