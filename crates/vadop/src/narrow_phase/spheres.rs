@@ -148,10 +148,11 @@ pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, (ga, gb): (DVe
 /// use vadop::motion::Motion;
 /// use vadop::narrow_phase::spheres::{pair_contact_time, straight_pair_contact_time};
 /// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
-/// let b = Motion { position: DVec3::new(8.0, 5.0, 5.0), since: 0.5, velocity: DVec3::new(-1.5, 0.0, 0.0) };
+/// // b starts later: from 0.5 on, when a is at x = 2.75, the gap of 7 - 1 closes at 3.
+/// let b = Motion { position: DVec3::new(9.75, 5.0, 5.0), since: 0.5, velocity: DVec3::new(-1.5, 0.0, 0.0) };
 /// let straight = straight_pair_contact_time(&a, &b, 1.0);
 /// assert_eq!(straight, pair_contact_time(&a, &b, 1.0, (DVec3::ZERO, DVec3::ZERO)));
-/// assert_eq!(straight, Some(1.75));
+/// assert_eq!(straight, Some(2.5));
 /// ```
 #[inline(always)]
 pub fn straight_pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
