@@ -1,0 +1,101 @@
+#!/usr/bin/env python3
+"""Before and after in instructions: two builds run under callgrind on the same commands.
+
+Usage: python3 scripts/ab_instructions.py BASE_DIR NEW_DIR OUT.md [detect] [gas] [shapes] [peers]
+
+BASE_DIR and NEW_DIR are the `target/release` folders of two builds (e.g. one built at an older
+commit in a git worktree, and this one's). Each case runs once per build under `valgrind
+--tool=callgrind`, and the count kept is the instructions inside the frame loop, inclusive:
+`vadop::world::World::step` for a `vadop simulate` case, `vadop::pipeline::Pipeline<B>::step` for
+a case of the peers' shapes scene (`vadop-bench --child --job peers-time`, pinned to core 1 with
+taskset so it runs one worker, as in the benchmark). Instruction counts do not depend on the
+machine's load, so this is the comparison to make on a shared or busy host, where times are
+drafts; it says nothing of memory stalls, which times do. Both builds' contacts are compared for
+the detect cases (`--contacts`), and the script stops when they differ. OUT.md gets a markdown
+table: case, base, new, new ÷ base.
+
+Cases: `detect` is the paper scene in detect mode at n = 1e4 (5 and 0.5 diameters per frame)
+and 1e5 (0.05 and 5); `gas` the periodic equilibrium gas at n = 2e4, packing 0.2 and 0.05;
+`shapes` the shapes crowd of issue 25 in detect mode; `peers` the peers' shapes scene at n = 1e4
+(0.05, 0.5 and 5 d/f) and 1e5 (0.05). valgrind runs a program about 50 times slower: the whole
+set takes about ten minutes.
+"""
+import filecmp
+import os
+import subprocess
+import sys
+import tempfile
+
+DETECT = [(10000, 5, 30), (10000, 0.5, 60), (100000, 0.05, 20), (100000, 5, 6)]
+GAS = [(20000, 0.2, 20), (20000, 0.05, 40)]
+PEERS = [(10000, 0.05, 30), (10000, 0.5, 10), (10000, 5, 3), (100000, 0.05, 10)]
+
+
+def cases(kinds):
+    """(label, program, arguments, frame-loop function, contacts option or None)."""
+    if "detect" in kinds:
+        for n, speed, frames in DETECT:
+            args = ["--bodies", str(n), "--max-speed", str(speed), "--mode", "detect", "--frames", str(frames)]
+            yield f"`vadop simulate {' '.join(args)}`", "vadop", args, True
+    if "gas" in kinds:
+        for n, packing, frames in GAS:
+            args = ["--kind", "gas", "--periodic", "xyz", "--bodies", str(n), "--packing", str(packing),
+                    "--max-speed", "0.2", "--mode", "simulate", "--frames", str(frames)]
+            yield f"`vadop simulate {' '.join(args)}`", "vadop", args, False
+    if "shapes" in kinds:
+        args = ["--kind", "shapes", "--bodies", "10000", "--max-speed", "0.5", "--mode", "detect", "--frames", "5"]
+        yield f"`vadop simulate {' '.join(args)}`", "vadop", args, True
+    if "peers" in kinds:
+        for n, speed, frames in PEERS:
+            args = ["--child", "--job", "peers-time", "--scene", "shapes", "--bodies", str(n), "--speed", str(speed),
+                    "--frames", str(frames), "--method", "auto"]
+            yield f"peers' shapes scene, n = {n}, {speed} d/f, {frames} frames", "vadop-bench", args, True
+
+
+def instructions(folder, program, args, checked, scratch, tag):
+    """The frame loop's inclusive instruction count, and the contacts file written (or None)."""
+    profile = os.path.join(scratch, f"{tag}.callgrind")
+    contacts = os.path.join(scratch, f"{tag}.contacts")
+    binary = os.path.join(folder, program)
+    valgrind = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={profile}"]
+    if program == "vadop":
+        command = valgrind + [binary, "simulate", *args, "--reference", "none", "--threads", "1"]
+        command += ["--contacts", contacts] if checked else []
+        function = "vadop::world::World::step ["
+    else:
+        # Pinned, so the child's workers are one, as in the benchmark.
+        command = ["taskset", "-c", "1", *valgrind, binary, *args, "--out", contacts]
+        function = "vadop::pipeline::Pipeline<B>::step ["
+    subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    annotated = subprocess.run(["callgrind_annotate", "--inclusive=yes", profile], check=True,
+                               capture_output=True, text=True).stdout
+    for line in annotated.splitlines():
+        if function in line and ":" in line:
+            return int(line.split()[0].replace(",", "")), contacts if checked else None
+    sys.exit(f"{function} not found in the profile of {' '.join(command)}")
+
+
+def main():
+    if len(sys.argv) < 5:
+        sys.exit(__doc__)
+    base, new, out, kinds = sys.argv[1], sys.argv[2], sys.argv[3], set(sys.argv[4:])
+    rows = ["| case | base | new | new ÷ base |", "|---|---:|---:|---:|"]
+    with tempfile.TemporaryDirectory() as scratch:
+        for k, (label, program, args, checked) in enumerate(cases(kinds)):
+            counts = []
+            files = []
+            for build, folder in (("base", base), ("new", new)):
+                count, contacts = instructions(folder, program, args, checked, scratch, f"{k}-{build}")
+                counts.append(count)
+                files.append(contacts)
+            if checked and not filecmp.cmp(files[0], files[1], shallow=False):
+                sys.exit(f"{label}: the builds report different contacts; no comparison")
+            row = f"| {label} | {counts[0] / 1e6:,.1f} M | {counts[1] / 1e6:,.1f} M | {counts[1] / counts[0]:.3f} |"
+            rows.append(row)
+            print(row, flush=True)
+    with open(out, "w") as f:
+        f.write("\n".join(rows) + "\n")
+
+
+if __name__ == "__main__":
+    main()
