@@ -137,14 +137,14 @@ fn latest_first_key(time: f64) -> u64 {
     !((total as u64) ^ (1 << 63))
 }
 
-/// The radix sort's reused storage: each event's key with its place, the pass's output, the
-/// bins, and the events in their new order.
+/// The radix sort's reused storage: each event's key with its place, the pass's output, and the
+/// bins (the events themselves are moved in place, so a window's thousands of events are not
+/// held twice).
 #[derive(Debug, Default)]
 struct RadixBuffers {
     keyed: Vec<(u64, u32)>,
     spare: Vec<(u64, u32)>,
     bins: Vec<u32>,
-    sorted: Vec<Event>,
 }
 
 impl RadixBuffers {
@@ -153,7 +153,7 @@ impl RadixBuffers {
     /// skipping the digits they all share (a window's times share their leading bits), then each
     /// run of equal times by comparisons. A window start sorts thousands of events, and a pass
     /// over them costs less than the dozen comparisons each takes otherwise.
-    fn sort(&mut self, events: &mut Vec<Event>) {
+    fn sort(&mut self, events: &mut [Event]) {
         let n = events.len();
         self.keyed.clear();
         self.keyed.extend(events.iter().enumerate().map(|(k, e)| (latest_first_key(e.time), k as u32)));
@@ -181,25 +181,40 @@ impl RadixBuffers {
             }
             std::mem::swap(&mut self.keyed, &mut self.spare);
         }
-        self.sorted.clear();
-        self.sorted.extend(self.keyed.iter().map(|&(_, k)| events[k as usize]));
-        // Equal times (rare) in the order of the rest of the key.
+        // Place k takes the event at `keyed[k].1`: each cycle of that permutation moved through
+        // one spare event, each place marked done (pointing at itself) once filled.
+        for first in 0..n {
+            if self.keyed[first].1 as usize == first {
+                continue;
+            }
+            let spare = events[first];
+            let mut k = first;
+            loop {
+                let from = self.keyed[k].1 as usize;
+                self.keyed[k].1 = k as u32;
+                if from == first {
+                    events[k] = spare;
+                    break;
+                }
+                events[k] = events[from];
+                k = from;
+            }
+        }
+        // Equal times (the same bits: the key is one-to-one) in the order of the rest of the key;
+        // they are rare but for repeats of one prediction.
         let mut start = 0;
         while start < n {
-            let key = self.keyed[start].0;
-            let end = start + self.keyed[start..].iter().take_while(|&&(k, _)| k == key).count();
+            let bits = events[start].time.to_bits();
+            let end = start + events[start..].iter().take_while(|e| e.time.to_bits() == bits).count();
             if end - start > 1 {
-                self.sorted[start..end].sort_unstable();
+                events[start..end].sort_unstable();
             }
             start = end;
         }
-        std::mem::swap(events, &mut self.sorted);
     }
 
     fn memory_bytes(&self) -> usize {
-        (self.keyed.capacity() + self.spare.capacity()) * std::mem::size_of::<(u64, u32)>()
-            + self.bins.capacity() * 4
-            + self.sorted.capacity() * std::mem::size_of::<Event>()
+        (self.keyed.capacity() + self.spare.capacity()) * std::mem::size_of::<(u64, u32)>() + self.bins.capacity() * 4
     }
 }
 
