@@ -339,6 +339,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
     b: (&'a ShapeGeometry, &'a RigidMotion<T>),
 ) -> Result<Option<Searcher<PairGauge<'a>>>> {
     let reference = a.1.since.max(b.1.since);
+    let motions = (a.1, b.1);
     let (a, b) = (Body::new(a.0, a.1, reference), Body::new(b.0, b.1, reference));
     let size = a.geometry.size() + b.geometry.size();
     let stall = |reason| VadopError::ContactSearchStalled { time: reference, iterations: 0, reason };
@@ -359,12 +360,13 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
     let gauge = match (a.geometry.is_static_only(), b.geometry.is_static_only()) {
         (false, false) => {
             let shapes = (a.support(scale), b.support(scale));
+            let (offset, velocity, acceleration) = relative_motion(motions, reference, scale);
             PairGauge::Convex(ConvexPair {
                 middles: (shapes.0.middle_ball(), shapes.1.middle_ball()),
                 shapes,
-                offset: (b.position - a.position) * scale,
-                velocity: (b.velocity - a.velocity) * scale,
-                acceleration: (b.acceleration - a.acceleration) * scale,
+                offset,
+                velocity,
+                acceleration,
                 a,
                 b,
                 scale,
@@ -456,6 +458,20 @@ pub fn shape_contact_resumed<S: Spin, T: Spin>(
 /// [`crate::Mode::turns_back`]): then a pair deeper than the tolerance at the reference is not a
 /// contact in progress but one more to turn back if it goes deeper, as against a wall (a rule
 /// that stops bodies touching, the jam rule or a stalled search, may leave them that deep).
+/// b's centre of mass relative to a's at `reference`, as `Body::new` takes them: offset, velocity
+/// and acceleration, scaled; what a convex pair's search and its reach test start from.
+fn relative_motion<S: Spin, T: Spin>(
+    (ma, mb): (&RigidMotion<S>, &RigidMotion<T>),
+    reference: f64,
+    scale: f64,
+) -> (DVec3, DVec3, DVec3) {
+    (
+        (mb.position_at(reference) - ma.position_at(reference)) * scale,
+        (mb.velocity_at(reference) - ma.velocity_at(reference)) * scale,
+        (mb.acceleration - ma.acceleration) * scale,
+    )
+}
+
 /// False when two solids (neither static-only) cannot start touching before the absolute time
 /// `until`, from their centre paths and bounding spheres alone: the first test of the search
 /// [`pair_searcher`] would build (`Searcher::first_start_in`), on the same numbers, asked before
@@ -475,13 +491,8 @@ fn convex_pair_in_reach<S: Spin, T: Spin>(
     if !(spins * scale).is_finite() {
         return true;
     }
-    // As `Body::new` takes the centres, at the pair's reference.
     let reference = ma.since.max(mb.since);
-    let relative = (
-        (mb.position_at(reference) - ma.position_at(reference)) * scale,
-        (mb.velocity_at(reference) - ma.velocity_at(reference)) * scale,
-        (mb.acceleration - ma.acceleration) * scale,
-    );
+    let relative = relative_motion((ma, mb), reference, scale);
     let tol = SHAPE_CONTACT_TOLERANCE * size * scale;
     spheres_reach(relative, size * scale, 2.0 * tol).is_some_and(|reach| reference + reach.enter < until)
 }
