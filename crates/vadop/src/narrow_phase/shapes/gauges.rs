@@ -8,7 +8,7 @@ use super::distance::{closer_points, convex_bounds, separation, Bounds, Need, Si
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
-use super::{ceiling, ending, guard, starting, SLACK};
+use super::{ceiling, cleared, ending, guard, starting, SLACK};
 use crate::narrow_phase::falling::bent_reach;
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
@@ -577,7 +577,8 @@ impl Gauge for ConvexPair<'_> {
             .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack));
         self.warm.set(Warm::new(&bounds, carry));
         let hold = match (measure, bounds.witness) {
-            (Measure::Contact, Some((x, y))) => {
+            // A contact whose end this probe finds needs no step out of it.
+            (Measure::Contact, Some((x, y))) if !(bounds.lower > cleared(self.tol)) => {
                 self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slack)
             }
             (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
@@ -590,7 +591,8 @@ impl Gauge for ConvexPair<'_> {
             upper: bounds.upper,
             shrink: (-velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
             grow,
-            far: self.far(tau, (ga, &pose_a), (gb, &pose_b), slack),
+            // Only a start search steps on it (see [`Probe::approach_step`]).
+            far: if gap { self.far(tau, (ga, &pose_a), (gb, &pose_b), slack) } else { NO_FAR },
             hold,
             bend,
         }

@@ -301,6 +301,11 @@ fn guard(tol: f64) -> f64 {
     0.5 * tol * (1.0 + MARGIN)
 }
 
+/// Above this a contact has ended: `tol` plus the margin.
+fn cleared(tol: f64) -> f64 {
+    tol * (1.0 + MARGIN)
+}
+
 /// The signed distance a contact is kept below until it ends: `2 tol` less the margin.
 fn ceiling(tol: f64) -> f64 {
     2.0 * tol * (1.0 - MARGIN)
@@ -315,7 +320,7 @@ fn starting(tol: f64) -> f64 {
 /// The middle of the band in which a contact ends: between `tol` plus the margin (above it the
 /// contact has ended) and `2 tol` less the margin (below it the contact lasts).
 fn ending(tol: f64) -> f64 {
-    0.5 * (tol * (1.0 + MARGIN) + ceiling(tol))
+    0.5 * (cleared(tol) + ceiling(tol))
 }
 
 /// The distance within which two shapes count as touching: [`SHAPE_CONTACT_TOLERANCE`] times the

@@ -3,7 +3,7 @@
 //! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
 
 use super::gauges::{Gauge, Measure, Probe, Reach};
-use super::{ceiling, ending, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
+use super::{ceiling, cleared, ending, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
 use crate::error::{Result, VadopError};
 use crate::window::Window;
 
@@ -121,7 +121,7 @@ impl<G: Gauge> Searcher<G> {
     }
     /// Above this, a contact has ended (`tol` plus the margin).
     pub(super) fn clear(&self) -> f64 {
-        self.tol * (1.0 + MARGIN)
+        cleared(self.tol)
     }
     /// During a contact the signed distance is kept below this (`2 tol` less the margin).
     pub(super) fn ceiling(&self) -> f64 {
