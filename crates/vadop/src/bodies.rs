@@ -187,10 +187,14 @@ pub struct Rigid {
 }
 
 /// The spin of a body that does not turn, made once.
-fn steady() -> FreeRotation {
+fn steady_spin() -> &'static FreeRotation {
     static STEADY: std::sync::LazyLock<FreeRotation> =
         std::sync::LazyLock::new(|| FreeRotation::new(DVec3::ONE, DQuat::IDENTITY, DVec3::ZERO));
-    *STEADY
+    &STEADY
+}
+
+fn steady() -> FreeRotation {
+    *steady_spin()
 }
 
 /// Principal moments of a body of `geometry` (a solid ball of `radius` without one) and `mass`;
@@ -514,8 +518,8 @@ impl Bodies {
 
     /// Body `i`'s rotation since its last velocity change (steady in a world of spheres).
     #[inline]
-    pub fn spin(&self, i: usize) -> FreeRotation {
-        self.rigid.spin.get(i).copied().unwrap_or_else(steady)
+    pub fn spin(&self, i: usize) -> &FreeRotation {
+        self.rigid.spin.get(i).unwrap_or_else(|| steady_spin())
     }
 
     /// Orientation of body `i` (its principal axes to world) at absolute time `t`.
@@ -548,9 +552,10 @@ impl Bodies {
         self.rigid.spin.get(i).map_or(DVec3::ZERO, FreeRotation::angular_momentum)
     }
 
-    /// Body `i`'s motion for the shape narrow phase, under the acceleration it moves under.
+    /// Body `i`'s motion for the shape narrow phase, under the acceleration it moves under. Its
+    /// spin is borrowed: a pair search that ends on the bounding spheres never copies it.
     #[inline]
-    pub fn rigid_motion(&self, i: usize) -> RigidMotion<FreeRotation> {
+    pub fn rigid_motion(&self, i: usize) -> RigidMotion<&FreeRotation> {
         let m = self.state[i].motion;
         let acceleration = self.gravity_on(i);
         RigidMotion { position: m.position, since: m.since, velocity: m.velocity, acceleration, spin: self.spin(i) }
