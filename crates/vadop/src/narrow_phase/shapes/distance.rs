@@ -4,7 +4,7 @@
 //! relative far from it; it owns that arithmetic and never decides a contact time.
 
 use super::epa::penetration;
-use super::scaled::{refine, Core, Kind, Scaled};
+use super::scaled::{hull_nearest, refine, Core, Kind, Scaled};
 use super::MARGIN;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
@@ -12,7 +12,7 @@ use parry3d_f64::partitioning::BvhLeafCost;
 use parry3d_f64::query::details::{closest_points_segment_segment_with_locations_nD, contact_support_map_support_map};
 use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
 use parry3d_f64::query::point::local_point_projection_on_support_map;
-use parry3d_f64::query::PointQuery;
+use parry3d_f64::query::{PointProjection, PointQuery};
 use parry3d_f64::shape::{Ball, Capsule, Cone, Cuboid, Cylinder, Segment, SupportMap};
 
 /// Within this many tolerances of contact the distance bounds are tightened to a fraction of the
@@ -77,7 +77,8 @@ pub(super) fn polish(
 pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64, DVec3)> {
     let local = pose.inverse_transform_point(point);
     // Everything in scaled lengths, where parry's absolute tolerances mean the same at any scale:
-    // closed forms on a scaled copy of a primitive, GJK on the scaled support map otherwise.
+    // closed forms on a scaled copy of a primitive, a hull's faces, GJK on the scaled support map
+    // otherwise.
     let (p, s) = (shape.parry, shape.scale);
     let projection = match shape.kind {
         Kind::Ball(ball) => Ball::new(ball.radius * s).project_local_point(local, true),
@@ -87,6 +88,10 @@ pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64,
         }
         Kind::Cylinder(c) => Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true),
         Kind::Cone(c) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
+        Kind::Hull(hull) => match hull_nearest(hull, local / s) {
+            Some(on) => PointProjection::new(false, on * s),
+            None => return None,
+        },
         _ if s == 1.0 => p.project_local_point(local, true),
         _ => local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true),
     };

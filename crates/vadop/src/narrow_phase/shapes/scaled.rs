@@ -10,7 +10,7 @@ use crate::shape::ShapeGeometry;
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query::PointQuery;
-use parry3d_f64::shape::{Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, Segment, Shape, SupportMap};
+use parry3d_f64::shape::{Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, Segment, Shape, SupportMap, Triangle};
 use std::cell::Cell;
 
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
@@ -104,19 +104,19 @@ impl<'a> Scaled<'a> {
 
     /// At least the signed distance of the point `p` (in the shape's frame, scaled) from the
     /// shape, negative inside, to rounding: the closed-form depth inside (and on either side for
-    /// a ball or a capsule), outside the distance to parry's projection on the shape (a point of
-    /// the shape: exact for the primitives, a combination of a hull's points by GJK otherwise).
+    /// a ball or a capsule), outside the distance to the nearest point of the shape (parry's
+    /// closed forms for the primitives, [`hull_nearest`] for a hull).
     pub(super) fn signed_distance_above(&self, p: DVec3) -> f64 {
         let (depth, _) = self.depth_at(p);
         if depth > 0.0 || !matches!(self.core, Core::Solid(_)) {
             return -depth;
         }
-        let projection = self.parry.project_local_point(p / self.scale, true);
-        if projection.is_inside {
-            0.0
-        } else {
-            projection.point.distance(p / self.scale) * self.scale
-        }
+        let local = p / self.scale;
+        let nearest = match self.kind {
+            Kind::Hull(hull) => hull_nearest(hull, local),
+            _ => Some(self.parry.project_local_point(local, true)).filter(|p| !p.is_inside).map(|p| p.point),
+        };
+        nearest.map_or(0.0, |point| point.distance(local) * self.scale)
     }
 
     /// The shape's core, as a support map.
@@ -158,6 +158,35 @@ fn solid_depth(kind: Kind, p: DVec3) -> (f64, DVec3) {
         return nearest(&mut hull.faces().iter().map(|f| face(f.normal, f.first_vertex_or_edge)));
     }
     (0.0, DVec3::ZERO)
+}
+
+/// The point of `hull`'s surface nearest to `p` (in the hull's frame), `None` when `p` lies
+/// inside: the nearest point of the faces `p` lies above, each a fan of triangles projected on
+/// by parry. An outside point's nearest point lies on such a face (the direction to the point is
+/// in the normal cone there, so some face through it has the point above its plane), and a face
+/// test costs a plane's offset: a few triangle projections instead of GJK on the support map
+/// (which took 7 % of the peers' shapes at 0.5 d/f). Any point found lies on the hull, so its
+/// distance bounds the hull's from above whatever the rounding.
+pub(super) fn hull_nearest(hull: &ConvexPolyhedron, p: DVec3) -> Option<DVec3> {
+    let (points, corners) = (hull.points(), hull.vertices_adj_to_face());
+    let mut best: Option<(f64, DVec3)> = None;
+    for face in hull.faces() {
+        let first = face.first_vertex_or_edge as usize;
+        let ring = &corners[first..first + face.num_vertices_or_edges as usize];
+        let apex = points[ring[0] as usize];
+        if !(face.normal.dot(p - apex) > 0.0) {
+            continue;
+        }
+        for edge in ring[1..].windows(2) {
+            let triangle = Triangle::new(apex, points[edge[0] as usize], points[edge[1] as usize]);
+            let on = triangle.project_local_point(p, false).point;
+            let distance = on.distance_squared(p);
+            if best.is_none_or(|(d, _)| distance < d) {
+                best = Some((distance, on));
+            }
+        }
+    }
+    best.map(|(_, on)| on)
 }
 
 /// The support map of a shape's core.
@@ -505,6 +534,41 @@ mod tests {
     use super::*;
     use crate::shape::Shape;
     use rand::{Rng, SeedableRng};
+
+    /// The nearest point of a hull's faces is parry's projection (GJK on the support map), to
+    /// 1e-9, for points near and far around two irregular hulls, and none for points inside.
+    #[test]
+    fn hull_nearest_is_the_projection() {
+        let eight = [[0.42, 0.0, 0.0], [-0.3, 0.3, 0.1], [-0.2, -0.3, 0.2], [0.0, 0.1, -0.38], [0.1, 0.0, 0.38]];
+        let more = [[0.2, 0.25, -0.2], [-0.25, -0.1, -0.25], [0.15, -0.3, -0.1]];
+        let hulls = [eight.to_vec(), [eight.as_slice(), more.as_slice()].concat()]
+            .map(|points| Shape::ConvexHull { points: points.into_iter().map(DVec3::from_array).collect() });
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (mut outside, mut inside) = (0, 0);
+        for shape in &hulls {
+            let geometry = shape.geometry().unwrap();
+            let hull = geometry.parry_shape().as_convex_polyhedron().unwrap();
+            for k in 0..20_000 {
+                let reach = [0.05, 0.5, 3.0][k % 3];
+                let p = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+                    * reach;
+                let parry = hull.project_local_point(p, true);
+                match hull_nearest(hull, p) {
+                    Some(on) => {
+                        outside += 1;
+                        assert!(!parry.is_inside, "{p} found outside, parry says inside");
+                        let (mine, theirs) = (on.distance(p), parry.point.distance(p));
+                        assert!((mine - theirs).abs() <= 1e-9, "{p}: {mine} against parry's {theirs}");
+                    }
+                    None => {
+                        inside += 1;
+                        assert!(parry.is_inside || parry.point.distance(p) < 1e-12, "{p} found inside");
+                    }
+                }
+            }
+        }
+        assert!(outside > 10_000 && inside > 1_000, "{outside} outside, {inside} inside");
+    }
 
     /// No point of a solid's core (its support points in every direction) lies farther from a
     /// line through the centre of mass than `rotation_radius_about` that line's axis says, and
