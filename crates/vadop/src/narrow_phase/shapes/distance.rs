@@ -4,7 +4,7 @@
 //! relative far from it; it owns that arithmetic and never decides a contact time.
 
 use super::epa::penetration;
-use super::scaled::{hull_nearest, refine, Core, Kind, Scaled};
+use super::scaled::{hull_nearest, refine, Core, HullPoint, Kind, Scaled};
 use super::MARGIN;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
@@ -89,8 +89,8 @@ pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64,
         Kind::Cylinder(c) => Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true),
         Kind::Cone(c) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
         Kind::Hull(hull) => match hull_nearest(hull, local / s) {
-            Some(on) => PointProjection::new(false, on * s),
-            None => return None,
+            HullPoint::Outside(on) => PointProjection::new(false, on * s),
+            HullPoint::Inside(_) => return None,
         },
         _ if s == 1.0 => p.project_local_point(local, true),
         _ => local_point_projection_on_support_map(shape, &mut VoronoiSimplex::new(), local, true),

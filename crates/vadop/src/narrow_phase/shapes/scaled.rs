@@ -107,16 +107,24 @@ impl<'a> Scaled<'a> {
     /// a ball or a capsule), outside the distance to the nearest point of the shape (parry's
     /// closed forms for the primitives, [`hull_nearest`] for a hull).
     pub(super) fn signed_distance_above(&self, p: DVec3) -> f64 {
+        let local = p / self.scale;
+        if let Kind::Hull(hull) = self.kind {
+            // One pass over the faces tells inside from outside and finds the nearest point.
+            return match hull_nearest(hull, local) {
+                HullPoint::Outside(on) => on.distance(local) * self.scale,
+                HullPoint::Inside(depth) => -depth * self.scale,
+            };
+        }
         let (depth, _) = self.depth_at(p);
         if depth > 0.0 || !matches!(self.core, Core::Solid(_)) {
             return -depth;
         }
-        let local = p / self.scale;
-        let nearest = match self.kind {
-            Kind::Hull(hull) => hull_nearest(hull, local),
-            _ => Some(self.parry.project_local_point(local, true)).filter(|p| !p.is_inside).map(|p| p.point),
-        };
-        nearest.map_or(0.0, |point| point.distance(local) * self.scale)
+        let projection = self.parry.project_local_point(local, true);
+        if projection.is_inside {
+            0.0
+        } else {
+            projection.point.distance(local) * self.scale
+        }
     }
 
     /// The shape's core, as a support map.
@@ -160,21 +168,30 @@ fn solid_depth(kind: Kind, p: DVec3) -> (f64, DVec3) {
     (0.0, DVec3::ZERO)
 }
 
-/// The point of `hull`'s surface nearest to `p` (in the hull's frame), `None` when `p` lies
-/// inside: the nearest point of the faces `p` lies above, each a fan of triangles projected on
-/// by parry. An outside point's nearest point lies on such a face (the direction to the point is
-/// in the normal cone there, so some face through it has the point above its plane), and a face
-/// test costs a plane's offset: a few triangle projections instead of GJK on the support map
-/// (which took 7 % of the peers' shapes at 0.5 d/f). Any point found lies on the hull, so its
-/// distance bounds the hull's from above whatever the rounding.
-pub(super) fn hull_nearest(hull: &ConvexPolyhedron, p: DVec3) -> Option<DVec3> {
+/// Where a point lies against a hull: outside, with the hull's point nearest to it, or inside,
+/// as deep as its nearest face's plane is from it (at least 0).
+pub(super) enum HullPoint {
+    Outside(DVec3),
+    Inside(f64),
+}
+
+/// Where `p` (in the hull's frame) lies against `hull`. Outside, the nearest point is on a face
+/// `p` lies above (the direction to `p` is in the normal cone there, so some face through the
+/// nearest point has `p` above its plane): those faces' fans of triangles are projected on by
+/// parry, a few triangle projections where GJK on the support map took 7 % of the peers' shapes
+/// at 0.5 d/f. Any point found lies on the hull, so its distance bounds the hull's from above
+/// whatever the rounding; inside, the depth is [`Scaled::depth_at`]'s, to the bit.
+pub(super) fn hull_nearest(hull: &ConvexPolyhedron, p: DVec3) -> HullPoint {
     let (points, corners) = (hull.points(), hull.vertices_adj_to_face());
     let mut best: Option<(f64, DVec3)> = None;
+    let mut depth = f64::INFINITY;
     for face in hull.faces() {
         let first = face.first_vertex_or_edge as usize;
         let ring = &corners[first..first + face.num_vertices_or_edges as usize];
         let apex = points[ring[0] as usize];
-        if !(face.normal.dot(p - apex) > 0.0) {
+        let below = face.normal.dot(apex - p);
+        depth = depth.min(below);
+        if !(below < 0.0) {
             continue;
         }
         for edge in ring[1..].windows(2) {
@@ -186,7 +203,10 @@ pub(super) fn hull_nearest(hull: &ConvexPolyhedron, p: DVec3) -> Option<DVec3> {
             }
         }
     }
-    best.map(|(_, on)| on)
+    match best {
+        Some((_, on)) => HullPoint::Outside(on),
+        None => HullPoint::Inside(depth.max(0.0)),
+    }
 }
 
 /// The support map of a shape's core.
@@ -536,7 +556,8 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     /// The nearest point of a hull's faces is parry's projection (GJK on the support map), to
-    /// 1e-9, for points near and far around two irregular hulls, and none for points inside.
+    /// 1e-9, for points near and far around two irregular hulls, and a point inside is as deep
+    /// as `depth_at` says, to the bit.
     #[test]
     fn hull_nearest_is_the_projection() {
         let eight = [[0.42, 0.0, 0.0], [-0.3, 0.3, 0.1], [-0.2, -0.3, 0.2], [0.0, 0.1, -0.38], [0.1, 0.0, 0.38]];
@@ -554,15 +575,17 @@ mod tests {
                     * reach;
                 let parry = hull.project_local_point(p, true);
                 match hull_nearest(hull, p) {
-                    Some(on) => {
+                    HullPoint::Outside(on) => {
                         outside += 1;
                         assert!(!parry.is_inside, "{p} found outside, parry says inside");
                         let (mine, theirs) = (on.distance(p), parry.point.distance(p));
                         assert!((mine - theirs).abs() <= 1e-9, "{p}: {mine} against parry's {theirs}");
                     }
-                    None => {
+                    HullPoint::Inside(depth) => {
                         inside += 1;
                         assert!(parry.is_inside || parry.point.distance(p) < 1e-12, "{p} found inside");
+                        let scaled = Scaled::new(hull, 1.0);
+                        assert_eq!(depth.to_bits(), scaled.depth_at(p).0.max(0.0).to_bits(), "{p}");
                     }
                 }
             }
