@@ -10,7 +10,9 @@ use crate::shape::ShapeGeometry;
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::query::PointQuery;
-use parry3d_f64::shape::{Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, Segment, Shape, SupportMap, Triangle};
+use parry3d_f64::shape::{
+    Ball, Capsule, Cone, ConvexPolyhedron, Cuboid, Cylinder, Segment, Shape, SupportMap, Triangle,
+};
 use std::cell::Cell;
 
 /// A shape's support map with lengths multiplied by an exact power of two, and the shape itself
@@ -571,8 +573,9 @@ mod tests {
             let hull = geometry.parry_shape().as_convex_polyhedron().unwrap();
             for k in 0..20_000 {
                 let reach = [0.05, 0.5, 3.0][k % 3];
-                let p = DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
-                    * reach;
+                let p =
+                    DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+                        * reach;
                 let parry = hull.project_local_point(p, true);
                 match hull_nearest(hull, p) {
                     HullPoint::Outside(on) => {
