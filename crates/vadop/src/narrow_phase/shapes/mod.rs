@@ -789,32 +789,6 @@ mod tests {
         );
     }
 
-    /// A pair that contacts turn back, overlapping a little at its reference and dipping a
-    /// little deeper before it parts: no contact while the dip stays within the tolerance of
-    /// touching, a contact at the reference once it would go past it, however deep the pair
-    /// already was there (each new reference of a pressed pair would otherwise let it sink a
-    /// tolerance further).
-    #[test]
-    fn a_dip_past_the_tolerance_is_a_contact_at_the_reference() {
-        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
-        let tol = contact_tolerance(&cube, &cube);
-        let a = still(DVec3::ZERO);
-        // b's face `depth` into a's, closing at 1 and pulled back: deepest by `dip` at t = 1.
-        let dipping = |depth: f64, dip: f64| RigidMotion {
-            velocity: DVec3::new(-1.0, 0.0, 0.0),
-            acceleration: DVec3::new(1.0, 0.0, 0.0) * (0.5 / dip),
-            ..still(DVec3::new(1.0 - depth, 0.0, 0.0))
-        };
-        let window = Window::new(0.0, 10.0);
-        let search =
-            |b: &RigidMotion<Fixed>| pair_first_start((&cube, &a), (&cube, b), window, None, true).unwrap().0.found;
-        for depth in [0.0, 0.3 * tol, 0.6 * tol] {
-            // Deepest at `depth + dip`: within the tolerance, no contact; past it, one at 0.
-            assert_eq!(search(&dipping(depth, 0.9 * tol - depth)), None, "{depth:e}");
-            assert_eq!(search(&dipping(depth, 1.2 * tol - depth)), Some(0.0), "{depth:e}");
-        }
-    }
-
     /// A pair search skipped because the bounding spheres stay out of reach
     /// (`convex_pair_in_reach`) would have found nothing: the full search agrees on spinning
     /// solids near and far, straight and falling, and most pairs far apart are skipped.

@@ -270,15 +270,12 @@ impl<G: Gauge> Searcher<G> {
     }
 
     /// Whether a pair touching at the reference (`p0`) is approaching. Decided by the motion
-    /// itself, whatever window asks: does it get `tol` deeper (but past `-tol` at most) before it
-    /// separates beyond `tol`? The cap keeps a pair that contacts turn back within `tol` of
-    /// touching: `tol` past its overlap at each new reference (another body's impact moving one
-    /// of the two) would let a pressed pair sink a tolerance further each time.
+    /// itself, whatever window asks: does it get `tol` deeper before it separates beyond `tol`?
     pub(super) fn classify(&mut self, p0: Probe, deep_is_contact: bool) -> Result<AtReference> {
         if deep_is_contact && p0.upper < -self.tol {
             return Ok(AtReference::Inside);
         }
-        let floor = (p0.upper.min(0.0) - self.tol).max(-self.tol);
+        let floor = p0.upper.min(0.0) - self.tol;
         let (mut tau, mut p) = (0.0, p0);
         let budget = self.iterations + RESTING_BUDGET;
         loop {
