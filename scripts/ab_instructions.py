@@ -10,8 +10,9 @@ commit in a git worktree, and this one's). Each case runs once per build under `
 a case of the peers' shapes scene (`vadop-bench --child --job peers-time`, pinned to core 1 with
 taskset so it runs one worker, as in the benchmark). Instruction counts do not depend on the
 machine's load, so this is the comparison to make on a shared or busy host, where times are
-drafts; it says nothing of memory stalls, which times do. Both builds' contacts are compared for
-the detect cases (`--contacts`), and the script stops when they differ. OUT.md gets a markdown
+drafts; it says nothing of memory stalls, which times do. Both builds' contacts files are
+compared byte for byte in every case but the gas's (times and points included, so a change that
+moves contact times inside the tolerance stops it too), and the script stops when they differ. OUT.md gets a markdown
 table: case, base, new, new ÷ base.
 
 Cases: `detect` is the paper scene in detect mode at n = 1e4 (5 and 0.5 diameters per frame)
@@ -32,7 +33,7 @@ PEERS = [(10000, 0.05, 30), (10000, 0.5, 10), (10000, 5, 3), (100000, 0.05, 10)]
 
 
 def cases(kinds):
-    """(label, program, arguments, frame-loop function, contacts option or None)."""
+    """(label, program, arguments, whether the two builds' contacts are compared)."""
     if "detect" in kinds:
         for n, speed, frames in DETECT:
             args = ["--bodies", str(n), "--max-speed", str(speed), "--mode", "detect", "--frames", str(frames)]

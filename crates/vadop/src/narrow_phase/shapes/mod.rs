@@ -459,10 +459,6 @@ pub fn shape_contact_resumed<S: Spin, T: Spin>(
     pair_first_start(a, b, window, resume, false)
 }
 
-/// [`shape_contact_resumed`], for a pair whose contacts turn it back when `turns_back` (see
-/// [`crate::Mode::turns_back`]): then a pair deeper than the tolerance at the reference is not a
-/// contact in progress but one more to turn back if it goes deeper, as against a wall (a rule
-/// that stops bodies touching, the jam rule or a stalled search, may leave them that deep).
 /// b's centre of mass relative to a's at `reference`, as `Body::new` takes them: offset, velocity
 /// and acceleration, scaled; what a convex pair's search and its reach test start from.
 fn relative_motion<S: Spin, T: Spin>(
@@ -502,6 +498,10 @@ fn convex_pair_in_reach<S: Spin, T: Spin>(
     spheres_reach(relative, size * scale, 2.0 * tol).is_some_and(|reach| reference + reach.enter < until)
 }
 
+/// [`shape_contact_resumed`], for a pair whose contacts turn it back when `turns_back` (see
+/// [`crate::Mode::turns_back`]): then a pair deeper than the tolerance at the reference is not a
+/// contact in progress but one more to turn back if it goes deeper, as against a wall (a rule
+/// that stops bodies touching, the jam rule or a stalled search, may leave them that deep).
 pub(crate) fn pair_first_start<S: Spin, T: Spin>(
     a: (&ShapeGeometry, &RigidMotion<S>),
     b: (&ShapeGeometry, &RigidMotion<T>),
