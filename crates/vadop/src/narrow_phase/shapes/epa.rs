@@ -1,8 +1,8 @@
 //! The expanding polytope algorithm (EPA, Van den Bergen's), stopped as soon as its depth bound is
 //! as tight as the caller asks: a search stepping out of a deep contact needs the depth to a few
-//! per cent, not to rounding (parry's converged EPA, which the caller keeps for shallow contacts
-//! and contact geometry, spends some 17 support points a call on mixed shapes). It owns the
-//! polytope's arithmetic and never decides a contact.
+//! per cent, a shallow one to a small share of the contact tolerance, not to rounding (parry's
+//! converged EPA, which the caller keeps for contact geometry, spends some 17 support points a
+//! call on mixed shapes). It owns the polytope's arithmetic and never decides a contact.
 //!
 //! The polytope is a closed triangle mesh over support points of the Minkowski difference
 //! `a - b`, started from GJK's simplex about the origin. Each step takes the face whose plane lies
@@ -43,6 +43,10 @@ pub(super) struct Penetration {
     pub(super) points: (DVec3, DVec3),
     /// That face's outward unit normal (from a towards b).
     pub(super) normal: DVec3,
+    /// The unit normal of the nearest plane bounding `a - b` that the expansion met: the shapes
+    /// are separated along it by at least minus `depth` less the allowance. `normal` may give
+    /// less: on two flat faces pressed together, its tilt times the faces' size.
+    pub(super) axis: DVec3,
 }
 
 /// The depth of the intersecting sets `g1` and `g2` (`pos12`: g2's pose in g1's frame) from
@@ -176,11 +180,14 @@ impl Polytope {
     /// Expands the polytope until the nearest face's distance is within the allowance (or
     /// rounding) of the least support value found.
     fn expand(&mut self, support: impl Fn(DVec3) -> CsoPoint, allowance: impl Fn(f64) -> f64) -> Option<Penetration> {
-        let mut least_support = f64::INFINITY;
+        let (mut least_support, mut least_normal) = (f64::INFINITY, DVec3::ZERO);
         let mut nearest = self.nearest()?;
         for _ in 0..MAX_EXPANSIONS {
             let apex = support(nearest.normal);
-            least_support = least_support.min(apex.point.dot(nearest.normal));
+            let value = apex.point.dot(nearest.normal);
+            if value < least_support {
+                (least_support, least_normal) = (value, nearest.normal);
+            }
             // The gap exceeds eps past here, so the nearest face is among those the apex sees.
             if least_support - nearest.offset <= allowance(nearest.offset).max(self.eps) {
                 break;
@@ -192,7 +199,7 @@ impl Polytope {
             }
             nearest = self.nearest()?;
         }
-        Some(self.bound(&nearest))
+        Some(Penetration { axis: least_normal, ..self.bound(&nearest) })
     }
 
     fn nearest(&self) -> Option<Triangle> {
@@ -247,7 +254,8 @@ impl Polytope {
         let whole = area(a, b) + area(b, c) + area(c, a);
         let weights = [area(b, c) / whole, area(c, a) / whole, area(a, b) / whole];
         let mix = |of: fn(&CsoPoint) -> DVec3| (0..3).map(|k| of(corners[k]) * weights[k]).sum::<DVec3>();
-        Penetration { depth: face.offset.max(0.0), points: (mix(|v| v.orig1), mix(|v| v.orig2)), normal: face.normal }
+        let points = (mix(|v| v.orig1), mix(|v| v.orig2));
+        Penetration { depth: face.offset.max(0.0), points, normal: face.normal, axis: face.normal }
     }
 }
 
@@ -265,8 +273,9 @@ mod tests {
 
     /// Runs `check(case, early, exact)` on random intersecting pairs of every two solid kinds,
     /// turned and offset at random: `early` from [`penetration`] on GJK's simplex, `exact` the
-    /// depth of parry's contact query.
-    fn on_random_intersections(mut check: impl FnMut(usize, Option<Penetration>, f64)) {
+    /// depth of parry's contact query; `check` may ask the difference's support value along a
+    /// unit vector (the shapes' separation along it is minus that).
+    fn on_random_intersections(mut check: impl FnMut(usize, Option<Penetration>, f64, &dyn Fn(DVec3) -> f64)) {
         let shapes = crate::shape::one_solid_of_each_kind().map(|s| s.geometry().unwrap());
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
         let mut random = move || rng.random_range(-0.5..0.5);
@@ -285,7 +294,8 @@ mod tests {
             else {
                 continue;
             };
-            check(case, penetration(&pos12, a, b, &simplex, allowance), -contact.dist);
+            let support_value = |n: DVec3| CsoPoint::from_shapes(&pos12, a, b, n).point.dot(n);
+            check(case, penetration(&pos12, a, b, &simplex, allowance), -contact.dist, &support_value);
         }
     }
 
@@ -295,7 +305,7 @@ mod tests {
     #[test]
     fn an_early_depth_is_a_lower_bound_within_its_allowance() {
         let (mut measured, mut tight) = (0, 0);
-        on_random_intersections(|case, early, exact| {
+        on_random_intersections(|case, early, exact, _| {
             let Some(early) = early else { return };
             assert!(early.depth <= exact + 1e-9, "case {case}: {} deeper than parry's {exact}", early.depth);
             measured += 1;
@@ -310,7 +320,7 @@ mod tests {
     #[test]
     fn the_witness_points_differ_by_the_depth_along_the_normal() {
         let mut measured = 0;
-        on_random_intersections(|case, early, _| {
+        on_random_intersections(|case, early, _, _| {
             let Some(early) = early else { return };
             let (on_a, on_b) = early.points;
             let miss = (on_a - on_b - early.normal * early.depth).length();
@@ -319,6 +329,24 @@ mod tests {
             measured += 1;
         });
         assert!(measured > 500, "only {measured} intersecting cases");
+    }
+
+    /// The axis bounds the depth from above (its support value is never below the true depth), and
+    /// nearly always within the allowance of the early depth: the shapes' separation along it is
+    /// then a lower bound on their signed distance as tight as the depth.
+    #[test]
+    fn the_axis_separates_the_shapes_within_the_allowance() {
+        let (mut measured, mut tight) = (0, 0);
+        on_random_intersections(|case, early, exact, support_value| {
+            let Some(early) = early else { return };
+            let value = support_value(early.axis);
+            assert!((early.axis.length() - 1.0).abs() < 1e-12, "case {case}: axis {}", early.axis);
+            assert!(value >= exact - 1e-9, "case {case}: support value {value} below parry's depth {exact}");
+            measured += 1;
+            tight += (value <= early.depth + allowance(early.depth) + 1e-12) as usize;
+        });
+        assert!(measured > 500, "only {measured} intersecting cases");
+        assert!(tight * 100 >= measured * 95, "only {tight} of {measured} axes within the allowance");
     }
 
     /// A simplex short of a tetrahedron is filled out: two balls about one centre (their difference
