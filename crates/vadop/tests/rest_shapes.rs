@@ -28,7 +28,10 @@ fn resting(world: &World) -> usize {
 /// Cuboids, capsules, cylinders, cones, rocks and balls, thrown spinning, settle on the box
 /// floor and on each other (gravity down z), and on the scene's bumpy mesh floor (gravity down
 /// y): within five seconds every body rests (balls may roll on), and at every frame end no body overlaps
-/// another, the mesh or a wall by more than the contact tolerance (parry's own contact query).
+/// another, the mesh or a wall by more than the contact tolerance (parry's own contact query; the
+/// pair's tolerance, 1e-6 of the sum of the bounding radii, as the narrow phase states it: a check
+/// against the smaller radius alone is about twice as strict, and other seeds of this scene failed
+/// it within the pair's tolerance).
 ///
 /// This failed three ways before the rule took shapes: a shape whose bounce off a body lying
 /// still was judged by its centre's velocity kept turning into it (zero impulses, over and
@@ -42,8 +45,8 @@ fn a_crowd_of_every_shape_settles_with_nothing_sinking() {
         let mut world = crowd(120, seed).world(config(Method::Auto, gravity)).unwrap();
         for frame in 0..150 {
             world.step(DT).unwrap();
-            let (depth, what) = common::deepest_overlap(&world);
-            assert!(depth <= SHAPE_CONTACT_TOLERANCE, "seed {seed}, frame {frame}: {what} ({depth:e} of the sizes)");
+            let (depth, what) = common::deepest_overlap(&world, common::Overlap::InTolerances);
+            assert!(depth <= 1.0, "seed {seed}, frame {frame}: {what} ({depth} contact tolerances)");
         }
         // Balls may still roll on the floor; every other shape lies still.
         for (handle, body) in world.bodies().filter(|(_, b)| b.mass.is_finite()) {

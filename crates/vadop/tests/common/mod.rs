@@ -6,6 +6,7 @@
 use glam::DVec3;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
+use vadop::narrow_phase::shapes::{contact_tolerance, SHAPE_CONTACT_TOLERANCE};
 use vadop::narrow_phase::spheres::CONTACT_TOLERANCE;
 use vadop::shape::Shape;
 use vadop::{Body, BodyHandle, BodyShape, Contact, Method, Mode, Sphere, VadopError, World};
@@ -190,15 +191,25 @@ pub fn closed_form_landings(height: f64, g: f64, restitution: f64, radius: f64) 
 /// The deepest overlap at the frame end, if beyond `tolerance` times the sizes (see
 /// [`deepest_overlap`]).
 pub fn sunk(world: &World, tolerance: f64) -> Option<String> {
-    let (depth, what) = deepest_overlap(world);
+    let (depth, what) = deepest_overlap(world, Overlap::OfSize);
     (depth > tolerance).then_some(what)
 }
 
-/// The deepest overlap at the frame end, relative to the sizes (bounding radii; the smaller of
-/// a pair's), and what overlaps: between two bodies (moving or static; moving ones only in
-/// simulate mode, where they turn back) or a moving body and a wall, measured by parry on the
-/// bodies' poses, independently of vadop's searches.
-pub fn deepest_overlap(world: &World) -> (f64, String) {
+/// What [`deepest_overlap`] measures an overlap against.
+#[derive(Clone, Copy, PartialEq)]
+pub enum Overlap {
+    /// The bodies' sizes: their bounding radii, the smaller of a pair's.
+    OfSize,
+    /// The contact tolerance of the pair (`contact_tolerance`, from the sum of the bounding
+    /// radii) or of the body against a wall: what the narrow phase's contract bounds.
+    InTolerances,
+}
+
+/// The deepest overlap at the frame end, relative to `unit`, and what overlaps: between two
+/// bodies (moving or static; moving ones only in simulate mode, where they turn back) or a
+/// moving body and a wall, measured by parry on the bodies' poses, independently of vadop's
+/// searches.
+pub fn deepest_overlap(world: &World, unit: Overlap) -> (f64, String) {
     let bodies: Vec<(BodyHandle, Body)> = world.bodies().collect();
     let geometry = |b: &Body| match b.shape {
         BodyShape::Sphere { radius } => Shape::Sphere { radius }.geometry().unwrap(),
@@ -224,7 +235,11 @@ pub fn deepest_overlap(world: &World) -> (f64, String) {
                 let [high, low] =
                     [axis, -axis].map(|d| pose * support.local_support_point(pose.rotation.inverse() * d));
                 let depth = (bounds.min.dot(axis) - low.dot(axis)).max(high.dot(axis) - bounds.max.dot(axis));
-                keep(depth / size(a), &|| format!("body {i} through a wall: it spans {low}..{high}"));
+                let scale = match unit {
+                    Overlap::OfSize => size(a),
+                    Overlap::InTolerances => SHAPE_CONTACT_TOLERANCE * size(a),
+                };
+                keep(depth / scale, &|| format!("body {i} through a wall: it spans {low}..{high}"));
             }
         }
         for (j, b) in &bodies[k + 1..] {
@@ -236,7 +251,11 @@ pub fn deepest_overlap(world: &World) -> (f64, String) {
             let (ga, gb) = (geometry(a), geometry(b));
             let (sa, sb) = (ga.parry_shape().as_ref(), gb.parry_shape().as_ref());
             if let Ok(Some(c)) = parry3d_f64::query::contact(&pose(a), sa, &pose(b), sb, 0.0) {
-                keep(-c.dist / size(a).min(size(b)), &|| format!("bodies {i} and {j} overlap by {:e}", -c.dist));
+                let scale = match unit {
+                    Overlap::OfSize => size(a).min(size(b)),
+                    Overlap::InTolerances => contact_tolerance(&ga, &gb),
+                };
+                keep(-c.dist / scale, &|| format!("bodies {i} and {j} overlap by {:e}", -c.dist));
             }
         }
     }
