@@ -419,7 +419,9 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     };
     let early = (result == GJKResult::Intersection).then(|| depth.and_then(|need| deep(need, &simplex))).flatten();
     // GJK's verdict is not reliable a hair from contact: ask again from the other side, unless
-    // EPA's polytope, points of the difference about the origin, already proved them deep inside.
+    // EPA's polytope, points of the difference about the origin, already proved them inside each
+    // other (to rounding: a hair apart after all, an axis separates them and EPA's points bound
+    // their distance).
     if early.is_none() && !matches!(result, GJKResult::ClosestPoints(..)) {
         let (again, _) = gjk_from(toward, None, None);
         if matches!(again, GJKResult::ClosestPoints(..)) {
