@@ -12,8 +12,8 @@ taskset so it runs one worker, as in the benchmark). Instruction counts do not d
 machine's load, so this is the comparison to make on a shared or busy host, where times are
 drafts; it says nothing of memory stalls, which times do. Both builds' contacts files are
 compared byte for byte in every case but the gas's (times and points included, so a change that
-moves contact times inside the tolerance stops it too), and the script stops when they differ. OUT.md gets a markdown
-table: case, base, new, new ÷ base.
+moves contact times inside the tolerance stops it too), and the script stops when they differ.
+OUT.md gets a markdown table: case, base, new, new ÷ base.
 
 Cases: `detect` is the paper scene in detect mode at n = 1e4 (5 and 0.5 diameters per frame)
 and 1e5 (0.05 and 5); `gas` the periodic equilibrium gas at n = 2e4, packing 0.2 and 0.05;

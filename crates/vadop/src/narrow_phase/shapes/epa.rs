@@ -199,7 +199,7 @@ impl Polytope {
             }
             nearest = self.nearest()?;
         }
-        Some(Penetration { axis: least_normal, ..self.bound(&nearest) })
+        Some(self.bound(&nearest, least_normal))
     }
 
     fn nearest(&self) -> Option<Triangle> {
@@ -245,8 +245,9 @@ impl Polytope {
     }
 
     /// The bound a face gives: its distance, and the shapes' points whose difference is the
-    /// origin's projection on it (weighed by the areas the projection cuts the face into).
-    fn bound(&self, face: &Triangle) -> Penetration {
+    /// origin's projection on it (weighed by the areas the projection cuts the face into), with
+    /// `axis` the normal of the least support value met.
+    fn bound(&self, face: &Triangle, axis: DVec3) -> Penetration {
         let corners = face.corners.map(|i| &self.vertices[i]);
         let [a, b, c] = corners.map(|v| v.point);
         let projection = face.normal * face.offset;
@@ -255,7 +256,7 @@ impl Polytope {
         let weights = [area(b, c) / whole, area(c, a) / whole, area(a, b) / whole];
         let mix = |of: fn(&CsoPoint) -> DVec3| (0..3).map(|k| of(corners[k]) * weights[k]).sum::<DVec3>();
         let points = (mix(|v| v.orig1), mix(|v| v.orig2));
-        Penetration { depth: face.offset.max(0.0), points, normal: face.normal, axis: face.normal }
+        Penetration { depth: face.offset.max(0.0), points, normal: face.normal, axis }
     }
 }
 
