@@ -121,15 +121,17 @@
 //!   motion (spinning shapes, detect mode): the k-th contact start is searched from the end of
 //!   the (k-1)-th, and a window gets the first contact *start* it contains.
 //! * At the reference instant itself, a touching pair is a new contact only if it is
-//!   approaching: if it goes on to penetrate `tol` deeper than it is before it separates beyond
-//!   `tol`. (A pair just resolved in simulate mode separates: its next contact is a new one.) A
+//!   approaching: if, before it separates beyond `tol`, it goes on to penetrate past `tol`, or
+//!   `tol/8` deeper than it is where it is deeper than `7/8 tol` already. (A pair just resolved in
+//!   simulate mode separates: its next contact is a new one.) So a pair pressed together (each
+//!   velocity change of either body a new reference) cannot sink past `tol` without a contact
+//!   that turns it back, nor further than `tol/8` per reference once a rule has left it there. A
 //!   pair already deeper than `tol` is a contact in progress where bodies pass through each
 //!   other (detect mode), as for spheres; where contacts turn them back (simulate mode, static
 //!   geometry, the walls) depth does not matter: a rule that stops bodies touching may leave
 //!   them that deep, and they must not then pass into each other. Such a pair that the search
 //!   cannot decide (it neither goes deeper nor parts) stalls at the reference, where it was
-//!   found touching, so that the jam rule stops it there and not up to `tol` deeper, stall after
-//!   stall.
+//!   found touching, so that the jam rule stops it there and not deeper, stall after stall.
 //!
 //! The search works a little inside the band: it stops at `(1 - 1/8) tol` and keeps the
 //! distance above `(1 + 1/8) tol/2`, so that an independent oracle (parry's own distance query)
@@ -787,6 +789,30 @@ mod tests {
             shape_contact_time((&floor, &floor_motion), (&cube, &on_floor), Window::new(0.0, 10.0)).unwrap(),
             None
         );
+    }
+
+    /// A pair touching at the reference that dips past the tolerance and turns back (two cubes,
+    /// the second pushed into the first and pulled away) is a new contact at the reference,
+    /// however deep within the tolerance it starts (a whole tolerance deeper than it is was
+    /// needed before, so a pair pressed together could sink that much per new reference); one
+    /// already past the tolerance is a contact once it goes an eighth of one deeper.
+    #[test]
+    fn a_pair_touching_at_the_reference_that_dips_past_its_floor_is_a_contact() {
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        let tol = contact_tolerance(&cube, &cube);
+        let a = still(DVec3::ZERO);
+        for (start, dip) in [(0.0, 1.3), (0.3, 1.3), (0.72, 1.3), (0.9, 1.2), (1.5, 1.75)] {
+            let speed = 1e-3;
+            let pull = speed * speed / (2.0 * (dip - start) * tol);
+            let b = RigidMotion {
+                velocity: DVec3::new(-speed, 0.0, 0.0),
+                acceleration: DVec3::new(pull, 0.0, 0.0),
+                ..still(DVec3::new(1.0 - start * tol, 0.0, 0.0))
+            };
+            // Where contacts turn bodies back (simulate mode): a deep pair is no contact in progress.
+            let (search, _) = pair_first_start((&cube, &a), (&cube, &b), Window::new(0.0, 10.0), None, true).unwrap();
+            assert_eq!(search.found, Some(0.0), "touching {start} tolerances deep, dipping to {dip}");
+        }
     }
 
     /// A pair search skipped because the bounding spheres stay out of reach

@@ -7,6 +7,12 @@ use super::{ceiling, cleared, ending, guard, MARGIN, MAX_ITERATIONS, RESTING_BUD
 use crate::error::{Result, VadopError};
 use crate::window::Window;
 
+/// How much deeper than it is, in tolerances, a pair touching at its reference must at least go
+/// to count as approaching there: real progress, so that a pair a rule has just left that deep is
+/// not found approaching again at once, and small, so that a pair pressed deeper at each new
+/// reference sinks an eighth of a tolerance each time, not a whole one.
+const PROGRESS: f64 = 0.125;
+
 /// The iteration of one search: the reference, the scaled tolerance, the step count, and the
 /// times outside which the pair is more than `2 tol` apart (neither touching nor in contact).
 pub(super) struct Searcher<G> {
@@ -270,12 +276,16 @@ impl<G: Gauge> Searcher<G> {
     }
 
     /// Whether a pair touching at the reference (`p0`) is approaching. Decided by the motion
-    /// itself, whatever window asks: does it get `tol` deeper before it separates beyond `tol`?
+    /// itself, whatever window asks: does it get past the floor (`tol` deep, or [`PROGRESS`]
+    /// deeper than it is, whichever is deeper) before it separates beyond `tol`?
     pub(super) fn classify(&mut self, p0: Probe, deep_is_contact: bool) -> Result<AtReference> {
         if deep_is_contact && p0.upper < -self.tol {
             return Ok(AtReference::Inside);
         }
-        let floor = p0.upper.min(0.0) - self.tol;
+        // The floor is absolute down to `tol` so that new references (each velocity change of
+        // either body) cannot each let a pressed pair sink a tolerance deeper than the last; below
+        // it a pair must still go deeper than it is, or every reference would be a new contact.
+        let floor = (p0.lower - PROGRESS * self.tol).min(-self.tol);
         let (mut tau, mut p) = (0.0, p0);
         let budget = self.iterations + RESTING_BUDGET;
         loop {
@@ -297,8 +307,8 @@ impl<G: Gauge> Searcher<G> {
                 None => return Ok(AtReference::Resting),
             }
             if self.iterations >= budget {
-                // A pair that turns back stops where it was found touching, not up to `tol`
-                // deeper where the search gave up: stall after stall, it would sink that far each.
+                // A pair that turns back stops where it was found touching, not down to the floor
+                // where the search gave up: stall after stall, it would sink that far each.
                 let at = if deep_is_contact { tau } else { 0.0 };
                 return Err(self.stall(at, "resting or sliding in contact: neither deeper nor apart"));
             }
