@@ -130,12 +130,13 @@ pub(super) fn closer_points(
 }
 
 /// How tight a depth must be: EPA may stop once its bound is within `share` of the depth plus
-/// `tol` of the true one, or [`PROBE_RESOLUTION`] of `tol` within [`BAND`] tolerances of contact
-/// ([`EXACT_DEPTH`]: converged, to rounding, by parry).
+/// `tol` of the true one, or within `resolution` of it within [`BAND`] tolerances of contact
+/// ([`EXACT_DEPTH`], or a resolution of 0 there: converged, to rounding, by parry).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct DepthNeed {
     pub(super) share: f64,
     pub(super) tol: f64,
+    pub(super) resolution: f64,
 }
 
 /// The share of a depth a search's probes leave EPA (see [`DepthNeed`]): a step out of a deep
@@ -143,11 +144,12 @@ pub(super) struct DepthNeed {
 /// took 17 support points a call on mixed shapes (the CLI's crowd), about 5 at this share.
 pub(super) const PROBE_DEPTH_SHARE: f64 = 1.0 / 32.0;
 
-/// How close, in tolerances, a search's probe needs a shallow depth (within [`BAND`] tolerances
-/// of contact): well inside the half margin its bounds must decide within. parry's converged
-/// contact query there (GJK again, then EPA to rounding) took 70,000 instructions a call, 6 % of
-/// the peers' mixed shapes at 0.5 diameters a frame.
-const PROBE_RESOLUTION: f64 = MARGIN / 16.0;
+/// How far apart, in tolerances, a search's probe may leave its bounds on a distance or a shallow
+/// depth (within [`BAND`] tolerances of contact): well inside the half margin its bounds must
+/// decide within. Converged instead, parry's GJK refines a distance to 1.5e-8 of itself (3 % of
+/// the peers' mixed shapes, most of it GJK on rounded shapes), and parry's contact query for a
+/// shallow depth runs GJK again, then EPA to rounding (70,000 instructions a call, 6 %).
+pub(super) const PROBE_RESOLUTION: f64 = MARGIN / 16.0;
 
 /// The depth share of a measure that must be exact: EPA run to convergence (contact geometry).
 pub(super) const EXACT_DEPTH: f64 = 0.0;
@@ -195,6 +197,9 @@ pub(super) struct Need {
     /// Beyond [`ROUGH_FLOOR`] tolerances from contact, the share of the distance GJK's bounds may
     /// leave between them: 0 to converge.
     pub(super) gap_share: f64,
+    /// Nearer, how far apart (in tolerances) the bounds may lie: [`PROBE_RESOLUTION`] for a
+    /// search's probe, 0 to converge (a measure that is reported).
+    pub(super) resolution: f64,
     /// Where GJK starts: a unit axis from the first shape to the second (world frame), the last
     /// probe's on a chain; `None` to start from the line between the shapes' middles.
     pub(super) start: Option<DVec3>,
@@ -244,7 +249,13 @@ impl Simplex {
 impl Need {
     /// Converged bounds, with the depth to `depth`'s share, GJK started between the middles.
     pub(super) fn converged(depth: Option<f64>) -> Need {
-        Need { depth, gap_share: 0.0, start: None, simplex: None }
+        Need { depth, gap_share: 0.0, resolution: 0.0, start: None, simplex: None }
+    }
+
+    /// A search's probe: bounds to [`PROBE_RESOLUTION`], the depth to `depth`'s share, GJK
+    /// started between the middles.
+    pub(super) fn probe(depth: Option<f64>) -> Need {
+        Need { resolution: PROBE_RESOLUTION, ..Need::converged(depth) }
     }
 }
 
@@ -323,13 +334,17 @@ pub(super) fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) 
 pub(super) struct Rough {
     share: f64,
     floor: f64,
+    /// Nearer than `floor`, how far apart the bounds may lie: 0 to leave them to parry's
+    /// converged GJK.
+    resolution: f64,
 }
 
-/// GJK's iterations (the sets `a` and `b` at `pos12`, grown by `margins`) from `simplex`, while
-/// the grown sets lie more than `rough.floor` apart, until the separation along a direction it
-/// tried lies within `rough.share` of the distance of the simplex's nearest points, points of
-/// the two sets: those points then, `None` if that does not come within [`ROUGH_ITERATIONS`] (the
-/// simplex is then left for parry's converged GJK to go on from).
+/// GJK's iterations (the sets `a` and `b` at `pos12`, grown by `margins`) from `simplex`, until
+/// the separation along a direction it tried lies within `rough.share` of the distance of the
+/// simplex's nearest points (points of the two sets) where the grown sets lie more than
+/// `rough.floor` apart, or within `rough.resolution` of it: those points then, `None` if that
+/// does not come within [`ROUGH_ITERATIONS`] or the sets intersect (the simplex is then left for
+/// parry's converged GJK to go on from).
 fn rough_closest<A: SupportMap, B: SupportMap>(
     pos12: &Pose,
     (a, b): (&A, &B),
@@ -343,14 +358,15 @@ fn rough_closest<A: SupportMap, B: SupportMap>(
         // The point of the simplex nearest the origin: a - b for a point of each set.
         let nearest = simplex.project_origin_and_reduce();
         let upper = nearest.length();
-        if simplex.dimension() == 3 || upper - margin <= rough.floor {
+        if simplex.dimension() == 3 || !(upper > 0.0) || (upper - margin <= rough.floor && rough.resolution == 0.0) {
             return None;
         }
         // The sets lie at least this far apart along `dir`, by the difference's support point.
         let dir = -nearest / upper;
         let support = CsoPoint::from_shapes(pos12, a, b, dir);
         lower = lower.max(-dir.dot(support.point));
-        if lower - margin > rough.floor && upper - lower <= rough.share * (upper - margin) {
+        let far = lower - margin > rough.floor && upper - lower <= rough.share * (upper - margin);
+        if far || upper - lower <= rough.resolution {
             let (mut on_a, mut on_b) = (DVec3::ZERO, DVec3::ZERO);
             for i in 0..=simplex.dimension() {
                 let (weight, vertex) = (simplex.proj_coord(i), simplex.point(i));
@@ -404,18 +420,20 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     };
     let (mut result, simplex) = gjk_from(-toward, rough, seed);
     estimate.simplex = Some(Simplex::of(&simplex, &pos12));
-    // A probe's depth need only be as tight as asked: EPA from GJK's simplex, stopped early, deep
-    // inside each other at a share of the depth, within the band at a fixed share of `tol`.
+    // A depth need only be as tight as asked: EPA from GJK's simplex, stopped early, deep inside
+    // each other at a share of the depth, within the band at the resolution; a measure that asks
+    // for none there takes parry's converged one.
     let deep = |need: DepthNeed, simplex: &VoronoiSimplex| {
+        let shallow = |depth: f64| depth + margins.0 + margins.1 < BAND * need.tol;
         let allowance = |depth: f64| {
-            let depth = depth + margins.0 + margins.1;
-            if depth < BAND * need.tol {
-                PROBE_RESOLUTION * need.tol
+            if shallow(depth) && need.resolution > 0.0 {
+                need.resolution
             } else {
-                need.share * (depth + need.tol)
+                need.share * (depth + margins.0 + margins.1 + need.tol)
             }
         };
-        (need.share > 0.0).then(|| penetration(&pos12, a, b, simplex, allowance))?
+        let found = (need.share > 0.0).then(|| penetration(&pos12, a, b, simplex, allowance))??;
+        (need.resolution > 0.0 || !shallow(found.depth)).then_some(found)
     };
     let early = (result == GJKResult::Intersection).then(|| depth.and_then(|need| deep(need, &simplex))).flatten();
     // GJK's verdict is not reliable a hair from contact: ask again from the other side, unless
@@ -490,14 +508,19 @@ pub(super) fn convex_bounds(
     slack: f64,
 ) -> Bounds {
     let band = BAND * tol;
-    let depth = need.depth.map(|share| DepthNeed { share, tol });
+    let resolution = need.resolution * tol;
+    let depth = need.depth.map(|share| DepthNeed { share, tol, resolution });
     // The last probe's axis, or from the middle of a to the middle of b, in a's frame: where GJK
     // starts, and the axis to fall back on if it fails.
     let toward = match need.start {
         Some(axis) => pose_a.rotation.inverse() * axis,
         None => (pose_a.inv_mul(pose_b) * b.middle() - a.middle()).try_normalize().unwrap_or(DVec3::X),
     };
-    let rough = (need.gap_share > 0.0).then_some(Rough { share: need.gap_share, floor: ROUGH_FLOOR * tol });
+    let rough = (need.gap_share > 0.0 || resolution > 0.0).then_some(Rough {
+        share: need.gap_share,
+        floor: ROUGH_FLOOR * tol,
+        resolution,
+    });
     let (first, second) = match closed_form(a, pose_a, b, pose_b) {
         Some(exact) => (exact, None),
         None => {
@@ -520,7 +543,7 @@ pub(super) fn convex_bounds(
             // A lone measure (a contact's geometry, reported as measured) must converge as if
             // GJK had started afresh.
             let seed = grown.as_ref().map(|simplex| Seed { simplex, verify: need.simplex.is_none() });
-            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, None, seed)))
+            (cores, near.then(|| gjk_estimate((a, pose_a), (b, pose_b), (0.0, 0.0), toward, depth, rough, seed)))
         }
     };
     let estimates = || std::iter::once(&first).chain(&second);

@@ -140,10 +140,11 @@ impl MeshPair<'_> {
     /// Bounds on the signed distance of the body to the mesh (the smallest of the triangles'):
     /// the smallest lower bound of a triangle measured (parry's best-first search over the mesh's
     /// hierarchy, which skips boxes farther than the best so far, and [`Self::search`]'s skips),
-    /// and the smallest upper bound met on the way, with its triangle's axis and points.
-    pub(super) fn closest(&self, tau: f64, depth: Option<f64>) -> Option<Bounds> {
+    /// and the smallest upper bound met on the way, with its triangle's axis and points, each
+    /// triangle measured to `need`.
+    pub(super) fn closest(&self, tau: f64, need: Need) -> Option<Bounds> {
         let nearest: Cell<Option<Bounds>> = Cell::new(None);
-        let (_, lowest) = self.search(tau, depth, &nearest)?;
+        let (_, lowest) = self.search(tau, need, &nearest)?;
         let nearest = nearest.get().unwrap_or(lowest);
         Some(Bounds { lower: lowest.lower, ..nearest })
     }
@@ -154,7 +155,7 @@ impl MeshPair<'_> {
     /// the chain never measured it, by its plane's separation from the body, is skipped: it
     /// holds neither the smallest lower bound (that is at most the upper bound) nor would it
     /// lower the upper bound, and every lower bound measured stays below its distance.
-    pub(super) fn search(&self, tau: f64, depth: Option<f64>, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
+    pub(super) fn search(&self, tau: f64, need: Need, nearest: &Cell<Option<Bounds>>) -> Option<(u32, Bounds)> {
         let (centre, pose) = self.state(tau);
         let body = self.body.support(self.scale);
         let slack = SLACK * self.size;
@@ -176,9 +177,7 @@ impl MeshPair<'_> {
             let warm = before.and_then(|m| m.warm);
             let bounds = (warm
                 .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
-            .unwrap_or_else(|| {
-                convex_bounds(&support, &Pose::IDENTITY, &body, &pose, Need::converged(depth), self.tol, slack)
-            });
+            .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, need, self.tol, slack));
             let warm = Warm::new(&bounds, carry);
             next.borrow_mut().push(Measured { id, tau, rate, lower: bounds.lower, warm });
             if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
@@ -242,10 +241,11 @@ impl MeshPair<'_> {
 impl Gauge for MeshPair<'_> {
     fn probe(&self, tau: f64, measure: Measure) -> Probe {
         let rate = self.rate(tau);
-        let (lower, upper) = match self.closest(tau, (measure != Measure::Gap).then_some(PROBE_DEPTH_SHARE)) {
-            Some(b) => (b.lower, b.upper),
-            None => (f64::INFINITY, f64::INFINITY),
-        };
+        let (lower, upper) =
+            match self.closest(tau, Need::probe((measure != Measure::Gap).then_some(PROBE_DEPTH_SHARE))) {
+                Some(b) => (b.lower, b.upper),
+                None => (f64::INFINITY, f64::INFINITY),
+            };
         let bend = self.acceleration.length();
         Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0, bend }
     }
@@ -423,7 +423,7 @@ mod tests {
             for step in 0..30 {
                 let tau = 0.01 * step as f64;
                 let depth = (step % 2 == 0).then_some(PROBE_DEPTH_SHARE);
-                let Some(bounds) = pair.closest(tau, depth) else { continue };
+                let Some(bounds) = pair.closest(tau, Need::probe(depth)) else { continue };
                 probes += 1;
                 skipped += pair.measures.borrow().last.iter().filter(|m| m.tau < tau).count();
                 let (centre, pose) = pair.state(tau);

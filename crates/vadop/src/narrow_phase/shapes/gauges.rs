@@ -4,7 +4,9 @@
 //! never chooses the probe times (the searcher does).
 
 use super::chord::{axis_hold, chord_hold, Moving};
-use super::distance::{closer_points, convex_bounds, separation, Bounds, Need, Simplex, GAP_SHARE, PROBE_DEPTH_SHARE};
+use super::distance::{
+    closer_points, convex_bounds, separation, Bounds, Need, Simplex, GAP_SHARE, PROBE_DEPTH_SHARE, PROBE_RESOLUTION,
+};
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
@@ -569,6 +571,7 @@ impl Gauge for ConvexPair<'_> {
         let need = Need {
             depth: (!gap).then_some(PROBE_DEPTH_SHARE),
             gap_share: if gap { GAP_SHARE } else { 0.0 },
+            resolution: PROBE_RESOLUTION,
             start: warm.map(|warm| pose_a.rotation * warm.axis.0),
             simplex: warm.and_then(|warm| warm.simplex),
         };

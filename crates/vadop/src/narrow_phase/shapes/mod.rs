@@ -723,7 +723,7 @@ pub fn contact_geometry<S: Spin, T: Spin>(
             Some(ContactPoint { point, normal, distance: distance / pair.scale })
         }
         PairGauge::Mesh(pair, flipped) => {
-            let bounds = pair.closest(tau, Some(EXACT_DEPTH))?;
+            let bounds = pair.closest(tau, Need::converged(Some(EXACT_DEPTH)))?;
             let (_, pose) = pair.state(tau);
             let witness = bounds.witness.unwrap_or_else(|| {
                 // The body's extreme point towards the mesh, on both sides.
