@@ -269,13 +269,22 @@ pub(crate) fn touches_a_wall(bodies: &Bodies, i: usize, bounds: &BoxBounds, t: f
 /// How deep bodies `i` and `j` interpenetrate at `t` beyond the contact tolerance (touching is
 /// allowed), for the start-of-run check of simulate mode.
 pub(crate) fn penetration(bodies: &Bodies, i: usize, j: usize, t: f64) -> Option<f64> {
-    if bodies.are_spheres(i, j) {
+    let unbounded = |k: usize| bodies.geometry(k).is_some_and(|g| g.is_static_only());
+    if !unbounded(i) && !unbounded(j) {
+        // How deep the bounding spheres overlap (for spheres, the bodies themselves).
         let reach = bodies.radius(i) + bodies.radius(j);
         // Scaled so the square neither underflows nor overflows at any scale.
         let scale = unit_scale(reach);
         let distance = (bodies.offset_at(i, j, t) * scale).length() / scale;
         let depth = reach - distance;
-        return (depth > CONTACT_TOLERANCE * reach).then_some(depth);
+        if bodies.are_spheres(i, j) {
+            return (depth > CONTACT_TOLERANCE * reach).then_some(depth);
+        }
+        // Shapes apart within their bounding spheres: most neighbours of a sparse scene, spared
+        // the exact query below (converged GJK and EPA, 30,000 instructions a pair).
+        if !(depth > 0.0) {
+            return None;
+        }
     }
     let (a, b) = (i.min(j), i.max(j));
     let (ga, gb) = (bodies.geometry(a)?, bodies.geometry(b)?);
