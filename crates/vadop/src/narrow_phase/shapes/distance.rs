@@ -342,9 +342,10 @@ pub(super) struct Rough {
 /// GJK's iterations (the sets `a` and `b` at `pos12`, grown by `margins`) from `simplex`, until
 /// the separation along a direction it tried lies within `rough.share` of the distance of the
 /// simplex's nearest points (points of the two sets) where the grown sets lie more than
-/// `rough.floor` apart, or within `rough.resolution` of it: those points then, `None` if that
-/// does not come within [`ROUGH_ITERATIONS`] or the sets intersect (the simplex is then left for
-/// parry's converged GJK to go on from).
+/// `rough.floor` apart, or within `rough.resolution` of it: those points then; an intersection
+/// where the simplex comes to hold the origin inside (parry's GJK would project it again to say
+/// so); `None` if neither comes within [`ROUGH_ITERATIONS`] or the origin lies on the simplex's
+/// boundary (the simplex is then left for parry's converged GJK to go on from).
 fn rough_closest<A: SupportMap, B: SupportMap>(
     pos12: &Pose,
     (a, b): (&A, &B),
@@ -358,7 +359,12 @@ fn rough_closest<A: SupportMap, B: SupportMap>(
         // The point of the simplex nearest the origin: a - b for a point of each set.
         let nearest = simplex.project_origin_and_reduce();
         let upper = nearest.length();
-        if simplex.dimension() == 3 || !(upper > 0.0) || (upper - margin <= rough.floor && rough.resolution == 0.0) {
+        if simplex.dimension() == 3 {
+            // The origin lies inside the tetrahedron (its projection is the origin itself):
+            // parry's GJK, from this simplex, starts with the same projection and returns this.
+            return Some(GJKResult::Intersection);
+        }
+        if !(upper > 0.0) || (upper - margin <= rough.floor && rough.resolution == 0.0) {
             return None;
         }
         // The sets lie at least this far apart along `dir`, by the difference's support point.
