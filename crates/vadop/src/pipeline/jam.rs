@@ -12,6 +12,7 @@
 use crate::bodies::{Bodies, Rest};
 use crate::frame::{FrameStats, Physics};
 use crate::narrow_phase::contacts;
+use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
 use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
 use crate::response::rest;
 use crate::response::rules::ContactRules;
@@ -106,8 +107,12 @@ impl Cluster {
             let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
             mass += bodies.mass[m];
             momentum += bodies.mass[m] * bodies.velocity_at(m, t);
+            // Within a few of the body's own contact tolerances: a shape's is a thousand times a
+            // sphere's, and one touching a floor a shape's tolerance away, not counted as on it,
+            // kept its fall, touched the floor again at the same instant and jammed for ever.
+            let tolerance = if bodies.is_sphere(m) { CONTACT_TOLERANCE } else { SHAPE_CONTACT_TOLERANCE };
+            let slack = 4.0 * tolerance * rm;
             for axis in 0..3 {
-                let slack = 4.0 * CONTACT_TOLERANCE * rm;
                 touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
                 touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
             }
