@@ -42,12 +42,7 @@ fn resting(world: &World) -> usize {
 #[test]
 fn a_crowd_of_every_shape_settles_with_nothing_sinking() {
     for (seed, gravity) in [(3, DVec3::new(0.0, 0.0, -9.81)), (1, DVec3::new(0.0, -9.81, 0.0))] {
-        let mut world = crowd(120, seed).world(config(Method::Auto, gravity)).unwrap();
-        for frame in 0..150 {
-            world.step(DT).unwrap();
-            let (depth, what) = common::deepest_overlap(&world, common::Overlap::InTolerances);
-            assert!(depth <= 1.0, "seed {seed}, frame {frame}: {what} ({depth} contact tolerances)");
-        }
+        let (world, _) = settle_checking_overlaps(seed, gravity);
         // Balls may still roll on the floor; every other shape lies still.
         for (handle, body) in world.bodies().filter(|(_, b)| b.mass.is_finite()) {
             match body.shape {
@@ -59,6 +54,37 @@ fn a_crowd_of_every_shape_settles_with_nothing_sinking() {
                     assert!(body.velocity == DVec3::ZERO && body.angular_velocity == DVec3::ZERO, "{handle}: {body:?}");
                 }
             }
+        }
+    }
+}
+
+/// The crowd of `seed` under `gravity` stepped 150 frames, asserting at every frame end that
+/// nothing overlaps anything by more than its contact tolerance: the world, and the deepest
+/// overlap met (in contact tolerances).
+fn settle_checking_overlaps(seed: u64, gravity: DVec3) -> (World, f64) {
+    let mut world = crowd(120, seed).world(config(Method::Auto, gravity)).unwrap();
+    let mut deepest = 0.0f64;
+    for frame in 0..150 {
+        world.step(DT).unwrap();
+        let (depth, what) = common::deepest_overlap(&world, common::Overlap::InTolerances);
+        assert!(depth <= 1.0, "seed {seed}, frame {frame}: {what} ({depth} contact tolerances)");
+        deepest = deepest.max(depth);
+    }
+    (world, deepest)
+}
+
+/// The overlap check of the test above over seeds 1 to 20 under both gravities, each run's
+/// deepest overlap printed: the sweep that found a pressed pair sinking a tolerance per new
+/// reference (1.72 tolerances, seed 20 under gravity down y) and a shape jammed against the floor
+/// at one instant for ever (seed 18 under gravity down z, with 32 rough GJK iterations). About
+/// four minutes: `cargo test --release -p vadop --test rest_shapes -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn twenty_crowds_never_sink_past_the_contact_tolerance() {
+    for gravity in [DVec3::new(0.0, 0.0, -9.81), DVec3::new(0.0, -9.81, 0.0)] {
+        for seed in 1..=20 {
+            let (_, deepest) = settle_checking_overlaps(seed, gravity);
+            eprintln!("gravity {gravity}, seed {seed}: deepest overlap {deepest:.3} contact tolerances");
         }
     }
 }
