@@ -254,16 +254,35 @@ pub(crate) fn pressed_together(bodies: &Bodies, i: usize, j: usize, t: f64) -> b
 /// True when body `i` is within twice the contact tolerance of a wall of `bounds` at `t`: the
 /// jam rule's test for a search against the walls that could not decide.
 pub(crate) fn touches_a_wall(bodies: &Bodies, i: usize, bounds: &BoxBounds, t: f64) -> bool {
-    let Some(g) = bodies.geometry(i).filter(|_| !bodies.is_sphere(i)) else {
-        let (p, r) = (bodies.position_at(i, t), bodies.radius(i));
-        let slack = 2.0 * CONTACT_TOLERANCE * r;
-        let (min, max) = bounds.walls();
-        return (p - r - min).min_element() <= slack || (max - p - r).min_element() <= slack;
-    };
-    let (motion, tol) = (bodies.rigid_motion(i), SHAPE_CONTACT_TOLERANCE * g.size());
-    Wall::ALL.into_iter().filter(|wall| !bounds.periodic[wall.axis()]).any(|wall| {
-        wall_contact_geometry(g, &motion, wall, bounds.min, bounds.max, t).is_some_and(|c| c.distance <= 2.0 * tol)
-    })
+    walls_within(bodies, i, bounds, t, 2.0).iter().flatten().any(|&near| near)
+}
+
+/// The walls of `bounds` that body `i` lies within `tolerances` of its own contact tolerances of
+/// at `t`, as `[min side, max side]` per axis: a sphere by its centre and radius, a shape by its
+/// own extreme point toward the wall, since its bounding sphere may reach a wall the shape is far
+/// from (a cube's reaches 0.37 of its side further). The periodic axes have none.
+pub(crate) fn walls_within(bodies: &Bodies, i: usize, bounds: &BoxBounds, t: f64, tolerances: f64) -> [[bool; 3]; 2] {
+    let (p, r) = (bodies.position_at(i, t), bodies.radius(i));
+    let (min, max) = bounds.walls();
+    let shape = bodies.geometry(i).filter(|_| !bodies.is_sphere(i));
+    let tolerance = if shape.is_some() { SHAPE_CONTACT_TOLERANCE } else { CONTACT_TOLERANCE };
+    let slack = tolerances * tolerance * r;
+    let mut near = [[false; 3]; 2];
+    for axis in 0..3 {
+        near[0][axis] = p[axis] - r <= min[axis] + slack;
+        near[1][axis] = p[axis] + r >= max[axis] - slack;
+    }
+    if let Some(g) = shape {
+        let (motion, tol) = (bodies.rigid_motion(i), tolerance * g.size());
+        for wall in Wall::ALL {
+            let side = &mut near[wall.is_max() as usize][wall.axis()];
+            if *side {
+                let contact = wall_contact_geometry(g, &motion, wall, bounds.min, bounds.max, t);
+                *side = contact.is_some_and(|c| c.distance <= tolerances * tol);
+            }
+        }
+    }
+    near
 }
 
 /// How deep bodies `i` and `j` interpenetrate at `t` beyond the contact tolerance (touching is
@@ -408,5 +427,55 @@ pub(crate) fn clearance(bodies: &Bodies, i: usize, j: usize) -> f64 {
     match (bodies.geometry(i), bodies.geometry(j)) {
         (Some(gi), Some(gj)) if !bodies.are_spheres(i, j) => contact_tolerance(gi, gj),
         _ => CONTACT_TOLERANCE * (bodies.radius(i) + bodies.radius(j)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bodies::RigidState;
+    use crate::shape::Shape;
+    use crate::Mode;
+    use glam::DQuat;
+
+    /// Whether a cube of side 1 lying flat with its bottom face `height` above the floor of a box
+    /// counts as on the floor: the jam rule's wall test (four contact tolerances) and the stall's
+    /// (two).
+    fn cube_on_the_floor(height: f64) -> (bool, bool) {
+        let bounds = BoxBounds::cube(4.0).unwrap();
+        let mut bodies = Bodies::new(DVec3::new(0.0, 0.0, -9.81), bounds.periodic_part(), Mode::Simulate);
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        let radius = cube.bounding_radius().unwrap();
+        bodies.rigid.shapes.push(cube);
+        let body = RigidState {
+            shape: 0,
+            radius,
+            position: DVec3::new(2.0, 2.0, 0.5 + height),
+            orientation: DQuat::IDENTITY,
+            velocity: DVec3::ZERO,
+            angular_velocity: DVec3::ZERO,
+            mass: 1.0,
+            fixed: false,
+        };
+        bodies.put_rigid(0, body, 0.0);
+        let [min, max] = walls_within(&bodies, 0, &bounds, 0.0, 4.0);
+        assert_eq!((min[0], min[1], max), (false, false, [false; 3]), "only the floor is near");
+        (min[2], touches_a_wall(&bodies, 0, &bounds, 0.0))
+    }
+
+    /// A shape is near a wall by its own surface, within its own contact tolerance, not by its
+    /// bounding sphere: a cube a shape tolerance off the floor is on it (counted off it, it kept
+    /// its fall and touched the floor again at one instant for ever), one a tenth of its side off
+    /// is not, though its bounding sphere reaches the floor (a cluster frozen there would lie
+    /// still in mid-air).
+    #[test]
+    fn a_shape_is_near_a_wall_by_its_own_surface() {
+        let tol =
+            SHAPE_CONTACT_TOLERANCE * Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap().size();
+        assert_eq!(cube_on_the_floor(0.0), (true, true));
+        assert_eq!(cube_on_the_floor(tol), (true, true));
+        assert_eq!(cube_on_the_floor(3.0 * tol), (true, false));
+        assert_eq!(cube_on_the_floor(5.0 * tol), (false, false));
+        assert_eq!(cube_on_the_floor(0.1), (false, false));
     }
 }

@@ -12,11 +12,13 @@
 use crate::bodies::{Bodies, Rest};
 use crate::frame::{FrameStats, Physics};
 use crate::narrow_phase::contacts;
-use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
-use crate::narrow_phase::spheres::CONTACT_TOLERANCE;
 use crate::response::rest;
 use crate::response::rules::ContactRules;
 use glam::DVec3;
+
+/// A member within this many of its contact tolerances of a wall touches it: the cluster moves no
+/// further into it, and on a floor under gravity lies still.
+const WALL_TOLERANCES: f64 = 4.0;
 
 /// Scratch of the jam rule: the cluster being frozen, its members' marks, query results.
 #[derive(Debug, Default)]
@@ -101,20 +103,17 @@ impl Cluster {
         cluster.sort_unstable();
         let (mut mass, mut momentum) = (0.0, DVec3::ZERO);
         let (mut touches_min, mut touches_max) = ([false; 3], [false; 3]);
-        let (walls_min, walls_max) = physics.bounds.walls();
         for &m in &cluster {
             let m = m as usize;
-            let (pm, rm) = (bodies.position_at(m, t), bodies.radius(m));
             mass += bodies.mass[m];
             momentum += bodies.mass[m] * bodies.velocity_at(m, t);
             // Within a few of the body's own contact tolerances: a shape's is a thousand times a
             // sphere's, and one touching a floor a shape's tolerance away, not counted as on it,
             // kept its fall, touched the floor again at the same instant and jammed for ever.
-            let tolerance = if bodies.is_sphere(m) { CONTACT_TOLERANCE } else { SHAPE_CONTACT_TOLERANCE };
-            let slack = 4.0 * tolerance * rm;
+            let [near_min, near_max] = contacts::walls_within(bodies, m, &physics.bounds, t, WALL_TOLERANCES);
             for axis in 0..3 {
-                touches_min[axis] |= pm[axis] - rm <= walls_min[axis] + slack;
-                touches_max[axis] |= pm[axis] + rm >= walls_max[axis] - slack;
+                touches_min[axis] |= near_min[axis];
+                touches_max[axis] |= near_max[axis];
             }
         }
         // Under the rest rule a cluster held up by a floor or by a body lying still lies still.
