@@ -815,6 +815,27 @@ mod tests {
         }
     }
 
+    /// Two shapes frozen into one motion by the jam rule (one velocity, one gravity, no spin)
+    /// never start a contact, touching or not, and their search spends no probe: probes at the
+    /// reference too loose to say whether such a pair touched once let it start a contact at the
+    /// reference, which froze it into the same motion at the same instant, for ever.
+    #[test]
+    fn shapes_moving_as_one_never_start_a_contact() {
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        let tol = contact_tolerance(&cube, &cube);
+        let together = |x: f64| RigidMotion {
+            velocity: DVec3::new(0.3, -0.5, 0.2),
+            acceleration: DVec3::new(0.0, -9.81, 0.0),
+            ..still(DVec3::new(x, 0.0, 0.0))
+        };
+        for gap in [-0.5, 0.0, 0.5, 3.0] {
+            let (a, b) = (together(0.0), together(1.0 + gap * tol));
+            let mut searcher = pair_searcher((&cube, &a), (&cube, &b)).unwrap().unwrap();
+            assert_eq!(searcher.first_start_in(Window::new(0.0, 10.0), true).unwrap(), None, "{gap} tolerances apart");
+            assert_eq!(searcher.probes(), 0, "{gap} tolerances apart");
+        }
+    }
+
     /// A pair search skipped because the bounding spheres stay out of reach
     /// (`convex_pair_in_reach`) would have found nothing: the full search agrees on spinning
     /// solids near and far, straight and falling, and most pairs far apart are skipped.

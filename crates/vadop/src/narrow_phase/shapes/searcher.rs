@@ -319,6 +319,12 @@ impl<G: Gauge> Searcher<G> {
     /// The first contact start in `window`, as a time since the reference.
     pub(super) fn first_start_in(&mut self, window: Window, deep_is_contact: bool) -> Result<Option<f64>> {
         let Some(reach) = self.reach else { return Ok(None) };
+        // Not probed at all: probes at the reference with bounds too loose to say whether it
+        // touches there let such a pair, touching, start a contact at the reference, and the jam
+        // rule that froze it gave it the same motion again, at the same instant, for ever.
+        if self.gauge.moving_as_one() {
+            return Ok(self.done());
+        }
         if !(self.reference + reach.enter < window.end) {
             return Ok(None);
         }
