@@ -109,6 +109,7 @@ impl Seen<'_> {
         let mut search = Search {
             bodies: self.bodies,
             cells: self.cells,
+            lists: None,
             bounds: self.bounds,
             screen: self.screen,
             candidates: &mut worker.candidates,

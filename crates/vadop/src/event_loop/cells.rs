@@ -3,7 +3,9 @@
 //! centre next crosses into another.
 //!
 //! It owns the grid's sizing, the lists (one intrusive doubly linked list per cell through the
-//! bodies, so moving a body costs O(1) and nothing is allocated while stepping), a body's
+//! bodies, so moving a body costs O(1) and nothing is allocated while stepping; with neighbour
+//! lists, see [`super::lists`], a body is listed by its shell's centre instead, in cells wider
+//! by two shells, and has no crossings), a body's
 //! neighbourhood (the 27 cells around its own, or the 9 it has just come within reach of) with
 //! the whole sides that bring each neighbour cell's bodies to their nearest image across periodic
 //! faces, and the crossing times. Two bodies that touch are always in neighbouring cells, so a
@@ -97,15 +99,18 @@ impl Listing {
 type AxisSteps = ([(u32, f64); 3], usize);
 
 impl Cells {
-    /// An empty grid over `bounds` for bodies of at most `max_radius` and about `bodies` of them.
-    pub(super) fn new(bounds: &BoxBounds, max_radius: f64, bodies: usize) -> Cells {
+    /// An empty grid over `bounds` for bodies of at most `max_radius` and about `bodies` of them,
+    /// listed by their centres (`shell` 0), or by their shells' centres, each body's own centre
+    /// within `shell` of it (see [`super::lists`]): then the cells are as narrow as they may be,
+    /// since they serve only to build lists, and the fewer bodies around a body the fewer to look at.
+    pub(super) fn new(bounds: &BoxBounds, max_radius: f64, shell: f64, bodies: usize) -> Cells {
         let side = bounds.side();
         let reach = 2.0 * max_radius;
         let scale = bounds.min.abs().max(bounds.max.abs()).max_element() + side.max_element();
-        let narrowest = reach * (1.0 + WIDTH_SLACK) + ROUNDINGS * f64::EPSILON * scale;
+        let narrowest = (reach + 2.0 * shell) * (1.0 + WIDTH_SLACK) + ROUNDINGS * f64::EPSILON * scale;
         // Cells of about BODIES_PER_CELL bodies each, never narrower than the reach.
         let volume = side.x * side.y * side.z;
-        let spacing = (volume * BODIES_PER_CELL / bodies.max(1) as f64).cbrt();
+        let spacing = if shell > 0.0 { 0.0 } else { (volume * BODIES_PER_CELL / bodies.max(1) as f64).cbrt() };
         let mut width = spacing.max(narrowest);
         let cells_for = |width: f64| side.to_array().map(|s| ((s / width).floor().clamp(1.0, MAX_PER_AXIS)) as i64);
         // A few bodies in a huge box: wider cells than the spacing says, to bound the memory.

@@ -1,13 +1,17 @@
 //! The event loop of spheres in simulate mode, of the class of dedicated event-driven molecular
-//! dynamics (EDMD) codes: one scheduled event per body, cells with crossing events, an O(1)
-//! calendar, and no work at a frame's end for the bodies nothing touched.
+//! dynamics (EDMD) codes: one scheduled event per body, cells with crossing events or neighbour
+//! lists with shell exits, an O(1) calendar, and no work at a frame's end for the bodies nothing
+//! touched.
 //!
 //! It owns the scheduling of a world whose every body is a moving sphere, in simulate mode and
 //! without gravity: each body's earliest event alone (a contact, a wall contact, a crossing of a
 //! periodic face, or the crossing of its centre into another cell: [`cells`]) is kept in the
 //! calendar ([`calendar`]); a body whose motion changed is tested against the bodies of the 27
 //! cells around it ([`search`]), and a body crossing into a cell against the 9 that came within
-//! reach. A body whose scheduled contact was voided by its partner's velocity change (stamps, as
+//! reach. In a dense world the serial loop keeps neighbour lists instead ([`lists`], see
+//! [`LISTS_FROM_PACKING`]): a body whose motion changed is tested against its list, and the
+//! crossing of its centre out of its shell replaces the cell crossings: its list is built anew,
+//! and it is tested against the bodies new to it. A body whose scheduled contact was voided by its partner's velocity change (stamps, as
 //! in the event queue) is tested again when that contact surfaces. Each body's event is the
 //! earliest of those it may still have, so the calendar's earliest is the next event of the
 //! world: the events are handled in the order the frame pipeline's queue handles them, ties
@@ -31,6 +35,7 @@
 mod ahead;
 mod calendar;
 mod cells;
+mod lists;
 mod search;
 
 use crate::bodies::Bodies;
@@ -45,6 +50,7 @@ use crate::walls::BoxBounds;
 use ahead::{Marks, Pushed, Seen, Worked, Worker, CELLS_PER_EVENT, MIN_PER_WORKER, PER_WORKER};
 use calendar::{Calendar, Entry, Scheduled};
 use cells::{Cells, Crossing, NONE};
+use lists::Lists;
 use rayon::prelude::*;
 use search::{Candidate, Eligible, Near, Overlay, Search};
 use std::time::Instant;
@@ -63,6 +69,20 @@ const GROWTH: usize = 2;
 /// most events are cell crossings of bodies far apart in memory: 2 and 4 both cut the time per
 /// event by about a tenth, 1 by less.
 const PREFETCH_AHEAD: usize = 4;
+/// The serial loop keeps neighbour lists (see [`lists`]) in a world of at least this packing
+/// fraction, cells below it. Measured with callgrind on the periodic gas at n = 2e4 (instructions
+/// per pair collision, cells then lists): 13.5 k then 19.8 k at packing 0.2, 13.8 k then 15.0 k at
+/// 0.3, 14.9 k then 12.5 k at 0.4, 15.6 k then 11.6 k at 0.45. A list pays where the mean free
+/// path is short against a shell: a collision's two searches then read a third of the bodies the
+/// 27 cells hold. In a thinner gas a body leaves its shell several times between collisions, and
+/// each list built anew (a look at the 27 wider cells around it) costs more than the cell
+/// crossings it replaces and the shorter searches save.
+const LISTS_FROM_PACKING: f64 = 0.35;
+/// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
+/// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
+/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
+/// 0.25 is also the shell of Smallenburg's EDMD.
+const SHELL: f64 = 0.25;
 /// How many events pass between looks at the interrupt flag.
 const INTERRUPT_EVERY: u32 = 4096;
 
@@ -74,8 +94,10 @@ pub(crate) struct EventLoop {
     calendar: Calendar,
     /// Per body: its earliest eligible contact, wall contact or periodic crossing.
     next: Vec<Option<Event>>,
-    /// Per body: when its centre next leaves its cell.
+    /// Per body: when its centre next leaves its cell, or with lists its shell (the time alone).
     crossing: Vec<Crossing>,
+    /// The neighbour lists (see [`lists`]): the serial loop's, built with the grid.
+    lists: Option<Lists>,
     pub(crate) impacts: Impacts,
     cluster: Cluster,
     /// Scratch: the members of the cluster last frozen; a search's candidates.
@@ -96,9 +118,12 @@ pub(crate) struct EventLoop {
     workers: Vec<Worker>,
     batch: Vec<Entry>,
     marks: Marks,
-    /// Tests: every step ends checking the search's screen.
+    /// Tests: every step ends checking the search's screen, and the lists when kept.
     #[cfg(test)]
     checking: bool,
+    /// Tests: the serial loop keeps lists whatever the packing.
+    #[cfg(test)]
+    always_lists: bool,
     /// The grid and the calendar are rebuilt at the next step (bodies were entered that the grid
     /// does not fit, or none was entered yet).
     stale: bool,
@@ -120,6 +145,7 @@ impl EventLoop {
             calendar: Calendar::default(),
             next: Vec::new(),
             crossing: Vec::new(),
+            lists: None,
             impacts: Impacts::default(),
             cluster: Cluster::default(),
             members: Vec::new(),
@@ -135,6 +161,8 @@ impl EventLoop {
             marks: Marks::default(),
             #[cfg(test)]
             checking: false,
+            #[cfg(test)]
+            always_lists: false,
             stale: true,
         }
     }
@@ -163,6 +191,7 @@ impl EventLoop {
             + self.batch.capacity() * std::mem::size_of::<Entry>()
             + self.workers.iter().map(|w| w.worked.capacity() * std::mem::size_of::<Worked>()).sum::<usize>()
             + self.candidates.capacity() * std::mem::size_of::<Candidate>()
+            + self.lists.as_ref().map_or(0, Lists::memory_bytes)
     }
 
     /// Body `i` was added, or given a new motion between frames, at `t`.
@@ -185,6 +214,13 @@ impl EventLoop {
             self.grow(bodies.slots());
             self.cells.insert(bodies, i, t);
             self.listed += 1;
+            if let Some(lists) = &mut self.lists {
+                lists.rebuild(&self.cells, bodies, i, t);
+            }
+        } else if let Some(lists) = &mut self.lists {
+            // A new motion, maybe from a new place: a new shell.
+            self.cells.relist(bodies, i, t);
+            lists.rebuild(&self.cells, bodies, i, t);
         }
         self.predict(bodies, i, t, Eligible::From(t), stats);
     }
@@ -195,6 +231,9 @@ impl EventLoop {
             *held = false;
         }
         if self.cells.cell_of(i as usize) != NONE {
+            if let Some(lists) = &mut self.lists {
+                lists.remove(i as usize);
+            }
             self.cells.remove(i as usize);
             self.listed -= 1;
         }
@@ -207,6 +246,9 @@ impl EventLoop {
             self.next.resize(slots, None);
             self.crossing.resize(slots, Crossing::NEVER);
         }
+        if let Some(lists) = &mut self.lists {
+            lists.grow(slots);
+        }
     }
 
     /// Lists every body afresh in a grid sized for them and schedules each one's earliest
@@ -214,7 +256,9 @@ impl EventLoop {
     fn rebuild(&mut self, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
         let ids: Vec<u32> = self.bodies().collect();
         let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
-        self.cells = Cells::new(&self.bounds, max_radius, ids.len());
+        self.lists = self.keeps_lists(bodies, &ids).then(|| Lists::new(&self.bounds, 2.0 * SHELL * max_radius));
+        let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
+        self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
         self.next.clear();
         self.crossing.clear();
@@ -222,6 +266,9 @@ impl EventLoop {
         for &i in &ids {
             self.min_radius = self.min_radius.min(bodies.radius(i as usize));
             self.cells.insert(bodies, i as usize, t);
+        }
+        if let Some(lists) = &mut self.lists {
+            lists.build_all(&self.cells, bodies, &ids, t);
         }
         for &i in &ids {
             let mut search = self.search(bodies);
@@ -231,10 +278,33 @@ impl EventLoop {
         }
         stats.retests += ids.len() as u64;
         for &i in &ids {
-            self.crossing[i as usize] = self.cells.next_crossing(bodies, i as usize, t);
+            self.crossing[i as usize] = self.next_crossing(bodies, i as usize, t);
         }
         self.stale = false;
         self.retune(t);
+    }
+
+    /// True when the loop keeps neighbour lists for the bodies `ids`: serial, in a world packed
+    /// at least [`LISTS_FROM_PACKING`], and the bodies few enough to number in a list entry. The
+    /// parallel loop keeps cells: its workers' results are checked against the cells marked since
+    /// their batch began, and a list built anew changes the lists of the bodies around it.
+    fn keeps_lists(&self, bodies: &Bodies, ids: &[u32]) -> bool {
+        let side = self.bounds.side();
+        let volume: f64 =
+            ids.iter().map(|&i| 4.0 / 3.0 * std::f64::consts::PI * bodies.radius(i as usize).powi(3)).sum();
+        let packed = volume >= LISTS_FROM_PACKING * side.x * side.y * side.z;
+        #[cfg(test)]
+        let packed = packed || self.always_lists;
+        self.workers.is_empty() && packed && bodies.slots() <= lists::MAX_BODIES
+    }
+
+    /// When body `i`'s centre next leaves its cell, or with lists its shell, from `now` on.
+    #[inline]
+    fn next_crossing(&self, bodies: &Bodies, i: usize, now: f64) -> Crossing {
+        match &self.lists {
+            Some(lists) => Crossing { time: lists.exit(bodies, i, now), ..Crossing::NEVER },
+            None => self.cells.next_crossing(bodies, i, now),
+        }
     }
 
     /// Resets the calendar with buckets sized for the events now scheduled, and schedules them.
@@ -263,6 +333,7 @@ impl EventLoop {
         Search {
             bodies,
             cells: &self.cells,
+            lists: self.lists.as_ref(),
             bounds: &self.bounds,
             screen,
             candidates,
@@ -302,7 +373,7 @@ impl EventLoop {
         stats.retests += 1;
         self.next[i] = next;
         if let Eligible::From(_) = eligible {
-            self.crossing[i] = self.cells.next_crossing(bodies, i, now);
+            self.crossing[i] = self.next_crossing(bodies, i, now);
             self.marks.mark(self.cells.cell_of(i));
         }
         self.calendar.schedule(i as u32, self.scheduled(i));
@@ -344,6 +415,9 @@ impl EventLoop {
         #[cfg(test)]
         if self.checking {
             self.check_screen(bodies, t1);
+            if let Some(lists) = &self.lists {
+                lists.check(&self.cells, bodies, &self.bounds, t1);
+            }
         }
     }
 
@@ -365,7 +439,7 @@ impl EventLoop {
     #[inline]
     fn prefetch_cells(&self, entry: &Entry) {
         let owner = entry.owner as usize;
-        if self.cells.cell_of(owner) == NONE {
+        if self.lists.is_some() || self.cells.cell_of(owner) == NONE {
             return;
         }
         if entry.scheduled.cell_crossing {
@@ -389,6 +463,9 @@ impl EventLoop {
             prefetch(crossing);
             self.cells.prefetch(i);
             self.calendar.prefetch(i);
+            if let Some(lists) = &self.lists {
+                lists.prefetch(i);
+            }
         }
     }
 
@@ -396,7 +473,11 @@ impl EventLoop {
     fn dispatch(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, out: &mut Output) {
         let (owner, t) = (entry.owner as usize, entry.scheduled.time());
         if entry.scheduled.cell_crossing {
-            self.cross_cell(bodies, owner, t, out.stats);
+            if self.lists.is_some() {
+                self.exit_shell(bodies, owner, t, out.stats);
+            } else {
+                self.cross_cell(bodies, owner, t, out.stats);
+            }
         } else {
             self.handle(bodies, physics, owner, entry.scheduled.event, out);
         }
@@ -599,6 +680,23 @@ impl EventLoop {
         self.calendar.schedule(i as u32, self.scheduled(i));
     }
 
+    /// Body `i` leaves its shell at `t`: it is listed by its new shell's centre, and tested
+    /// against the bodies new to its list.
+    fn exit_shell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
+        let was_at_face = self.cells.at_face(self.cells.place(i).0);
+        self.cells.relist(bodies, i, t);
+        let lists = self.lists.as_mut().expect("a shell exit comes with the lists");
+        lists.rebuild(&self.cells, bodies, i, t);
+        self.crossing[i] = Crossing { time: lists.exit(bodies, i, t), ..Crossing::NEVER };
+        let entered_face = !was_at_face && self.cells.at_face(self.cells.place(i).0);
+        let before = self.next[i];
+        let mut search = self.search(bodies);
+        let next = search.after_shell_exit(i, t, before, entered_face);
+        stats.narrow_tests += search.tests;
+        self.next[i] = next;
+        self.calendar.schedule(i as u32, self.scheduled(i));
+    }
+
     /// The event `event`, scheduled by body `owner`: handled if its bodies' motions are those
     /// it was predicted from; otherwise `owner`'s events after it are found again.
     fn handle(&mut self, bodies: &mut Bodies, physics: &Physics, owner: usize, event: Event, out: &mut Output) {
@@ -616,6 +714,10 @@ impl EventLoop {
                 bodies.wrap(i, face, t);
                 self.marks.mark(self.cells.cell_of(i));
                 self.cells.relist(bodies, i, t);
+                if let Some(lists) = &mut self.lists {
+                    // Its shell's centre moves with it, whole sides away.
+                    lists.rebuild(&self.cells, bodies, i, t);
+                }
                 self.predict(bodies, i, t, Eligible::From(t), out.stats);
             }
             Partner::End(_) | Partner::Stalled(_) | Partner::WallStalled | Partner::Renew => {
@@ -697,9 +799,15 @@ impl Responder for EventLoop {
 
 #[cfg(test)]
 impl EventLoop {
-    /// From now on every step ends checking the search's screen (see [`Self::check_screen`]).
+    /// From now on every step ends checking the search's screen (see [`Self::check_screen`]) and
+    /// the lists when kept (see [`Lists::check`]).
     pub(crate) fn check_screen_each_step(&mut self) {
         self.checking = true;
+    }
+
+    /// The serial loop keeps lists whatever the packing (from the next rebuild of the grid).
+    pub(crate) fn keep_lists_always(&mut self) {
+        self.always_lists = true;
     }
 
     /// Every listed body's next event found again at `now`, with the screen and without it: the

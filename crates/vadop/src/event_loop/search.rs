@@ -1,5 +1,6 @@
-//! A body's next event in the event loop: its earliest contact with a body of its neighbourhood,
-//! with a wall, or its crossing of a periodic face.
+//! A body's next event in the event loop: its earliest contact with a body of its neighbourhood
+//! (the 27 cells around it, or its neighbour list: [`super::lists`]), with a wall, or its crossing
+//! of a periodic face.
 //!
 //! It owns two things. Which events a body may still be given ([`Eligible`]): every one from
 //! now on when its motion is new, or those after the one just handled when it is unchanged (a
@@ -14,6 +15,7 @@
 //! bits as every method's. It never schedules, handles an event or changes a body.
 
 use super::cells::{Cells, Crossing, Neighbour, NONE};
+use super::lists::{self, Lists, NO_SHIFT};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::memory::prefetch;
@@ -88,6 +90,8 @@ pub(super) fn earlier(a: &Event, b: &Event) -> bool {
 pub(super) struct Search<'a> {
     pub bodies: &'a Bodies,
     pub cells: &'a Cells,
+    /// The neighbour lists, when the loop keeps them: a body's neighbourhood is then its list.
+    pub lists: Option<&'a Lists>,
     pub bounds: &'a BoxBounds,
     pub screen: bool,
     /// The partners that passed the screen, waiting for their exact tests, and the cells they
@@ -199,6 +203,12 @@ impl<'a> Search<'a> {
         let (own, cells) = (self.own(p, now), self.cells);
         self.candidates.clear();
         self.near.cells = 0;
+        if let Some(lists) = self.lists {
+            self.gather_members(&own, lists, false);
+            self.screen_all(&own, &mut best);
+            self.test_candidates(&own, eligible, &mut best);
+            return best.event;
+        }
         match cells.inner_rows(p) {
             Some(rows) => {
                 // No cell across a face: one origin for all.
@@ -236,6 +246,31 @@ impl<'a> Search<'a> {
         self.candidates.clear();
         self.near.cells = 0;
         cells.for_each_new(into, crossing, |n| self.gather(&own, n));
+        self.screen_all(&own, &mut best);
+        self.test_candidates(&own, Eligible::From(now), &mut best);
+        best.event
+    }
+
+    /// Body `p`, whose list was just built anew at `now` (its motion unchanged): its earliest
+    /// contact with the bodies new to its list, or `best` when none is earlier; its own events
+    /// too when its cell came to a face of the box (`entered_face`). (A contact with a new member
+    /// cannot be at `now` itself: the two shells were out of reach, see [`super::lists`].)
+    #[inline]
+    pub(super) fn after_shell_exit(
+        &mut self,
+        p: usize,
+        now: f64,
+        best: Option<Event>,
+        entered_face: bool,
+    ) -> Option<Event> {
+        let lists = self.lists.expect("a shell exit comes with the lists");
+        let own = self.own(p, now);
+        let mut best = Best::new(best, now);
+        if entered_face {
+            self.offer_own(p, now, Eligible::From(now), &mut best);
+        }
+        self.candidates.clear();
+        self.gather_members(&own, lists, true);
         self.screen_all(&own, &mut best);
         self.test_candidates(&own, Eligible::From(now), &mut best);
         best.event
@@ -313,6 +348,30 @@ impl<'a> Search<'a> {
                 }
             }
             q = cells.after(q);
+        }
+    }
+
+    /// Lists the members of `own`'s list (only those [`Lists::fresh`] when `fresh`) in
+    /// `self.candidates`, to be screened, with the origins of their images, asking for their
+    /// records on the way (see [`Self::gather`]).
+    #[inline(always)]
+    fn gather_members(&mut self, own: &Own, lists: &Lists, fresh: bool) {
+        debug_assert_eq!(self.overlay.len, 0, "the parallel loop keeps no lists");
+        let states = &self.bodies.state[..];
+        (self.near.origins[NO_SHIFT], self.near.shifts[NO_SHIFT]) = (own.position, DVec3::ZERO);
+        let mut ready = 1u32 << NO_SHIFT;
+        for &entry in lists.members(own.p) {
+            let (q, image) = lists::split(entry);
+            if fresh && !lists.fresh(q) {
+                continue;
+            }
+            if ready & (1 << image) == 0 {
+                let shift = lists.images[image];
+                (self.near.origins[image], self.near.shifts[image]) = (own.position - shift, shift);
+                ready |= 1 << image;
+            }
+            prefetch(&states[q]);
+            self.candidates.push(Candidate { earliest: 0.0, q: q as u32, cell: image as u8 });
         }
     }
 

@@ -358,6 +358,29 @@ mod tests {
         world
     }
 
+    /// `world` stepped by the event loop `spheres`, on one thread.
+    fn serially_on(world: &mut World, spheres: EventLoop) {
+        let (bounds, workers) = (world.bounds, Workers::serial());
+        world.engine = Some(Box::new(SpheresFirst { spheres: Some(spheres), general: None, bounds, workers }));
+    }
+
+    /// Steps `found` and `expected` by `frames` frames of changing lengths, checking that they give
+    /// the same contacts and virial each frame and the same states at the end (case `k`); returns
+    /// how many contacts there were.
+    fn same_bits(found: &mut World, expected: &mut World, frames: usize, k: usize) -> usize {
+        let mut total = 0;
+        for frame in 0..frames {
+            let dt = [0.2, 1.0, 3.0][frame % 3] / FRAMES_PER_SECOND;
+            let contacts = expected.step(dt).unwrap().to_vec();
+            assert_eq!(found.step(dt).unwrap(), contacts, "case {k}, frame {frame}");
+            assert_eq!(found.stats().pair_virial.to_bits(), expected.stats().pair_virial.to_bits());
+            total += contacts.len();
+        }
+        let state = |w: &World| w.spheres().map(|(_, s)| format!("{s:?}")).collect::<Vec<_>>();
+        assert_eq!(state(found), state(expected), "case {k}: final states differ");
+        total
+    }
+
     /// The parallel event loop gives the serial loop's bits, contacts and states, frame after frame,
     /// in walled and periodic boxes, elastic and not, with frames of changing lengths.
     #[test]
@@ -368,17 +391,34 @@ mod tests {
             let scene = gas(1500, packing, periodic, k as u64);
             let config = WorldConfig { restitution, threads: Some(2), ..WorldConfig::default() };
             let (mut serial, mut parallel) = (on_workers(&scene, config, 1), on_workers(&scene, config, 2));
-            let mut total = 0;
-            for frame in 0..12 {
-                let dt = [0.2, 1.0, 3.0][frame % 3] / FRAMES_PER_SECOND;
-                let expected = serial.step(dt).unwrap().to_vec();
-                assert_eq!(parallel.step(dt).unwrap(), expected, "case {k}, frame {frame}");
-                assert_eq!(parallel.stats().pair_virial.to_bits(), serial.stats().pair_virial.to_bits());
-                total += expected.len();
-            }
-            let state = |w: &World| w.spheres().map(|(_, s)| format!("{s:?}")).collect::<Vec<_>>();
-            assert_eq!(state(&parallel), state(&serial), "case {k}: final states differ");
+            let total = same_bits(&mut parallel, &mut serial, 12, k);
             assert!(total > 2000, "case {k}: {total} contacts");
+        }
+    }
+
+    /// The serial loop with neighbour lists, kept whatever the packing, gives brute force's bits
+    /// (contacts, virial and states, frame after frame) and its lists stay complete: sparse and
+    /// dense gases in periodic, walled and mixed boxes, elastic and not, frames of changing
+    /// lengths, and a few bodies thirty times faster than the rest, which leave their shells and
+    /// cross periodic faces many times a frame.
+    #[test]
+    fn neighbour_lists_give_brute_force_s_bits() {
+        let cases =
+            [(0.05, [true; 3], 1.0), (0.2, [false; 3], 1.0), (0.45, [true; 3], 1.0), (0.35, [true, false, true], 0.6)];
+        for (k, (packing, periodic, restitution)) in cases.into_iter().enumerate() {
+            let mut scene = gas(600, packing, periodic, 20 + k as u64);
+            for sphere in scene.spheres.iter_mut().step_by(37) {
+                sphere.velocity *= 30.0;
+            }
+            let config = WorldConfig { restitution, threads: Some(1), ..WorldConfig::default() };
+            let mut listed = scene.world(config).unwrap();
+            let mut spheres = EventLoop::with_workers(&listed.bounds, 1);
+            spheres.keep_lists_always();
+            spheres.check_screen_each_step();
+            serially_on(&mut listed, spheres);
+            let mut oracle = scene.world(WorldConfig { method: Method::Brute, ..config }).unwrap();
+            let total = same_bits(&mut listed, &mut oracle, 10, k);
+            assert!(total > 300, "case {k}: {total} contacts");
         }
     }
 
@@ -393,12 +433,7 @@ mod tests {
             let mut world = on_workers(&scene, WorldConfig { threads: Some(1), ..WorldConfig::default() }, 1);
             let mut spheres = EventLoop::with_workers(&world.bounds, 1);
             spheres.check_screen_each_step();
-            world.engine = Some(Box::new(SpheresFirst {
-                spheres: Some(spheres),
-                general: None,
-                bounds: world.bounds,
-                workers: Workers::serial(),
-            }));
+            serially_on(&mut world, spheres);
             for _ in 0..6 {
                 assert!(!world.step(1.0 / FRAMES_PER_SECOND).unwrap().is_empty());
             }

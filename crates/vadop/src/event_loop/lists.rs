@@ -1,0 +1,341 @@
+//! The neighbour lists of the serial event loop (as in the "Single" variant of Smallenburg's
+//! EDMD): each body keeps the short list of the bodies around its shell, so a body whose motion
+//! changed is tested against its list instead of the 27 cells around it.
+//!
+//! It owns, per body, its shell (a ball of radius [`Lists::shell`] around the centre the body had
+//! when its list was built), the time its centre leaves the shell, and its list: every body whose
+//! shell comes within reach of its own, that is whose shell centre is within the sum of the two
+//! radii plus two shells (with a slack far above rounding), each with the whole sides that bring
+//! it next to the body across periodic faces. The lists are symmetric: a body is in the list of
+//! every body in its own, so a body that builds its list anew takes itself off the lists of its
+//! old members and onto those of its new ones. **Why a list never misses a partner:** while two
+//! bodies are inside their shells, their centres are within a shell of their shells' centres, so
+//! when they touch (centres a sum of radii apart) their shells' centres are at most two shells
+//! further apart, within the lists' reach: each is in the other's list. A body builds its list anew
+//! when its centre leaves its shell (its "shell exit", which the loop schedules as it schedules
+//! a cell crossing without lists), when it wraps across a periodic face, and when it is entered,
+//! so two bodies are always inside their shells up to the first of their shell exits, and a pair
+//! that touches is listed from before the instant it touches until after. The lists are found
+//! through the cells, whose bodies the loop then lists by their shells' centres (which move only
+//! when a list is built), so a shell exit replaces every cell crossing. The lists live in one flat
+//! array of fixed-size blocks (the count first, then the entries), grown (and every list built
+//! again from the shells' centres, which gives the same lists) on the rare list that outgrows its
+//! block, so nothing is allocated per event. It never computes a contact time nor changes a body.
+
+use super::cells::{Cells, NONE};
+use crate::bodies::Bodies;
+use crate::memory::prefetch;
+use crate::walls::BoxBounds;
+use glam::{DVec3, DVec4};
+
+/// The lists' reach is the sum of the radii plus two shells, times this plus this many roundings
+/// of the box's largest coordinate: above the rounding of a shell's centre and of a shell exit's
+/// time, and below the cells' own slack (see [`super::cells`]), so a body within the reach is
+/// always in a neighbour cell.
+const REACH_SLACK: f64 = 1e-7;
+const ROUNDINGS: f64 = 16.0;
+/// A list entry holds the body in its low bits and its image (see [`Lists::images`]) above them.
+const IMAGE_BITS: u32 = 27;
+const BODY_MASK: u32 = (1 << IMAGE_BITS) - 1;
+/// The image of a body not across any periodic face.
+pub(super) const NO_SHIFT: usize = 13;
+/// Entries per block a first sizing gives (the count takes one more): enough for the densest
+/// liquid at the widest shell measured (see [`super::SHELL`]).
+const FIRST_BLOCK: usize = 47;
+
+/// The most bodies (slots) the lists can number.
+pub(super) const MAX_BODIES: usize = BODY_MASK as usize;
+
+/// The neighbour lists (see the module documentation).
+#[derive(Debug)]
+pub(super) struct Lists {
+    /// How far a body's centre may go from its shell's centre.
+    pub shell: f64,
+    /// The absolute part of the reach's slack.
+    slack: f64,
+    /// Per image: the whole sides (-1, 0 or 1 of each) that bring a body next to another, as
+    /// `(x + 1) + 3 (y + 1) + 9 (z + 1)`.
+    pub images: [DVec3; 27],
+    /// Per body: its shell's centre, and its radius (read together when lists are built).
+    shells: Vec<DVec4>,
+    /// Per body, `stride` entries: the count, then the list.
+    blocks: Vec<u32>,
+    stride: usize,
+    /// Per body: the number of the last list built while it was in that body's list before
+    /// (see [`Lists::fresh`]).
+    seen: Vec<u32>,
+    built: u32,
+}
+
+impl Lists {
+    /// Lists in the box `bounds` with shells of `shell`.
+    pub(super) fn new(bounds: &BoxBounds, shell: f64) -> Lists {
+        let side = bounds.side();
+        let scale = bounds.min.abs().max(bounds.max.abs()).max_element() + side.max_element();
+        let images = std::array::from_fn(|k| {
+            let step = |a: usize| (k / [1, 3, 9][a] % 3) as f64 - 1.0;
+            DVec3::new(step(0) * side.x, step(1) * side.y, step(2) * side.z)
+        });
+        Lists {
+            shell,
+            slack: ROUNDINGS * f64::EPSILON * scale,
+            images,
+            shells: Vec::new(),
+            blocks: Vec::new(),
+            stride: FIRST_BLOCK + 1,
+            seen: Vec::new(),
+            built: 0,
+        }
+    }
+
+    /// Room for `slots` bodies.
+    pub(super) fn grow(&mut self, slots: usize) {
+        if self.shells.len() < slots {
+            self.shells.resize(slots, DVec4::ZERO);
+            self.seen.resize(slots, 0);
+            self.blocks.resize(slots * self.stride, 0);
+        }
+    }
+
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.shells.capacity() * 32 + self.blocks.capacity() * 4 + self.seen.capacity() * 4
+    }
+
+    /// Body `i`'s list: each entry the body in its low bits, its image above (see [`split`]).
+    #[inline(always)]
+    pub(super) fn members(&self, i: usize) -> &[u32] {
+        let block = &self.blocks[i * self.stride..(i + 1) * self.stride];
+        &block[1..1 + block[0] as usize]
+    }
+
+    /// Asks for body `i`'s shell and list ahead of their use.
+    #[inline]
+    pub(super) fn prefetch(&self, i: usize) {
+        if let (Some(shell), Some(count)) = (self.shells.get(i), self.blocks.get(i * self.stride)) {
+            prefetch(shell);
+            prefetch(count);
+        }
+    }
+
+    /// True when body `q` was not in the list of the body whose list was built last, before it
+    /// was built: the pair was not tested before.
+    #[inline(always)]
+    pub(super) fn fresh(&self, q: usize) -> bool {
+        self.seen[q] != self.built
+    }
+
+    /// When body `i`'s centre next leaves its shell on its current motion, from `now` on (`now`
+    /// when rounding put it a hair outside already).
+    #[inline]
+    pub(super) fn exit(&self, bodies: &Bodies, i: usize, now: f64) -> f64 {
+        let motion = bodies.motion(i);
+        let (offset, velocity) = (motion.position - self.shells[i].truncate(), motion.velocity);
+        let speed2 = velocity.length_squared();
+        if speed2 == 0.0 {
+            return f64::INFINITY;
+        }
+        // The later root of |offset + velocity s| = shell, in the form that cancels nothing.
+        let (b, c) = (offset.dot(velocity), offset.length_squared() - self.shell * self.shell);
+        let root = (b * b - speed2 * c).max(0.0).sqrt();
+        let s = if b > 0.0 { -c / (b + root) } else { (root - b) / speed2 };
+        let time = motion.since + s;
+        if time >= now {
+            time
+        } else {
+            now
+        }
+    }
+
+    /// True when body `q`, shifted by `shift`, is within the lists' reach of the shell `own`.
+    #[inline(always)]
+    fn within(&self, own: DVec4, q: usize, shift: DVec3) -> bool {
+        let other = self.shells[q];
+        let reach = (own.w + other.w + 2.0 * self.shell) * (1.0 + REACH_SLACK) + self.slack;
+        let (x, y, z) = (other.x + shift.x - own.x, other.y + shift.y - own.y, other.z + shift.z - own.z);
+        x * x + y * y + z * z < reach * reach
+    }
+
+    /// Body `i`'s shell: its centre at `t`, and its radius.
+    fn place(&mut self, bodies: &Bodies, i: usize, t: f64) {
+        self.shells[i] = bodies.position_at(i, t).extend(bodies.radius(i));
+    }
+
+    /// Lists the pairs of body `i` and the bodies of the cell whose first body is `first`, shifted
+    /// by `shift`, that are within reach: those of higher id only when `higher`. False when a
+    /// block overflowed.
+    #[inline(always)]
+    fn pair_with_cell(&mut self, cells: &Cells, i: usize, first: u32, shift: DVec3, higher: bool) -> bool {
+        let (own, image) = (self.shells[i], image_of(shift));
+        let mut fits = true;
+        let mut q = first;
+        while q != NONE {
+            let k = q as usize;
+            if (if higher { k > i } else { k != i }) && self.within(own, k, shift) {
+                fits &= self.push(i, q | (image << IMAGE_BITS));
+                fits &= self.push(k, i as u32 | ((26 - image) << IMAGE_BITS));
+            }
+            q = cells.after(q);
+        }
+        fits
+    }
+
+    /// Lists the pairs of body `i` and the bodies around it within reach (of higher id only when
+    /// `higher`); false when a block overflowed.
+    #[inline(always)]
+    fn pair_around(&mut self, cells: &Cells, i: usize, higher: bool) -> bool {
+        let mut fits = true;
+        match cells.inner_rows(i) {
+            // No cell across a face: no shift.
+            Some(rows) => {
+                for row in rows {
+                    for &first in row {
+                        fits &= self.pair_with_cell(cells, i, first, DVec3::ZERO, higher);
+                    }
+                }
+            }
+            None => cells
+                .for_each_around(i, |n| fits &= self.pair_with_cell(cells, i, cells.first(n.cell), n.shift, higher)),
+        }
+        fits
+    }
+
+    /// Appends `entry` to body `i`'s list; false when its block is full.
+    #[inline(always)]
+    fn push(&mut self, i: usize, entry: u32) -> bool {
+        let at = i * self.stride;
+        let count = self.blocks[at] as usize;
+        if count + 1 == self.stride {
+            return false;
+        }
+        self.blocks[at + 1 + count] = entry;
+        self.blocks[at] += 1;
+        true
+    }
+
+    /// Takes body `i` off body `q`'s list.
+    #[inline(always)]
+    fn take_off(&mut self, q: usize, i: usize) {
+        let at = q * self.stride;
+        let count = self.blocks[at] as usize;
+        let list = &mut self.blocks[at + 1..at + 1 + count];
+        if let Some(k) = list.iter().position(|&e| (e & BODY_MASK) as usize == i) {
+            list[k] = list[count - 1];
+            self.blocks[at] -= 1;
+        }
+    }
+
+    /// Body `i` leaves every list, its own emptied.
+    pub(super) fn remove(&mut self, i: usize) {
+        let at = i * self.stride;
+        for k in 0..self.blocks[at] as usize {
+            let q = (self.blocks[at + 1 + k] & BODY_MASK) as usize;
+            self.take_off(q, i);
+        }
+        self.blocks[at] = 0;
+    }
+
+    /// Body `i`'s list built anew around its centre at `t`, which `cells` list it by: it leaves
+    /// its old members' lists (remembered, see [`Self::fresh`]) and joins its new ones'.
+    pub(super) fn rebuild(&mut self, cells: &Cells, bodies: &Bodies, i: usize, t: f64) {
+        self.built = self.built.wrapping_add(1);
+        if self.built == 0 {
+            // Once in 2^32 lists: no body may look seen by a list of long ago.
+            self.seen.fill(0);
+            self.built = 1;
+        }
+        let at = i * self.stride;
+        for k in 0..self.blocks[at] as usize {
+            let q = (self.blocks[at + 1 + k] & BODY_MASK) as usize;
+            self.seen[q] = self.built;
+            self.take_off(q, i);
+        }
+        self.blocks[at] = 0;
+        self.place(bodies, i, t);
+        if !self.pair_around(cells, i, false) {
+            self.widen(cells);
+        }
+    }
+
+    /// Every list built from the shells' centres, the bodies of `ids` with their centres at `t`
+    /// (listed by `cells` there).
+    pub(super) fn build_all(&mut self, cells: &Cells, bodies: &Bodies, ids: &[u32], t: f64) {
+        for &i in ids {
+            self.place(bodies, i as usize, t);
+        }
+        self.relist_all(cells);
+    }
+
+    /// Every list built again from the shells' centres.
+    fn relist_all(&mut self, cells: &Cells) {
+        let mut fits = true;
+        for i in 0..self.shells.len() {
+            self.blocks[i * self.stride] = 0;
+        }
+        for i in 0..self.shells.len() {
+            // Each pair once, from its lower id: both lists get it.
+            if cells.cell_of(i) != NONE {
+                fits &= self.pair_around(cells, i, true);
+            }
+        }
+        if !fits {
+            self.widen(cells);
+        }
+    }
+
+    /// Blocks twice as long, and every list built again (the same lists: they depend on the
+    /// shells' centres alone).
+    #[cold]
+    fn widen(&mut self, cells: &Cells) {
+        self.stride = 2 * self.stride - 1;
+        self.blocks = vec![0; self.shells.len() * self.stride];
+        self.relist_all(cells);
+    }
+}
+
+/// A list entry's body and image.
+#[inline(always)]
+pub(super) fn split(entry: u32) -> (usize, usize) {
+    ((entry & BODY_MASK) as usize, (entry >> IMAGE_BITS) as usize)
+}
+
+/// The image of a neighbour cell's `shift`: -1, 0 or 1 side on each axis.
+#[inline(always)]
+fn image_of(shift: DVec3) -> u32 {
+    let step = |s: f64| {
+        if s > 0.0 {
+            2
+        } else if s < 0.0 {
+            0
+        } else {
+            1
+        }
+    };
+    step(shift.x) + 3 * step(shift.y) + 9 * step(shift.z)
+}
+
+#[cfg(test)]
+impl Lists {
+    /// Checks at `now` that every body listed in `cells` is inside its shell, and that its list
+    /// holds exactly the bodies (and images across the periodic faces of `bounds`) within reach.
+    pub(super) fn check(&self, cells: &Cells, bodies: &Bodies, bounds: &BoxBounds, now: f64) {
+        let listed: Vec<usize> = (0..self.shells.len()).filter(|&i| cells.cell_of(i) != NONE).collect();
+        let real = |image: usize| (0..3).all(|a| bounds.periodic[a] || image / [1, 3, 9][a] % 3 == 1);
+        for &i in &listed {
+            let away = (bodies.position_at(i, now) - self.shells[i].truncate()).length();
+            assert!(away <= self.shell * (1.0 + 1e-9), "body {i} is {away} from its shell's centre");
+            let mut expected: Vec<u32> = Vec::new();
+            for &q in listed.iter().filter(|&&q| q != i) {
+                for image in (0..27).filter(|&image| real(image)) {
+                    if self.within(self.shells[i], q, self.images[image]) {
+                        expected.push(q as u32 | ((image as u32) << IMAGE_BITS));
+                    }
+                }
+            }
+            let mut found = self.members(i).to_vec();
+            found.sort_unstable();
+            expected.sort_unstable();
+            assert_eq!(found, expected, "body {i}'s list at {now}");
+        }
+    }
+}
