@@ -399,7 +399,7 @@ impl Cells {
     /// gravity: the event loop takes none), from `now` on. The outer faces of the outermost
     /// cells are never crossed: walls turn the body back first, and a periodic face is the
     /// body's wrap, an event of its own.
-    #[inline]
+    #[inline(always)]
     pub(super) fn next_crossing(&self, bodies: &Bodies, i: usize, now: f64) -> Crossing {
         self.next_crossing_from(&bodies.motion(i), self.listing[i].at, now)
     }

@@ -147,12 +147,19 @@ impl Lists {
         }
     }
 
-    /// True when body `q`, shifted by `shift`, is within the lists' reach of the shell `own`.
+    /// The shell `own` as its partners across `shift` are measured from: its centre less the
+    /// shift, and its radius plus two shells.
     #[inline(always)]
-    fn within(&self, own: DVec4, q: usize, shift: DVec3) -> bool {
+    fn origin(&self, own: DVec4, shift: DVec3) -> DVec4 {
+        (own.truncate() - shift).extend(own.w + 2.0 * self.shell)
+    }
+
+    /// True when body `q` is within the lists' reach of the shell whose [`Self::origin`] is `origin`.
+    #[inline(always)]
+    fn within(&self, origin: DVec4, q: usize) -> bool {
         let other = self.shells[q];
-        let reach = (own.w + other.w + 2.0 * self.shell) * (1.0 + REACH_SLACK) + self.slack;
-        let (x, y, z) = (other.x + shift.x - own.x, other.y + shift.y - own.y, other.z + shift.z - own.z);
+        let reach = (origin.w + other.w) * (1.0 + REACH_SLACK) + self.slack;
+        let (x, y, z) = (other.x - origin.x, other.y - origin.y, other.z - origin.z);
         x * x + y * y + z * z < reach * reach
     }
 
@@ -166,12 +173,15 @@ impl Lists {
     /// block overflowed.
     #[inline(always)]
     fn pair_with_cell(&mut self, cells: &Cells, i: usize, first: u32, shift: DVec3, higher: bool) -> bool {
-        let (own, image) = (self.shells[i], image_of(shift));
+        if first == NONE {
+            return true;
+        }
+        let (origin, image) = (self.origin(self.shells[i], shift), image_of(shift));
         let mut fits = true;
         let mut q = first;
         while q != NONE {
             let k = q as usize;
-            if (if higher { k > i } else { k != i }) && self.within(own, k, shift) {
+            if (if higher { k > i } else { k != i }) && self.within(origin, k) {
                 fits &= self.push(i, q | (image << IMAGE_BITS));
                 fits &= self.push(k, i as u32 | ((26 - image) << IMAGE_BITS));
             }
@@ -327,7 +337,7 @@ impl Lists {
             let mut expected: Vec<u32> = Vec::new();
             for &q in listed.iter().filter(|&&q| q != i) {
                 for image in (0..27).filter(|&image| real(image)) {
-                    if self.within(self.shells[i], q, self.images[image]) {
+                    if self.within(self.origin(self.shells[i], self.images[image]), q) {
                         expected.push(q as u32 | ((image as u32) << IMAGE_BITS));
                     }
                 }

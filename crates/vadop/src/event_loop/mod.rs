@@ -71,13 +71,14 @@ const GROWTH: usize = 2;
 const PREFETCH_AHEAD: usize = 4;
 /// The serial loop keeps neighbour lists (see [`lists`]) in a world of at least this packing
 /// fraction, cells below it. Measured with callgrind on the periodic gas at n = 2e4 (instructions
-/// per pair collision, cells then lists): 13.5 k then 19.8 k at packing 0.2, 13.8 k then 15.0 k at
-/// 0.3, 14.9 k then 12.5 k at 0.4, 15.6 k then 11.6 k at 0.45. A list pays where the mean free
-/// path is short against a shell: a collision's two searches then read a third of the bodies the
-/// 27 cells hold. In a thinner gas a body leaves its shell several times between collisions, and
-/// each list built anew (a look at the 27 wider cells around it) costs more than the cell
+/// per pair collision, cells then lists): 13.5 k then 19.2 k at packing 0.2, 13.8 k then 14.6 k at
+/// 0.3, 13.9 k then 13.4 k at 0.35, 14.9 k then 12.4 k at 0.4, 15.6 k then 11.5 k at 0.45: even
+/// at about 0.33. A list pays where the mean free path is short against a shell: a collision's
+/// two searches then read fewer bodies than the 27 cells hold, and a body seldom leaves its shell.
+/// In a thinner gas a body leaves its shell several times between collisions, and each list
+/// built anew (a look at the 27 cells, wider by two shells, around it) costs more than the cell
 /// crossings it replaces and the shorter searches save.
-const LISTS_FROM_PACKING: f64 = 0.35;
+const LISTS_FROM_PACKING: f64 = 0.33;
 /// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
 /// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
 /// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
