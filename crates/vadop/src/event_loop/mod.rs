@@ -82,7 +82,9 @@ const LISTS_FROM_PACKING: f64 = 0.33;
 /// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
 /// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
 /// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
-/// 0.25 is also the shell of Smallenburg's EDMD.
+/// 0.25 is also the shell of Smallenburg's EDMD. At most 0.8: a periodic side holds 8 diameters
+/// (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so cells a diameter and two shells wide still
+/// number 3 to a periodic side, as the cells need.
 const SHELL: f64 = 0.25;
 /// How many events pass between looks at the interrupt flag.
 const INTERRUPT_EVERY: u32 = 4096;
