@@ -39,9 +39,10 @@ const IMAGE_BITS: u32 = 27;
 const BODY_MASK: u32 = (1 << IMAGE_BITS) - 1;
 /// The image of a body not across any periodic face.
 pub(super) const NO_SHIFT: usize = 13;
-/// Entries per block a first sizing gives (the count takes one more): enough for the densest
-/// liquid at the widest shell measured (see [`super::SHELL`]).
-const FIRST_BLOCK: usize = 47;
+/// Entries per block a first sizing gives (the count takes one more, so a block is two cache
+/// lines): no list outgrew it in the gas at n = 2e4 and packing 0.4 or 0.45 (see [`super::SHELL`]);
+/// a denser world widens the blocks once.
+pub(super) const FIRST_BLOCK: usize = 31;
 
 /// The most bodies (slots) the lists can number.
 pub(super) const MAX_BODIES: usize = BODY_MASK as usize;
@@ -68,8 +69,8 @@ pub(super) struct Lists {
 }
 
 impl Lists {
-    /// Lists in the box `bounds` with shells of `shell`.
-    pub(super) fn new(bounds: &BoxBounds, shell: f64) -> Lists {
+    /// Lists in the box `bounds` with shells of `shell`, blocks of `block` entries at first.
+    pub(super) fn new(bounds: &BoxBounds, shell: f64, block: usize) -> Lists {
         let side = bounds.side();
         let scale = bounds.min.abs().max(bounds.max.abs()).max_element() + side.max_element();
         let images = std::array::from_fn(|k| {
@@ -82,7 +83,7 @@ impl Lists {
             images,
             shells: Vec::new(),
             blocks: Vec::new(),
-            stride: FIRST_BLOCK + 1,
+            stride: block + 1,
             seen: Vec::new(),
             built: 0,
         }

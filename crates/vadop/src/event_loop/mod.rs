@@ -124,9 +124,10 @@ pub(crate) struct EventLoop {
     /// Tests: every step ends checking the search's screen, and the lists when kept.
     #[cfg(test)]
     checking: bool,
-    /// Tests: the serial loop keeps lists whatever the packing.
+    /// Tests: the serial loop keeps lists whatever the packing, with blocks of this many entries
+    /// at first.
     #[cfg(test)]
-    always_lists: bool,
+    always_lists: Option<usize>,
     /// The grid and the calendar are rebuilt at the next step (bodies were entered that the grid
     /// does not fit, or none was entered yet).
     stale: bool,
@@ -165,7 +166,7 @@ impl EventLoop {
             #[cfg(test)]
             checking: false,
             #[cfg(test)]
-            always_lists: false,
+            always_lists: None,
             stale: true,
         }
     }
@@ -259,7 +260,11 @@ impl EventLoop {
     fn rebuild(&mut self, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
         let ids: Vec<u32> = self.bodies().collect();
         let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
-        self.lists = self.keeps_lists(bodies, &ids).then(|| Lists::new(&self.bounds, 2.0 * SHELL * max_radius));
+        #[cfg(not(test))]
+        let block = lists::FIRST_BLOCK;
+        #[cfg(test)]
+        let block = self.always_lists.unwrap_or(lists::FIRST_BLOCK);
+        self.lists = self.keeps_lists(bodies, &ids).then(|| Lists::new(&self.bounds, 2.0 * SHELL * max_radius, block));
         let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
         self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
@@ -297,7 +302,7 @@ impl EventLoop {
             ids.iter().map(|&i| 4.0 / 3.0 * std::f64::consts::PI * bodies.radius(i as usize).powi(3)).sum();
         let packed = volume >= LISTS_FROM_PACKING * side.x * side.y * side.z;
         #[cfg(test)]
-        let packed = packed || self.always_lists;
+        let packed = packed || self.always_lists.is_some();
         self.workers.is_empty() && packed && bodies.slots() <= lists::MAX_BODIES
     }
 
@@ -808,9 +813,10 @@ impl EventLoop {
         self.checking = true;
     }
 
-    /// The serial loop keeps lists whatever the packing (from the next rebuild of the grid).
-    pub(crate) fn keep_lists_always(&mut self) {
-        self.always_lists = true;
+    /// The serial loop keeps lists whatever the packing (from the next rebuild of the grid), with
+    /// blocks of `block` entries at first.
+    pub(crate) fn keep_lists_always(&mut self, block: usize) {
+        self.always_lists = Some(block);
     }
 
     /// Every listed body's next event found again at `now`, with the screen and without it: the
