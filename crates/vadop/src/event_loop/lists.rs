@@ -155,7 +155,8 @@ impl Lists {
         (own.truncate() - shift).extend(own.w + 2.0 * self.shell)
     }
 
-    /// True when body `q` is within the lists' reach of the shell whose [`Self::origin`] is `origin`.
+    /// True when body `q` is within the lists' reach of the shell whose [`Self::origin`] (for
+    /// `q`'s image) is `origin`.
     #[inline(always)]
     fn within(&self, origin: DVec4, q: usize) -> bool {
         let other = self.shells[q];

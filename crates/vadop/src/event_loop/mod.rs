@@ -11,8 +11,9 @@
 //! reach. In a dense world the serial loop keeps neighbour lists instead ([`lists`], see
 //! [`LISTS_FROM_PACKING`]): a body whose motion changed is tested against its list, and the
 //! crossing of its centre out of its shell replaces the cell crossings: its list is built anew,
-//! and it is tested against the bodies new to it. A body whose scheduled contact was voided by its partner's velocity change (stamps, as
-//! in the event queue) is tested again when that contact surfaces. Each body's event is the
+//! and it is tested against the bodies new to it. A body whose scheduled contact was voided by
+//! its partner's velocity change (stamps, as in the event queue) is tested again when that
+//! contact surfaces. Each body's event is the
 //! earliest of those it may still have, so the calendar's earliest is the next event of the
 //! world: the events are handled in the order the frame pipeline's queue handles them, ties
 //! included. The contact times, the impacts, the contact rules (the TC model and the jam rule,
