@@ -2,9 +2,10 @@
 //! EDMD): each body keeps the short list of the bodies around its shell, so a body whose motion
 //! changed is tested against its list instead of the 27 cells around it.
 //!
-//! It owns, per body, its shell (a ball of radius [`Lists::shell`] around the centre the body had
-//! when its list was built), the time its centre leaves the shell, and its list: every body whose
-//! shell comes within reach of its own, that is whose shell centre is within the sum of the two
+//! It owns when lists pay (in a dense world: [`FROM_PACKING`]) and how wide a shell is, and, per
+//! body, its shell (a ball of radius [`Lists::shell`] around the centre the body had when its list
+//! was built), the time its centre leaves the shell, and its list: every body whose shell comes
+//! within reach of its own, that is whose shell centre is within the sum of the two
 //! radii plus two shells (with a slack far above rounding), each with the whole sides that bring
 //! it next to the body across periodic faces. The lists are symmetric: a body is in the list of
 //! every body in its own, so a body that builds its list anew takes itself off the lists of its
@@ -40,12 +41,30 @@ const BODY_MASK: u32 = (1 << IMAGE_BITS) - 1;
 /// The image of a body not across any periodic face.
 pub(super) const NO_SHIFT: usize = 13;
 /// Entries per block a first sizing gives (the count takes one more, so a block is two cache
-/// lines): no list outgrew it in the gas at n = 2e4 and packing 0.4 or 0.45 (see [`super::SHELL`]);
+/// lines): no list outgrew it in the gas at n = 2e4 and packing 0.4 or 0.45 (see [`SHELL`]);
 /// a denser world widens the blocks once.
-pub(super) const FIRST_BLOCK: usize = 31;
+const FIRST_BLOCK: usize = 31;
 
 /// The most bodies (slots) the lists can number.
-pub(super) const MAX_BODIES: usize = BODY_MASK as usize;
+const MAX_BODIES: usize = BODY_MASK as usize;
+
+/// The serial loop keeps neighbour lists in a world of at least this packing fraction, cells below
+/// it. Measured with callgrind on the periodic gas at n = 2e4 (instructions per pair collision,
+/// cells then lists): 13.5 k then 19.2 k at packing 0.2, 13.8 k then 14.6 k at 0.3, 13.9 k then
+/// 13.4 k at 0.35, 14.9 k then 12.4 k at 0.4, 15.6 k then 11.5 k at 0.45: even at about 0.33. A
+/// list pays where the mean free path is short against a shell: a collision's two searches then
+/// read fewer bodies than the 27 cells hold, and a body seldom leaves its shell. In a thinner gas
+/// a body leaves its shell several times between collisions, and each list built anew (a look at
+/// the 27 cells, wider by two shells, around it) costs more than the cell crossings it replaces
+/// and the shorter searches save.
+const FROM_PACKING: f64 = 0.33;
+/// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
+/// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
+/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
+/// 0.25 is also the shell of Smallenburg's EDMD. At most 0.8: a periodic side holds 8 diameters
+/// (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so cells a diameter and two shells wide still
+/// number 3 to a periodic side, as the cells need.
+const SHELL: f64 = 0.25;
 
 /// The neighbour lists (see the module documentation).
 #[derive(Debug)]
@@ -69,8 +88,21 @@ pub(super) struct Lists {
 }
 
 impl Lists {
+    /// Lists for the bodies `ids` in the box `bounds` when they pay, in a world packed at least
+    /// [`FROM_PACKING`] (or `always`, with blocks of that many entries at first), and when the
+    /// bodies are few enough to number in an entry; shells of [`SHELL`] largest diameters.
+    pub(super) fn paying(bounds: &BoxBounds, bodies: &Bodies, ids: &[u32], always: Option<usize>) -> Option<Lists> {
+        let side = bounds.side();
+        let volume: f64 =
+            ids.iter().map(|&i| 4.0 / 3.0 * std::f64::consts::PI * bodies.radius(i as usize).powi(3)).sum();
+        let packed = volume >= FROM_PACKING * side.x * side.y * side.z || always.is_some();
+        let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
+        let shell = 2.0 * SHELL * max_radius;
+        (packed && bodies.slots() <= MAX_BODIES).then(|| Lists::new(bounds, shell, always.unwrap_or(FIRST_BLOCK)))
+    }
+
     /// Lists in the box `bounds` with shells of `shell`, blocks of `block` entries at first.
-    pub(super) fn new(bounds: &BoxBounds, shell: f64, block: usize) -> Lists {
+    fn new(bounds: &BoxBounds, shell: f64, block: usize) -> Lists {
         let side = bounds.side();
         let scale = bounds.min.abs().max(bounds.max.abs()).max_element() + side.max_element();
         let images = std::array::from_fn(|k| {

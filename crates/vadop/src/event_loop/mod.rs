@@ -9,7 +9,7 @@
 //! calendar ([`calendar`]); a body whose motion changed is tested against the bodies of the 27
 //! cells around it ([`search`]), and a body crossing into a cell against the 9 that came within
 //! reach. In a dense world the serial loop keeps neighbour lists instead ([`lists`], see
-//! [`LISTS_FROM_PACKING`]): a body whose motion changed is tested against its list, and the
+//! [`Lists::paying`]): a body whose motion changed is tested against its list, and the
 //! crossing of its centre out of its shell replaces the cell crossings: its list is built anew,
 //! and it is tested against the bodies new to it. A body whose scheduled contact was voided by
 //! its partner's velocity change (stamps, as in the event queue) is tested again when that
@@ -70,23 +70,6 @@ const GROWTH: usize = 2;
 /// most events are cell crossings of bodies far apart in memory: 2 and 4 both cut the time per
 /// event by about a tenth, 1 by less.
 const PREFETCH_AHEAD: usize = 4;
-/// The serial loop keeps neighbour lists (see [`lists`]) in a world of at least this packing
-/// fraction, cells below it. Measured with callgrind on the periodic gas at n = 2e4 (instructions
-/// per pair collision, cells then lists): 13.5 k then 19.2 k at packing 0.2, 13.8 k then 14.6 k at
-/// 0.3, 13.9 k then 13.4 k at 0.35, 14.9 k then 12.4 k at 0.4, 15.6 k then 11.5 k at 0.45: even
-/// at about 0.33. A list pays where the mean free path is short against a shell: a collision's
-/// two searches then read fewer bodies than the 27 cells hold, and a body seldom leaves its shell.
-/// In a thinner gas a body leaves its shell several times between collisions, and each list
-/// built anew (a look at the 27 cells, wider by two shells, around it) costs more than the cell
-/// crossings it replaces and the shorter searches save.
-const LISTS_FROM_PACKING: f64 = 0.33;
-/// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
-/// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
-/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
-/// 0.25 is also the shell of Smallenburg's EDMD. At most 0.8: a periodic side holds 8 diameters
-/// (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so cells a diameter and two shells wide still
-/// number 3 to a periodic side, as the cells need.
-const SHELL: f64 = 0.25;
 /// How many events pass between looks at the interrupt flag.
 const INTERRUPT_EVERY: u32 = 4096;
 
@@ -261,11 +244,13 @@ impl EventLoop {
     fn rebuild(&mut self, bodies: &Bodies, t: f64, stats: &mut FrameStats) {
         let ids: Vec<u32> = self.bodies().collect();
         let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
+        // The parallel loop keeps cells: its workers' results are checked against the cells
+        // marked since their batch began, and a list built anew changes the lists around it.
         #[cfg(not(test))]
-        let block = lists::FIRST_BLOCK;
+        let always = None;
         #[cfg(test)]
-        let block = self.always_lists.unwrap_or(lists::FIRST_BLOCK);
-        self.lists = self.keeps_lists(bodies, &ids).then(|| Lists::new(&self.bounds, 2.0 * SHELL * max_radius, block));
+        let always = self.always_lists;
+        self.lists = self.workers.is_empty().then(|| Lists::paying(&self.bounds, bodies, &ids, always)).flatten();
         let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
         self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
@@ -291,20 +276,6 @@ impl EventLoop {
         }
         self.stale = false;
         self.retune(t);
-    }
-
-    /// True when the loop keeps neighbour lists for the bodies `ids`: serial, in a world packed
-    /// at least [`LISTS_FROM_PACKING`], and the bodies few enough to number in a list entry. The
-    /// parallel loop keeps cells: its workers' results are checked against the cells marked since
-    /// their batch began, and a list built anew changes the lists of the bodies around it.
-    fn keeps_lists(&self, bodies: &Bodies, ids: &[u32]) -> bool {
-        let side = self.bounds.side();
-        let volume: f64 =
-            ids.iter().map(|&i| 4.0 / 3.0 * std::f64::consts::PI * bodies.radius(i as usize).powi(3)).sum();
-        let packed = volume >= LISTS_FROM_PACKING * side.x * side.y * side.z;
-        #[cfg(test)]
-        let packed = packed || self.always_lists.is_some();
-        self.workers.is_empty() && packed && bodies.slots() <= lists::MAX_BODIES
     }
 
     /// When body `i`'s centre next leaves its cell, or with lists its shell, from `now` on.
