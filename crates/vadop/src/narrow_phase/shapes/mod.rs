@@ -836,6 +836,44 @@ mod tests {
         }
     }
 
+    /// Two shapes that only translate (here cubes not turning, and a ball spinning) touch once
+    /// as they pass through each other: after the contact's start the search knows no other
+    /// follows without looking for the contact's end (their distance is convex in time).
+    #[test]
+    fn translating_shapes_touch_once_and_their_search_stops_there() {
+        fn passes_once<S: Spin>(first: (&ShapeGeometry, &RigidMotion<S>)) {
+            let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+            let b = RigidMotion { velocity: DVec3::new(-2.0, 0.3, 0.0), ..still(DVec3::new(5.0, 0.0, 0.0)) };
+            let window = Window::new(0.0, 100.0);
+            let mut searcher = pair_searcher(first, (&cube, &b)).unwrap().unwrap();
+            let start = searcher.reference + searcher.first_start_in(window, false).unwrap().unwrap();
+            let probes = searcher.probes();
+            assert_eq!(searcher.first_start_after(start, window).unwrap(), None);
+            assert_eq!(searcher.probes(), probes, "no probe after the start");
+            // The search from the reference agrees, past the contact's start.
+            let later = Window::new(start.next_up(), 100.0);
+            assert_eq!(shape_contact_time(first, (&cube, &b), later).unwrap(), None);
+        }
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        passes_once((&cube, &still(DVec3::ZERO)));
+        let ball = Shape::Sphere { radius: 0.5 }.geometry().unwrap();
+        let turn = crate::motion::FreeRotation::new(
+            ball.principal_inertia_unit(),
+            DQuat::IDENTITY,
+            DVec3::new(3.0, -2.0, 1.0),
+        );
+        passes_once((
+            &ball,
+            &RigidMotion {
+                position: DVec3::ZERO,
+                since: 0.0,
+                velocity: DVec3::ZERO,
+                acceleration: DVec3::ZERO,
+                spin: turn,
+            },
+        ));
+    }
+
     /// A pair search skipped because the bounding spheres stay out of reach
     /// (`convex_pair_in_reach`) would have found nothing: the full search agrees on spinning
     /// solids near and far, straight and falling, and most pairs far apart are skipped.

@@ -379,8 +379,13 @@ impl<G: Gauge> Searcher<G> {
     }
 
     /// Where the chain goes on after the contact that starts at absolute time `start`: the time
-    /// since the reference at which it has ended, restarted there; `None` if not before `until`.
+    /// since the reference at which it has ended, restarted there; `None` if not before `until`,
+    /// or when no contact can follow (two shapes that only translate: the chain is done).
     pub(super) fn after_contact(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
+        if self.gauge.translating() {
+            // Their distance is convex in time: below the touch threshold once, never again.
+            return Ok(self.done());
+        }
         let tau = self.restart_at(start);
         Ok(match self.contact_end(tau, until)? {
             Some(end) => Some(self.restart_at(self.reference + end)),
