@@ -271,9 +271,19 @@ impl Lists {
 
     /// Body `i` leaves every list, its own emptied.
     pub(super) fn remove(&mut self, i: usize) {
+        self.leave(i, false);
+    }
+
+    /// Body `i` leaves its members' lists, its own emptied; each member marked seen by the list
+    /// built now (see [`Self::fresh`]) when `mark`.
+    #[inline(always)]
+    fn leave(&mut self, i: usize, mark: bool) {
         let at = i * self.stride;
         for k in 0..self.blocks[at] as usize {
             let q = (self.blocks[at + 1 + k] & BODY_MASK) as usize;
+            if mark {
+                self.seen[q] = self.built;
+            }
             self.take_off(q, i);
         }
         self.blocks[at] = 0;
@@ -288,13 +298,7 @@ impl Lists {
             self.seen.fill(0);
             self.built = 1;
         }
-        let at = i * self.stride;
-        for k in 0..self.blocks[at] as usize {
-            let q = (self.blocks[at + 1 + k] & BODY_MASK) as usize;
-            self.seen[q] = self.built;
-            self.take_off(q, i);
-        }
-        self.blocks[at] = 0;
+        self.leave(i, true);
         self.place(bodies, i, t);
         if !self.pair_around(cells, i, false) {
             self.widen(cells);
