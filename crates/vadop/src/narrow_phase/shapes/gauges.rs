@@ -25,7 +25,8 @@ pub(super) struct Probe {
     /// `lower <= signed distance <= upper`.
     pub(super) lower: f64,
     pub(super) upper: f64,
-    /// The lower bound (a separation along a fixed axis) shrinks at most this fast.
+    /// The lower bound (a separation along a fixed axis) shrinks at most this fast (a rate below
+    /// 0 is one at which it certainly grows, at first: see [`Self::bend`]).
     pub(super) shrink: f64,
     /// The signed distance grows at most this fast.
     pub(super) grow: f64,
@@ -91,14 +92,20 @@ impl Probe {
     }
 
     /// How long a quantity `room` short of a bound stays short of it, moving towards it at
-    /// `rate` (at least 0) now, a rate that grows at most by [`Self::bend`] per unit of time: the
-    /// root of `rate s + bend s^2 / 2 = room` (`room / rate` on a straight motion), infinite when
-    /// it never moves.
+    /// `rate` now (away from it when negative), a rate that grows at most by [`Self::bend`] per
+    /// unit of time: the root of `rate s + bend s^2 / 2 = room` (`room / rate` on a straight
+    /// motion), infinite when it never gets there.
     pub(super) fn time_to(&self, room: f64, rate: f64) -> f64 {
         if self.bend == 0.0 {
             return if rate > 0.0 { room / rate } else { f64::INFINITY };
         }
-        2.0 * room / (rate + (rate * rate + 2.0 * self.bend * room).sqrt())
+        let root = (rate * rate + 2.0 * self.bend * room).sqrt();
+        // Each form where it adds terms of one sign: no cancellation.
+        if rate < 0.0 {
+            (root - rate) / self.bend
+        } else {
+            2.0 * room / (rate + root)
+        }
     }
 }
 
@@ -598,7 +605,8 @@ impl Gauge for ConvexPair<'_> {
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
-            shrink: (-velocity.dot(bounds.axis)).max(0.0) + self.spin_along(bounds.axis),
+            // Negative where the pair leaves along the axis faster than turning can close it.
+            shrink: self.spin_along(bounds.axis) - velocity.dot(bounds.axis),
             grow,
             // Only a start search steps on it (see [`Probe::approach_step`]).
             far: if gap { self.far(tau, (ga, &pose_a), (gb, &pose_b), slack) } else { NO_FAR },

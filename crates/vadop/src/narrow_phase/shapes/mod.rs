@@ -31,14 +31,18 @@
 //! At a time t, let d be a lower bound on the distance of the shapes obtained as their
 //! separation along a fixed unit axis n from a to b (`min over b of n.y - max over a of n.x`).
 //! That separation cannot shrink faster than
-//! `mu = max(0, (v_a - v_b) . n) + w_a r_a + w_b r_b`,
+//! `mu = (v_a - v_b) . n + w_a r_a + w_b r_b`,
 //! w being a body's angular speed bound and r how far its core (below) reaches from the centre of
 //! mass: its bounding radius, a capsule's half height, 0 for a sphere, whose surface does not move
 //! when it turns. So the distance stays above `tol/2` until `t + (d - tol/2) / mu`, and the
 //! search steps there, less the margins below: on bounds tightened to decide, the steps are at
-//! least `(tol/4) / mu` long (`(5/24) tol / mu` on a warm start's). Against a triangle mesh, whose nearest triangle may change, `mu` uses
-//! `|v_a - v_b|` instead of the projection; against a half-space or a wall, n is the fixed plane
-//! normal and the separation along it is the exact signed distance.
+//! least `(tol/4) / mu` long (`(5/24) tol / mu` on a warm start's). Where `mu <= 0` (two solids
+//! leaving each other along n faster than turning can close it) no contact ever follows: this
+//! also ends the search at the probe that ends a contact of two solids passing through each other
+//! at speed. Against a triangle mesh, whose nearest triangle may change, `mu` uses `|v_a - v_b|`
+//! instead of the projection; against a half-space or a wall, n is the fixed plane normal, the
+//! separation along it is the exact signed distance, and `mu` takes the projection's positive
+//! part only.
 //!
 //! A spinning solid never leaves its bounding sphere, so far from contact a fast spinner is also
 //! stepped on its sphere's separation from the other shape (or from the other's sphere, a plane
@@ -872,6 +876,34 @@ mod tests {
                 spin: turn,
             },
         ));
+    }
+
+    /// A spinning pair that leaves along the ending probe's axis faster than turning can close
+    /// it touches no more: the search after its contact stops at the end's probe, with no probe
+    /// of a start search after it.
+    #[test]
+    fn a_fast_pass_through_of_spinning_shapes_ends_the_search_at_its_end() {
+        use crate::motion::FreeRotation;
+        let cube = Shape::Cuboid { half_extents: DVec3::splat(0.5) }.geometry().unwrap();
+        let spin = FreeRotation::new(cube.principal_inertia_unit(), DQuat::IDENTITY, DVec3::new(1.0, -2.0, 3.0));
+        let spinning = RigidMotion {
+            position: DVec3::new(6.0, 0.2, 0.0),
+            since: 0.0,
+            velocity: DVec3::new(-20.0, 0.5, 0.3),
+            acceleration: DVec3::ZERO,
+            spin,
+        };
+        let (a, b) = ((&cube, &still(DVec3::ZERO)), (&cube, &spinning));
+        let window = Window::new(0.0, 10.0);
+        let start = shape_contact_time(a, b, window).unwrap().unwrap();
+        let mut after = pair_searcher(a, b).unwrap().unwrap();
+        assert_eq!(after.first_start_after(start, window).unwrap(), None);
+        let mut end = pair_searcher(a, b).unwrap().unwrap();
+        assert!(end.end_of(start, window.end).unwrap().is_some());
+        assert_eq!(after.probes(), end.probes(), "the end's probes and no more");
+        assert_eq!(after.parked, Some(Parked::DONE));
+        // The search from the reference agrees, past the contact's start.
+        assert_eq!(shape_contact_time(a, b, Window::new(start.next_up(), 10.0)).unwrap(), None);
     }
 
     /// A pair search skipped because the bounding spheres stay out of reach

@@ -41,7 +41,16 @@ pub(super) struct Parked {
 
 impl Parked {
     /// A chain that finds nothing more, ever.
-    const DONE: Parked = Parked { tau: f64::INFINITY, in_contact: false };
+    pub(super) const DONE: Parked = Parked { tau: f64::INFINITY, in_contact: false };
+}
+
+/// The end of a contact: its time since the reference, and whether no contact can follow it
+/// (the bounding volumes have parted, or the separation along the ending probe's axis stays above
+/// the guard until they do).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct End {
+    pub(super) tau: f64,
+    pub(super) last: bool,
 }
 
 /// What the pair does when it touches at the reference.
@@ -112,7 +121,7 @@ impl<G: Gauge> Searcher<G> {
     }
 
     /// Nothing more, ever: parks the chain for good.
-    fn done(&mut self) -> Option<f64> {
+    fn done<T>(&mut self) -> Option<T> {
         self.parked = Some(Parked::DONE);
         None
     }
@@ -163,10 +172,11 @@ impl<G: Gauge> Searcher<G> {
     }
 
     /// The end of the contact in progress at `tau`, before absolute time `end`.
-    pub(super) fn contact_end(&mut self, mut tau: f64, end: f64) -> Result<Option<f64>> {
+    pub(super) fn contact_end(&mut self, mut tau: f64, end: f64) -> Result<Option<End>> {
         if self.gauge.translating() {
             return match self.translating_end(tau)? {
-                Some(found) if self.reference + found < end => Ok(Some(found)),
+                // Their distance is convex in time: once it has grown past the band, it only grows.
+                Some(found) if self.reference + found < end => Ok(Some(End { tau: found, last: true })),
                 // The chain goes on from the end as the caller would take it up (restarted
                 // there, see `after_contact`), outside the contact: the same iterates follow.
                 Some(found) => {
@@ -184,11 +194,15 @@ impl<G: Gauge> Searcher<G> {
             }
             if tau >= self.leave() {
                 // The bounding volumes have parted: more than `2 tol` apart.
-                return Ok(Some(tau));
+                return Ok(Some(End { tau, last: true }));
             }
             let p = self.probe(tau, Measure::Contact)?;
             if p.lower > self.clear() {
-                return Ok(Some(tau));
+                // Leaving along an axis faster than turning can bring the surfaces back along it
+                // (a pair passing through another at speed): no start can follow, and the start
+                // search from here would spend a probe to find that out.
+                let last = p.approach_step(self.guard()).is_some_and(|step| tau + step >= self.leave());
+                return Ok(Some(End { tau, last }));
             }
             let room = self.ceiling() - p.upper;
             if !(room > 0.0) {
@@ -354,8 +368,9 @@ impl<G: Gauge> Searcher<G> {
     pub(super) fn resume(&mut self, parked: Parked, spent: u32, window: Window) -> Result<Option<f64>> {
         (self.iterations, self.restarted, self.carried) = (spent, 0, spent);
         let tau = if parked.in_contact {
-            match self.contact_end(parked.tau, window.end)? {
-                Some(end) => self.restart_at(self.reference + end),
+            let end = self.contact_end(parked.tau, window.end)?;
+            match self.past(end) {
+                Some(tau) => tau,
                 None => return Ok(None),
             }
         } else {
@@ -387,10 +402,18 @@ impl<G: Gauge> Searcher<G> {
             return Ok(self.done());
         }
         let tau = self.restart_at(start);
-        Ok(match self.contact_end(tau, until)? {
-            Some(end) => Some(self.restart_at(self.reference + end)),
+        let end = self.contact_end(tau, until)?;
+        Ok(self.past(end))
+    }
+
+    /// Where the chain goes on past a contact's end (restarted there): `None` when the contact
+    /// has not ended (parked in it) or nothing can follow (done).
+    fn past(&mut self, end: Option<End>) -> Option<f64> {
+        match end {
+            Some(End { last: true, .. }) => self.done(),
+            Some(End { tau, .. }) => Some(self.restart_at(self.reference + tau)),
             None => None,
-        })
+        }
     }
 
     /// The first contact start in `window` after the contact that starts at absolute time
@@ -406,7 +429,7 @@ impl<G: Gauge> Searcher<G> {
     /// holds), before `until`.
     pub(super) fn end_of(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
         let tau = self.restart_at(start);
-        self.contact_end(tau, until)
+        Ok(self.contact_end(tau, until)?.map(|end| end.tau))
     }
 
     /// The end, before `until`, of the contact in progress at absolute time `at`, found by
@@ -422,12 +445,13 @@ impl<G: Gauge> Searcher<G> {
                     let tau = self.restart_at(self.reference);
                     self.contact_end(tau, until)?
                 }
-                AtReference::Ended(end) => Some(end),
+                AtReference::Ended(end) => Some(End { tau: end, last: false }),
                 AtReference::Resting => None,
             };
             match end {
-                Some(end) if self.reference + end > at => return Ok(Some(end)),
-                Some(end) => tau = self.restart_at(self.reference + end),
+                Some(end) if self.reference + end.tau > at => return Ok(Some(end.tau)),
+                Some(End { last: true, .. }) => return self.end_of(at, until),
+                Some(end) => tau = self.restart_at(self.reference + end.tau),
                 None => return Ok(None),
             }
         }
@@ -435,8 +459,9 @@ impl<G: Gauge> Searcher<G> {
         while let Some(start) = self.next_start(tau, before)? {
             let start = self.restart_at(self.reference + start);
             match self.contact_end(start, until)? {
-                Some(end) if self.reference + end > at => return Ok(Some(end)),
-                Some(end) => tau = self.restart_at(self.reference + end),
+                Some(end) if self.reference + end.tau > at => return Ok(Some(end.tau)),
+                Some(End { last: true, .. }) => break,
+                Some(end) => tau = self.restart_at(self.reference + end.tau),
                 None => return Ok(None),
             }
         }
