@@ -64,11 +64,12 @@ pub(super) enum Measure {
 /// [`Warm::contact_upper`]) when it is at most this many tolerances, so that the contact is far
 /// from its end (above `tol`) and a step on it goes at least six sevenths as far as the widest
 /// room a shallow contact leaves, and when it leaves at least [`STALE_ROOM`] of the room below
-/// `2 tol` that the last full measure did: a carried bound gone stale (the shapes turned and slid
-/// since) never holds the search to much shorter steps than a fresh one would take.
+/// `2 tol` that the deepest bound since the last full measure did: a carried bound gone stale
+/// (the shapes turned and slid since, or a pair passing through, deep a probe ago, nears its way
+/// out) never holds the search to much shorter steps than a fresh one would take.
 const CARRIED_UPPER: f64 = 0.25;
 
-/// The share of the last full measure's room below a carried bound must leave. A tenth, not a
+/// The share of the deepest bound's room (see [`CARRIED_UPPER`]) a carried bound must leave. A tenth, not a
 /// quarter: the steps also rest on the inner balls, and EPA on each quarter of a contact's exit
 /// cost more than the shorter steps between (8% on mixed shapes at 0.05 d/f, measured).
 const STALE_ROOM: f64 = 0.1;
@@ -569,7 +570,9 @@ impl Gauge for ConvexPair<'_> {
                 let (upper, deepest) = warm.contact_upper((ga, &pose_a), (gb, &pose_b), slack);
                 let room = |upper: f64| 2.0 * self.tol - upper;
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= STALE_ROOM * room(warm.upper) {
-                    // Far from the contact's end: nothing else is needed, and the warm start stays.
+                    // Far from the contact's end: nothing else is needed, and the warm start stays,
+                    // holding the deepest bound yet (the room a later carried bound is held to).
+                    self.warm.set(Some(Warm { upper: upper.min(warm.upper), ..warm }));
                     let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slack);
                     return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
