@@ -38,8 +38,6 @@ const ROUNDINGS: f64 = 16.0;
 /// A list entry holds the body in its low bits and its image (see [`Lists::images`]) above them.
 const IMAGE_BITS: u32 = 27;
 const BODY_MASK: u32 = (1 << IMAGE_BITS) - 1;
-/// The image of a body not across any periodic face.
-pub(super) const NO_SHIFT: usize = 13;
 /// Entries per block a first sizing gives (the count takes one more, so a block is two cache
 /// lines): no list outgrew it in the gas at n = 2e4 and packing 0.4 or 0.45 (see [`SHELL`]);
 /// a denser world widens the blocks once.

@@ -15,7 +15,7 @@
 //! bits as every method's. It never schedules, handles an event or changes a body.
 
 use super::cells::{Cells, Crossing, Neighbour, NONE};
-use super::lists::{self, Lists, NO_SHIFT};
+use super::lists::{self, Lists};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::memory::prefetch;
@@ -134,7 +134,8 @@ impl Overlay {
 pub(super) struct Candidate {
     earliest: f64,
     q: u32,
-    /// Its cell among the neighbourhood's (see [`Near`]).
+    /// Its cell among the neighbourhood's (see [`Near`]), or with lists its image (see
+    /// [`Lists::images`]).
     cell: u8,
 }
 
@@ -204,8 +205,7 @@ impl<'a> Search<'a> {
         self.candidates.clear();
         self.near.cells = 0;
         if let Some(lists) = self.lists {
-            self.gather_members(&own, lists, false);
-            self.screen_all(&own, &mut best);
+            self.screen_members(&own, lists, false, &mut best);
             self.test_candidates(&own, eligible, &mut best);
             return best.event;
         }
@@ -270,8 +270,7 @@ impl<'a> Search<'a> {
             self.offer_own(p, now, Eligible::From(now), &mut best);
         }
         self.candidates.clear();
-        self.gather_members(&own, lists, true);
-        self.screen_all(&own, &mut best);
+        self.screen_members(&own, lists, true, &mut best);
         self.test_candidates(&own, Eligible::From(now), &mut best);
         best.event
     }
@@ -351,28 +350,36 @@ impl<'a> Search<'a> {
         }
     }
 
-    /// Lists the members of `own`'s list (only those [`Lists::fresh`] when `fresh`) in
-    /// `self.candidates`, to be screened, with the origins of their images, asking for their
-    /// records on the way (see [`Self::gather`]).
+    /// Screens the members of `own`'s list (only those [`Lists::fresh`] when `fresh`) as they are
+    /// read: those that pass wait in `self.candidates`, each with the earliest it can touch `own`
+    /// and its image (see [`Lists::images`]). One pass, nothing gathered first: a list is short
+    /// and its members known, so the screen's reject, most members' fate, is all they cost.
     #[inline(always)]
-    fn gather_members(&mut self, own: &Own, lists: &Lists, fresh: bool) {
+    fn screen_members(&mut self, own: &Own, lists: &Lists, fresh: bool, best: &mut Best) {
         debug_assert_eq!(self.overlay.len, 0, "the parallel loop keeps no lists");
-        let states = &self.bodies.state[..];
-        (self.near.origins[NO_SHIFT], self.near.shifts[NO_SHIFT]) = (own.position, DVec3::ZERO);
-        let mut ready = 1u32 << NO_SHIFT;
-        for &entry in lists.members(own.p) {
+        let (states, members) = (&self.bodies.state[..], lists.members(own.p));
+        // The members' records, scattered in memory, asked for all at once: they then arrive
+        // together rather than one after the other.
+        for &entry in members {
+            prefetch(&states[lists::split(entry).0]);
+        }
+        let mut bound = best.bound;
+        for &entry in members {
             let (q, image) = lists::split(entry);
             if fresh && !lists.fresh(q) {
                 continue;
             }
-            if ready & (1 << image) == 0 {
-                let shift = lists.images[image];
-                (self.near.origins[image], self.near.shifts[image]) = (own.position - shift, shift);
-                ready |= 1 << image;
-            }
-            prefetch(&states[q]);
-            self.candidates.push(Candidate { earliest: 0.0, q: q as u32, cell: image as u8 });
+            let earliest = if self.screen {
+                match screen(own, &states[q], own.position - lists.images[image], &mut bound) {
+                    Some(earliest) => earliest,
+                    None => continue,
+                }
+            } else {
+                f64::NEG_INFINITY
+            };
+            self.candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
         }
+        best.bound = bound;
     }
 
     /// Screens the bodies gathered: those that pass stay in `self.candidates`, each with the
@@ -418,7 +425,11 @@ impl<'a> Search<'a> {
             if c.earliest > best.horizon {
                 break;
             }
-            self.exact(own, c.q as usize, self.near.shifts[c.cell as usize], eligible, best);
+            let shift = match self.lists {
+                Some(lists) => lists.images[c.cell as usize],
+                None => self.near.shifts[c.cell as usize],
+            };
+            self.exact(own, c.q as usize, shift, eligible, best);
         }
         *self.candidates = candidates;
     }
