@@ -54,6 +54,17 @@ pub(super) struct Neighbour {
     pub shift: DVec3,
 }
 
+/// A slab of cells next to a body's along one axis (its own among them): its part of a cell
+/// index, the sign of the whole side that brings its bodies next to the body across a periodic
+/// face (0, 1 or 2 for -, none or +), and the least distance from a point in the body's cell to
+/// the slab, squared.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Slab {
+    pub part: u32,
+    pub sign: u32,
+    pub gap2: f64,
+}
+
 /// The most cells along one axis (coordinates are kept as 16 bits).
 const MAX_PER_AXIS: f64 = 65_535.0;
 
@@ -355,6 +366,46 @@ impl Cells {
         let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
         let centre = self.listing[i].cell as i64;
         inside.then(|| self.rows.map(|d| (centre + d - 1) as usize))
+    }
+
+    /// The widest radius a body of the grid may have (see [`Self::fits`]).
+    pub(super) fn max_radius(&self) -> f64 {
+        self.reach / 2.0
+    }
+
+    /// The slabs of cells along each axis whose cells make body `i`'s neighbourhood (see
+    /// [`Slab`]), each with how near `position`, a point of body `i`'s cell, comes to it, less
+    /// `margin`: a cell whose three slabs' gaps add up to more than a distance squared holds no
+    /// centre within that distance of `position` (but by `margin`).
+    #[inline(always)]
+    pub(super) fn slabs_around(&self, i: usize, position: DVec3, margin: f64) -> [([Slab; 3], usize); 3] {
+        let at = self.listing[i].at;
+        std::array::from_fn(|a| {
+            let c = at[a] as i64;
+            let into = position[a] - (self.min[a] + c as f64 * self.width[a]);
+            let mut slabs = ([Slab::default(); 3], 0);
+            let reach = if self.counts[a] == 1 { 0..=0 } else { -1..=1 };
+            for d in reach {
+                if let Some((part, shift)) = self.step(a, c, d) {
+                    let gap = match d {
+                        -1 => into - margin,
+                        1 => self.width[a] - into - margin,
+                        _ => 0.0,
+                    };
+                    let sign = if shift < 0.0 {
+                        0
+                    } else if shift > 0.0 {
+                        2
+                    } else {
+                        1
+                    };
+                    let gap = gap.max(0.0);
+                    slabs.0[slabs.1] = Slab { part, sign, gap2: gap * gap };
+                    slabs.1 += 1;
+                }
+            }
+            slabs
+        })
     }
 
     /// Calls `visit` with every cell of body `i`'s neighbourhood: the 27 cells around its own
