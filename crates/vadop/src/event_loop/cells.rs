@@ -380,32 +380,31 @@ impl Cells {
     #[inline(always)]
     pub(super) fn slabs_around(&self, i: usize, position: DVec3, margin: f64) -> [([Slab; 3], usize); 3] {
         let at = self.listing[i].at;
-        std::array::from_fn(|a| {
-            let c = at[a] as i64;
+        let mut slabs = [([Slab::default(); 3], 0); 3];
+        for (a, (slabs, len)) in slabs.iter_mut().enumerate() {
+            let (c, n, stride) = (at[a] as i64, self.counts[a], self.strides[a]);
             let into = position[a] - (self.min[a] + c as f64 * self.width[a]);
-            let mut slabs = ([Slab::default(); 3], 0);
-            let reach = if self.counts[a] == 1 { 0..=0 } else { -1..=1 };
-            for d in reach {
-                if let Some((part, shift)) = self.step(a, c, d) {
-                    let gap = match d {
-                        -1 => into - margin,
-                        1 => self.width[a] - into - margin,
-                        _ => 0.0,
-                    };
-                    let sign = if shift < 0.0 {
-                        0
-                    } else if shift > 0.0 {
-                        2
-                    } else {
-                        1
-                    };
-                    let gap = gap.max(0.0);
-                    slabs.0[slabs.1] = Slab { part, sign, gap2: gap * gap };
-                    slabs.1 += 1;
-                }
+            let mut push = |k: i64, sign: u32, gap: f64| {
+                let gap = gap.max(0.0);
+                slabs[*len] = Slab { part: (k * stride) as u32, sign, gap2: gap * gap };
+                *len += 1;
+            };
+            // Below, its own, above: across a periodic face the slab wraps to the far side
+            // (a periodic axis has 3 cells at least, so the three are distinct); past a wall,
+            // none.
+            if c > 0 {
+                push(c - 1, 1, into - margin);
+            } else if self.periodic[a] {
+                push(n - 1, 0, into - margin);
             }
-            slabs
-        })
+            push(c, 1, 0.0);
+            if c + 1 < n {
+                push(c + 1, 1, self.width[a] - into - margin);
+            } else if self.periodic[a] {
+                push(0, 2, self.width[a] - into - margin);
+            }
+        }
+        slabs
     }
 
     /// Calls `visit` with every cell of body `i`'s neighbourhood: the 27 cells around its own
