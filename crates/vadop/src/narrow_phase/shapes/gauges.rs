@@ -3,7 +3,7 @@
 //! and the warm start kept between probes. A gauge turns distance bounds into a safe step; it
 //! never chooses the probe times (the searcher does).
 
-use super::chord::{axis_hold, chord_hold, Moving};
+use super::chord::{axis_hold, chord_hold, sliding_hold, Moving};
 use super::distance::{
     closer_points, convex_bounds, separation, Bounds, Need, Simplex, GAP_SHARE, PROBE_DEPTH_SHARE, PROBE_RESOLUTION,
 };
@@ -270,19 +270,33 @@ pub(super) struct Warm {
     pub(super) upper: f64,
     /// GJK's simplex from the last probe that ran it, its points fixed in the bodies.
     pub(super) simplex: Option<Simplex>,
+    /// The last probe's time and a point inside both shapes then, fixed in the first (its
+    /// deepest point, or the midpoint of the witnesses of an intersection): how the region inside
+    /// both slides from one probe to the next (see [`super::chord::sliding_hold`]).
+    pub(super) inside: Option<(f64, DVec3)>,
 }
 
 impl Warm {
-    /// What a probe's `bounds` leave for the next one; `carry` maps each shape's moving frame to
-    /// the probe's.
-    pub(super) fn new(bounds: &Bounds, carry: (&Pose, &Pose)) -> Option<Warm> {
+    /// What a probe's `bounds` at `tau` leave for the next one; `carry` maps each shape's moving
+    /// frame to the probe's.
+    pub(super) fn new(bounds: &Bounds, carry: (&Pose, &Pose), tau: f64) -> Option<Warm> {
         let (x, y) = bounds.witness?;
         Some(Warm {
             axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
             witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
             upper: bounds.upper,
             simplex: bounds.simplex,
+            inside: inside_point(bounds).map(|p| (tau, carry.0.inverse_transform_point(p))),
         })
+    }
+
+    /// How the point inside both shapes at `tau`, `point` (in the probe's frame, the first
+    /// shape's pose `pose_a`), slid through the first shape since the last probe's, as a velocity
+    /// in world axes; `None` without both.
+    pub(super) fn slide(&self, tau: f64, point: Option<DVec3>, pose_a: &Pose) -> Option<DVec3> {
+        let (before, from) = self.inside?;
+        let to = pose_a.inverse_transform_point(point?);
+        (tau > before).then(|| pose_a.rotation * ((to - from) / (tau - before)))
     }
 
     /// An upper bound on the signed distance from what the last full measure found, with no
@@ -332,6 +346,13 @@ impl Warm {
         let simplex = self.simplex;
         tight(upper).then_some(Bounds { lower: lower - slack, upper: upper + slack, axis, witness, simplex })
     }
+}
+
+/// A point inside both shapes from bounds that say they intersect: the midpoint of the witness
+/// points (each shape's deepest point in the other, so both lie in each shape).
+fn inside_point(bounds: &Bounds) -> Option<DVec3> {
+    let (x, y) = bounds.witness?;
+    (bounds.upper < 0.0).then(|| 0.5 * (x + y))
 }
 
 /// A point inside both shapes and how deep it lies in them together, `None` when none is found:
@@ -385,13 +406,16 @@ pub(super) enum Deepest {
 impl ConvexPair<'_> {
     /// How long the contact in progress at `tau` certainly lasts, from balls in both shapes: the
     /// balls about `deepest` (or the witness points), the balls about each shape's middle, balls
-    /// deeper in each shape than `deepest`, and each near ball with the other shape's deeper one.
+    /// deeper in each shape than `deepest`, and each near ball with the other shape's deeper one;
+    /// from the chords of those points; and from a point inside both sliding through a along
+    /// `slide` (the way the region inside both slid since the last probe, when known).
     fn hold(
         &self,
         tau: f64,
         (a, pose_a): (&Scaled, &Pose),
         (b, pose_b): (&Scaled, &Pose),
         deepest: Deepest,
+        slide: Option<DVec3>,
         slack: f64,
     ) -> f64 {
         // The balls' certificate is for a straight relative motion (a pair passing through each
@@ -434,7 +458,18 @@ impl ConvexPair<'_> {
             Deepest::Inside { point, .. } => (point, point),
             Deepest::Witnesses(x, y) => (x, y),
         };
-        balls.max(self.chord(tau, (a, pose_a), (b, pose_b), points, slack))
+        let chord = self.chord(tau, (a, pose_a), (b, pose_b), points, slack);
+        let sliding = match (slide, self.moving(tau, (a, pose_a), (b, pose_b))) {
+            (Some(drift), Some((moving_a, moving_b))) => {
+                let point = match deepest {
+                    Deepest::Inside { point, .. } => point,
+                    Deepest::Witnesses(x, y) => 0.5 * (x + y),
+                };
+                sliding_hold(point, drift, &moving_a, &moving_b, ending(self.tol), slack)
+            }
+            _ => 0.0,
+        };
+        balls.max(chord).max(sliding)
     }
 
     /// How long the signed distance certainly stays below the middle of the band in which a
@@ -571,9 +606,16 @@ impl Gauge for ConvexPair<'_> {
                 let room = |upper: f64| 2.0 * self.tol - upper;
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= STALE_ROOM * room(warm.upper) {
                     // Far from the contact's end: nothing else is needed, and the warm start stays,
-                    // holding the deepest bound yet (the room a later carried bound is held to).
-                    self.warm.set(Some(Warm { upper: upper.min(warm.upper), ..warm }));
-                    let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slack);
+                    // holding the deepest bound yet (the room a later carried bound is held to) and
+                    // the deepest point, fixed in a.
+                    let point = match deepest {
+                        Deepest::Inside { point, .. } => Some(point),
+                        Deepest::Witnesses(..) => None,
+                    };
+                    let slide = warm.slide(tau, point, &pose_a);
+                    let inside = point.map(|p| (tau, pose_a.inverse_transform_point(p)));
+                    self.warm.set(Some(Warm { upper: upper.min(warm.upper), inside, ..warm }));
+                    let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slide, slack);
                     return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
             }
@@ -594,11 +636,12 @@ impl Gauge for ConvexPair<'_> {
         let bounds = warm
             .and_then(|warm| warm.bounds((ga, &pose_a), (gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack));
-        self.warm.set(Warm::new(&bounds, carry));
+        let slide = warm.and_then(|warm| warm.slide(tau, inside_point(&bounds), &pose_a));
+        self.warm.set(Warm::new(&bounds, carry, tau));
         let hold = match (measure, bounds.witness) {
             // A contact whose end this probe finds needs no step out of it.
             (Measure::Contact, Some((x, y))) if !(bounds.lower > cleared(self.tol)) => {
-                self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slack)
+                self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slide, slack)
             }
             (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
                 self.apart(tau, (ga, &pose_a), (gb, &pose_b), bounds.axis, slack)
@@ -753,7 +796,7 @@ mod tests {
                 DVec3::new(random(), random(), random()).normalize_or(DVec3::X) * (0.1 + 0.6 * (random() + 0.5));
             let (pose_a, pose_b) = (Pose::from_parts(DVec3::ZERO, qa), Pose::from_parts(offset, qb));
             let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Need::converged(Some(EXACT_DEPTH)), 1e-6, 1e-14);
-            let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b)) else { continue };
+            let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b), 0.0) else { continue };
             let (here, _) = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
             if bounds.upper < -1e-3 {
                 measured += 1;
