@@ -55,12 +55,11 @@ const MAX_BODIES: usize = BODY_MASK as usize;
 /// the slabs of a list built anew were found without `array::from_fn` and the calendar's
 /// buckets held 6 events (the event loop's instructions alone, 15, 12 and 12 frames): 11.9 k
 /// then 13.6 k at 0.25, 12.4 k then 12.0 k at 0.3, 12.4 k then 10.7 k at 0.35: even at about
-/// 0.29. A
-/// list pays where the mean free path is short against a shell: a collision's two searches then
-/// read fewer bodies than the 27 cells hold, and a body seldom leaves its shell. In a thinner gas
-/// a body leaves its shell several times between collisions, and each list built anew (a look at
-/// the cells, wider by two shells, of the 27 around it that its shell can reach) costs more than
-/// the cell crossings it replaces and the shorter searches save.
+/// 0.29. A list pays where the mean free path is short against a shell: a collision's two
+/// searches then read fewer bodies than the 27 cells hold, and a body seldom leaves its shell. In
+/// a thinner gas a body leaves its shell several times between collisions, and each list built
+/// anew (a look at the cells, wider by two shells, of the 27 around it that its shell can reach)
+/// costs more than the cell crossings it replaces and the shorter searches save.
 const FROM_PACKING: f64 = 0.29;
 /// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
 /// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k

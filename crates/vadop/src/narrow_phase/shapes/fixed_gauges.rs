@@ -178,7 +178,7 @@ impl MeshPair<'_> {
             let bounds = (warm
                 .and_then(|w| w.bounds((&support, &Pose::IDENTITY), (&body, &pose), carry, self.tol, slack)))
             .unwrap_or_else(|| convex_bounds(&support, &Pose::IDENTITY, &body, &pose, need, self.tol, slack));
-            let warm = Warm::new(&bounds, carry, tau);
+            let warm = Warm::new(&bounds, carry);
             next.borrow_mut().push(Measured { id, tau, rate, lower: bounds.lower, warm });
             if nearest.get().is_none_or(|b| bounds.upper < b.upper) {
                 nearest.set(Some(bounds));

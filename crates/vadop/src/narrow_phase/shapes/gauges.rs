@@ -69,9 +69,10 @@ pub(super) enum Measure {
 /// out) never holds the search to much shorter steps than a fresh one would take.
 const CARRIED_UPPER: f64 = 0.25;
 
-/// The share of the deepest bound's room (see [`CARRIED_UPPER`]) a carried bound must leave. A tenth, not a
-/// quarter: the steps also rest on the inner balls, and EPA on each quarter of a contact's exit
-/// cost more than the shorter steps between (8% on mixed shapes at 0.05 d/f, measured).
+/// The share of the deepest bound's room (see [`CARRIED_UPPER`]) a carried bound must leave. A
+/// tenth, not a quarter: the steps also rest on the inner balls, and EPA on each quarter of a
+/// contact's exit cost more than the shorter steps between (8% on mixed shapes at 0.05 d/f,
+/// measured).
 const STALE_ROOM: f64 = 0.1;
 
 /// How many times [`Warm::contact_upper`] moves its point deeper into both shapes (one move less
@@ -277,16 +278,16 @@ pub(super) struct Warm {
 }
 
 impl Warm {
-    /// What a probe's `bounds` at `tau` leave for the next one; `carry` maps each shape's moving
-    /// frame to the probe's.
-    pub(super) fn new(bounds: &Bounds, carry: (&Pose, &Pose), tau: f64) -> Option<Warm> {
+    /// What a probe's `bounds` leave for the next one; `carry` maps each shape's moving frame to
+    /// the probe's.
+    pub(super) fn new(bounds: &Bounds, carry: (&Pose, &Pose)) -> Option<Warm> {
         let (x, y) = bounds.witness?;
         Some(Warm {
             axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
             witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
             upper: bounds.upper,
             simplex: bounds.simplex,
-            inside: inside_point(bounds).map(|p| (tau, carry.0.inverse_transform_point(p))),
+            inside: None,
         })
     }
 
@@ -297,6 +298,11 @@ impl Warm {
         let (before, from) = self.inside?;
         let to = pose_a.inverse_transform_point(point?);
         (tau > before).then(|| pose_a.rotation * ((to - from) / (tau - before)))
+    }
+
+    /// This warm start holding `point`, inside both shapes at `tau` (or none), fixed in the first.
+    fn inside_at(self, tau: f64, point: Option<DVec3>, pose_a: &Pose) -> Warm {
+        Warm { inside: point.map(|p| (tau, pose_a.inverse_transform_point(p))), ..self }
     }
 
     /// An upper bound on the signed distance from what the last full measure found, with no
@@ -454,39 +460,20 @@ impl ConvexPair<'_> {
             .into_iter()
             .filter_map(|(x, y)| Some(held(x?, y?, self.velocity, limit, slack)))
             .fold(0.0, f64::max);
-        let points = match deepest {
-            Deepest::Inside { point, .. } => (point, point),
-            Deepest::Witnesses(x, y) => (x, y),
+        // The chords (see [`super::chord`]) below the middle of the band in which a contact ends:
+        // of the deepest point (or a's witness) fixed in a, of it (or b's) fixed in b, and of a
+        // point inside both sliding through a; none when a spin does not give its angular
+        // velocity.
+        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return balls };
+        let (points, inside) = match deepest {
+            Deepest::Inside { point, .. } => ((point, point), point),
+            Deepest::Witnesses(x, y) => ((x, y), 0.5 * (x + y)),
         };
-        let chord = self.chord(tau, (a, pose_a), (b, pose_b), points, slack);
-        let sliding = match (slide, self.moving(tau, (a, pose_a), (b, pose_b))) {
-            (Some(drift), Some((moving_a, moving_b))) => {
-                let point = match deepest {
-                    Deepest::Inside { point, .. } => point,
-                    Deepest::Witnesses(x, y) => 0.5 * (x + y),
-                };
-                sliding_hold(point, drift, &moving_a, &moving_b, ending(self.tol), slack)
-            }
-            _ => 0.0,
-        };
-        balls.max(chord).max(sliding)
-    }
-
-    /// How long the signed distance certainly stays below the middle of the band in which a
-    /// contact ends, by the chord certificate (see [`super::chord`]) of the point `points.0`
-    /// fixed in a and of `points.1` fixed in b: 0 when a spin does not give its angular velocity.
-    fn chord(
-        &self,
-        tau: f64,
-        (a, pose_a): (&Scaled, &Pose),
-        (b, pose_b): (&Scaled, &Pose),
-        points: (DVec3, DVec3),
-        slack: f64,
-    ) -> f64 {
-        let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return 0.0 };
         let level = ending(self.tol);
-        let from_a = chord_hold(points.0, &moving_a, &moving_b, level, slack);
-        from_a.max(chord_hold(points.1, &moving_b, &moving_a, level, slack))
+        let fixed = chord_hold(points.0, &moving_a, &moving_b, level, slack)
+            .max(chord_hold(points.1, &moving_b, &moving_a, level, slack));
+        let sliding = slide.map_or(0.0, |drift| sliding_hold(inside, drift, &moving_a, &moving_b, level, slack));
+        balls.max(fixed).max(sliding)
     }
 
     /// How long the shapes certainly stay farther apart than the middle of the band in which a
@@ -613,8 +600,7 @@ impl Gauge for ConvexPair<'_> {
                         Deepest::Witnesses(..) => None,
                     };
                     let slide = warm.slide(tau, point, &pose_a);
-                    let inside = point.map(|p| (tau, pose_a.inverse_transform_point(p)));
-                    self.warm.set(Some(Warm { upper: upper.min(warm.upper), inside, ..warm }));
+                    self.warm.set(Some(Warm { upper: upper.min(warm.upper), ..warm }.inside_at(tau, point, &pose_a)));
                     let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slide, slack);
                     return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
@@ -636,8 +622,9 @@ impl Gauge for ConvexPair<'_> {
         let bounds = warm
             .and_then(|warm| warm.bounds((ga, &pose_a), (gb, &pose_b), carry, self.tol, slack))
             .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack));
-        let slide = warm.and_then(|warm| warm.slide(tau, inside_point(&bounds), &pose_a));
-        self.warm.set(Warm::new(&bounds, carry, tau));
+        let inside = inside_point(&bounds);
+        let slide = warm.and_then(|warm| warm.slide(tau, inside, &pose_a));
+        self.warm.set(Warm::new(&bounds, carry).map(|next| next.inside_at(tau, inside, &pose_a)));
         let hold = match (measure, bounds.witness) {
             // A contact whose end this probe finds needs no step out of it.
             (Measure::Contact, Some((x, y))) if !(bounds.lower > cleared(self.tol)) => {
@@ -796,7 +783,7 @@ mod tests {
                 DVec3::new(random(), random(), random()).normalize_or(DVec3::X) * (0.1 + 0.6 * (random() + 0.5));
             let (pose_a, pose_b) = (Pose::from_parts(DVec3::ZERO, qa), Pose::from_parts(offset, qb));
             let bounds = convex_bounds(&a, &pose_a, &b, &pose_b, Need::converged(Some(EXACT_DEPTH)), 1e-6, 1e-14);
-            let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b), 0.0) else { continue };
+            let Some(warm) = Warm::new(&bounds, (&pose_a, &pose_b)) else { continue };
             let (here, _) = warm.contact_upper((&a, &pose_a), (&b, &pose_b), 1e-14);
             if bounds.upper < -1e-3 {
                 measured += 1;
