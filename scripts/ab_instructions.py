@@ -72,8 +72,10 @@ def instructions(folder, program, args, checked, scratch, tag):
         command = ["taskset", "-c", "1", *valgrind, binary, *args, "--out", contacts]
         function = "vadop::pipeline::Pipeline<B>::step ["
     subprocess.run(command, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # Annotated from the scratch folder: from the build's source folder, callgrind_annotate
+    # shortens the paths under it and splits a function's cost between two names.
     annotated = subprocess.run(["callgrind_annotate", "--inclusive=yes", profile], check=True,
-                               capture_output=True, text=True).stdout
+                               capture_output=True, text=True, cwd=scratch).stdout
     for line in annotated.splitlines():
         if function in line and ":" in line:
             return int(line.split()[0].replace(",", "")), contacts if checked else None
