@@ -18,7 +18,7 @@ use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
 use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAPE_CONTACT_TOLERANCE};
 use crate::narrow_phase::shapes::{
-    pair_first_start, shape_contact_after_parked, shape_wall_time, walls_in_reach, Resume,
+    pair_first_start, shape_contact_after_measured, shape_wall_time, walls_in_reach, Resume,
 };
 use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, straight_pair_contact_time};
 use crate::narrow_phase::spheres::{wall_contact_time, CONTACT_TOLERANCE};
@@ -126,23 +126,26 @@ fn parking_key(bodies: &Bodies, a: usize, b: usize) -> ((u32, u32), (u32, u32)) 
 
 /// The canonical time in `window` at which bodies `a` and `b` (`a` the lower id), which started
 /// to touch at `start`, touch again on the same motions (spinning shapes may; spheres never do),
-/// with where the search parks when they do not.
+/// with where the search parks when they do not, and where they touch at `start` and the normal
+/// when the search measured them there ([`pair_geometry`]'s, to the bit).
 pub(crate) fn pair_start_after(
     bodies: &Bodies,
     a: usize,
     b: usize,
     start: f64,
     window: Window,
-) -> (Found, Option<Parking>) {
+) -> (Found, Option<Parking>, Option<(DVec3, DVec3)>) {
     let (Some(ga), Some(gb), false) = (bodies.geometry(a), bodies.geometry(b), bodies.are_spheres(a, b)) else {
-        return (None, None);
+        return (None, None, None);
     };
     // Touching at `start`: through their nearest image then.
     let shift = bodies.image_shift(a, b, start);
     let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
     let (key, epochs) = parking_key(bodies, a, b);
-    let (found, parks) = settled_parked(shape_contact_after_parked((ga, &ma), (gb, &mb), start, window), window);
-    (found, parks.filter(|_| shift == DVec3::ZERO).map(|r| (key, epochs, r)))
+    let search = shape_contact_after_measured((ga, &ma), (gb, &mb), start, window);
+    let measured = search.as_ref().ok().and_then(|(_, _, at_start)| at_start.map(|c| (c.point, c.normal)));
+    let (found, parks) = settled_parked(search.map(|(found, parked, _)| (found, parked)), window);
+    (found, parks.filter(|_| shift == DVec3::ZERO).map(|r| (key, epochs, r)), measured)
 }
 
 /// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id), in

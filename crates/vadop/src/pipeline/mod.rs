@@ -414,7 +414,7 @@ impl<B: BroadPhase> Pipeline<B> {
         // changed, the pair's next contact is predicted now, as a later window would find it.
         if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
             let later = self.window.from(t.next_up());
-            let (found, parks) = contacts::pair_start_after(bodies, i, j, t, later);
+            let (found, parks, _) = contacts::pair_start_after(bodies, i, j, t, later);
             self.follow_pair((a, stamps.0), (b, stamps.1), found, parks);
         }
         self.report_pair_contact(bodies, physics, (a, b), t, (point, normal, impulse), resolution, out);

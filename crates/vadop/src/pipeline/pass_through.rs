@@ -1,7 +1,8 @@
 //! Shapes passing through each other in detect mode, with their searches shared among the
 //! workers. A pair contact there changes no body, and what costs is the search for the pair's
 //! next contact (the end of this one, then the next start), which the event loop runs as each
-//! contact pops, one at a time.
+//! contact pops, one at a time. The search's first probe measures the contact's point and normal
+//! exactly, so a pass-through is measured once (on one worker too).
 //!
 //! It owns that speculation only: when a pass-through pops, the searches of the pass-throughs
 //! queued right behind it run at once, on every worker, from the bodies as they are. The loop
@@ -16,6 +17,7 @@ use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
 use crate::narrow_phase::contacts::{self, Found, Parking};
+use crate::window::Window;
 use glam::DVec3;
 
 /// Pass-throughs searched ahead per worker: enough to share out, few enough that most are still
@@ -35,6 +37,20 @@ pub(super) struct Searched {
     pub(super) parks: Option<Parking>,
 }
 
+impl Searched {
+    /// The search after the pass-through `event` on the bodies as they are, in `window`: the
+    /// pair's next contact, where it parks, and where the two touch at `event` (measured by the
+    /// search where it can, as for any reported contact otherwise).
+    fn of(bodies: &Bodies, window: Window, event: Event) -> Searched {
+        let Partner::Body(j) = event.partner else { unreachable!("pass-throughs are pair contacts") };
+        let (i, j) = (event.body as usize, j as usize);
+        let (next, parks, measured) =
+            contacts::pair_start_after(bodies, i, j, event.time, window.from(event.time.next_up()));
+        let point_normal = measured.unwrap_or_else(|| contacts::pair_geometry(bodies, i, j, event.time));
+        Searched { event, point_normal, next, parks }
+    }
+}
+
 /// Whether `event` (valid) is two moving bodies, not both spheres, passing through each other.
 fn passes_through(bodies: &Bodies, physics: &Physics, event: &Event) -> bool {
     let Partner::Body(j) = event.partner else { return false };
@@ -44,8 +60,8 @@ fn passes_through(bodies: &Bodies, physics: &Physics, event: &Event) -> bool {
 
 impl<B: BroadPhase> Pipeline<B> {
     /// The search after the pass-through `event` (just popped, valid), from those run ahead, or
-    /// with those behind it in the queue (before `until`) on every worker; `None` when it is no
-    /// pass-through or there is one worker (the loop then searches as for any contact).
+    /// with those behind it in the queue (before `until`) on every worker (alone on one); `None`
+    /// when it is no pass-through (the loop then handles it as any contact).
     pub(super) fn searched_ahead(
         &mut self,
         bodies: &Bodies,
@@ -53,8 +69,11 @@ impl<B: BroadPhase> Pipeline<B> {
         event: &Event,
         until: f64,
     ) -> Option<Searched> {
-        if self.workers.threads() == 1 || !passes_through(bodies, physics, event) {
+        if !passes_through(bodies, physics, event) {
             return None;
+        }
+        if self.workers.threads() == 1 {
+            return Some(Searched::of(bodies, self.window, *event));
         }
         // Searches for events that popped before this one are stale (their events went void).
         while self.ahead.front().is_some_and(|s| s.event > *event) {
@@ -93,14 +112,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let (window, mut searched) = (self.window, std::mem::take(&mut self.searched));
         searched.clear();
         self.workers.extend_ranges(events.len(), &mut searched, |range, found| {
-            for &event in &events[range] {
-                let Partner::Body(j) = event.partner else { unreachable!("pass-throughs are pair contacts") };
-                let (i, j) = (event.body as usize, j as usize);
-                let (next, parks) =
-                    contacts::pair_start_after(bodies, i, j, event.time, window.from(event.time.next_up()));
-                let point_normal = contacts::pair_geometry(bodies, i, j, event.time);
-                found.push(Searched { event, point_normal, next, parks });
-            }
+            found.extend(events[range].iter().map(|&event| Searched::of(bodies, window, event)));
         });
         self.ahead.extend(searched.drain(..));
         // Earliest first: the events' order is reversed.

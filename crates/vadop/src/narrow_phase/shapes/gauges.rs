@@ -5,16 +5,17 @@
 
 use super::chord::{axis_hold, chord_hold, sliding_hold, Moving};
 use super::distance::{
-    closer_points, convex_bounds, separation, Bounds, Need, Simplex, GAP_SHARE, PROBE_DEPTH_SHARE, PROBE_RESOLUTION,
+    closer_points, convex_bounds, separation, Bounds, Need, Simplex, EXACT_DEPTH, GAP_SHARE, PROBE_DEPTH_SHARE,
+    PROBE_RESOLUTION,
 };
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
 use super::scaled::{along, speeding, Body, Scaled};
-use super::{ceiling, cleared, ending, guard, starting, SLACK};
+use super::{ceiling, cleared, contact_point, ending, guard, starting, ContactPoint, SLACK};
 use crate::narrow_phase::falling::bent_reach;
 use crate::narrow_phase::spheres::{sphere_separation_time, sphere_sphere_time};
 use crate::numeric::direction;
-use glam::DVec3;
+use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::SupportMap;
 use std::cell::Cell;
@@ -56,7 +57,8 @@ pub(super) enum Measure {
     /// The signed distance both ways, its depth too when the shapes intersect.
     Depth,
     /// Within a contact, looking for its end: while the shapes lie deep inside each other only
-    /// an upper bound on the signed distance steps the search, and a cheap one will do.
+    /// an upper bound on the signed distance steps the search, and a cheap one will do. The
+    /// first, cold at the contact's start, is exact: the contact's reported geometry.
     Contact,
 }
 
@@ -258,6 +260,10 @@ pub(super) struct ConvexPair<'a> {
     pub(super) warm: Cell<Option<Warm>>,
     /// The balls about the shapes' middles ([`Scaled::middle_ball`], in the shapes' frames).
     pub(super) middles: (Option<ShapeBall>, Option<ShapeBall>),
+    /// Where the shapes touch at the first contact probe made cold (the first of a contact's end
+    /// search, at its start), from the exact measure that probe made, with its time: the
+    /// contact's geometry, which the caller then need not measure again.
+    pub(super) measured: Cell<Option<(f64, ContactPoint)>>,
 }
 
 /// A probe's axis and witness points, fixed in the bodies (in frames that move with them): after
@@ -570,6 +576,23 @@ impl ConvexPair<'_> {
         speeding(self.velocity, self.acceleration, tau)
     }
 
+    /// The shapes' bounds at their poses, converged, the depth to rounding: what a contact's
+    /// reported geometry is measured from.
+    pub(super) fn exact_bounds(&self, (pose_a, pose_b): (&Pose, &Pose)) -> Bounds {
+        let (ga, gb) = &self.shapes;
+        convex_bounds(ga, pose_a, gb, pose_b, Need::converged(Some(EXACT_DEPTH)), self.tol, 0.0)
+    }
+
+    /// Where the shapes touch `tau` after the reference, in world coordinates, from their exact
+    /// bounds there (see [`super::contact_geometry`]).
+    pub(super) fn contact_point(&self, tau: f64, (pose_a, pose_b): (&Pose, &Pose), exact: Bounds) -> ContactPoint {
+        let (ga, gb) = &self.shapes;
+        let witness = exact
+            .witness
+            .unwrap_or_else(|| (ga.support_point(pose_a, exact.axis), gb.support_point(pose_b, -exact.axis)));
+        contact_point(self.a.centre(tau), witness, exact, DQuat::IDENTITY, self.scale)
+    }
+
     pub(super) fn poses(&self, tau: f64) -> (Pose, Pose) {
         let centre = self.centre(tau);
         (
@@ -619,9 +642,21 @@ impl Gauge for ConvexPair<'_> {
             start: warm.map(|warm| pose_a.rotation * warm.axis.0),
             simplex: warm.and_then(|warm| warm.simplex),
         };
-        let bounds = warm
-            .and_then(|warm| warm.bounds((ga, &pose_a), (gb, &pose_b), carry, self.tol, slack))
-            .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack));
+        let bounds = match warm {
+            // A contact's end search starts cold at the contact's start, where the caller reports
+            // where the shapes touch: one exact measure serves both (the slack then added, as a
+            // probe's bounds must hold it).
+            None if measure == Measure::Contact => {
+                let exact = self.exact_bounds((&pose_a, &pose_b));
+                if self.measured.get().is_none() {
+                    self.measured.set(Some((tau, self.contact_point(tau, (&pose_a, &pose_b), exact))));
+                }
+                Bounds { lower: exact.lower - slack, upper: exact.upper + slack, ..exact }
+            }
+            _ => warm
+                .and_then(|warm| warm.bounds((ga, &pose_a), (gb, &pose_b), carry, self.tol, slack))
+                .unwrap_or_else(|| convex_bounds(ga, &pose_a, gb, &pose_b, need, self.tol, slack)),
+        };
         let inside = inside_point(&bounds);
         let slide = warm.and_then(|warm| warm.slide(tau, inside, &pose_a));
         self.warm.set(Warm::new(&bounds, carry).map(|next| next.inside_at(tau, inside, &pose_a)));

@@ -185,7 +185,7 @@ use crate::motion::{RigidMotion, Spin};
 use crate::numeric::unit_scale;
 use crate::shape::ShapeGeometry;
 use crate::window::Window;
-use distance::{convex_bounds, Bounds, Need, EXACT_DEPTH};
+use distance::{Bounds, Need, EXACT_DEPTH};
 use fixed_gauges::{MeshPair, PlanePair};
 use gauges::{spheres_reach, ConvexPair, Gauge, PairGauge, Warm};
 use glam::{DQuat, DVec3};
@@ -385,6 +385,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
                 size: size * scale,
                 tol,
                 warm: Cell::new(None),
+                measured: Cell::new(None),
             })
         }
         (first_static, _) => {
@@ -675,10 +676,26 @@ pub fn shape_contact_after_parked<S: Spin, T: Spin>(
     start: f64,
     window: Window,
 ) -> Result<(Option<f64>, Option<Resume>)> {
-    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok((None, None)) };
+    shape_contact_after_measured(a, b, start, window).map(|(found, parked, _)| (found, parked))
+}
+
+/// [`shape_contact_after_parked`] with where the shapes touch at `start`, as
+/// [`contact_geometry`] gives it to the bit, when the search measured it there (the first probe
+/// of the contact's end search): a caller that reports the contact need not measure it again.
+pub(crate) fn shape_contact_after_measured<S: Spin, T: Spin>(
+    a: (&ShapeGeometry, &RigidMotion<S>),
+    b: (&ShapeGeometry, &RigidMotion<T>),
+    start: f64,
+    window: Window,
+) -> Result<(Option<f64>, Option<Resume>, Option<ContactPoint>)> {
+    let Some(mut searcher) = pair_searcher(a, b)? else { return Ok((None, None, None)) };
     let found = searcher.first_start_after(start, window)?;
     let parked = if found.is_none() { Resume::of(&searcher, window.end) } else { None };
-    Ok((found.map(|tau| searcher.reference + tau), parked))
+    let measured = match &searcher.gauge {
+        PairGauge::Convex(pair) => pair.measured.get().filter(|&(tau, _)| tau == start - searcher.reference),
+        PairGauge::Plane(..) | PairGauge::Mesh(..) => None,
+    };
+    Ok((found.map(|tau| searcher.reference + tau), parked, measured.map(|(_, point)| point)))
 }
 
 /// Where two shapes touch at `time` (normally a contact time), in world coordinates: the normal
@@ -709,14 +726,8 @@ pub fn contact_geometry<S: Spin, T: Spin>(
     let tau = time - searcher.reference;
     match &searcher.gauge {
         PairGauge::Convex(pair) => {
-            let (pose_a, pose_b) = pair.poses(tau);
-            let (ga, gb) = &pair.shapes;
-            let bounds = convex_bounds(ga, &pose_a, gb, &pose_b, Need::converged(Some(EXACT_DEPTH)), pair.tol, 0.0);
-            let origin = pair.a.centre(tau);
-            let witness = bounds
-                .witness
-                .unwrap_or_else(|| (ga.support_point(&pose_a, bounds.axis), gb.support_point(&pose_b, -bounds.axis)));
-            Some(contact_point(origin, witness, bounds, DQuat::IDENTITY, pair.scale))
+            let poses = pair.poses(tau);
+            Some(pair.contact_point(tau, (&poses.0, &poses.1), pair.exact_bounds((&poses.0, &poses.1))))
         }
         PairGauge::Plane(pair, flipped) => {
             let (n, pose, distance, _) = pair.state(tau);
@@ -947,6 +958,47 @@ mod tests {
             }
         }
         assert!(skipped > 200 && found > 20, "{skipped} skipped, {found} contacts found");
+    }
+
+    /// The search after a contact measures where the shapes touch at its start with its first
+    /// probe: the same bits as [`contact_geometry`], on every kind of solid, spinning or not.
+    #[test]
+    fn the_search_after_a_contact_measures_its_geometry_to_the_bit() {
+        use crate::motion::FreeRotation;
+        use rand::{Rng, SeedableRng};
+        let solids = crate::shape::one_solid_of_each_kind().map(|s| s.geometry().unwrap());
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(29);
+        let mut measured = 0;
+        for case in 0..144 {
+            let mut random = |low: f64, high: f64| rng.random_range(low..high);
+            let mut body = |kind: usize, spinning: bool| {
+                let position = DVec3::new(random(-3.0, 3.0), random(-3.0, 3.0), random(-3.0, 3.0));
+                let start =
+                    DQuat::from_scaled_axis(DVec3::new(random(-3.0, 3.0), random(-3.0, 3.0), random(-3.0, 3.0)));
+                let omega = if spinning {
+                    DVec3::new(random(-9.0, 9.0), random(-9.0, 9.0), random(-9.0, 9.0))
+                } else {
+                    DVec3::ZERO
+                };
+                let spin = FreeRotation::new(solids[kind].principal_inertia_unit(), start, omega);
+                RigidMotion { position, since: 0.0, velocity: DVec3::ZERO, acceleration: DVec3::ZERO, spin }
+            };
+            let (kinds, spinning) = ((case % 6, (case / 6) % 6), case % 4 != 0);
+            let (a, mut b) = (body(kinds.0, spinning), body(kinds.1, spinning || case % 8 == 0));
+            // Aimed through each other, fast or slow.
+            b.velocity = (a.position - b.position) * rng.random_range(0.5..12.0);
+            let (a, b) = ((&solids[kinds.0], &a), (&solids[kinds.1], &b));
+            let window = Window::new(0.0, 2.0);
+            let Some(start) = shape_contact_time(a, b, window).unwrap() else { continue };
+            let after = Window::new(start.next_up(), window.end);
+            let (found, parked, at_start) = shape_contact_after_measured(a, b, start, after).unwrap();
+            assert_eq!((found, parked), shape_contact_after_parked(a, b, start, after).unwrap(), "case {case}");
+            if let Some(point) = at_start {
+                assert_eq!(Some(point), contact_geometry(a, b, start), "case {case}");
+                measured += 1;
+            }
+        }
+        assert!(measured > 60, "{measured} contacts measured by their searches");
     }
 
     #[test]
