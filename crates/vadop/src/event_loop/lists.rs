@@ -9,7 +9,8 @@
 //! radii plus two shells (with a slack far above rounding), each with the whole sides that bring
 //! it next to the body across periodic faces. The lists are symmetric: a body is in the list of
 //! every body in its own, so a body that builds its list anew takes itself off the lists of its
-//! old members and onto those of its new ones. **Why a list never misses a partner:** while two
+//! old members and onto those of its new ones (at a shell exit, the lists of the members it
+//! keeps stay as they are). **Why a list never misses a partner:** while two
 //! bodies are inside their shells, their centres are within a shell of their shells' centres, so
 //! when they touch (centres a sum of radii apart) their shells' centres are at most two shells
 //! further apart, within the lists' reach: each is in the other's list. A body builds its list anew
@@ -42,6 +43,10 @@ const BODY_MASK: u32 = (1 << IMAGE_BITS) - 1;
 /// lines): no list outgrew it in the gas at n = 2e4 and packing 0.4 or 0.45 (see [`SHELL`]);
 /// a denser world widens the blocks once.
 const FIRST_BLOCK: usize = 31;
+
+/// Marks, in [`Lists::seen`], a body of the old list that the list built anew holds again (the
+/// lists' numbers count below it).
+const FOUND_AGAIN: u32 = 1 << 31;
 
 /// The most bodies (slots) the lists can number.
 const MAX_BODIES: usize = BODY_MASK as usize;
@@ -85,9 +90,12 @@ pub(super) struct Lists {
     blocks: Vec<u32>,
     stride: usize,
     /// Per body: the number of the last list built while it was in that body's list before
-    /// (see [`Lists::fresh`]).
+    /// (see [`Lists::fresh`]), with [`FOUND_AGAIN`] when that list holds it again.
     seen: Vec<u32>,
     built: u32,
+    /// Scratch: the old list of the body whose list is built anew in place (see
+    /// [`Lists::rebuild_in_place`]).
+    old: Vec<u32>,
 }
 
 impl Lists {
@@ -121,6 +129,7 @@ impl Lists {
             stride: block + 1,
             seen: Vec::new(),
             built: 0,
+            old: Vec::new(),
         }
     }
 
@@ -135,7 +144,7 @@ impl Lists {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.shells.capacity() * 32 + self.blocks.capacity() * 4 + self.seen.capacity() * 4
+        self.shells.capacity() * 32 + (self.blocks.capacity() + self.seen.capacity() + self.old.capacity()) * 4
     }
 
     /// Body `i`'s list: each entry the body in its low bits, its image above (see [`split`]).
@@ -158,7 +167,7 @@ impl Lists {
     /// was built: the pair was not tested before.
     #[inline(always)]
     pub(super) fn fresh(&self, q: usize) -> bool {
-        self.seen[q] != self.built
+        self.seen[q] & !FOUND_AGAIN != self.built
     }
 
     /// When body `i`'s centre next leaves its shell on its current motion, from `now` on (`now`
@@ -207,9 +216,17 @@ impl Lists {
 
     /// Lists the pairs of body `i` and the bodies of the cell whose first body is `first`, seen
     /// through `image` (see [`Self::images`]), that are within reach: those of higher id only
-    /// when `higher`. False when a block overflowed.
+    /// when `higher`. With `in_place`, a body of `i`'s old list keeps its entry for `i` (see
+    /// [`Self::rebuild_in_place`]). False when a block overflowed.
     #[inline(always)]
-    fn pair_with_cell(&mut self, cells: &Cells, i: usize, first: u32, image: u32, higher: bool) -> bool {
+    fn pair_with_cell(
+        &mut self,
+        cells: &Cells,
+        i: usize,
+        (first, image): (u32, u32),
+        higher: bool,
+        in_place: bool,
+    ) -> bool {
         if first == NONE {
             return true;
         }
@@ -220,7 +237,11 @@ impl Lists {
             let k = q as usize;
             if (if higher { k > i } else { k != i }) && self.within(origin, k) {
                 fits &= self.push(i, q | (image << IMAGE_BITS));
-                fits &= self.push(k, i as u32 | ((26 - image) << IMAGE_BITS));
+                if in_place && self.seen[k] == self.built {
+                    self.seen[k] |= FOUND_AGAIN;
+                } else {
+                    fits &= self.push(k, i as u32 | ((26 - image) << IMAGE_BITS));
+                }
             }
             q = cells.after(q);
         }
@@ -232,7 +253,7 @@ impl Lists {
     /// reach of its shell, whatever the radii (most of the corners and some edges: a quarter of
     /// the 27 cells' bodies), are not read.
     #[inline(always)]
-    fn pair_around(&mut self, cells: &Cells, i: usize, higher: bool) -> bool {
+    fn pair_around(&mut self, cells: &Cells, i: usize, higher: bool, in_place: bool) -> bool {
         let own = self.shells[i];
         let reach = (own.w + 2.0 * self.shell + cells.max_radius()) * (1.0 + REACH_SLACK) + self.slack;
         // Twice the rounding [`Self::within`] allows for: the gaps' own, and the cells'.
@@ -247,8 +268,8 @@ impl Lists {
                 }
                 for x in &xs.0[..xs.1] {
                     if gap2 + x.gap2 < out_of_reach {
-                        let (first, image) = (cells.first(x.part + y.part + z.part), x.sign + 3 * y.sign + 9 * z.sign);
-                        fits &= self.pair_with_cell(cells, i, first, image, higher);
+                        let cell = (cells.first(x.part + y.part + z.part), x.sign + 3 * y.sign + 9 * z.sign);
+                        fits &= self.pair_with_cell(cells, i, cell, higher, in_place);
                     }
                 }
             }
@@ -283,36 +304,50 @@ impl Lists {
 
     /// Body `i` leaves every list, its own emptied.
     pub(super) fn remove(&mut self, i: usize) {
-        self.leave(i, false);
-    }
-
-    /// Body `i` leaves its members' lists, its own emptied; each member marked seen by the list
-    /// built now (see [`Self::fresh`]) when `mark`.
-    #[inline(always)]
-    fn leave(&mut self, i: usize, mark: bool) {
         let at = i * self.stride;
         for k in 0..self.blocks[at] as usize {
-            let q = (self.blocks[at + 1 + k] & BODY_MASK) as usize;
-            if mark {
-                self.seen[q] = self.built;
-            }
-            self.take_off(q, i);
+            self.take_off((self.blocks[at + 1 + k] & BODY_MASK) as usize, i);
         }
         self.blocks[at] = 0;
     }
 
     /// Body `i`'s list built anew around its centre at `t`, which `cells` list it by: it leaves
     /// its old members' lists (remembered, see [`Self::fresh`]) and joins its new ones'.
-    pub(super) fn rebuild(&mut self, cells: &Cells, bodies: &Bodies, i: usize, t: f64) {
-        self.built = self.built.wrapping_add(1);
-        if self.built == 0 {
-            // Once in 2^32 lists: no body may look seen by a list of long ago.
+    /// `in_place` when it crossed no periodic face since its list was built (at its shell exit):
+    /// a body of its old list that its new list holds again then keeps its entry for `i` as it is
+    /// (the pair's image is still the one that brings them within reach), so only the lists of
+    /// the bodies it leaves or joins change, and those of most of its neighbours, scattered in
+    /// memory, are not read at all.
+    pub(super) fn rebuild(&mut self, cells: &Cells, bodies: &Bodies, i: usize, t: f64, in_place: bool) {
+        self.built += 1;
+        if self.built == FOUND_AGAIN {
+            // Once in 2^31 lists: no body may look seen by a list of long ago.
             self.seen.fill(0);
             self.built = 1;
         }
-        self.leave(i, true);
+        let mut old = std::mem::take(&mut self.old);
+        old.clear();
+        old.extend_from_slice(self.members(i));
+        self.blocks[i * self.stride] = 0;
+        for &entry in &old {
+            let q = (entry & BODY_MASK) as usize;
+            self.seen[q] = self.built;
+            if !in_place {
+                self.take_off(q, i);
+            }
+        }
         self.place(bodies, i, t);
-        if !self.pair_around(cells, i, false) {
+        let fits = self.pair_around(cells, i, false, in_place);
+        if in_place {
+            for &entry in &old {
+                let q = (entry & BODY_MASK) as usize;
+                if self.seen[q] & FOUND_AGAIN == 0 {
+                    self.take_off(q, i);
+                }
+            }
+        }
+        self.old = old;
+        if !fits {
             self.widen(cells);
         }
     }
@@ -335,7 +370,7 @@ impl Lists {
         for i in 0..self.shells.len() {
             // Each pair once, from its lower id: both lists get it.
             if cells.cell_of(i) != NONE {
-                fits &= self.pair_around(cells, i, true);
+                fits &= self.pair_around(cells, i, true, false);
             }
         }
         if !fits {

@@ -203,12 +203,12 @@ impl EventLoop {
             self.cells.insert(bodies, i, t);
             self.listed += 1;
             if let Some(lists) = &mut self.lists {
-                lists.rebuild(&self.cells, bodies, i, t);
+                lists.rebuild(&self.cells, bodies, i, t, false);
             }
         } else if let Some(lists) = &mut self.lists {
             // A new motion, maybe from a new place: a new shell.
             self.cells.relist(bodies, i, t);
-            lists.rebuild(&self.cells, bodies, i, t);
+            lists.rebuild(&self.cells, bodies, i, t, false);
         }
         self.predict(bodies, i, t, Eligible::From(t), stats);
     }
@@ -666,7 +666,9 @@ impl EventLoop {
         let was_at_face = self.cells.at_face(self.cells.place(i).0);
         self.cells.relist(bodies, i, t);
         let lists = self.lists.as_mut().expect("a shell exit comes with the lists");
-        lists.rebuild(&self.cells, bodies, i, t);
+        // In place: a wrap across a periodic face builds the list anew at once, so none came
+        // since the last.
+        lists.rebuild(&self.cells, bodies, i, t, true);
         self.crossing[i] = Crossing { time: lists.exit(bodies, i, t), ..Crossing::NEVER };
         let entered_face = !was_at_face && self.cells.at_face(self.cells.place(i).0);
         let before = self.next[i];
@@ -696,7 +698,7 @@ impl EventLoop {
                 self.cells.relist(bodies, i, t);
                 if let Some(lists) = &mut self.lists {
                     // Its shell's centre moves with it, whole sides away.
-                    lists.rebuild(&self.cells, bodies, i, t);
+                    lists.rebuild(&self.cells, bodies, i, t, false);
                 }
                 self.predict(bodies, i, t, Eligible::From(t), out.stats);
             }
