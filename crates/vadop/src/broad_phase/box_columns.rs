@@ -129,22 +129,32 @@ impl BoxColumns {
             unsafe {
                 let q_low = query.low.map(|v| _mm_set1_ps(v));
                 let q_high = query.high.map(|v| _mm_set1_ps(v));
+                let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
+                // The overlaps of up to 64 boxes gathered as bits before any is reported: `hit`
+                // is a call, which would otherwise clobber the query's registers in the scan.
                 while j < end {
-                    let mut all = _mm_castsi128_ps(_mm_set1_epi32(-1));
-                    for axis in 0..3 {
-                        let low = _mm_loadu_ps(self.low[axis].as_ptr().add(j));
-                        let high = _mm_loadu_ps(self.high[axis].as_ptr().add(j));
-                        // Ordered comparisons: a NaN fails them, as it fails `<=`.
-                        let overlap = _mm_and_ps(_mm_cmple_ps(q_low[axis], high), _mm_cmple_ps(low, q_high[axis]));
-                        all = _mm_and_ps(all, overlap);
+                    let (first, last) = (j, end.min(j + 64));
+                    let mut found = 0u64;
+                    while j < last {
+                        let mut all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+                        for axis in 0..3 {
+                            let box_low = _mm_loadu_ps(low[axis].add(j));
+                            let box_high = _mm_loadu_ps(high[axis].add(j));
+                            // Ordered comparisons: a NaN fails them, as it fails `<=`.
+                            let overlap =
+                                _mm_and_ps(_mm_cmple_ps(q_low[axis], box_high), _mm_cmple_ps(box_low, q_high[axis]));
+                            all = _mm_and_ps(all, overlap);
+                        }
+                        found |= (_mm_movemask_ps(all) as u64) << (j - first);
+                        j += 4;
                     }
                     // The boxes past `end` (the padding, or boxes not asked for) masked off.
-                    let mut mask = _mm_movemask_ps(all) as u32 & (0b1111 >> (j + 4).saturating_sub(end));
-                    while mask != 0 {
-                        hit(j + mask.trailing_zeros() as usize);
-                        mask &= mask - 1;
+                    found &= u64::MAX >> (64 - (last - first));
+                    while found != 0 {
+                        hit(first + found.trailing_zeros() as usize);
+                        found &= found - 1;
                     }
-                    j += 4;
+                    j = last;
                 }
             }
         }

@@ -442,11 +442,12 @@ impl Grid {
                         continue;
                     }
                     // The neighbours' runs of binned slots: the next cell along z, then the
-                    // columns, each with the axis a box must reach across into it.
-                    let mut runs = [(0, 0, 0); 5];
+                    // columns, each with the axes a box must reach across into it (as bits: x 1,
+                    // y 2, z 4) and where the run ends when the box does not reach across z.
+                    let mut runs = [(0, 0, 0, 0); 5];
                     let mut count = 0;
                     if z + 1 < nz {
-                        runs[0] = (to, level.first + starts[c + 2] as usize, 2);
+                        runs[0] = (to, to, level.first + starts[c + 2] as usize, 0);
                         count = 1;
                     }
                     for [dx, dy] in COLUMNS {
@@ -457,22 +458,27 @@ impl Grid {
                         let column = (x2 * ny + y2) * nz;
                         let (z_from, z_to) = (z.saturating_sub(1), (z + 1).min(nz - 1));
                         let from = level.first + starts[column + z_from] as usize;
-                        runs[count] = (from, level.first + starts[column + z_to + 1] as usize, 1 - dx);
+                        let within = level.first + starts[column + z + 1] as usize;
+                        let across = level.first + starts[column + z_to + 1] as usize;
+                        runs[count] = (from, within, across, dx | usize::from(dy == 2) << 1);
                         count += 1;
                     }
                     for a in from..to {
                         let bbox = boxes.get(a);
                         boxes.for_each_overlap(&bbox, a + 1..to, |b| hit(a, b));
-                        // A box in a neighbour lies past this cell's upper face on the axis that
+                        // A box in a neighbour lies past this cell's upper face on each axis that
                         // leads there (its low corner does, and cells are never smaller than a
-                        // box): only a box reaching across that face can overlap it. The
+                        // box): only a box reaching across those faces can overlap it, and the
+                        // next cell along z of a column only one reaching across z. The
                         // coordinate is the binning's own, monotonic in the value, so no overlap
                         // is skipped. Boxes of this level reach across in a fraction of cases
                         // near their extent over the cell's, which this saves sweeping the rest.
                         let reach = level.coordinates(bbox.corners().1);
-                        let beyond = [reach[0] > x, reach[1] > y, reach[2] > z];
-                        for &(other_from, other_to, axis) in &runs[..count] {
-                            if beyond[axis] {
+                        let beyond = usize::from(reach[0] > x) | usize::from(reach[1] > y) << 1;
+                        let across_z = reach[2] > z;
+                        for &(other_from, within, across, faces) in &runs[..count] {
+                            if beyond & faces == faces {
+                                let other_to = if across_z { across } else { within };
                                 boxes.for_each_overlap(&bbox, other_from..other_to, |b| hit(a, b));
                             }
                         }
