@@ -441,15 +441,13 @@ impl Grid {
                     if from == to {
                         continue;
                     }
-                    // The neighbours' runs of binned slots: the next cell along z, then the
-                    // columns, each with the axes a box must reach across into it (as bits: x 1,
-                    // y 2, z 4) and where the run ends when the box does not reach across z.
-                    let mut runs = [(0, 0, 0, 0); 5];
+                    // The neighbours' runs of binned slots: the columns, each with the axes a
+                    // box must reach across into it (as bits: x 1, y 2) and where the run ends
+                    // when the box does not reach across z. The next cell along z follows this
+                    // one's slots, so it extends this cell's own run.
+                    let mut runs = [(0, 0, 0, 0); 4];
                     let mut count = 0;
-                    if z + 1 < nz {
-                        runs[0] = (to, to, level.first + starts[c + 2] as usize, 0);
-                        count = 1;
-                    }
+                    let next_z_end = if z + 1 < nz { level.first + starts[c + 2] as usize } else { to };
                     for [dx, dy] in COLUMNS {
                         let (x2, y2) = (x + dx, (y + dy).wrapping_sub(1));
                         if x2 >= nx || y2 >= ny {
@@ -465,7 +463,6 @@ impl Grid {
                     }
                     for a in from..to {
                         let bbox = boxes.get(a);
-                        boxes.for_each_overlap(&bbox, a + 1..to, |b| hit(a, b));
                         // A box in a neighbour lies past this cell's upper face on each axis that
                         // leads there (its low corner does, and cells are never smaller than a
                         // box): only a box reaching across those faces can overlap it, and the
@@ -476,6 +473,7 @@ impl Grid {
                         let reach = level.coordinates(bbox.corners().1);
                         let beyond = usize::from(reach[0] > x) | usize::from(reach[1] > y) << 1;
                         let across_z = reach[2] > z;
+                        boxes.for_each_overlap(&bbox, a + 1..if across_z { next_z_end } else { to }, |b| hit(a, b));
                         for &(other_from, within, across, faces) in &runs[..count] {
                             if beyond & faces == faces {
                                 let other_to = if across_z { across } else { within };
