@@ -62,6 +62,10 @@ const UPDATES_PER_BODY: usize = 2;
 /// 6 % fewer instructions at 5 diameters/frame (BENCHMARKS.md, eleventh session).
 const WINDOW_DIAMETERS: f64 = 2.0;
 const CALM_WINDOW_DIAMETERS: f64 = 4.5;
+/// A calm window of a world with shapes stays at 3: their pair predictions, not the window's start,
+/// are what costs, and a longer window predicts more (the peers' shapes at 5 d/f: 8.6 % more
+/// instructions at 4.5; BENCHMARKS.md, eleventh session).
+const SHAPE_CALM_WINDOW_DIAMETERS: f64 = 3.0;
 /// A window is calm when the last one refreshed fewer proxies mid-window than this, per live
 /// body and per diameter the fastest tenth travels. Measured: the paper scene in detect mode
 /// (only wall bounces) refreshes about 0.02, the equilibrium gas at packing 0.05 about 0.3 and
@@ -266,7 +270,8 @@ impl<B: BroadPhase> Pipeline<B> {
             mode == Mode::Detect
         };
         self.proxies.set_calm(calm);
-        let diameters = if calm { CALM_WINDOW_DIAMETERS } else { WINDOW_DIAMETERS };
+        let calm_diameters = if bodies.has_rigid() { SHAPE_CALM_WINDOW_DIAMETERS } else { CALM_WINDOW_DIAMETERS };
+        let diameters = if calm { calm_diameters } else { WINDOW_DIAMETERS };
         let longest = frame * if bodies.has_rigid() { SHAPE_WINDOW_FRAMES } else { FRAME_RATIO };
         (quick * diameters * self.shrink).clamp(frame / FRAME_RATIO, longest)
     }
