@@ -270,9 +270,12 @@ impl<B: BroadPhase> Pipeline<B> {
             mode == Mode::Detect
         };
         self.proxies.set_calm(calm);
-        let calm_diameters = if bodies.has_rigid() { SHAPE_CALM_WINDOW_DIAMETERS } else { CALM_WINDOW_DIAMETERS };
+        let (calm_diameters, longest) = if bodies.has_rigid() {
+            (SHAPE_CALM_WINDOW_DIAMETERS, frame * SHAPE_WINDOW_FRAMES)
+        } else {
+            (CALM_WINDOW_DIAMETERS, frame * FRAME_RATIO)
+        };
         let diameters = if calm { calm_diameters } else { WINDOW_DIAMETERS };
-        let longest = frame * if bodies.has_rigid() { SHAPE_WINDOW_FRAMES } else { FRAME_RATIO };
         (quick * diameters * self.shrink).clamp(frame / FRAME_RATIO, longest)
     }
 

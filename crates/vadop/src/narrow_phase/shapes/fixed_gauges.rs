@@ -354,8 +354,13 @@ impl WallGauge<'_> {
 /// comes within `within` of it: the body lies in its bounding sphere of radius `size`. It needs no
 /// pose, so a wall search asks it before building its body (see `shape_wall_search`).
 pub(super) fn wall_reach(gap: f64, speed: f64, pull: f64, size: f64, within: f64) -> Option<Reach> {
-    let limit = size + within + SLACK * (gap.abs() + size);
-    Reach::below_bent(gap, -speed, -pull, limit)
+    Reach::below_bent(gap, -speed, -pull, wall_reach_limit(gap, size, within))
+}
+
+/// The centre's distance from the wall below which [`wall_reach`] counts a body `gap` from it in
+/// reach: its bounding radius `size`, `within`, and the rounding slack.
+pub(super) fn wall_reach_limit(gap: f64, size: f64, within: f64) -> f64 {
+    size + within + SLACK * (gap.abs() + size)
 }
 
 impl Gauge for WallGauge<'_> {

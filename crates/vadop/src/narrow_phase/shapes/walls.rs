@@ -4,10 +4,10 @@
 //! the window start, which asks every body, builds a searcher only for the few near a wall. It
 //! never sees another body.
 
-use super::fixed_gauges::{wall_reach, WallGauge};
+use super::fixed_gauges::{wall_reach, wall_reach_limit, WallGauge};
 use super::scaled::Body;
 use super::searcher::Searcher;
-use super::{ContactPoint, Search, SHAPE_CONTACT_TOLERANCE, SLACK};
+use super::{ContactPoint, Search, SHAPE_CONTACT_TOLERANCE};
 use crate::error::Result;
 use crate::motion::{Motion, RigidMotion, Spin};
 use crate::numeric::unit_scale;
@@ -108,9 +108,10 @@ fn far_from_walls(
 ) -> bool {
     let span = 2.0 * span;
     let travel = velocity.abs() * span + acceleration.abs() * (0.5 * span * span);
-    let reach = size * (1.0 + 2.0 * SHAPE_CONTACT_TOLERANCE);
+    // A wall search looks `2 tol` beyond the bounding sphere (see `WallApproach::in_reach_before`).
+    let within = 2.0 * SHAPE_CONTACT_TOLERANCE * size;
     // An open side (an infinite wall) is far; NaN is not.
-    let far = |gap: f64, travel: f64| gap == f64::INFINITY || gap - travel > 2.0 * (reach + SLACK * (gap + size));
+    let far = |gap: f64, travel: f64| gap == f64::INFINITY || gap - travel > 2.0 * wall_reach_limit(gap, size, within);
     let (below, above) = ((position - min).to_array(), (max - position).to_array());
     let travel = travel.to_array();
     (0..3).all(|k| far(below[k], travel[k]) && far(above[k], travel[k]))
