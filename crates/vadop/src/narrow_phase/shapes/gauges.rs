@@ -660,12 +660,18 @@ impl Gauge for ConvexPair<'_> {
         let inside = inside_point(&bounds);
         let slide = warm.and_then(|warm| warm.slide(tau, inside, &pose_a));
         self.warm.set(Warm::new(&bounds, carry).map(|next| next.inside_at(tau, inside, &pose_a)));
+        // Negative where the pair leaves along the axis faster than turning can close it.
+        let shrink = self.spin_along(bounds.axis) - velocity.dot(bounds.axis);
+        // Apart and never closer along the axis: the start search's step on it is infinite, so
+        // neither the certificate nor the spin-free bound could step it farther; most pairs a
+        // broad phase reports that never touch end on such a probe, often their first.
+        let receding = gap && bend == 0.0 && shrink <= 0.0 && bounds.lower > guard(self.tol);
         let hold = match (measure, bounds.witness) {
             // A contact whose end this probe finds needs no step out of it.
             (Measure::Contact, Some((x, y))) if !(bounds.lower > cleared(self.tol)) => {
                 self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slide, slack)
             }
-            (Measure::Gap, _) if bounds.lower > guard(self.tol) => {
+            (Measure::Gap, _) if bounds.lower > guard(self.tol) && !receding => {
                 self.apart(tau, (ga, &pose_a), (gb, &pose_b), bounds.axis, slack)
             }
             _ => 0.0,
@@ -673,11 +679,10 @@ impl Gauge for ConvexPair<'_> {
         Probe {
             lower: bounds.lower,
             upper: bounds.upper,
-            // Negative where the pair leaves along the axis faster than turning can close it.
-            shrink: self.spin_along(bounds.axis) - velocity.dot(bounds.axis),
+            shrink,
             grow,
             // Only a start search steps on it (see [`Probe::approach_step`]).
-            far: if gap { self.far(tau, (ga, &pose_a), (gb, &pose_b), slack) } else { NO_FAR },
+            far: if gap && !receding { self.far(tau, (ga, &pose_a), (gb, &pose_b), slack) } else { NO_FAR },
             hold,
             bend,
         }

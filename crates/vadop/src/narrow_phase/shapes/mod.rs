@@ -240,6 +240,12 @@ impl Resume {
         self.searched_to
     }
 
+    /// A chain parked for good, searched to `searched_to`: a value for the store's tests.
+    #[cfg(test)]
+    pub(crate) fn done_at(searched_to: f64) -> Resume {
+        Resume { reference: 0.0, searched_to, parked: Parked::DONE, spent: 0, warm: None }
+    }
+
     /// Where `searcher` parked after finding nothing before `searched_to`; `None` when it did
     /// not park (it never probed, or found something) or its gauge's warm start cannot be kept.
     fn of<G: Gauge>(searcher: &Searcher<G>, searched_to: f64) -> Option<Resume> {

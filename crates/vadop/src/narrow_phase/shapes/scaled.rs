@@ -25,6 +25,10 @@ pub(super) struct Scaled<'a> {
     /// Which primitive `parry` is, asked once.
     pub(super) kind: Kind<'a>,
     pub(super) scale: f64,
+    /// `1 / scale`, exact (a power of two): a point is brought back to the shape's own lengths
+    /// by a product, which gives the quotient's bits, not by a division, whose latency was a
+    /// tenth of the depth evaluations' time at 5 d/f.
+    pub(super) inverse_scale: f64,
 }
 
 /// The primitive a parry shape is, for the closed forms that depend on it: asked of the shape once
@@ -83,7 +87,9 @@ impl<'a> Scaled<'a> {
             }
             _ => (Core::Solid(parry.as_support_map().expect("solid shapes have support maps")), 0.0),
         };
-        Scaled { core, margin: margin * scale, parry, kind, scale }
+        let inverse_scale = 1.0 / scale;
+        debug_assert!(scale.is_normal() && scale.to_bits() & ((1 << 52) - 1) == 0, "the scale is a power of two");
+        Scaled { core, margin: margin * scale, parry, kind, scale, inverse_scale }
     }
 
     /// How deep the point `p` (in the shape's frame, scaled) lies inside the shape: the radius of
@@ -98,7 +104,7 @@ impl<'a> Scaled<'a> {
                 (self.margin - on.distance(p), (on - p).normalize_or_zero())
             }
             Core::Solid(_) => {
-                let (depth, inward) = solid_depth(self.kind, p / self.scale);
+                let (depth, inward) = solid_depth(self.kind, p * self.inverse_scale);
                 (depth * self.scale, inward)
             }
         }
@@ -109,7 +115,7 @@ impl<'a> Scaled<'a> {
     /// a ball or a capsule), outside the distance to the nearest point of the shape (parry's
     /// closed forms for the primitives, [`hull_nearest`] for a hull).
     pub(super) fn signed_distance_above(&self, p: DVec3) -> f64 {
-        let local = p / self.scale;
+        let local = p * self.inverse_scale;
         if let Kind::Hull(hull) = self.kind {
             // One pass over the faces tells inside from outside and finds the nearest point.
             return match hull_nearest(hull, local) {
