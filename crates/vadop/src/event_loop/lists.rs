@@ -68,11 +68,14 @@ const MAX_BODIES: usize = BODY_MASK as usize;
 const FROM_PACKING: f64 = 0.29;
 /// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
 /// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
-/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
-/// 0.25 is also the shell of Smallenburg's EDMD. At most 0.8: a periodic side holds 8 diameters
-/// (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so cells a diameter and two shells wide still
-/// number 3 to a periodic side, as the cells need.
-const SHELL: f64 = 0.25;
+/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6
+/// (0.25 is the shell of Smallenburg's EDMD). At n = 10^5, where the loop waits on memory, 0.3
+/// also misses a 2 MiB cache 4 % less often per collision than 0.25 (cachegrind, BENCHMARKS.md,
+/// issue 27's twelfth session): a list is built anew less often, and each such build, which walks
+/// about fifty bodies scattered in memory, costs more misses than its longer searches add. At
+/// most 0.8: a periodic side holds 8 diameters (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so
+/// cells a diameter and two shells wide still number 3 to a periodic side, as the cells need.
+const SHELL: f64 = 0.3;
 
 /// The neighbour lists (see the module documentation).
 #[derive(Debug)]
