@@ -21,6 +21,7 @@
 use super::calendar::Entry;
 use super::cells::{Cells, Crossing};
 use super::search::{Candidate, Eligible, Near, Overlay, Search};
+use super::Events;
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
@@ -96,8 +97,7 @@ pub(super) struct Seen<'a> {
     pub rules: &'a ContactRules,
     pub screen: bool,
     /// Per body: its next event and its next cell crossing, as the loop keeps them.
-    pub next: &'a [Option<Event>],
-    pub crossing: &'a [Crossing],
+    pub events: &'a [Events],
 }
 
 impl Seen<'_> {
@@ -118,9 +118,9 @@ impl Seen<'_> {
             tests: 0,
         };
         let worked = if entry.scheduled.cell_crossing {
-            let crossing = self.crossing[owner];
+            let crossing = self.events[owner].crossing;
             let into = self.cells.stepped(owner, crossing);
-            let next = search.after_crossing(owner, (into, crossing), time, self.next[owner]);
+            let next = search.after_crossing(owner, (into, crossing), time, self.events[owner].next);
             Worked::Crossed { next, crossing: self.cells.next_crossing_from(&self.bodies.motion(owner), into.0, time) }
         } else {
             let event = entry.scheduled.event;

@@ -68,11 +68,14 @@ const MAX_BODIES: usize = BODY_MASK as usize;
 const FROM_PACKING: f64 = 0.29;
 /// The serial loop's shells, in largest diameters (a body's list holds the bodies whose shells'
 /// centres are within a diameter and two shells). Measured as above at packing 0.4: 12.6 k
-/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6;
-/// 0.25 is also the shell of Smallenburg's EDMD. At most 0.8: a periodic side holds 8 diameters
-/// (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so cells a diameter and two shells wide still
-/// number 3 to a periodic side, as the cells need.
-const SHELL: f64 = 0.25;
+/// instructions per collision at 0.2, 12.5 k at 0.25 and 0.3, 13.4 k at 0.4, 18.9 k at 0.6
+/// (0.25 is the shell of Smallenburg's EDMD). At n = 10^5, where the loop waits on memory, 0.3
+/// also misses a 2 MiB cache 4 % less often per collision than 0.25 (cachegrind, BENCHMARKS.md,
+/// issue 27's twelfth session): a list is built anew less often, and each such build, which walks
+/// about fifty bodies scattered in memory, costs more misses than its longer searches add. At
+/// most 0.8: a periodic side holds 8 diameters (see [`crate::walls::MIN_PERIODIC_DIAMETERS`]), so
+/// cells a diameter and two shells wide still number 3 to a periodic side, as the cells need.
+const SHELL: f64 = 0.3;
 
 /// The neighbour lists (see the module documentation).
 #[derive(Debug)]
@@ -85,7 +88,7 @@ pub(super) struct Lists {
     /// `(x + 1) + 3 (y + 1) + 9 (z + 1)`.
     pub images: [DVec3; 27],
     /// Per body: its shell's centre, and its radius (read together when lists are built).
-    shells: Vec<DVec4>,
+    shells: Vec<Shell>,
     /// Per body, `stride` entries: the count, then the list.
     blocks: Vec<u32>,
     stride: usize,
@@ -97,6 +100,13 @@ pub(super) struct Lists {
     /// [`Lists::rebuild_in_place`]).
     old: Vec<u32>,
 }
+
+/// A body's shell: its centre, and its radius as `w`. Aligned to its size, so that one is never
+/// split across two cache lines: a list built anew reads those of about fifty bodies scattered in
+/// memory, and an unaligned array (as the allocator places a large one) splits every other one.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(32))]
+struct Shell(DVec4);
 
 impl Lists {
     /// Lists for the bodies `ids` in the box `bounds` when they pay, in a world packed at least
@@ -136,7 +146,7 @@ impl Lists {
     /// Room for `slots` bodies.
     pub(super) fn grow(&mut self, slots: usize) {
         if self.shells.len() < slots {
-            self.shells.resize(slots, DVec4::ZERO);
+            self.shells.resize(slots, Shell(DVec4::ZERO));
             self.seen.resize(slots, 0);
             self.blocks.resize(slots * self.stride, 0);
         }
@@ -144,7 +154,8 @@ impl Lists {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.shells.capacity() * 32 + (self.blocks.capacity() + self.seen.capacity() + self.old.capacity()) * 4
+        self.shells.capacity() * std::mem::size_of::<Shell>()
+            + (self.blocks.capacity() + self.seen.capacity() + self.old.capacity()) * 4
     }
 
     /// Body `i`'s list: each entry the body in its low bits, its image above (see [`split`]).
@@ -175,7 +186,7 @@ impl Lists {
     #[inline]
     pub(super) fn exit(&self, bodies: &Bodies, i: usize, now: f64) -> f64 {
         let motion = bodies.motion(i);
-        let (offset, velocity) = (motion.position - self.shells[i].truncate(), motion.velocity);
+        let (offset, velocity) = (motion.position - self.shells[i].0.truncate(), motion.velocity);
         let speed2 = velocity.length_squared();
         if speed2 == 0.0 {
             return f64::INFINITY;
@@ -203,7 +214,7 @@ impl Lists {
     /// `q`'s image) is `origin`.
     #[inline(always)]
     fn within(&self, origin: DVec4, q: usize) -> bool {
-        let other = self.shells[q];
+        let other = self.shells[q].0;
         let reach = (origin.w + other.w) * (1.0 + REACH_SLACK) + self.slack;
         let (x, y, z) = (other.x - origin.x, other.y - origin.y, other.z - origin.z);
         x * x + y * y + z * z < reach * reach
@@ -211,7 +222,7 @@ impl Lists {
 
     /// Body `i`'s shell: its centre at `t`, and its radius.
     fn place(&mut self, bodies: &Bodies, i: usize, t: f64) {
-        self.shells[i] = bodies.position_at(i, t).extend(bodies.radius(i));
+        self.shells[i] = Shell(bodies.position_at(i, t).extend(bodies.radius(i)));
     }
 
     /// Lists the pairs of body `i` and the bodies of the cell whose first body is `first`, seen
@@ -230,7 +241,7 @@ impl Lists {
         if first == NONE {
             return true;
         }
-        let origin = self.origin(self.shells[i], self.images[image as usize]);
+        let origin = self.origin(self.shells[i].0, self.images[image as usize]);
         let mut fits = true;
         let mut q = first;
         while q != NONE {
@@ -254,7 +265,7 @@ impl Lists {
     /// the 27 cells' bodies), are not read.
     #[inline(always)]
     fn pair_around(&mut self, cells: &Cells, i: usize, higher: bool, in_place: bool) -> bool {
-        let own = self.shells[i];
+        let own = self.shells[i].0;
         let reach = (own.w + 2.0 * self.shell + cells.max_radius()) * (1.0 + REACH_SLACK) + self.slack;
         // Twice the rounding [`Self::within`] allows for: the gaps' own, and the cells'.
         let [xs, ys, zs] = cells.slabs_around(i, own.truncate(), 2.0 * self.slack);
@@ -402,12 +413,12 @@ impl Lists {
         let listed: Vec<usize> = (0..self.shells.len()).filter(|&i| cells.cell_of(i) != NONE).collect();
         let real = |image: usize| (0..3).all(|a| bounds.periodic[a] || image / [1, 3, 9][a] % 3 == 1);
         for &i in &listed {
-            let away = (bodies.position_at(i, now) - self.shells[i].truncate()).length();
+            let away = (bodies.position_at(i, now) - self.shells[i].0.truncate()).length();
             assert!(away <= self.shell * (1.0 + 1e-9), "body {i} is {away} from its shell's centre");
             let mut expected: Vec<u32> = Vec::new();
             for &q in listed.iter().filter(|&&q| q != i) {
                 for image in (0..27).filter(|&image| real(image)) {
-                    if self.within(self.origin(self.shells[i], self.images[image]), q) {
+                    if self.within(self.origin(self.shells[i].0, self.images[image]), q) {
                         expected.push(q as u32 | ((image as u32) << IMAGE_BITS));
                     }
                 }

@@ -56,6 +56,21 @@ use rayon::prelude::*;
 use search::{Candidate, Eligible, Near, Overlay, Search};
 use std::time::Instant;
 
+/// A body's next events, side by side and in one cache line: scheduling a body reads both, and
+/// its event is handled far in memory from the last one's (the events come in time order).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Events {
+    /// Its earliest eligible contact, wall contact or periodic crossing.
+    next: Option<Event>,
+    /// When its centre next leaves its cell, or with lists its shell (the time alone).
+    crossing: Crossing,
+}
+
+impl Events {
+    const NONE: Events = Events { next: None, crossing: Crossing::NEVER };
+}
+
 /// The parallel loop runs from this many threads on. On 2 its workers share the searches, most
 /// of an event's cost, but an event's handling in order stays on one thread: measured with
 /// callgrind on the gas at n = 10^5 and packing 0.2, the workers execute about 10.5 k
@@ -79,10 +94,8 @@ pub(crate) struct EventLoop {
     bounds: BoxBounds,
     cells: Cells,
     calendar: Calendar,
-    /// Per body: its earliest eligible contact, wall contact or periodic crossing.
-    next: Vec<Option<Event>>,
-    /// Per body: when its centre next leaves its cell, or with lists its shell (the time alone).
-    crossing: Vec<Crossing>,
+    /// Per body: its next events (see [`Events`]).
+    events: Vec<Events>,
     /// The neighbour lists (see [`lists`]): the serial loop's, built with the grid.
     lists: Option<Lists>,
     pub(crate) impacts: Impacts,
@@ -131,8 +144,7 @@ impl EventLoop {
             bounds: *bounds,
             cells: Cells::default(),
             calendar: Calendar::default(),
-            next: Vec::new(),
-            crossing: Vec::new(),
+            events: Vec::new(),
             lists: None,
             impacts: Impacts::default(),
             cluster: Cluster::default(),
@@ -169,8 +181,7 @@ impl EventLoop {
     pub(crate) fn memory_bytes(&self) -> usize {
         self.cells.memory_bytes()
             + self.calendar.memory_bytes()
-            + self.next.capacity() * std::mem::size_of::<Option<Event>>()
-            + self.crossing.capacity() * std::mem::size_of::<Crossing>()
+            + self.events.capacity() * std::mem::size_of::<Events>()
             + self.impacts.rules.memory_bytes()
             + self.cluster.memory_bytes()
             + self.members.capacity() * 4
@@ -230,9 +241,8 @@ impl EventLoop {
     }
 
     fn grow(&mut self, slots: usize) {
-        if self.next.len() < slots {
-            self.next.resize(slots, None);
-            self.crossing.resize(slots, Crossing::NEVER);
+        if self.events.len() < slots {
+            self.events.resize(slots, Events::NONE);
         }
         if let Some(lists) = &mut self.lists {
             lists.grow(slots);
@@ -254,8 +264,7 @@ impl EventLoop {
         let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
         self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
-        self.next.clear();
-        self.crossing.clear();
+        self.events.clear();
         self.grow(bodies.slots());
         for &i in &ids {
             self.min_radius = self.min_radius.min(bodies.radius(i as usize));
@@ -268,11 +277,11 @@ impl EventLoop {
             let mut search = self.search(bodies);
             let next = search.next_event(i as usize, t, Eligible::From(t));
             stats.narrow_tests += search.tests;
-            self.next[i as usize] = next;
+            self.events[i as usize].next = next;
         }
         stats.retests += ids.len() as u64;
         for &i in &ids {
-            self.crossing[i as usize] = self.next_crossing(bodies, i as usize, t);
+            self.events[i as usize].crossing = self.next_crossing(bodies, i as usize, t);
         }
         self.stale = false;
         self.retune(t);
@@ -290,7 +299,7 @@ impl EventLoop {
     /// Resets the calendar with buckets sized for the events now scheduled, and schedules them.
     fn retune(&mut self, t: f64) {
         let (mut sum, mut count) = (0.0, 0usize);
-        for i in 0..self.next.len() {
+        for i in 0..self.events.len() {
             let time = self.scheduled(i).time();
             if time.is_finite() {
                 (sum, count) = (sum + (time - t).max(0.0), count + 1);
@@ -298,8 +307,8 @@ impl EventLoop {
         }
         // A body's events come about `sum / count` apart: the world's, that over `count`.
         let gap = if count > 0 { sum / (count * count) as f64 } else { 1.0 };
-        self.calendar.reset(self.next.len(), t, if gap > 0.0 { gap } else { 1.0 });
-        for i in 0..self.next.len() {
+        self.calendar.reset(self.events.len(), t, if gap > 0.0 { gap } else { 1.0 });
+        for i in 0..self.events.len() {
             if self.cells.cell_of(i) != NONE {
                 self.calendar.schedule(i as u32, self.scheduled(i));
             }
@@ -327,8 +336,8 @@ impl EventLoop {
     /// or its next cell crossing, whichever comes first (the crossing at a tie).
     #[inline]
     fn scheduled(&self, i: usize) -> Scheduled {
-        let crossing = self.crossing[i];
-        match self.next[i] {
+        let crossing = self.events[i].crossing;
+        match self.events[i].next {
             Some(event) if event.time < crossing.time => Scheduled { event, cell_crossing: false },
             _ => {
                 let event = Event {
@@ -351,9 +360,9 @@ impl EventLoop {
         let next = search.next_event(i, now, eligible);
         stats.narrow_tests += search.tests;
         stats.retests += 1;
-        self.next[i] = next;
+        self.events[i].next = next;
         if let Eligible::From(_) = eligible {
-            self.crossing[i] = self.next_crossing(bodies, i, now);
+            self.events[i].crossing = self.next_crossing(bodies, i, now);
             self.marks.mark(self.cells.cell_of(i));
         }
         self.calendar.schedule(i as u32, self.scheduled(i));
@@ -424,7 +433,7 @@ impl EventLoop {
         }
         if entry.scheduled.cell_crossing {
             // The entry may be stale: the body's crossing is the one of the cell it is in.
-            let crossing = self.crossing[owner];
+            let crossing = self.events[owner].crossing;
             if crossing.time.is_finite() {
                 self.cells.prefetch_new(owner, crossing);
             }
@@ -434,13 +443,11 @@ impl EventLoop {
     /// [`Self::prefetch`] of body `i`'s records: its motion, stamp, events, place in the cells.
     #[inline]
     fn prefetch_body(&self, bodies: &Bodies, i: usize) {
-        if let (Some(state), Some(stamp), Some(next), Some(crossing)) =
-            (bodies.state.get(i), bodies.stamp.get(i), self.next.get(i), self.crossing.get(i))
+        if let (Some(state), Some(stamp), Some(events)) = (bodies.state.get(i), bodies.stamp.get(i), self.events.get(i))
         {
             prefetch(state);
             prefetch(stamp);
-            prefetch(next);
-            prefetch(crossing);
+            prefetch(events);
             self.cells.prefetch(i);
             self.calendar.prefetch(i);
             if let Some(lists) = &self.lists {
@@ -481,8 +488,7 @@ impl EventLoop {
                 physics,
                 rules: &self.impacts.rules,
                 screen: search::screen_trusted(self.scale, self.min_radius),
-                next: &self.next,
-                crossing: &self.crossing,
+                events: &self.events,
             };
             self.workers.par_iter_mut().enumerate().for_each(|(k, worker)| {
                 worker.worked.clear();
@@ -557,15 +563,15 @@ impl EventLoop {
         match worked {
             Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
                 self.marks.mark(self.cells.cell_of(i));
-                self.cells.step_across(i, self.crossing[i]);
+                self.cells.step_across(i, self.events[i].crossing);
                 self.marks.mark(self.cells.cell_of(i));
-                (self.next[i], self.crossing[i]) = (next, crossing);
+                (self.events[i].next, self.events[i].crossing) = (next, crossing);
                 self.calendar.schedule(i as u32, self.scheduled(i));
             }
             Worked::Voided { next } if self.untouched_around(i) => {
                 out.stats.invalidations += 1;
                 out.stats.retests += 1;
-                self.next[i] = next;
+                self.events[i].next = next;
                 self.calendar.schedule(i as u32, self.scheduled(i));
             }
             Worked::Pushed(pushed) if self.untouched_pair(bodies, &pushed, entry.scheduled.event) => {
@@ -604,7 +610,7 @@ impl EventLoop {
             debug_assert!(
                 ahead::same_bits(&bodies.motion(i), &pushed.motions[k]) && bodies.stamp[i] == pushed.stamps[k]
             );
-            (self.next[i], self.crossing[i]) = (pushed.next[k], pushed.crossings[k]);
+            (self.events[i].next, self.events[i].crossing) = (pushed.next[k], pushed.crossings[k]);
             self.marks.mark(self.cells.cell_of(i));
             self.calendar.schedule(pushed.pair[k], self.scheduled(i));
         }
@@ -636,7 +642,7 @@ impl EventLoop {
     /// True when neither body `i`'s cell nor the cells its next crossing brings within reach were
     /// marked in this batch.
     fn untouched_crossing(&self, i: usize) -> bool {
-        let crossing = self.crossing[i];
+        let crossing = self.events[i].crossing;
         let mut untouched = !self.marks.is_marked(self.cells.cell_of(i));
         self.cells
             .for_each_new(self.cells.stepped(i, crossing), crossing, |n| untouched &= !self.marks.is_marked(n.cell));
@@ -646,17 +652,17 @@ impl EventLoop {
     /// Body `i` crosses into the next cell at `t`: it is listed there, and tested against the
     /// bodies that came within reach.
     fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
-        let crossing = self.crossing[i];
+        let crossing = self.events[i].crossing;
         self.marks.mark(self.cells.cell_of(i));
         self.cells.step_across(i, crossing);
         self.marks.mark(self.cells.cell_of(i));
         let into = self.cells.place(i);
-        self.crossing[i] = self.cells.next_crossing(bodies, i, t);
-        let before = self.next[i];
+        self.events[i].crossing = self.cells.next_crossing(bodies, i, t);
+        let before = self.events[i].next;
         let mut search = self.search(bodies);
         let next = search.after_crossing(i, (into, crossing), t, before);
         stats.narrow_tests += search.tests;
-        self.next[i] = next;
+        self.events[i].next = next;
         self.calendar.schedule(i as u32, self.scheduled(i));
     }
 
@@ -669,13 +675,13 @@ impl EventLoop {
         // In place: a wrap across a periodic face builds the list anew at once, so none came
         // since the last.
         lists.rebuild(&self.cells, bodies, i, t, true);
-        self.crossing[i] = Crossing { time: lists.exit(bodies, i, t), ..Crossing::NEVER };
+        self.events[i].crossing = Crossing { time: lists.exit(bodies, i, t), ..Crossing::NEVER };
         let entered_face = !was_at_face && self.cells.at_face(self.cells.place(i).0);
-        let before = self.next[i];
+        let before = self.events[i].next;
         let mut search = self.search(bodies);
         let next = search.after_shell_exit(i, t, before, entered_face);
         stats.narrow_tests += search.tests;
-        self.next[i] = next;
+        self.events[i].next = next;
         self.calendar.schedule(i as u32, self.scheduled(i));
     }
 

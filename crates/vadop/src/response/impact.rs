@@ -144,8 +144,7 @@ impl Impacts {
         let duration = tc_duration(physics);
         // Whether each body's own previous contact lies within the contact duration (the TC
         // model asks whether either's does).
-        let quick = [a, b]
-            .map(|k| t - self.rules.last_contact.get(k as usize).copied().unwrap_or(f64::NEG_INFINITY) < duration);
+        let quick = [a, b].map(|k| t - self.rules.last_contact(k as usize) < duration);
         // Level geometry keeps no contact history, as a wall keeps none: the TC model and the
         // jam count are about the moving body's own contacts.
         let rule = match fixed {

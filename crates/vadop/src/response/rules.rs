@@ -25,8 +25,8 @@
 //! A Newton's cradle of k touching bodies takes about 2k contacts per body at one instant, so
 //! cradles of up to about [`JAM_LIMIT`] / 2 bodies are resolved exactly.
 //!
-//! This module owns the per-body contact history (flat arrays by body id, no hashing); it decides
-//! which rule applies and never changes a body itself.
+//! This module owns the per-body contact history (one record per body, by body id, no hashing);
+//! it decides which rule applies and never changes a body itself.
 
 /// Contacts one body may take part in at a single instant before it counts as jammed.
 pub const JAM_LIMIT: u32 = 64;
@@ -53,60 +53,84 @@ pub(crate) enum Rule {
 /// Contact history.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct ContactRules {
-    /// Time of each body's last contact (`-inf` before the first).
-    pub last_contact: Vec<f64>,
-    /// Contacts of each body at the instant `last_contact`, saturating: only "more than
-    /// [`JAM_LIMIT`]" matters, and a byte holds that.
-    at_instant: Vec<u8>,
-    /// Contacts of each body within the current step.
-    in_step: Vec<u32>,
+    /// Per body: its history (see [`History`]).
+    history: Vec<History>,
     /// The bodies whose `in_step` is not zero: the next step clears only those, so no body needs
     /// a step number of its own.
     counted: Vec<u32>,
-    /// The instant at which each body was last frozen into a jammed cluster.
-    frozen: Vec<f64>,
+}
+
+/// One body's contact history, its fields side by side: every contact reads and writes them
+/// together for bodies scattered in memory (the event loop's contacts come in time order, each
+/// far from the last), and each field in an array of its own then cost a cache miss of its own.
+#[derive(Debug, Clone, Copy)]
+struct History {
+    /// Time of the body's last contact (`-inf` before the first).
+    last_contact: f64,
+    /// The instant at which the body was last frozen into a jammed cluster.
+    frozen: f64,
+    /// Its contacts within the current step.
+    in_step: u32,
+    /// Its contacts at the instant `last_contact`, saturating: only "more than [`JAM_LIMIT`]"
+    /// matters, and a byte holds that.
+    at_instant: u8,
+}
+
+impl History {
+    const NONE: History =
+        History { last_contact: f64::NEG_INFINITY, frozen: f64::NEG_INFINITY, in_step: 0, at_instant: 0 };
 }
 
 impl ContactRules {
     /// Makes room for `slots` bodies; new bodies have no history.
     pub(crate) fn resize(&mut self, slots: usize) {
-        if self.last_contact.len() < slots {
-            self.last_contact.resize(slots, f64::NEG_INFINITY);
-            self.at_instant.resize(slots, 0);
-            self.in_step.resize(slots, 0);
-            self.frozen.resize(slots, f64::NEG_INFINITY);
+        if self.history.len() < slots {
+            self.history.resize(slots, History::NONE);
         }
     }
 
     /// Forgets body `i`'s history (its slot was reused or removed).
     pub(crate) fn forget(&mut self, i: usize) {
         self.resize(i + 1);
-        self.last_contact[i] = f64::NEG_INFINITY;
-        self.at_instant[i] = 0;
+        let history = &mut self.history[i];
+        (history.last_contact, history.at_instant) = (f64::NEG_INFINITY, 0);
+    }
+
+    /// The time of body `i`'s last contact (`-inf` before the first, or for a body not held).
+    pub(crate) fn last_contact(&self, i: usize) -> f64 {
+        self.history.get(i).map_or(f64::NEG_INFINITY, |h| h.last_contact)
+    }
+
+    /// Body `i`'s last contact was at `t` (a restored history).
+    pub(crate) fn set_last_contact(&mut self, i: usize, t: f64) {
+        self.resize(i + 1);
+        self.history[i].last_contact = t;
     }
 
     /// A new step: every body's step count starts again.
     pub(crate) fn next_step(&mut self) {
         for &i in &self.counted {
-            self.in_step[i as usize] = 0;
+            self.history[i as usize].in_step = 0;
         }
         self.counted.clear();
     }
 
     /// Marks body `i` frozen into a jammed cluster at `t`; false when it already was.
     pub(crate) fn freeze(&mut self, i: u32, t: f64) -> bool {
-        let was = self.frozen[i as usize] == t;
-        self.frozen[i as usize] = t;
+        let history = &mut self.history[i as usize];
+        let was = history.frozen == t;
+        history.frozen = t;
         !was
     }
 
     /// Counts a contact of body `i` at `t`; true once it is jammed.
     fn count(&mut self, i: usize, t: f64) -> bool {
         let (at_instant, in_step, jammed) = self.after_count(i, t);
-        if self.in_step[i] == 0 {
+        let history = &mut self.history[i];
+        if history.in_step == 0 {
             self.counted.push(i as u32);
         }
-        (self.at_instant[i], self.in_step[i]) = (at_instant, in_step);
+        (history.at_instant, history.in_step) = (at_instant, in_step);
         jammed
     }
 
@@ -114,9 +138,10 @@ impl ContactRules {
     /// whether it is jammed then.
     #[inline]
     fn after_count(&self, i: usize, t: f64) -> (u8, u32, bool) {
-        let at_instant = if self.last_contact[i] == t { self.at_instant[i].saturating_add(1) } else { 1 };
-        let in_step = self.in_step[i] + 1;
-        (at_instant, in_step, at_instant as u32 > JAM_LIMIT || in_step > BURST_LIMIT || self.frozen[i] == t)
+        let history = &self.history[i];
+        let at_instant = if history.last_contact == t { history.at_instant.saturating_add(1) } else { 1 };
+        let in_step = history.in_step + 1;
+        (at_instant, in_step, at_instant as u32 > JAM_LIMIT || in_step > BURST_LIMIT || history.frozen == t)
     }
 
     /// True when a contact of bodies `a` and `b` at `t` would jam them, found without counting it.
@@ -134,7 +159,7 @@ impl ContactRules {
     /// The restitution a contact of bodies `a` and `b` at `t` gets under the TC model, unless it
     /// jams them, without recording it: what [`Self::pair`] would apply.
     pub(crate) fn pair_restitution(&self, a: u32, b: u32, t: f64, restitution: f64, duration: f64) -> f64 {
-        let previous = self.last_contact[a as usize].max(self.last_contact[b as usize]);
+        let previous = self.history[a as usize].last_contact.max(self.history[b as usize].last_contact);
         match ContactRules::restitution(restitution, duration, t, previous) {
             Rule::Impulse { restitution, .. } => restitution,
             Rule::Jam => unreachable!("the TC model never jams"),
@@ -144,10 +169,10 @@ impl ContactRules {
     /// The rule for a contact of bodies `a` and `b` at `t`, recorded in their history.
     pub(crate) fn pair(&mut self, a: u32, b: u32, t: f64, restitution: f64, duration: f64) -> Rule {
         let (a, b) = (a as usize, b as usize);
-        let previous = self.last_contact[a].max(self.last_contact[b]);
+        let previous = self.history[a].last_contact.max(self.history[b].last_contact);
         let jammed = self.count(a, t) | self.count(b, t);
-        self.last_contact[a] = t;
-        self.last_contact[b] = t;
+        self.history[a].last_contact = t;
+        self.history[b].last_contact = t;
         if jammed {
             Rule::Jam
         } else {
@@ -158,9 +183,9 @@ impl ContactRules {
     /// The rule for a contact of body `a` with a wall at `t`, recorded in its history.
     pub(crate) fn wall(&mut self, a: u32, t: f64, restitution: f64, duration: f64) -> Rule {
         let a = a as usize;
-        let previous = self.last_contact[a];
+        let previous = self.history[a].last_contact;
         let jammed = self.count(a, t);
-        self.last_contact[a] = t;
+        self.history[a].last_contact = t;
         if jammed {
             Rule::Jam
         } else {
@@ -170,10 +195,7 @@ impl ContactRules {
 
     /// Bytes held.
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.last_contact.capacity() * 8
-            + self.at_instant.capacity()
-            + (self.in_step.capacity() + self.counted.capacity()) * 4
-            + self.frozen.capacity() * 8
+        self.history.capacity() * std::mem::size_of::<History>() + self.counted.capacity() * 4
     }
 }
 

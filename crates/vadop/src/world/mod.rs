@@ -601,7 +601,7 @@ impl World {
     /// The time of body `i`'s last contact, if it had one.
     pub(super) fn last_contact(&self, i: usize) -> Option<f64> {
         let kept = match self.rules() {
-            Some(rules) => rules.last_contact.get(i).copied(),
+            Some(rules) => Some(rules.last_contact(i)),
             None => self.history.iter().rev().find(|&&(slot, _)| slot as usize == i).map(|&(_, t)| t),
         };
         kept.filter(|t| t.is_finite())
@@ -610,10 +610,7 @@ impl World {
     /// Body `i`'s last contact was at `t`; kept until the engine exists when it does not yet.
     fn set_last_contact(&mut self, i: usize, t: f64) {
         match self.rules_mut() {
-            Some(rules) => {
-                rules.resize(i + 1);
-                rules.last_contact[i] = t;
-            }
+            Some(rules) => rules.set_last_contact(i, t),
             None => self.history.push((i as u32, t)),
         }
     }

@@ -367,7 +367,7 @@ impl World {
         if let Some(rules) = world.rules_mut() {
             rules.resize(slots);
             for (i, slot) in snapshot.slots.iter().enumerate() {
-                rules.last_contact[i] = slot.last_contact.unwrap_or(f64::NEG_INFINITY);
+                rules.set_last_contact(i, slot.last_contact.unwrap_or(f64::NEG_INFINITY));
             }
         }
         if let Some(engine) = &mut world.engine {
