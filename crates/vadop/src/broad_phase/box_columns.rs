@@ -119,16 +119,13 @@ impl BoxColumns {
     #[inline]
     pub fn for_each_overlap(&self, query: &CompactBox, range: Range<usize>, hit: impl FnMut(usize)) {
         assert!(range.end <= self.len(), "range {range:?} beyond {} boxes", self.len());
+        // SAFETY: the range lies within the boxes, and AVX is asked for only where it is.
         #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx") {
-                // SAFETY: the processor has AVX.
-                unsafe { self.scan_avx(query, range, hit) };
-            } else {
-                // SAFETY: SSE2 is part of the x86_64 baseline.
-                unsafe { self.scan_sse2(query, range, hit) };
-            }
-        }
+        unsafe {
+            self.scan(query, range, std::arch::is_x86_feature_detected!("avx"), hit)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let mut hit = hit;
         #[cfg(not(target_arch = "x86_64"))]
         for j in range {
             let overlaps =
@@ -139,18 +136,48 @@ impl BoxColumns {
         }
     }
 
-    /// [`Self::for_each_overlap`] four boxes at a time.
+    /// [`Self::for_each_overlap`] by vector code, eight boxes at a time with `avx`, four
+    /// otherwise: up to 64 boxes' overlaps gathered as bits by a loop with no call inside, then
+    /// reported. `hit` is a call, which clobbers every vector register: were it made inside the
+    /// scan, the query and the columns would be saved and reloaded around it.
     ///
     /// # Safety
-    /// `range.end <= self.len()`.
+    /// `range.end <= self.len()`, and `avx` only where the processor has AVX.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn scan_sse2(&self, query: &CompactBox, range: Range<usize>, hit: impl FnMut(usize)) {
+    unsafe fn scan(&self, query: &CompactBox, range: Range<usize>, avx: bool, mut hit: impl FnMut(usize)) {
+        let (mut first, end) = (range.start, range.end);
+        while first < end {
+            let last = end.min(first + 64);
+            // SAFETY: the caller's.
+            let mut found = unsafe {
+                if avx {
+                    self.overlaps_avx(query, first, last)
+                } else {
+                    self.overlaps_sse2(query, first, last)
+                }
+            };
+            while found != 0 {
+                hit(first + found.trailing_zeros() as usize);
+                found &= found - 1;
+            }
+            first = last;
+        }
+    }
+
+    /// The overlaps with `query` of boxes `first..last` (at most 64), as bits from bit 0, four
+    /// boxes at a time.
+    ///
+    /// # Safety
+    /// `last <= self.len()`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn overlaps_sse2(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
         use std::arch::x86_64::*;
         let q_low = query.low.map(|v| _mm_set1_ps(v));
         let q_high = query.high.map(|v| _mm_set1_ps(v));
         let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
-        // SAFETY: every load reads four floats at j..j + 4 <= end + PADDING <= len + PADDING,
+        // SAFETY: every load reads four floats at j..j + 4 <= last + PADDING <= len + PADDING,
         // the length of a column.
         let group = |j: usize| unsafe {
             let mut all = _mm_castsi128_ps(_mm_set1_epi32(-1));
@@ -163,22 +190,22 @@ impl BoxColumns {
             }
             _mm_movemask_ps(all) as u64
         };
-        gather_overlaps::<4>(range, group, hit);
+        chunk_bits::<4>(first, last, group)
     }
 
-    /// [`Self::for_each_overlap`] eight boxes at a time: the scan's instructions halve on the
+    /// [`Self::overlaps_sse2`] eight boxes at a time: the scan's instructions halve on the
     /// longer runs of neighbour cells.
     ///
     /// # Safety
-    /// The processor has AVX, and `range.end <= self.len()`.
+    /// The processor has AVX, and `last <= self.len()`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn scan_avx(&self, query: &CompactBox, range: Range<usize>, hit: impl FnMut(usize)) {
+    unsafe fn overlaps_avx(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
         use std::arch::x86_64::*;
         let q_low = query.low.map(|v| _mm256_set1_ps(v));
         let q_high = query.high.map(|v| _mm256_set1_ps(v));
         let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
-        // SAFETY: every load reads eight floats at j..j + 8 <= end + PADDING <= len + PADDING,
+        // SAFETY: every load reads eight floats at j..j + 8 <= last + PADDING <= len + PADDING,
         // the length of a column.
         let group = |j: usize| unsafe {
             let mut all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
@@ -194,32 +221,21 @@ impl BoxColumns {
             }
             _mm256_movemask_ps(all) as u64
         };
-        gather_overlaps::<8>(range, group, hit);
+        chunk_bits::<8>(first, last, group)
     }
 }
 
-/// Calls `hit(j)` for every box `j` in `range` whose bit `group(k)` sets, `group(k)` giving the
-/// overlaps of boxes `k..k + LANES` as bits: up to 64 boxes' bits gathered before any is
-/// reported, since `hit` is a call, which would otherwise clobber the query's registers in the
-/// scan. The boxes past `range.end` (the padding, or boxes not asked for) are masked off.
+/// The bits of boxes `first..last` (at most 64), `group(j)` giving those of boxes
+/// `j..j + LANES`; the boxes past `last` (the padding, or boxes not asked for) masked off.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn gather_overlaps<const LANES: usize>(range: Range<usize>, group: impl Fn(usize) -> u64, mut hit: impl FnMut(usize)) {
-    let (mut j, end) = (range.start, range.end);
-    while j < end {
-        let (first, last) = (j, end.min(j + 64));
-        let mut found = 0u64;
-        while j < last {
-            found |= group(j) << (j - first);
-            j += LANES;
-        }
-        found &= u64::MAX >> (64 - (last - first));
-        while found != 0 {
-            hit(first + found.trailing_zeros() as usize);
-            found &= found - 1;
-        }
-        j = last;
+fn chunk_bits<const LANES: usize>(first: usize, last: usize, group: impl Fn(usize) -> u64) -> u64 {
+    let (mut found, mut j) = (0u64, first);
+    while j < last {
+        found |= group(j) << (j - first);
+        j += LANES;
     }
+    found & (u64::MAX >> (64 - (last - first)))
 }
 
 #[cfg(test)]
@@ -253,8 +269,8 @@ mod tests {
             #[cfg(target_arch = "x86_64")]
             {
                 found.clear();
-                // SAFETY: `to` is at most the boxes' count.
-                unsafe { boxes.scan_sse2(&query, from..to, |j| found.push(j)) };
+                // SAFETY: `to` is at most the boxes' count; no AVX asked for.
+                unsafe { boxes.scan(&query, from..to, false, |j| found.push(j)) };
                 assert_eq!(found, expected);
             }
         }
