@@ -1,16 +1,16 @@
 //! Compact boxes stored column by column: every low x, then every low y, and so on.
 //!
 //! It owns a broad phase's binned boxes and the inner loop of its pair sweep: one box tested
-//! against a run of stored boxes, four at a time with SSE2 on x86_64 (part of that target's
-//! baseline, so no detection is needed) and one at a time elsewhere. Both report exactly the
-//! boxes [`CompactBox::overlaps`] accepts, in ascending order, so which path runs never changes a
-//! result. It knows nothing of bodies, cells or windows.
+//! against a run of stored boxes, on x86_64 eight at a time with AVX where the processor has it
+//! and four at a time with SSE2 (part of that target's baseline) where not, one at a time
+//! elsewhere. All report exactly the boxes [`CompactBox::overlaps`] accepts, in ascending order,
+//! so which path runs never changes a result. It knows nothing of bodies, cells or windows.
 
 use crate::broad_phase::proxy::CompactBox;
 use std::ops::Range;
 
 /// Boxes by coordinate, all six columns of one length: the boxes' count and `PADDING` more,
-/// so the vector scan reads whole groups of four past the last box and masks off what is not
+/// so the vector scan reads whole groups past the last box and masks off what is not
 /// asked for, with no scalar tail (whose branch on each box's overlap mispredicts as often as
 /// not).
 #[derive(Debug, Default, Clone)]
@@ -19,8 +19,9 @@ pub struct BoxColumns {
     high: [Vec<f32>; 3],
 }
 
-/// Slots past the last box in every column (empty while no box is stored).
-const PADDING: usize = 3;
+/// Slots past the last box in every column (empty while no box is stored): the widest scan reads
+/// eight at a time.
+const PADDING: usize = 7;
 
 /// Disjoint mutable windows onto the columns, one per worker.
 pub struct BoxColumnsMut<'a> {
@@ -116,49 +117,17 @@ impl BoxColumns {
     /// assert_eq!(hits, [1, 2]);
     /// ```
     #[inline]
-    pub fn for_each_overlap(&self, query: &CompactBox, range: Range<usize>, mut hit: impl FnMut(usize)) {
-        let end = range.end;
-        assert!(end <= self.len(), "range {range:?} beyond {} boxes", self.len());
-        #[allow(unused_mut)]
-        let mut j = range.start;
+    pub fn for_each_overlap(&self, query: &CompactBox, range: Range<usize>, hit: impl FnMut(usize)) {
+        assert!(range.end <= self.len(), "range {range:?} beyond {} boxes", self.len());
+        // SAFETY: the range lies within the boxes, and AVX is asked for only where it is.
         #[cfg(target_arch = "x86_64")]
-        {
-            use std::arch::x86_64::*;
-            // SAFETY: SSE2 is part of the x86_64 baseline, and every load reads four floats at
-            // j..j + 4 <= end + PADDING <= len + PADDING, the length of a column.
-            unsafe {
-                let q_low = query.low.map(|v| _mm_set1_ps(v));
-                let q_high = query.high.map(|v| _mm_set1_ps(v));
-                let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
-                // The overlaps of up to 64 boxes gathered as bits before any is reported: `hit`
-                // is a call, which would otherwise clobber the query's registers in the scan.
-                while j < end {
-                    let (first, last) = (j, end.min(j + 64));
-                    let mut found = 0u64;
-                    while j < last {
-                        let mut all = _mm_castsi128_ps(_mm_set1_epi32(-1));
-                        for axis in 0..3 {
-                            let box_low = _mm_loadu_ps(low[axis].add(j));
-                            let box_high = _mm_loadu_ps(high[axis].add(j));
-                            // Ordered comparisons: a NaN fails them, as it fails `<=`.
-                            let overlap =
-                                _mm_and_ps(_mm_cmple_ps(q_low[axis], box_high), _mm_cmple_ps(box_low, q_high[axis]));
-                            all = _mm_and_ps(all, overlap);
-                        }
-                        found |= (_mm_movemask_ps(all) as u64) << (j - first);
-                        j += 4;
-                    }
-                    // The boxes past `end` (the padding, or boxes not asked for) masked off.
-                    found &= u64::MAX >> (64 - (last - first));
-                    while found != 0 {
-                        hit(first + found.trailing_zeros() as usize);
-                        found &= found - 1;
-                    }
-                    j = last;
-                }
-            }
-        }
-        for j in j..end {
+        unsafe {
+            self.scan(query, range, std::arch::is_x86_feature_detected!("avx"), hit)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        let mut hit = hit;
+        #[cfg(not(target_arch = "x86_64"))]
+        for j in range {
             let overlaps =
                 (0..3).all(|axis| (query.low[axis] <= self.high[axis][j]) & (self.low[axis][j] <= query.high[axis]));
             if overlaps {
@@ -166,6 +135,107 @@ impl BoxColumns {
             }
         }
     }
+
+    /// [`Self::for_each_overlap`] by vector code, eight boxes at a time with `avx`, four
+    /// otherwise: up to 64 boxes' overlaps gathered as bits by a loop with no call inside, then
+    /// reported. `hit` is a call, which clobbers every vector register: were it made inside the
+    /// scan, the query and the columns would be saved and reloaded around it.
+    ///
+    /// # Safety
+    /// `range.end <= self.len()`, and `avx` only where the processor has AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn scan(&self, query: &CompactBox, range: Range<usize>, avx: bool, mut hit: impl FnMut(usize)) {
+        let (mut first, end) = (range.start, range.end);
+        while first < end {
+            let last = end.min(first + 64);
+            // SAFETY: the caller's.
+            let mut found = unsafe {
+                if avx {
+                    self.overlaps_avx(query, first, last)
+                } else {
+                    self.overlaps_sse2(query, first, last)
+                }
+            };
+            while found != 0 {
+                hit(first + found.trailing_zeros() as usize);
+                found &= found - 1;
+            }
+            first = last;
+        }
+    }
+
+    /// The overlaps with `query` of boxes `first..last` (at most 64), as bits from bit 0, four
+    /// boxes at a time.
+    ///
+    /// # Safety
+    /// `last <= self.len()`.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn overlaps_sse2(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
+        use std::arch::x86_64::*;
+        let q_low = query.low.map(|v| _mm_set1_ps(v));
+        let q_high = query.high.map(|v| _mm_set1_ps(v));
+        let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
+        // SAFETY: every load reads four floats at j..j + 4 <= last + PADDING <= len + PADDING,
+        // the length of a column.
+        let group = |j: usize| unsafe {
+            let mut all = _mm_castsi128_ps(_mm_set1_epi32(-1));
+            for axis in 0..3 {
+                let box_low = _mm_loadu_ps(low[axis].add(j));
+                let box_high = _mm_loadu_ps(high[axis].add(j));
+                // Ordered comparisons: a NaN fails them, as it fails `<=`.
+                let overlap = _mm_and_ps(_mm_cmple_ps(q_low[axis], box_high), _mm_cmple_ps(box_low, q_high[axis]));
+                all = _mm_and_ps(all, overlap);
+            }
+            _mm_movemask_ps(all) as u64
+        };
+        chunk_bits::<4>(first, last, group)
+    }
+
+    /// [`Self::overlaps_sse2`] eight boxes at a time: the scan's instructions halve on the
+    /// longer runs of neighbour cells.
+    ///
+    /// # Safety
+    /// The processor has AVX, and `last <= self.len()`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn overlaps_avx(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
+        use std::arch::x86_64::*;
+        let q_low = query.low.map(|v| _mm256_set1_ps(v));
+        let q_high = query.high.map(|v| _mm256_set1_ps(v));
+        let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
+        // SAFETY: every load reads eight floats at j..j + 8 <= last + PADDING <= len + PADDING,
+        // the length of a column.
+        let group = |j: usize| unsafe {
+            let mut all = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+            for axis in 0..3 {
+                let box_low = _mm256_loadu_ps(low[axis].add(j));
+                let box_high = _mm256_loadu_ps(high[axis].add(j));
+                // Ordered, non-signalling comparisons: a NaN fails them, as it fails `<=`.
+                let overlap = _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(q_low[axis], box_high),
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(box_low, q_high[axis]),
+                );
+                all = _mm256_and_ps(all, overlap);
+            }
+            _mm256_movemask_ps(all) as u64
+        };
+        chunk_bits::<8>(first, last, group)
+    }
+}
+
+/// The bits of boxes `first..last` (at most 64), `group(j)` giving those of boxes
+/// `j..j + LANES`; the boxes past `last` (the padding, or boxes not asked for) masked off.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn chunk_bits<const LANES: usize>(first: usize, last: usize, group: impl Fn(usize) -> u64) -> u64 {
+    let (mut found, mut j) = (0u64, first);
+    while j < last {
+        found |= group(j) << (j - first);
+        j += LANES;
+    }
+    found & (u64::MAX >> (64 - (last - first)))
 }
 
 #[cfg(test)]
@@ -195,6 +265,14 @@ mod tests {
             boxes.for_each_overlap(&query, from..to, |j| found.push(j));
             let expected: Vec<usize> = (from..to).filter(|&j| query.overlaps(&stored[j])).collect();
             assert_eq!(found, expected);
+            // The four-wide scan too, which the dispatch skips on a processor with AVX.
+            #[cfg(target_arch = "x86_64")]
+            {
+                found.clear();
+                // SAFETY: `to` is at most the boxes' count; no AVX asked for.
+                unsafe { boxes.scan(&query, from..to, false, |j| found.push(j)) };
+                assert_eq!(found, expected);
+            }
         }
         // Touching faces overlap; a NaN never does.
         let unit = CompactBox { low: [0.0; 3], high: [1.0; 3] };

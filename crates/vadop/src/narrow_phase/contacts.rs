@@ -68,7 +68,7 @@ pub(crate) fn pair_start(
     if bodies.are_spheres(a, b) {
         let (ma, mb, radius_sum) = (&state_a.motion, &state_b.motion, state_a.radius + state_b.radius);
         // Without gravity (most worlds) every path is straight: no pull to read or compare.
-        let time = if bodies.gravity == DVec3::ZERO {
+        let time = if bodies.straight_paths() {
             straight_pair_contact_time(ma, mb, radius_sum)?
         } else {
             let (ga, gb) = (bodies.gravity_on(a), bodies.gravity_on(b));

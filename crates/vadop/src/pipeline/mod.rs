@@ -329,7 +329,13 @@ impl<B: BroadPhase> Pipeline<B> {
             self.broad.find_pairs(
                 self.proxies.view(bodies),
                 &self.workers,
-                |a, b, window, out| out.extend(predict_pair(bodies, table, a, b, window)),
+                // Not `out.extend(..)` of the option: that reserves room for the pair even when
+                // it has no contact, as most candidates have not, at a dozen instructions each.
+                |a, b, window, out| {
+                    if let Some(event) = predict_pair(bodies, table, a, b, window) {
+                        out.push(event);
+                    }
+                },
                 &mut predicted,
             )
         };
