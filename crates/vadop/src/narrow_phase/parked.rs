@@ -12,7 +12,8 @@ use crate::narrow_phase::shapes::Resume;
 /// One pair's parked search as its body's list holds it: the key a lookup compares, and where
 /// its [`Resume`] lies in the store's slab. Kept apart from the resume (about 400 bytes, the warm
 /// start with GJK's simplex) so that scanning a body's list for a partner reads a few cache
-/// lines, not one per entry: the scan over whole entries was 44 % of a lookup's time at 5 d/f.
+/// lines, not one per entry: that scan over whole entries took 44 % of `pair_start_parked`'s
+/// samples at 5 d/f.
 #[derive(Debug, Clone, Copy)]
 struct ParkedKey {
     partner: u32,
