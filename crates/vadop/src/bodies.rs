@@ -389,7 +389,7 @@ impl Bodies {
     /// one lying still, less the pull into the wall a sliding body slides on.
     #[inline]
     pub fn gravity_on(&self, i: usize) -> DVec3 {
-        if self.gravity == DVec3::ZERO || self.is_fixed(i) {
+        if self.straight_paths() || self.is_fixed(i) {
             return DVec3::ZERO;
         }
         self.rest_of(i).acceleration(self.gravity)

@@ -48,6 +48,7 @@ pub mod memory;
 pub mod motion;
 pub mod numeric;
 pub(crate) mod parallel;
+mod slab;
 mod walls;
 pub mod window;
 

@@ -8,6 +8,7 @@
 //! of a body but its motion epoch. Sphere pairs have closed forms and are never parked here.
 
 use crate::narrow_phase::shapes::Resume;
+use crate::slab::Slab;
 
 /// One pair's parked search as its body's list holds it: the key a lookup compares, and where
 /// its [`Resume`] lies in the store's slab. Kept apart from the resume (about 400 bytes, the warm
@@ -25,13 +26,12 @@ struct ParkedKey {
 }
 
 /// The parked searches of every shape pair, by the lower body id: one short list of keys per
-/// body, found by index and scanned, never hashed; the resumes in one slab whose freed slots are
-/// reused, so that pruning a list never moves them.
+/// body, found by index and scanned, never hashed; the resumes in a [`Slab`], so that pruning a
+/// list never moves them.
 #[derive(Debug, Default)]
 pub(crate) struct ParkedSearches {
     by_body: Vec<Vec<ParkedKey>>,
-    resumes: Vec<Resume>,
-    free: Vec<u32>,
+    resumes: Slab<Resume>,
 }
 
 impl ParkedSearches {
@@ -40,7 +40,7 @@ impl ParkedSearches {
     pub(crate) fn get(&self, a: u32, b: u32, epochs: (u32, u32)) -> Option<&Resume> {
         let list = self.by_body.get(a as usize)?;
         let key = list.iter().find(|k| k.partner == b && k.epochs == epochs)?;
-        Some(&self.resumes[key.slot as usize])
+        Some(&self.resumes[key.slot])
     }
 
     /// Keeps where the search of bodies `a < b` on the motions of `epochs` parked, over what an
@@ -52,11 +52,11 @@ impl ParkedSearches {
         if i >= self.by_body.len() {
             self.by_body.resize_with(i + 1, Vec::new);
         }
-        let (list, free) = (&mut self.by_body[i], &mut self.free);
+        let (list, resumes) = (&mut self.by_body[i], &mut self.resumes);
         list.retain(|k| {
             let kept = k.epochs.0 == epochs.0 && (k.partner == b || k.searched_to >= stale);
             if !kept {
-                free.push(k.slot);
+                resumes.free(k.slot);
             }
             kept
         });
@@ -65,21 +65,9 @@ impl ParkedSearches {
             Some(k) if k.epochs == epochs && k.searched_to > searched_to => {}
             Some(k) => {
                 (k.epochs, k.searched_to) = (epochs, searched_to);
-                self.resumes[k.slot as usize] = resume;
+                resumes[k.slot] = resume;
             }
-            None => {
-                let slot = match free.pop() {
-                    Some(slot) => {
-                        self.resumes[slot as usize] = resume;
-                        slot
-                    }
-                    None => {
-                        self.resumes.push(resume);
-                        (self.resumes.len() - 1) as u32
-                    }
-                };
-                list.push(ParkedKey { partner: b, epochs, slot, searched_to });
-            }
+            None => list.push(ParkedKey { partner: b, epochs, slot: resumes.insert(resume), searched_to }),
         }
     }
 
@@ -87,7 +75,9 @@ impl ParkedSearches {
     /// epoch.
     pub(crate) fn remove(&mut self, i: u32) {
         if let Some(list) = self.by_body.get_mut(i as usize) {
-            self.free.extend(list.drain(..).map(|k| k.slot));
+            for key in list.drain(..) {
+                self.resumes.free(key.slot);
+            }
         }
     }
 
@@ -95,8 +85,7 @@ impl ParkedSearches {
     pub(crate) fn memory_bytes(&self) -> usize {
         self.by_body.capacity() * std::mem::size_of::<Vec<ParkedKey>>()
             + self.by_body.iter().map(|l| l.capacity() * std::mem::size_of::<ParkedKey>()).sum::<usize>()
-            + self.resumes.capacity() * std::mem::size_of::<Resume>()
-            + self.free.capacity() * std::mem::size_of::<u32>()
+            + self.resumes.memory_bytes()
     }
 }
 
@@ -129,17 +118,17 @@ mod tests {
                 store.keep(0, 2 + (window + partner) % 7, (0, 1), Resume::done_at(t), t - 1.0);
             }
         }
-        assert!(store.resumes.len() <= 8, "{} resumes held for at most 7 pairs", store.resumes.len());
+        assert!(store.resumes.slots() <= 8, "{} slots taken for at most 7 pairs", store.resumes.slots());
         assert_eq!(searched_to(&store, 0, 2 + 999 % 7, (0, 1)), Some(999.0));
         // A new motion of the lower body voids all its pairs; removal frees what is left.
         store.keep(0, 50, (1, 0), Resume::done_at(1000.0), 1000.0);
         assert_eq!(store.by_body[0].len(), 1);
         store.remove(0);
         assert_eq!(searched_to(&store, 0, 50, (1, 0)), None);
-        let held = store.resumes.len();
+        let held = store.resumes.slots();
         for partner in 1..=held as u32 {
             store.keep(3, 3 + partner, (0, 0), Resume::done_at(0.0), 0.0);
         }
-        assert_eq!(store.resumes.len(), held, "freed slots are reused before the slab grows");
+        assert_eq!(store.resumes.slots(), held, "freed slots are reused before the slab grows");
     }
 }

@@ -7,6 +7,8 @@
 //! keeps when each contact started, because the end search starts there: from a point every run
 //! shares (a resumed one too), not from wherever the window in progress began.
 
+use crate::slab::Slab;
+
 /// End of a body's list.
 const NONE: u32 = u32::MAX;
 
@@ -26,9 +28,7 @@ struct Link {
 pub struct Touching {
     /// First link of each body's list.
     head: Vec<u32>,
-    links: Vec<Link>,
-    /// Links no longer in use, to be reused first.
-    free: Vec<u32>,
+    links: Slab<Link>,
 }
 
 impl Touching {
@@ -41,16 +41,7 @@ impl Touching {
             self.head.resize(needed, NONE);
         }
         let link = Link { bodies, next: bodies.map(|i| self.head[i as usize]), since };
-        let index = match self.free.pop() {
-            Some(index) => {
-                self.links[index as usize] = link;
-                index
-            }
-            None => {
-                self.links.push(link);
-                (self.links.len() - 1) as u32
-            }
-        };
+        let index = self.links.insert(link);
         for i in bodies {
             self.head[i as usize] = index;
         }
@@ -65,7 +56,7 @@ impl Touching {
         for i in bodies {
             self.unlink(i, index);
         }
-        self.free.push(index);
+        self.links.free(index);
         true
     }
 
@@ -89,7 +80,7 @@ impl Touching {
             if current == NONE {
                 return None;
             }
-            let link = &self.links[current as usize];
+            let link = &self.links[current];
             let side = usize::from(link.bodies[1] == i);
             current = link.next[side];
             Some((link.bodies[1 - side], link.since))
@@ -113,19 +104,19 @@ impl Touching {
     /// True when no pair touches.
     #[cfg(test)]
     pub fn is_empty(&self) -> bool {
-        self.links.len() == self.free.len()
+        self.links.len() == 0
     }
 
     /// Bytes held (capacity).
     pub fn memory_bytes(&self) -> usize {
-        self.head.capacity() * 4 + self.links.capacity() * std::mem::size_of::<Link>() + self.free.capacity() * 4
+        self.head.capacity() * 4 + self.links.memory_bytes()
     }
 
     /// The link of the pair `bodies`, from the lower id's list.
     fn find(&self, bodies: [u32; 2]) -> Option<u32> {
         let mut current = self.head.get(bodies[0] as usize).copied().unwrap_or(NONE);
         while current != NONE {
-            let link = &self.links[current as usize];
+            let link = &self.links[current];
             if link.bodies == bodies {
                 return Some(current);
             }
@@ -137,7 +128,7 @@ impl Touching {
     /// Takes link `index` out of body `i`'s list.
     fn unlink(&mut self, i: u32, index: u32) {
         let side_of = |link: &Link| usize::from(link.bodies[1] == i);
-        let removed = self.links[index as usize];
+        let removed = self.links[index];
         let after = removed.next[side_of(&removed)];
         if self.head[i as usize] == index {
             self.head[i as usize] = after;
@@ -145,10 +136,10 @@ impl Touching {
         }
         let mut current = self.head[i as usize];
         while current != NONE {
-            let side = side_of(&self.links[current as usize]);
-            let next = self.links[current as usize].next[side];
+            let side = side_of(&self.links[current]);
+            let next = self.links[current].next[side];
             if next == index {
-                self.links[current as usize].next[side] = after;
+                self.links[current].next[side] = after;
                 return;
             }
             current = next;
