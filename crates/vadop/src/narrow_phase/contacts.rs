@@ -12,7 +12,7 @@
 
 use crate::bodies::{Bodies, BodyState};
 use crate::error::{Result, VadopError};
-use crate::motion::RigidMotion;
+use crate::motion::{Motion, RigidMotion};
 use crate::narrow_phase::falling::may_touch_within;
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::shapes::{contact_end_time, contact_geometry};
@@ -206,12 +206,42 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
             }
         }
     }
-    let (pi, pj) = (bodies.position_at(i, t), bodies.position_at(j, t));
+    sphere_pair_geometry(bodies, (i, &SpherePath::of(bodies, i)), (j, &SpherePath::of(bodies, j)), t)
+}
+
+/// A sphere's path as its contact geometry reads it: its straight motion since its last velocity
+/// change and the acceleration it moves under. A copy outlives the body's next velocity change,
+/// so the geometry of a contact can be worked out after the step has moved on (see
+/// [`sphere_pair_geometry`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SpherePath {
+    motion: Motion,
+    gravity: DVec3,
+}
+
+impl SpherePath {
+    /// Body `i`'s path now.
+    #[inline]
+    pub(crate) fn of(bodies: &Bodies, i: usize) -> SpherePath {
+        SpherePath { motion: bodies.motion(i), gravity: bodies.gravity_on(i) }
+    }
+}
+
+/// [`pair_geometry`] of spheres `i` and `j` on the paths given (theirs at `t`, whatever their
+/// motions are now): the same bits.
+#[inline]
+pub(crate) fn sphere_pair_geometry(
+    bodies: &Bodies,
+    (i, path_i): (usize, &SpherePath),
+    (j, path_j): (usize, &SpherePath),
+    t: f64,
+) -> (DVec3, DVec3) {
+    let (pi, pj) = (path_i.motion.at_under(t, path_i.gravity), path_j.motion.at_under(t, path_j.gravity));
     let (offset, shift) = bodies.nearest_offset(pi, pj);
     // Coincident centres have no normal; the relative velocity gives one.
-    let normal = direction(offset)
-        .or_else(|| direction(bodies.velocity_at(i, t) - bodies.velocity_at(j, t)))
-        .unwrap_or(DVec3::X);
+    let relative_velocity =
+        || path_i.motion.velocity_under(t, path_i.gravity) - path_j.motion.velocity_under(t, path_j.gravity);
+    let normal = direction(offset).or_else(|| direction(relative_velocity())).unwrap_or(DVec3::X);
     // Midway between the two surface points (which coincide at a contact, up to rounding), so
     // that in a walled box naming the pair either way round gives the same bits: the sum
     // commutes, and negating the normal is exact. Two processes that hold a pair under different

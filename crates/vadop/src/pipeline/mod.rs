@@ -23,6 +23,7 @@
 
 pub(crate) mod jam;
 mod pass_through;
+mod passed;
 pub(crate) mod predict;
 pub(crate) mod pseudo_dynamic;
 pub(crate) mod respond;
@@ -41,11 +42,12 @@ use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::parallel::Workers;
 use crate::pipeline::touching::Touching;
-use crate::response::impact::{Impacts, Resolution};
+use crate::response::impact::{passes_through, Impacts, Resolution};
 use crate::walls::BoxBounds;
 use crate::window::Window;
 use glam::DVec3;
 use pass_through::Searched;
+use passed::PassedContacts;
 use predict::{for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_pair};
 use predict::{predict_wall, renewal, sort_predictions, Prediction};
 use std::collections::VecDeque;
@@ -140,6 +142,9 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     cluster_members: Vec<u32>,
     /// Scratch: a body's neighbours, for the wake walk.
     near: Vec<u32>,
+    /// The step's contacts of spheres passing through each other, their geometry still to work
+    /// out.
+    passed: PassedContacts,
 }
 
 impl<B: BroadPhase> Pipeline<B> {
@@ -170,6 +175,7 @@ impl<B: BroadPhase> Pipeline<B> {
             cluster: jam::Cluster::default(),
             cluster_members: Vec::new(),
             near: Vec::new(),
+            passed: PassedContacts::default(),
         }
     }
 
@@ -193,6 +199,7 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.travel.capacity() * 8
             + self.cluster.memory_bytes()
             + (self.cluster_members.capacity() + self.near.capacity()) * 4
+            + self.passed.memory_bytes()
     }
 
     /// Body `i` was added or changed velocity between frames at time `t`: it enters the window
@@ -243,6 +250,7 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             now = self.window.end;
         }
+        self.passed.resolve(bodies, out.contacts, &self.workers);
     }
 
     /// The length of the window starting at `now`, for frames of length `frame`; tells the proxy
@@ -424,6 +432,13 @@ impl<B: BroadPhase> Pipeline<B> {
 
     fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, b: u32, t: f64, out: &mut Output) {
         let (i, j) = (a as usize, b as usize);
+        if bodies.are_spheres(i, j) && passes_through(bodies, physics, i, j) {
+            // Nothing changes: where they touch is worked out at the step's end, on every worker.
+            self.passed.defer(bodies, (a, b), out.contacts.len());
+            let unknown = (DVec3::ZERO, DVec3::ZERO, 0.0);
+            self.report_pair_contact(bodies, physics, (a, b), t, unknown, Resolution::Passed, out);
+            return;
+        }
         let stamps = (bodies.stamp[i], bodies.stamp[j]);
         let (point, normal, resolution, impulse) = respond::pair_impact(self, bodies, physics, (a, b), t, out.stats);
         // Spinning shapes may touch again on the same motions (spheres never do): with nothing

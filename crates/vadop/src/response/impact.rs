@@ -125,6 +125,13 @@ pub(crate) struct Impacts {
     pub manifold: ManifoldScratch,
 }
 
+/// Whether bodies `i` and `j` pass through each other at a contact, neither changed: two moving
+/// bodies in detect mode (see [`crate::frame::Mode::turns_back`]).
+#[inline]
+pub(crate) fn passes_through(bodies: &Bodies, physics: &Physics, i: usize, j: usize) -> bool {
+    !physics.turns_back(bodies.is_fixed(i) || bodies.is_fixed(j))
+}
+
 impl Impacts {
     /// Bodies `a` and `b` touch at `t` at `point` with `normal` (from `a` to `b`).
     pub(crate) fn pair(
@@ -137,10 +144,10 @@ impl Impacts {
         stats: &mut FrameStats,
     ) -> Resolution {
         let (i, j) = (a as usize, b as usize);
-        let fixed = (bodies.is_fixed(i), bodies.is_fixed(j));
-        if !physics.turns_back(fixed != (false, false)) {
+        if passes_through(bodies, physics, i, j) {
             return Resolution::Passed;
         }
+        let fixed = (bodies.is_fixed(i), bodies.is_fixed(j));
         let duration = tc_duration(physics);
         // Whether each body's own previous contact lies within the contact duration (the TC
         // model asks whether either's does).
