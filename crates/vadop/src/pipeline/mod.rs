@@ -348,11 +348,21 @@ impl<B: BroadPhase> Pipeline<B> {
             )
         };
         let (proxies, statics, window) = (self.proxies.view(bodies), &self.statics, self.window);
+        // Asked once per window rather than of every body: most boxes have no periodic face and
+        // most worlds no static body.
+        let (periodic, level) = (physics.bounds.is_periodic(), !statics.is_empty());
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
-                found.extend(predict_wall(bodies, &proxies, &physics.bounds, i as u32, window));
-                found.extend(predict_crossing(bodies, &physics.bounds, i as u32, window));
-                for_each_static_event(bodies, proxies, statics, i, window, |event| found.push(event));
+                // Pushed, not `extend`ed with the option, which reserves room for every body.
+                if let Some(event) = predict_wall(bodies, &proxies, &physics.bounds, i as u32, window) {
+                    found.push(event);
+                }
+                if periodic {
+                    found.extend(predict_crossing(bodies, &physics.bounds, i as u32, window));
+                }
+                if level {
+                    for_each_static_event(bodies, proxies, statics, i, window, |event| found.push(event));
+                }
                 if proxies.expires(i) {
                     found.push(renewal(bodies, &proxies, i as u32));
                 }
