@@ -2,14 +2,15 @@
 """Before and after in instructions: two builds run under callgrind on the same commands.
 
 Usage: python3 scripts/ab_instructions.py BASE_DIR NEW_DIR OUT.md [detect] [gas] [shapes] [peers]
-                                          [times-may-move]
+                                          [spheres] [times-may-move]
 
 BASE_DIR and NEW_DIR are the `target/release` folders of two builds (e.g. one built at an older
 commit in a git worktree, and this one's). Each case runs once per build under `valgrind
 --tool=callgrind`, and the count kept is the instructions inside the frame loop, inclusive:
 `vadop::world::World::step` for a `vadop simulate` case, `vadop::pipeline::Pipeline<B>::step` for
-a case of the peers' shapes scene (`vadop-bench --child --job peers-time`, pinned to core 1 with
-taskset so it runs one worker, as in the benchmark). Instruction counts do not depend on the
+a case of the peers' shapes or spheres scene (`vadop-bench --child --job peers-time`, pinned to
+core 1 with taskset so it runs one worker, as in the benchmark; its contacts file holds the pairs
+alone). Instruction counts do not depend on the
 machine's load, so this is the comparison to make on a shared or busy host, where times are
 drafts; it says nothing of memory stalls, which times do. Both builds' contacts files are
 compared byte for byte in every case but the gas's (times and points included, so a change that
@@ -22,8 +23,9 @@ Cases: `detect` is the paper scene in detect mode at n = 1e4 (5 and 0.5 diameter
 and 1e5 (0.05 and 5); `gas` the periodic equilibrium gas at n = 2e4, packing 0.2, 0.05, 0.35, 0.4 and
 0.45 (the last three where the serial event loop keeps neighbour lists);
 `shapes` the shapes crowd of issue 25 in detect mode; `peers` the peers' shapes scene at n = 1e4
-(0.05, 0.5 and 5 d/f) and 1e5 (0.05). valgrind runs a program about 50 times slower: the whole
-set takes about ten minutes.
+(0.05, 0.5 and 5 d/f) and 1e5 (0.05); `spheres` the peers' spheres scene (issue 28's table,
+the default method) at n = 1e4 (5 and 0.5 d/f) and 1e5 (5 d/f). valgrind runs a program about 50
+times slower: the whole set takes about ten minutes.
 """
 import filecmp
 import os
@@ -34,6 +36,7 @@ import tempfile
 DETECT = [(10000, 5, 30), (10000, 0.5, 60), (100000, 0.05, 20), (100000, 5, 6)]
 GAS = [(20000, 0.2, 20), (20000, 0.05, 40), (20000, 0.35, 12), (20000, 0.4, 10), (20000, 0.45, 8)]
 PEERS = [(10000, 0.05, 30), (10000, 0.5, 10), (10000, 5, 3), (100000, 0.05, 10)]
+SPHERES = [(10000, 5, 20), (10000, 0.5, 30), (100000, 5, 4)]
 
 
 def cases(kinds):
@@ -50,11 +53,12 @@ def cases(kinds):
     if "shapes" in kinds:
         args = ["--kind", "shapes", "--bodies", "10000", "--max-speed", "0.5", "--mode", "detect", "--frames", "5"]
         yield f"`vadop simulate {' '.join(args)}`", "vadop", args, True
-    if "peers" in kinds:
-        for n, speed, frames in PEERS:
-            args = ["--child", "--job", "peers-time", "--scene", "shapes", "--bodies", str(n), "--speed", str(speed),
-                    "--frames", str(frames), "--method", "auto"]
-            yield f"peers' shapes scene, n = {n}, {speed} d/f, {frames} frames", "vadop-bench", args, True
+    for kind, scene, runs in (("peers", "shapes", PEERS), ("spheres", "spheres", SPHERES)):
+        if kind in kinds:
+            for n, speed, frames in runs:
+                args = ["--child", "--job", "peers-time", "--scene", scene, "--bodies", str(n), "--speed", str(speed),
+                        "--frames", str(frames), "--method", "auto"]
+                yield f"peers' {scene} scene, n = {n}, {speed} d/f, {frames} frames", "vadop-bench", args, True
 
 
 def instructions(folder, program, args, checked, scratch, tag):

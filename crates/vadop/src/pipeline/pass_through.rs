@@ -17,6 +17,7 @@ use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
 use crate::narrow_phase::contacts::{self, Found, Parking};
+use crate::response::impact;
 use crate::window::Window;
 use glam::DVec3;
 
@@ -51,11 +52,12 @@ impl Searched {
     }
 }
 
-/// Whether `event` (valid) is two moving bodies, not both spheres, passing through each other.
+/// Whether `event` (valid) is two moving bodies, not both spheres, passing through each other
+/// (two spheres passing through are [`super::passed`]'s).
 fn passes_through(bodies: &Bodies, physics: &Physics, event: &Event) -> bool {
     let Partner::Body(j) = event.partner else { return false };
     let (i, j) = (event.body as usize, j as usize);
-    !(physics.turns_back(bodies.is_fixed(i) || bodies.is_fixed(j)) || bodies.are_spheres(i, j))
+    impact::passes_through(bodies, physics, i, j) && !bodies.are_spheres(i, j)
 }
 
 impl<B: BroadPhase> Pipeline<B> {
