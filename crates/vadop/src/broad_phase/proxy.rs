@@ -260,6 +260,12 @@ impl ProxyTable {
         self.spans.len()
     }
 
+    /// True in a box with periodic faces, where proxies may be ghosts (see [`Self::owner`]).
+    #[inline]
+    pub fn has_ghosts(&self) -> bool {
+        self.ghosts.active()
+    }
+
     /// Number of the bodies' slots (live or not), ghosts' left out.
     #[inline]
     pub fn body_slots(&self) -> usize {

@@ -48,7 +48,8 @@ use crate::window::Window;
 use glam::DVec3;
 use pass_through::Searched;
 use passed::PassedContacts;
-use predict::{for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_pair};
+use predict::{for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_own_pair};
+use predict::{predict_pair, push_found};
 use predict::{predict_wall, renewal, sort_predictions, Prediction};
 use std::collections::VecDeque;
 use std::time::Instant;
@@ -333,19 +334,25 @@ impl<B: BroadPhase> Pipeline<B> {
             self.predictions = found;
             candidates
         } else {
-            let table = &self.proxies;
-            self.broad.find_pairs(
-                self.proxies.view(bodies),
-                &self.workers,
-                // Not `out.extend(..)` of the option: that reserves room for the pair even when
-                // it has no contact, as most candidates have not, at a dozen instructions each.
-                |a, b, window, out| {
-                    if let Some(event) = predict_pair(bodies, table, a, b, window) {
-                        out.push(event);
-                    }
-                },
-                &mut predicted,
-            )
+            let (table, view, workers) = (&self.proxies, self.proxies.view(bodies), &self.workers);
+            if table.has_ghosts() {
+                let found = &mut predicted;
+                self.broad.find_pairs(
+                    view,
+                    workers,
+                    |a, b, w, out| push_found(out, predict_pair(bodies, table, a, b, w)),
+                    found,
+                )
+            } else {
+                // Every proxy is its body's own: no owners to look up for each candidate.
+                let found = &mut predicted;
+                self.broad.find_pairs(
+                    view,
+                    workers,
+                    |a, b, w, out| push_found(out, predict_own_pair(bodies, a, b, w)),
+                    found,
+                )
+            }
         };
         let (proxies, statics, window) = (self.proxies.view(bodies), &self.statics, self.window);
         // Asked once per window rather than of every body: most boxes have no periodic face and
@@ -353,12 +360,9 @@ impl<B: BroadPhase> Pipeline<B> {
         let (periodic, level) = (physics.bounds.is_periodic(), !statics.is_empty());
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
-                // Pushed, not `extend`ed with the option, which reserves room for every body.
-                if let Some(event) = predict_wall(bodies, &proxies, &physics.bounds, i as u32, window) {
-                    found.push(event);
-                }
+                push_found(found, predict_wall(bodies, &proxies, &physics.bounds, i as u32, window));
                 if periodic {
-                    found.extend(predict_crossing(bodies, &physics.bounds, i as u32, window));
+                    push_found(found, predict_crossing(bodies, &physics.bounds, i as u32, window));
                 }
                 if level {
                     for_each_static_event(bodies, proxies, statics, i, window, |event| found.push(event));
