@@ -200,12 +200,14 @@ pub(super) enum HullPoint {
     Inside(f64),
 }
 
-/// Where `p` (in the hull's frame) lies against `hull`. Outside, the nearest point is on a face
-/// `p` lies above (the direction to `p` is in the normal cone there, so some face through the
-/// nearest point has `p` above its plane): those faces' fans of triangles are projected on by
-/// parry, a few triangle projections where GJK on the support map took 7 % of the peers' shapes
-/// at 0.5 d/f. Any point found lies on the hull, so its distance bounds the hull's from above
-/// whatever the rounding; inside, the depth is [`Scaled::depth_at`]'s, to the bit.
+/// Where `p` (in the hull's frame) lies against `hull` (with its face `planes`). Outside, the
+/// nearest point is on a face `p` lies above (the direction to `p` is in the normal cone there, so
+/// some face through the nearest point has `p` above its plane): inside such a face where `p`'s
+/// foot on its plane falls in it (the plane bounds the hull: nothing is nearer, and the scan
+/// stops), else on one of its edges. Edges, not parry's projections on each face's fan of
+/// triangles: those took two fifths of this function's instructions (itself 6 % of the peers'
+/// shapes' at 5 d/f). Any point found lies on the hull, so its distance bounds the hull's from
+/// above whatever the rounding; inside, the depth is [`Scaled::depth_at`]'s, to the bit.
 pub(super) fn hull_nearest(hull: &ConvexPolyhedron, planes: &[(DVec3, f64)], p: DVec3) -> HullPoint {
     let (points, corners) = (hull.points(), hull.vertices_adj_to_face());
     let mut best: Option<(f64, DVec3)> = None;
@@ -219,12 +221,19 @@ pub(super) fn hull_nearest(hull: &ConvexPolyhedron, planes: &[(DVec3, f64)], p: 
         let face = &hull.faces()[k];
         let first = face.first_vertex_or_edge as usize;
         let ring = &corners[first..first + face.num_vertices_or_edges as usize];
-        let apex = points[ring[0] as usize];
-        for edge in ring[1..].windows(2) {
-            let triangle = Triangle::new(apex, points[edge[0] as usize], points[edge[1] as usize]);
-            let on = triangle.project_local_point(p, false).point;
+        let corner = |i: usize| points[ring[i % ring.len()] as usize];
+        let foot = p + normal * below;
+        // On the same side of every edge, as the ring turns: inside the face.
+        let turn = |i: usize| normal.dot((corner(i + 1) - corner(i)).cross(foot - corner(i)));
+        if (0..ring.len()).all(|i| turn(i) > 0.0) || (0..ring.len()).all(|i| turn(i) < 0.0) {
+            return HullPoint::Outside(foot);
+        }
+        for i in 0..ring.len() {
+            let (a, along) = (corner(i), corner(i + 1) - corner(i));
+            let t = ((p - a).dot(along) / along.length_squared()).clamp(0.0, 1.0);
+            let on = a + along * t;
             let distance = on.distance_squared(p);
-            if best.is_none_or(|(d, _)| distance < d) {
+            if t.is_finite() && best.is_none_or(|(d, _)| distance < d) {
                 best = Some((distance, on));
             }
         }
