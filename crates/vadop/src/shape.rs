@@ -176,6 +176,10 @@ pub struct ShapeGeometry {
     rotation_radius: f64,
     /// [`ShapeGeometry::rotation_radius_about`] each principal axis, computed once.
     principal_reach: [f64; 3],
+    /// A convex hull's face planes (outward unit normal, offset from the shape frame's origin),
+    /// empty for other kinds: how deep a point lies is the least of the offsets less its
+    /// projections on the normals, read in one pass over contiguous planes.
+    face_planes: Vec<(DVec3, f64)>,
 }
 
 /// Relative margin added to computed bounding radii so that rounding never leaves a point of the
@@ -287,6 +291,11 @@ impl Shape {
         let rotation_radius = rotation_radius * (1.0 + RADIUS_MARGIN);
         let principal_reach =
             DVec3::AXES.map(|axis| self.reach_about(&parry, body_from_shape, axis).min(rotation_radius));
+        let face_planes = parry.as_convex_polyhedron().map_or_else(Vec::new, |hull| {
+            let (points, corners) = (hull.points(), hull.vertices_adj_to_face());
+            let plane = |normal: DVec3, corner: u32| (normal, normal.dot(points[corners[corner as usize] as usize]));
+            hull.faces().iter().map(|face| plane(face.normal, face.first_vertex_or_edge)).collect()
+        });
         ShapeGeometry {
             shape: self.clone(),
             volume: props.mass(),
@@ -295,6 +304,7 @@ impl Shape {
             bounding_radius: Some(bound * (1.0 + RADIUS_MARGIN)),
             rotation_radius,
             principal_reach,
+            face_planes,
             parry,
         }
     }
@@ -331,6 +341,7 @@ impl Shape {
             bounding_radius: None,
             rotation_radius: 0.0,
             principal_reach: [0.0; 3],
+            face_planes: Vec::new(),
         }
     }
 
@@ -427,6 +438,12 @@ impl ShapeGeometry {
     /// The parry shape, in the shape frame, that all queries run on.
     pub fn parry_shape(&self) -> &SharedShape {
         &self.parry
+    }
+
+    /// A convex hull's face planes in the shape frame (outward unit normal, offset), in parry's
+    /// order of its faces; empty for other kinds.
+    pub(crate) fn face_planes(&self) -> &[(DVec3, f64)] {
+        &self.face_planes
     }
 
     /// True for static-only shapes (a mesh or a half-space).

@@ -295,7 +295,7 @@ mod tests {
     /// first for even `k`, b's for odd, with the index of the first.
     fn in_either_order(case: &Case, k: usize, check: impl FnOnce(&Moving, &Moving, usize)) {
         let [(body_a, pose_a, centre_a), (body_b, pose_b, centre_b)] = posed(case, 0.0);
-        let shapes = [0, 1].map(|i| Scaled::new(case.geometry[i].parry_shape().as_ref(), 1.0));
+        let shapes = [0, 1].map(|i| Scaled::new(&case.geometry[i], 1.0));
         let moving_a = moving(&body_a, &shapes[0], &pose_a, centre_a, case.tau);
         let moving_b = moving(&body_b, &shapes[1], &pose_b, centre_b, case.tau);
         if k.is_multiple_of(2) {

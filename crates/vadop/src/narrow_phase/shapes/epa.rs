@@ -18,9 +18,10 @@
 //! plane that bounds `a - b`, so the least of them bounds the depth from above: the gap between the
 //! two says how tight the bound is, and the loop stops once the caller's allowance covers it.
 
+use super::gjk::Simplex;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
-use parry3d_f64::query::gjk::{CsoPoint, VoronoiSimplex};
+use parry3d_f64::query::gjk::CsoPoint;
 use parry3d_f64::shape::SupportMap;
 use std::cell::RefCell;
 
@@ -56,7 +57,7 @@ pub(super) fn penetration<G1, G2>(
     pos12: &Pose,
     g1: &G1,
     g2: &G2,
-    simplex: &VoronoiSimplex,
+    simplex: &Simplex,
     allowance: impl Fn(f64) -> f64,
 ) -> Option<Penetration>
 where
@@ -128,12 +129,12 @@ impl Polytope {
     /// giving a point off its line; a triangle, its normal or the opposite one giving a point off
     /// its plane. The origin may then lie on the tetrahedron's boundary, at depth 0, and the
     /// first expansions push those faces out.
-    fn seed(&mut self, simplex: &VoronoiSimplex, support: impl Fn(DVec3) -> CsoPoint) -> Option<()> {
+    fn seed(&mut self, simplex: &Simplex, support: impl Fn(DVec3) -> CsoPoint) -> Option<()> {
         self.vertices.clear();
         self.triangles.clear();
         self.eps = ROUNDING;
-        for i in 0..=simplex.dimension() {
-            self.add_vertex(*simplex.point(i));
+        for i in 0..simplex.len() {
+            self.add_vertex(*simplex.vertex(i));
         }
         if self.vertices.len() == 1 {
             let first = self.point(0);
@@ -263,8 +264,9 @@ impl Polytope {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::narrow_phase::shapes::gjk;
     use glam::DQuat;
-    use parry3d_f64::query::gjk::{self, GJKResult};
+    use parry3d_f64::query::gjk::GJKResult;
     use rand::{Rng, SeedableRng};
 
     /// The early depth's allowance in these tests: 1/32 of the depth, plus a tolerance.
@@ -286,9 +288,8 @@ mod tests {
             let turn = DQuat::from_xyzw(random(), random(), random(), random()).normalize();
             let offset = DVec3::new(random(), random(), random()) * 0.8;
             let pos12 = Pose::from_parts(offset, turn);
-            let mut simplex = VoronoiSimplex::new();
-            simplex.reset(CsoPoint::from_shapes(&pos12, a, b, -offset.normalize_or(DVec3::X)));
-            if gjk::closest_points(&pos12, a, b, f64::MAX, true, &mut simplex) != GJKResult::Intersection {
+            let mut simplex = Simplex::new(CsoPoint::from_shapes(&pos12, a, b, -offset.normalize_or(DVec3::X)));
+            if gjk::closest_points(&pos12, a, b, &mut simplex) != GJKResult::Intersection {
                 continue;
             }
             let Ok(Some(contact)) = parry3d_f64::query::contact(&Pose::IDENTITY, ga.as_ref(), &pos12, gb.as_ref(), 0.0)
@@ -361,10 +362,9 @@ mod tests {
         let (a, b) = (Ball::new(0.5), Ball::new(0.3));
         let allowance = |depth: f64| depth / 4.0;
         let simplex_along = |pos12: &Pose, dirs: &[DVec3]| {
-            let mut simplex = VoronoiSimplex::new();
-            simplex.reset(CsoPoint::from_shapes(pos12, &a, &b, dirs[0]));
+            let mut simplex = Simplex::new(CsoPoint::from_shapes(pos12, &a, &b, dirs[0]));
             for &dir in &dirs[1..] {
-                assert!(simplex.add_point(CsoPoint::from_shapes(pos12, &a, &b, dir)));
+                assert!(simplex.add(CsoPoint::from_shapes(pos12, &a, &b, dir)));
             }
             simplex
         };

@@ -171,7 +171,7 @@ impl MeshPair<'_> {
         let (rate, bend) = (self.rate(tau), self.acceleration.length());
         let measure = |id: u32, triangle: Triangle, before: Option<&Measured>| {
             let slack = SLACK * (triangle.a.length() + self.size);
-            let support = Scaled::new(&triangle, 1.0);
+            let support = Scaled::triangle(&triangle);
             // The triangle's frame is fixed to it at its first vertex, the body's to the body.
             let carry = (&Pose::from_translation(triangle.a), &pose);
             let warm = before.and_then(|m| m.warm);
@@ -438,7 +438,7 @@ mod tests {
                     let triangle = pair.triangle(id, centre);
                     let need = Need::converged(Some(EXACT_DEPTH));
                     let exact = convex_bounds(
-                        &Scaled::new(&triangle, 1.0),
+                        &Scaled::triangle(&triangle),
                         &Pose::IDENTITY,
                         &shape,
                         &pose,

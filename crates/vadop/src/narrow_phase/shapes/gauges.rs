@@ -789,7 +789,7 @@ mod tests {
         use crate::shape::Shape;
         let cone = Shape::Cone { half_height: 0.3, radius: 0.35 }.geometry().unwrap();
         let cylinder = Shape::Cylinder { half_height: 0.3, radius: 0.3 }.geometry().unwrap();
-        let (a, b) = (Scaled::new(cone.parry_shape().as_ref(), 2.0), Scaled::new(cylinder.parry_shape().as_ref(), 2.0));
+        let (a, b) = (Scaled::new(&cone, 2.0), Scaled::new(&cylinder, 2.0));
         let pose_a = Pose::from_parts(
             DVec3::new(-0.0756406398250358, 0.1098075833417988, -0.26873925698988455),
             DQuat::from_xyzw(0.4582929894338157, -0.6443682401464725, 0.32703959535929095, -0.5174960965973425),
@@ -816,7 +816,7 @@ mod tests {
         let (mut measured, mut ratio) = (0, 0.0);
         for case in 0..3000 {
             let (ga, gb) = (&shapes[case % 6], &shapes[(case / 6) % 6]);
-            let (a, b) = (Scaled::new(ga.parry_shape().as_ref(), 1.0), Scaled::new(gb.parry_shape().as_ref(), 1.0));
+            let (a, b) = (Scaled::new(ga, 1.0), Scaled::new(gb, 1.0));
             let mut turn = || DQuat::from_xyzw(random(), random(), random(), random()).normalize();
             let (qa, qb) = (turn(), turn());
             let offset =

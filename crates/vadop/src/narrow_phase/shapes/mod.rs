@@ -175,6 +175,7 @@ mod distance;
 mod epa;
 mod fixed_gauges;
 mod gauges;
+mod gjk;
 mod inner_balls;
 mod scaled;
 mod searcher;
