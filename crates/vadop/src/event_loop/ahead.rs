@@ -18,10 +18,9 @@
 //! over one calendar: no region of the box is a thread's, so there is no border to agree on. It
 //! never schedules or handles an event itself.
 
-use super::calendar::Entry;
+use super::calendar::{Calendar, Entry, Events};
 use super::cells::{Cells, Crossing};
 use super::search::{Candidate, Eligible, Near, Overlay, Search};
-use super::Events;
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
@@ -96,8 +95,8 @@ pub(super) struct Seen<'a> {
     pub physics: &'a Physics,
     pub rules: &'a ContactRules,
     pub screen: bool,
-    /// Per body: its next event and its next cell crossing, as the loop keeps them.
-    pub events: &'a [Events],
+    /// The calendar, with each body's next event and next cell crossing.
+    pub calendar: &'a Calendar,
 }
 
 impl Seen<'_> {
@@ -118,9 +117,9 @@ impl Seen<'_> {
             tests: 0,
         };
         let worked = if entry.scheduled.cell_crossing {
-            let crossing = self.events[owner].crossing;
+            let Events { next: before, crossing } = *self.calendar.events(owner);
             let into = self.cells.stepped(owner, crossing);
-            let next = search.after_crossing(owner, (into, crossing), time, self.events[owner].next);
+            let next = search.after_crossing(owner, (into, crossing), time, before);
             Worked::Crossed { next, crossing: self.cells.next_crossing_from(&self.bodies.motion(owner), into.0, time) }
         } else {
             let event = entry.scheduled.event;

@@ -9,10 +9,14 @@
 //! scheduling). The order is total and the one the frame pipeline's event queue keeps: earlier
 //! first, then (for contacts, walls and periodic crossings) the queue's own rule, so ties between
 //! simultaneous events fall as they fall there; a body's crossing into another cell, which
-//! changes nothing but the cell lists, comes before any contact at the same instant. It never
+//! changes nothing but the cell lists, comes before any contact at the same instant. It also
+//! keeps each body's next events, the two the loop predicts (its earliest contact, wall contact or
+//! periodic crossing, and its next cell crossing), of which the earlier is the one scheduled, in
+//! one cache line with the body's version: the loop reads and writes them through it. It never
 //! predicts or handles an event.
 
-use crate::event_queue::Event;
+use super::cells::Crossing;
+use crate::event_queue::{Event, Partner};
 use std::cmp::Ordering;
 
 /// Events a bucket holds on average when the width is tuned: the sorted list stays short, and the
@@ -92,6 +96,38 @@ impl Ord for Entry {
     }
 }
 
+/// A body's next events: the earlier is its scheduled event (see [`Events::scheduled`]).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Events {
+    /// Its earliest eligible contact, wall contact or periodic crossing.
+    pub next: Option<Event>,
+    /// When its centre next leaves its cell, or with lists its shell (the time alone).
+    pub crossing: Crossing,
+}
+
+impl Events {
+    pub(super) const NONE: Events = Events { next: None, crossing: Crossing::NEVER };
+
+    /// Body `owner`'s scheduled event: its earliest contact (or wall contact, or periodic
+    /// crossing) or its next cell crossing, whichever comes first (the crossing at a tie).
+    #[inline]
+    fn scheduled(&self, owner: u32) -> Scheduled {
+        match self.next {
+            Some(event) if event.time < self.crossing.time => Scheduled { event, cell_crossing: false },
+            _ => {
+                let event = Event {
+                    time: self.crossing.time,
+                    body: owner,
+                    partner: Partner::Renew,
+                    body_stamp: 0,
+                    partner_stamp: 0,
+                };
+                Scheduled { event, cell_crossing: true }
+            }
+        }
+    }
+}
+
 /// A bucket's entry: only what finds the body's event again.
 #[derive(Debug, Clone, Copy)]
 struct Slot {
@@ -100,18 +136,25 @@ struct Slot {
     version: u32,
 }
 
-/// A body's scheduled event and its version, kept side by side: a bucket poured reads both for
-/// each of its bodies, scattered in memory, and then pays one cache miss per body, not two.
+/// A body's next events and the version they were scheduled under, in one cache line: a bucket
+/// poured reads the version and the event of each of its bodies, scattered in memory, and the
+/// event handled then reads its body's events again (and schedules them anew), so the line it
+/// missed on once serves all three.
 #[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
 struct Booked {
-    scheduled: Scheduled,
+    events: Events,
     version: u32,
+}
+
+impl Booked {
+    const NONE: Booked = Booked { events: Events::NONE, version: 0 };
 }
 
 /// One scheduled event per body, earliest first.
 #[derive(Debug, Default)]
 pub(super) struct Calendar {
-    /// Per body: its scheduled event and the version it was scheduled under.
+    /// Per body: its next events and the version they were scheduled under.
     booked: Vec<Booked>,
     /// The instant bucket 0 starts at, and the buckets' width (as its inverse).
     origin: f64,
@@ -180,15 +223,59 @@ impl Calendar {
         k - ((k as f64) > x) as i64
     }
 
-    /// Schedules `scheduled` as body `owner`'s event, replacing the one it had.
-    #[inline]
-    pub(super) fn schedule(&mut self, owner: u32, scheduled: Scheduled) {
-        let i = owner as usize;
-        if i >= self.booked.len() {
-            self.booked.resize(i + 1, Booked { scheduled, version: 0 });
+    /// Room for the events of `slots` bodies (those not booked yet have none).
+    pub(super) fn grow(&mut self, slots: usize) {
+        if self.booked.len() < slots {
+            self.booked.resize(slots, Booked::NONE);
         }
+    }
+
+    /// Body `owner`'s next events, as last booked.
+    #[inline]
+    pub(super) fn events(&self, owner: usize) -> &Events {
+        &self.booked[owner].events
+    }
+
+    /// Every body's next events dropped: none is scheduled until booked again.
+    pub(super) fn clear(&mut self) {
+        for booked in &mut self.booked {
+            *booked = Booked { events: Events::NONE, version: booked.version.wrapping_add(1) };
+        }
+    }
+
+    /// Books `events` as body `owner`'s without scheduling them: every body's events booked so
+    /// are scheduled by the next [`Self::retune`] (a grid built anew books them all, then retunes).
+    pub(super) fn book(&mut self, owner: u32, events: Events) {
+        let booked = &mut self.booked[owner as usize];
+        *booked = Booked { events, version: booked.version.wrapping_add(1) };
+    }
+
+    /// Resets the calendar with buckets sized for the events now booked, and schedules them,
+    /// from `now` on.
+    pub(super) fn retune(&mut self, now: f64) {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for (i, booked) in self.booked.iter().enumerate() {
+            let time = booked.events.scheduled(i as u32).time();
+            if time.is_finite() {
+                (sum, count) = (sum + (time - now).max(0.0), count + 1);
+            }
+        }
+        // A body's events come about `sum / count` apart: the world's, that over `count`.
+        let gap = if count > 0 { sum / (count * count) as f64 } else { 1.0 };
+        self.reset(self.booked.len(), now, if gap > 0.0 { gap } else { 1.0 });
+        for i in 0..self.booked.len() {
+            self.schedule(i as u32, self.booked[i].events);
+        }
+    }
+
+    /// Schedules `events` as body `owner`'s next events, replacing those it had: the earlier of
+    /// them is its scheduled event.
+    #[inline]
+    pub(super) fn schedule(&mut self, owner: u32, events: Events) {
+        let i = owner as usize;
         let version = self.booked[i].version.wrapping_add(1);
-        self.booked[i] = Booked { scheduled, version };
+        self.booked[i] = Booked { events, version };
+        let scheduled = events.scheduled(owner);
         let time = scheduled.time();
         if !time.is_finite() {
             return;
@@ -209,7 +296,7 @@ impl Calendar {
     /// Body `owner` has no event any more (it was removed).
     pub(super) fn cancel(&mut self, owner: u32) {
         if let Some(booked) = self.booked.get_mut(owner as usize) {
-            booked.version = booked.version.wrapping_add(1);
+            *booked = Booked { events: Events::NONE, version: booked.version.wrapping_add(1) };
         }
     }
 
@@ -257,7 +344,7 @@ impl Calendar {
         self.near.len().checked_sub(1 + ahead).map(|k| &self.near[k])
     }
 
-    /// Asks for body `owner`'s scheduled event ahead of its use (see [`crate::memory::prefetch`]).
+    /// Asks for body `owner`'s events ahead of their use (see [`crate::memory::prefetch`]).
     #[inline]
     pub(super) fn prefetch(&self, owner: usize) {
         if let Some(booked) = self.booked.get(owner) {
@@ -303,7 +390,7 @@ impl Calendar {
             self.poured += 1;
             for slot in &bucket {
                 if self.is_current(slot.owner, slot.version) {
-                    let scheduled = self.booked[slot.owner as usize].scheduled;
+                    let scheduled = self.booked[slot.owner as usize].events.scheduled(slot.owner);
                     self.near.push(Entry { scheduled, owner: slot.owner, version: slot.version });
                 }
             }
@@ -330,7 +417,7 @@ impl Calendar {
             }
             let bucket = self.bucket(slot.time);
             if bucket <= self.current {
-                let scheduled = self.booked[slot.owner as usize].scheduled;
+                let scheduled = self.booked[slot.owner as usize].events.scheduled(slot.owner);
                 self.insert_near(Entry { scheduled, owner: slot.owner, version: slot.version });
             } else if bucket < self.current + ring {
                 self.ring[bucket.rem_euclid(ring) as usize].push(slot);
@@ -355,14 +442,11 @@ impl Calendar {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::event_queue::Partner;
     use rand::{Rng, SeedableRng};
 
-    fn at(time: f64, body: u32) -> Scheduled {
-        Scheduled {
-            event: Event { time, body, partner: Partner::Renew, body_stamp: 0, partner_stamp: 0 },
-            cell_crossing: false,
-        }
+    fn at(time: f64, body: u32) -> Events {
+        let event = Event { time, body, partner: Partner::Renew, body_stamp: 0, partner_stamp: 0 };
+        Events { next: Some(event), crossing: Crossing::NEVER }
     }
 
     /// Against a sorted list: random schedules and reschedules pop in order, each body's last
@@ -372,6 +456,7 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         for gap in [1e-4, 0.01, 1.0, 100.0] {
             let mut calendar = Calendar::default();
+            calendar.grow(500);
             calendar.reset(500, 0.0, gap);
             let mut last = vec![f64::INFINITY; 500];
             let mut now = 0.0;
@@ -407,10 +492,11 @@ mod tests {
     #[test]
     fn simultaneous_events_pop_in_the_event_queue_s_order_cell_crossings_first() {
         let mut calendar = Calendar::default();
+        calendar.grow(8);
         calendar.reset(8, 0.0, 1.0);
         calendar.schedule(5, at(2.0, 5));
         calendar.schedule(2, at(2.0, 2));
-        calendar.schedule(7, Scheduled { cell_crossing: true, ..at(2.0, 7) });
+        calendar.schedule(7, Events { next: None, crossing: Crossing { time: 2.0, ..Crossing::NEVER } });
         calendar.schedule(1, at(3.0, 1));
         let mut order = Vec::new();
         while let Some((owner, _)) = calendar.peek() {

@@ -5,7 +5,8 @@
 //! It owns the grid's sizing, the lists (one intrusive doubly linked list per cell through the
 //! bodies, so moving a body costs O(1) and nothing is allocated while stepping; with neighbour
 //! lists, see [`super::lists`], a body is listed by its shell's centre instead, in cells wider
-//! by two shells, and has no crossings), a body's
+//! by two shells, and has no crossings) with a bit per cell that tells an empty cell without
+//! reading its list's head, a body's
 //! neighbourhood (the 27 cells around its own, or the 9 it has just come within reach of) with
 //! the whole sides that bring each neighbour cell's bodies to their nearest image across periodic
 //! faces, and the crossing times. Two bodies that touch are always in neighbouring cells, so a
@@ -86,6 +87,10 @@ pub(super) struct Cells {
     reach: f64,
     /// Per cell: its first body, or [`NONE`].
     head: Vec<u32>,
+    /// Per cell, one bit: it holds a body (its head is not [`NONE`]). A search reads this before
+    /// a cell's head: in a thin gas most cells are empty, and the heads (4 bytes a cell) outgrow
+    /// the caches where the bits (one a cell) do not, so an empty cell costs no cache miss.
+    occupied: Vec<u64>,
     /// Per body: its place in the lists (see [`Listing`]).
     listing: Vec<Listing>,
 }
@@ -152,6 +157,7 @@ impl Cells {
             periodic: bounds.periodic,
             reach,
             head: vec![NONE; total],
+            occupied: vec![0; total.div_ceil(64)],
             listing: Vec::new(),
         }
     }
@@ -163,7 +169,9 @@ impl Cells {
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.head.capacity() * 4 + self.listing.capacity() * std::mem::size_of::<Listing>()
+        self.head.capacity() * 4
+            + self.occupied.capacity() * 8
+            + self.listing.capacity() * std::mem::size_of::<Listing>()
     }
 
     /// The cell body `i` is listed in, or [`NONE`].
@@ -184,7 +192,11 @@ impl Cells {
     /// crossing out of its cell), ahead of the search that follows it.
     #[inline]
     pub(super) fn prefetch_new(&self, i: usize, crossing: Crossing) {
-        self.for_each_new(self.stepped(i, crossing), crossing, |n| prefetch(&self.head[n.cell as usize]));
+        self.for_each_new(self.stepped(i, crossing), crossing, |n| {
+            if self.is_occupied(n.cell) {
+                prefetch(&self.head[n.cell as usize]);
+            }
+        });
     }
 
     /// The coordinates of the cell holding the centre `position`.
@@ -268,6 +280,8 @@ impl Cells {
         self.listing[i] = Listing { next: first, prev: NONE, cell, at: at.map(|c| c as u16) };
         if first != NONE {
             self.listing[first as usize].prev = i as u32;
+        } else {
+            self.occupied[cell as usize / 64] |= 1 << (cell % 64);
         }
         self.head[cell as usize] = i as u32;
     }
@@ -276,6 +290,9 @@ impl Cells {
         let Listing { next, prev, cell, .. } = self.listing[i];
         if prev == NONE {
             self.head[cell as usize] = next;
+            if next == NONE {
+                self.occupied[cell as usize / 64] &= !(1 << (cell % 64));
+            }
         } else {
             self.listing[prev as usize].next = next;
         }
@@ -289,6 +306,25 @@ impl Cells {
     #[inline]
     pub(super) fn first(&self, cell: u32) -> u32 {
         self.head[cell as usize]
+    }
+
+    /// True when cell `cell` holds a body (see [`Self::occupied`]).
+    #[inline(always)]
+    pub(super) fn is_occupied(&self, cell: u32) -> bool {
+        self.occupied[cell as usize / 64] & (1 << (cell % 64)) != 0
+    }
+
+    /// The cells `first`, `first + 1` and `first + 2` (a row along x) that hold a body, as the
+    /// bits 0, 1 and 2.
+    #[inline(always)]
+    pub(super) fn occupied_in_row(&self, first: usize) -> u32 {
+        let (word, bit) = (first / 64, first % 64);
+        let mut bits = self.occupied[word] >> bit;
+        if bit > 61 {
+            // The row runs into the next word (which exists: `first + 2` is a cell).
+            bits |= self.occupied[word + 1] << (64 - bit);
+        }
+        (bits & 7) as u32
     }
 
     /// The body after `i` in its cell, or [`NONE`].
@@ -336,21 +372,6 @@ impl Cells {
                 }
             }
         }
-    }
-
-    /// The heads of the 27 cells around body `i`'s, as 9 rows of 3 neighbours along x, when none
-    /// of them lies across a face of the box (most bodies' case; then no shift is needed).
-    #[inline(always)]
-    pub(super) fn inner_rows(&self, i: usize) -> Option<impl Iterator<Item = &[u32]> + '_> {
-        let at = self.listing[i].at;
-        let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
-        let cell = self.listing[i].cell as i64;
-        inside.then(|| {
-            self.rows.iter().map(move |&d| {
-                let first = (cell + d - 1) as usize;
-                &self.head[first..first + 3]
-            })
-        })
     }
 
     /// Number of cells.

@@ -49,27 +49,12 @@ use crate::response::impact::{Impacts, Resolution};
 use crate::response::rules::Rule;
 use crate::walls::BoxBounds;
 use ahead::{Marks, Pushed, Seen, Worked, Worker, CELLS_PER_EVENT, MIN_PER_WORKER, PER_WORKER};
-use calendar::{Calendar, Entry, Scheduled};
+use calendar::{Calendar, Entry, Events};
 use cells::{Cells, Crossing, NONE};
 use lists::Lists;
 use rayon::prelude::*;
 use search::{Candidate, Eligible, Near, Overlay, Search};
 use std::time::Instant;
-
-/// A body's next events, side by side and in one cache line: scheduling a body reads both, and
-/// its event is handled far in memory from the last one's (the events come in time order).
-#[derive(Debug, Clone, Copy)]
-#[repr(C, align(64))]
-struct Events {
-    /// Its earliest eligible contact, wall contact or periodic crossing.
-    next: Option<Event>,
-    /// When its centre next leaves its cell, or with lists its shell (the time alone).
-    crossing: Crossing,
-}
-
-impl Events {
-    const NONE: Events = Events { next: None, crossing: Crossing::NEVER };
-}
 
 /// The parallel loop runs from this many threads on. On 2 its workers share the searches, most
 /// of an event's cost, but an event's handling in order stays on one thread: measured with
@@ -93,9 +78,8 @@ const INTERRUPT_EVERY: u32 = 4096;
 pub(crate) struct EventLoop {
     bounds: BoxBounds,
     cells: Cells,
+    /// The calendar, which keeps each body's next events (see [`Events`]).
     calendar: Calendar,
-    /// Per body: its next events (see [`Events`]).
-    events: Vec<Events>,
     /// The neighbour lists (see [`lists`]): the serial loop's, built with the grid.
     lists: Option<Lists>,
     pub(crate) impacts: Impacts,
@@ -144,7 +128,6 @@ impl EventLoop {
             bounds: *bounds,
             cells: Cells::default(),
             calendar: Calendar::default(),
-            events: Vec::new(),
             lists: None,
             impacts: Impacts::default(),
             cluster: Cluster::default(),
@@ -177,11 +160,10 @@ impl EventLoop {
         self.held.iter().enumerate().filter(|(_, &held)| held).map(|(i, _)| i as u32)
     }
 
-    /// Bytes held: cells, calendar, each body's next events, the rules.
+    /// Bytes held: cells, calendar (with each body's next events), the rules.
     pub(crate) fn memory_bytes(&self) -> usize {
         self.cells.memory_bytes()
             + self.calendar.memory_bytes()
-            + self.events.capacity() * std::mem::size_of::<Events>()
             + self.impacts.rules.memory_bytes()
             + self.cluster.memory_bytes()
             + self.members.capacity() * 4
@@ -241,9 +223,7 @@ impl EventLoop {
     }
 
     fn grow(&mut self, slots: usize) {
-        if self.events.len() < slots {
-            self.events.resize(slots, Events::NONE);
-        }
+        self.calendar.grow(slots);
         if let Some(lists) = &mut self.lists {
             lists.grow(slots);
         }
@@ -264,7 +244,7 @@ impl EventLoop {
         let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
         self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
-        self.events.clear();
+        self.calendar.clear();
         self.grow(bodies.slots());
         for &i in &ids {
             self.min_radius = self.min_radius.min(bodies.radius(i as usize));
@@ -277,14 +257,12 @@ impl EventLoop {
             let mut search = self.search(bodies);
             let next = search.next_event(i as usize, t, Eligible::From(t));
             stats.narrow_tests += search.tests;
-            self.events[i as usize].next = next;
+            let crossing = self.next_crossing(bodies, i as usize, t);
+            self.calendar.book(i, Events { next, crossing });
         }
         stats.retests += ids.len() as u64;
-        for &i in &ids {
-            self.events[i as usize].crossing = self.next_crossing(bodies, i as usize, t);
-        }
         self.stale = false;
-        self.retune(t);
+        self.calendar.retune(t);
     }
 
     /// When body `i`'s centre next leaves its cell, or with lists its shell, from `now` on.
@@ -293,25 +271,6 @@ impl EventLoop {
         match &self.lists {
             Some(lists) => Crossing { time: lists.exit(bodies, i, now), ..Crossing::NEVER },
             None => self.cells.next_crossing(bodies, i, now),
-        }
-    }
-
-    /// Resets the calendar with buckets sized for the events now scheduled, and schedules them.
-    fn retune(&mut self, t: f64) {
-        let (mut sum, mut count) = (0.0, 0usize);
-        for i in 0..self.events.len() {
-            let time = self.scheduled(i).time();
-            if time.is_finite() {
-                (sum, count) = (sum + (time - t).max(0.0), count + 1);
-            }
-        }
-        // A body's events come about `sum / count` apart: the world's, that over `count`.
-        let gap = if count > 0 { sum / (count * count) as f64 } else { 1.0 };
-        self.calendar.reset(self.events.len(), t, if gap > 0.0 { gap } else { 1.0 });
-        for i in 0..self.events.len() {
-            if self.cells.cell_of(i) != NONE {
-                self.calendar.schedule(i as u32, self.scheduled(i));
-            }
         }
     }
 
@@ -332,26 +291,6 @@ impl EventLoop {
         }
     }
 
-    /// Body `i`'s scheduled event: its earliest contact (or wall contact, or periodic crossing)
-    /// or its next cell crossing, whichever comes first (the crossing at a tie).
-    #[inline]
-    fn scheduled(&self, i: usize) -> Scheduled {
-        let crossing = self.events[i].crossing;
-        match self.events[i].next {
-            Some(event) if event.time < crossing.time => Scheduled { event, cell_crossing: false },
-            _ => {
-                let event = Event {
-                    time: crossing.time,
-                    body: i as u32,
-                    partner: Partner::Renew,
-                    body_stamp: 0,
-                    partner_stamp: 0,
-                };
-                Scheduled { event, cell_crossing: true }
-            }
-        }
-    }
-
     /// Body `i`'s events at `now` found again, those `eligible`; a body whose motion is new gets
     /// its next cell crossing too.
     #[inline]
@@ -360,12 +299,14 @@ impl EventLoop {
         let next = search.next_event(i, now, eligible);
         stats.narrow_tests += search.tests;
         stats.retests += 1;
-        self.events[i].next = next;
-        if let Eligible::From(_) = eligible {
-            self.events[i].crossing = self.next_crossing(bodies, i, now);
-            self.marks.mark(self.cells.cell_of(i));
-        }
-        self.calendar.schedule(i as u32, self.scheduled(i));
+        let crossing = match eligible {
+            Eligible::From(_) => {
+                self.marks.mark(self.cells.cell_of(i));
+                self.next_crossing(bodies, i, now)
+            }
+            Eligible::After(_) => self.calendar.events(i).crossing,
+        };
+        self.calendar.schedule(i as u32, Events { next, crossing });
     }
 
     /// Steps from `t0` to `t1`: every contact with a time in `[t0, t1)`, in time order.
@@ -376,7 +317,7 @@ impl EventLoop {
         if self.stale {
             self.rebuild(bodies, t0, out.stats);
         } else if self.calendar.needs_tuning() {
-            self.retune(t0);
+            self.calendar.retune(t0);
         }
         if self.workers.is_empty() {
             let mut handled = 0u32;
@@ -433,7 +374,7 @@ impl EventLoop {
         }
         if entry.scheduled.cell_crossing {
             // The entry may be stale: the body's crossing is the one of the cell it is in.
-            let crossing = self.events[owner].crossing;
+            let crossing = self.calendar.events(owner).crossing;
             if crossing.time.is_finite() {
                 self.cells.prefetch_new(owner, crossing);
             }
@@ -443,11 +384,9 @@ impl EventLoop {
     /// [`Self::prefetch`] of body `i`'s records: its motion, stamp, events, place in the cells.
     #[inline]
     fn prefetch_body(&self, bodies: &Bodies, i: usize) {
-        if let (Some(state), Some(stamp), Some(events)) = (bodies.state.get(i), bodies.stamp.get(i), self.events.get(i))
-        {
+        if let (Some(state), Some(stamp)) = (bodies.state.get(i), bodies.stamp.get(i)) {
             prefetch(state);
             prefetch(stamp);
-            prefetch(events);
             self.cells.prefetch(i);
             self.calendar.prefetch(i);
             if let Some(lists) = &self.lists {
@@ -488,7 +427,7 @@ impl EventLoop {
                 physics,
                 rules: &self.impacts.rules,
                 screen: search::screen_trusted(self.scale, self.min_radius),
-                events: &self.events,
+                calendar: &self.calendar,
             };
             self.workers.par_iter_mut().enumerate().for_each(|(k, worker)| {
                 worker.worked.clear();
@@ -563,16 +502,15 @@ impl EventLoop {
         match worked {
             Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
                 self.marks.mark(self.cells.cell_of(i));
-                self.cells.step_across(i, self.events[i].crossing);
+                self.cells.step_across(i, self.calendar.events(i).crossing);
                 self.marks.mark(self.cells.cell_of(i));
-                (self.events[i].next, self.events[i].crossing) = (next, crossing);
-                self.calendar.schedule(i as u32, self.scheduled(i));
+                self.calendar.schedule(i as u32, Events { next, crossing });
             }
             Worked::Voided { next } if self.untouched_around(i) => {
                 out.stats.invalidations += 1;
                 out.stats.retests += 1;
-                self.events[i].next = next;
-                self.calendar.schedule(i as u32, self.scheduled(i));
+                let crossing = self.calendar.events(i).crossing;
+                self.calendar.schedule(i as u32, Events { next, crossing });
             }
             Worked::Pushed(pushed) if self.untouched_pair(bodies, &pushed, entry.scheduled.event) => {
                 self.commit_pushed(bodies, physics, pushed, entry.scheduled.event.time, out);
@@ -610,9 +548,8 @@ impl EventLoop {
             debug_assert!(
                 ahead::same_bits(&bodies.motion(i), &pushed.motions[k]) && bodies.stamp[i] == pushed.stamps[k]
             );
-            (self.events[i].next, self.events[i].crossing) = (pushed.next[k], pushed.crossings[k]);
             self.marks.mark(self.cells.cell_of(i));
-            self.calendar.schedule(pushed.pair[k], self.scheduled(i));
+            self.calendar.schedule(pushed.pair[k], Events { next: pushed.next[k], crossing: pushed.crossings[k] });
         }
         out.stats.retests += 2;
         out.stats.pair_contacts += 1;
@@ -642,7 +579,7 @@ impl EventLoop {
     /// True when neither body `i`'s cell nor the cells its next crossing brings within reach were
     /// marked in this batch.
     fn untouched_crossing(&self, i: usize) -> bool {
-        let crossing = self.events[i].crossing;
+        let crossing = self.calendar.events(i).crossing;
         let mut untouched = !self.marks.is_marked(self.cells.cell_of(i));
         self.cells
             .for_each_new(self.cells.stepped(i, crossing), crossing, |n| untouched &= !self.marks.is_marked(n.cell));
@@ -652,18 +589,16 @@ impl EventLoop {
     /// Body `i` crosses into the next cell at `t`: it is listed there, and tested against the
     /// bodies that came within reach.
     fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
-        let crossing = self.events[i].crossing;
+        let Events { next: before, crossing } = *self.calendar.events(i);
         self.marks.mark(self.cells.cell_of(i));
         self.cells.step_across(i, crossing);
         self.marks.mark(self.cells.cell_of(i));
         let into = self.cells.place(i);
-        self.events[i].crossing = self.cells.next_crossing(bodies, i, t);
-        let before = self.events[i].next;
         let mut search = self.search(bodies);
         let next = search.after_crossing(i, (into, crossing), t, before);
         stats.narrow_tests += search.tests;
-        self.events[i].next = next;
-        self.calendar.schedule(i as u32, self.scheduled(i));
+        let crossing = self.cells.next_crossing(bodies, i, t);
+        self.calendar.schedule(i as u32, Events { next, crossing });
     }
 
     /// Body `i` leaves its shell at `t`: it is listed by its new shell's centre, and tested
@@ -675,14 +610,13 @@ impl EventLoop {
         // In place: a wrap across a periodic face builds the list anew at once, so none came
         // since the last.
         lists.rebuild(&self.cells, bodies, i, t, true);
-        self.events[i].crossing = Crossing { time: lists.exit(bodies, i, t), ..Crossing::NEVER };
+        let crossing = Crossing { time: lists.exit(bodies, i, t), ..Crossing::NEVER };
         let entered_face = !was_at_face && self.cells.at_face(self.cells.place(i).0);
-        let before = self.events[i].next;
+        let before = self.calendar.events(i).next;
         let mut search = self.search(bodies);
         let next = search.after_shell_exit(i, t, before, entered_face);
         stats.narrow_tests += search.tests;
-        self.events[i].next = next;
-        self.calendar.schedule(i as u32, self.scheduled(i));
+        self.calendar.schedule(i as u32, Events { next, crossing });
     }
 
     /// The event `event`, scheduled by body `owner`: handled if its bodies' motions are those

@@ -209,13 +209,16 @@ impl<'a> Search<'a> {
             self.test_candidates(&own, eligible, &mut best);
             return best.event;
         }
-        match cells.inner_rows(p) {
+        match cells.rows_around(p) {
             Some(rows) => {
                 // No cell across a face: one origin for all.
                 (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
-                for row in rows {
-                    for &first in row {
-                        self.gather_list(own.p, first, 0);
+                for first in rows {
+                    let mut occupied = cells.occupied_in_row(first);
+                    while occupied != 0 {
+                        let cell = first as u32 + occupied.trailing_zeros();
+                        occupied &= occupied - 1;
+                        self.gather_list(own.p, cells.first(cell), 0);
                     }
                 }
             }
@@ -320,7 +323,7 @@ impl<'a> Search<'a> {
     /// and the records then arrive together rather than one after the other.
     #[inline(always)]
     fn gather(&mut self, own: &Own, n: Neighbour) {
-        if self.cells.first(n.cell) == NONE {
+        if !self.cells.is_occupied(n.cell) {
             return;
         }
         let k = self.near.cells;
