@@ -188,9 +188,10 @@ fn converged<A: SupportMap, B: SupportMap>(pos12: &Pose, (a, b): (&A, &B), (p1, 
     distance == 0.0 || distance + n.dot(CsoPoint::from_shapes(pos12, a, b, n).point) <= SEEDED_PRECISION * distance
 }
 
-/// GJK's iterations before a rough query hands its simplex to parry's converged GJK. A rough
-/// query seldom needs more than a dozen; handing over after 8 cost 3 to 4 % more instructions on
-/// the mixed shapes at every speed (measured against 32), for parry's GJK starting over.
+/// GJK's iterations before a rough query hands its simplex to the converged GJK
+/// ([`gjk::closest_points`]). A rough query seldom needs more than a dozen; handing over after 8
+/// cost 3 to 4 % more instructions on the mixed shapes at every speed (measured against 32, when
+/// the converged GJK was parry's and started over).
 const ROUGH_ITERATIONS: usize = 32;
 
 /// What a distance query must measure, beyond bounds tight enough to decide near contact.
@@ -338,8 +339,8 @@ pub(super) fn closed_form(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose) 
 pub(super) struct Rough {
     share: f64,
     floor: f64,
-    /// Nearer than `floor`, how far apart the bounds may lie: 0 to leave them to parry's
-    /// converged GJK.
+    /// Nearer than `floor`, how far apart the bounds may lie: 0 to leave them to the converged
+    /// GJK.
     resolution: f64,
 }
 
@@ -347,9 +348,11 @@ pub(super) struct Rough {
 /// the separation along a direction it tried lies within `rough.share` of the distance of the
 /// simplex's nearest points (points of the two sets) where the grown sets lie more than
 /// `rough.floor` apart, or within `rough.resolution` of it: those points then; an intersection
-/// where the simplex comes to hold the origin inside (parry's GJK would project it again to say
-/// so); `None` if neither comes within [`ROUGH_ITERATIONS`] or the origin lies on the simplex's
-/// boundary (the simplex is then left for parry's converged GJK to go on from).
+/// where the simplex comes to hold the origin inside; `None` if neither comes within
+/// [`ROUGH_ITERATIONS`] or the origin lies on the simplex's boundary (the simplex is then left
+/// for the converged GJK, [`gjk::closest_points`], to go on from). Kept apart from that loop:
+/// folded into it as an early stop, the measures took 1.3 % more instructions at 1e4 x 5 d/f
+/// (not traced further).
 fn rough_closest<A: SupportMap, B: SupportMap>(
     pos12: &Pose,
     (a, b): (&A, &B),
