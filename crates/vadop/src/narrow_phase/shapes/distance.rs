@@ -4,7 +4,7 @@
 //! relative far from it; it owns that arithmetic and never decides a contact time.
 
 use super::epa::penetration;
-use super::gjk;
+use super::gjk::{self, Relative};
 use super::scaled::{hull_nearest, refine, Core, HullPoint, Kind, Scaled};
 use super::MARGIN;
 use glam::DVec3;
@@ -181,11 +181,11 @@ pub(super) struct Seed<'s> {
 /// for a GJK started from carried points to count as converged (see [`converged`]).
 const SEEDED_PRECISION: f64 = 1e-6;
 
-/// Whether the points `p1` of `a` and `p2` of `b` (at `pos12`) lie within [`SEEDED_PRECISION`]
+/// Whether the points `p1` of `a` and `p2` of `b` (at `relative`) lie within [`SEEDED_PRECISION`]
 /// of their distance of the sets' separation along the line through them.
-fn converged<A: SupportMap, B: SupportMap>(pos12: &Pose, (a, b): (&A, &B), (p1, p2): (DVec3, DVec3)) -> bool {
+fn converged<A: SupportMap, B: SupportMap>(relative: &Relative, (a, b): (&A, &B), (p1, p2): (DVec3, DVec3)) -> bool {
     let (n, distance) = (p2 - p1).normalize_and_length();
-    distance == 0.0 || distance + n.dot(CsoPoint::from_shapes(pos12, a, b, n).point) <= SEEDED_PRECISION * distance
+    distance == 0.0 || distance + n.dot(relative.support(a, b, n).point) <= SEEDED_PRECISION * distance
 }
 
 /// GJK's iterations before a rough query hands its simplex to the converged GJK
@@ -231,18 +231,18 @@ impl Simplex {
         Simplex { points: self.points.map(|(x, y)| (grow_a(x), grow_b(y))), count: self.count }
     }
 
-    /// GJK's `simplex` of the sets at `pos12` (the second's pose in the first's frame).
-    fn of(simplex: &gjk::Simplex, pos12: &Pose) -> Simplex {
+    /// GJK's `simplex` of the sets at `relative` (the second's pose in the first's frame).
+    fn of(simplex: &gjk::Simplex, relative: &Relative) -> Simplex {
         let pair = |i: usize| {
             let vertex = simplex.vertex(i.min(simplex.len() - 1));
-            (vertex.orig1, pos12.inverse_transform_point(vertex.orig2))
+            (vertex.orig1, relative.unapply(vertex.orig2))
         };
         Simplex { points: std::array::from_fn(pair), count: simplex.len() }
     }
 
-    /// The pairs as GJK's simplex of the sets at `pos12`, less any that would make it degenerate.
-    fn at(&self, pos12: &Pose) -> gjk::Simplex {
-        let vertex = |(x, y): (DVec3, DVec3)| CsoPoint::new(x, pos12 * y);
+    /// The pairs as GJK's simplex of the sets at `relative`, less any that would make it degenerate.
+    fn at(&self, relative: &Relative) -> gjk::Simplex {
+        let vertex = |(x, y): (DVec3, DVec3)| CsoPoint::new(x, relative.apply(y));
         let mut simplex = gjk::Simplex::new(vertex(self.points[0]));
         for &pair in &self.points[1..self.count] {
             simplex.add(vertex(pair));
@@ -344,7 +344,7 @@ pub(super) struct Rough {
     resolution: f64,
 }
 
-/// GJK's iterations (the sets `a` and `b` at `pos12`, grown by `margins`) from `simplex`, until
+/// GJK's iterations (the sets `a` and `b` at `relative`, grown by `margins`) from `simplex`, until
 /// the separation along a direction it tried lies within `rough.share` of the distance of the
 /// simplex's nearest points (points of the two sets) where the grown sets lie more than
 /// `rough.floor` apart, or within `rough.resolution` of it: those points then; an intersection
@@ -354,7 +354,7 @@ pub(super) struct Rough {
 /// folded into it as an early stop, the measures took 1.3 % more instructions at 1e4 x 5 d/f
 /// (not traced further).
 fn rough_closest<A: SupportMap, B: SupportMap>(
-    pos12: &Pose,
+    relative: &Relative,
     (a, b): (&A, &B),
     margins: (f64, f64),
     rough: Rough,
@@ -375,7 +375,7 @@ fn rough_closest<A: SupportMap, B: SupportMap>(
         }
         // The sets lie at least this far apart along `dir`, by the difference's support point.
         let dir = -nearest / upper;
-        let support = CsoPoint::from_shapes(pos12, a, b, dir);
+        let support = relative.support(a, b, dir);
         lower = lower.max(-dir.dot(support.point));
         let far = lower - margin > rough.floor && upper - lower <= rough.share * (upper - margin);
         if far || upper - lower <= rough.resolution {
@@ -389,10 +389,10 @@ fn rough_closest<A: SupportMap, B: SupportMap>(
     None
 }
 
-/// GJK's estimate (EPA's when the sets intersect and `depth` asks for it) from the sets `a` and
-/// `b` at `pos12` (b's pose in a's frame), grown by `margins` into the shapes; `toward` (in a's
-/// frame) is where GJK starts from and the axis to fall back on. With `rough`, GJK may stop short
-/// far from contact ([`rough_closest`]).
+/// GJK's estimate (EPA's when the sets intersect and `depth` asks for it) from the sets `a` at
+/// `pose_a` and `b` at `pose_b`, grown by `margins` into the shapes; `toward` (in a's frame) is
+/// where GJK starts from and the axis to fall back on. With `rough`, GJK may stop short far from
+/// contact ([`rough_closest`]).
 pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     (a, pose_a): (&A, &Pose),
     (b, pose_b): (&B, &Pose),
@@ -402,27 +402,27 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     rough: Option<Rough>,
     seed: Option<Seed>,
 ) -> Estimate {
-    let pos12 = pose_a.inv_mul(pose_b);
+    let relative = Relative::new(pose_a.inv_mul(pose_b));
     let mut estimate =
         Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None, simplex: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
     let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<Seed>| {
-        let fresh = || gjk::Simplex::new(CsoPoint::from_shapes(&pos12, a, b, dir));
-        let mut simplex = seed.map_or_else(fresh, |seed| seed.simplex.at(&pos12));
-        let stopped = rough.and_then(|rough| rough_closest(&pos12, (a, b), margins, rough, &mut simplex));
-        let result = stopped.unwrap_or_else(|| match gjk::closest_points(&pos12, a, b, &mut simplex) {
+        let fresh = || gjk::Simplex::new(relative.support(a, b, dir));
+        let mut simplex = seed.map_or_else(fresh, |seed| seed.simplex.at(&relative));
+        let stopped = rough.and_then(|rough| rough_closest(&relative, (a, b), margins, rough, &mut simplex));
+        let result = stopped.unwrap_or_else(|| match gjk::closest_points(&relative, a, b, &mut simplex) {
             GJKResult::ClosestPoints(p1, p2, _)
-                if seed.is_some_and(|seed| seed.verify) && !converged(&pos12, (a, b), (p1, p2)) =>
+                if seed.is_some_and(|seed| seed.verify) && !converged(&relative, (a, b), (p1, p2)) =>
             {
                 simplex = fresh();
-                gjk::closest_points(&pos12, a, b, &mut simplex)
+                gjk::closest_points(&relative, a, b, &mut simplex)
             }
             found => found,
         });
         (result, simplex)
     };
     let (mut result, simplex) = gjk_from(-toward, rough, seed);
-    estimate.simplex = Some(Simplex::of(&simplex, &pos12));
+    estimate.simplex = Some(Simplex::of(&simplex, &relative));
     // A depth need only be as tight as asked: EPA from GJK's simplex, stopped early, deep inside
     // each other at a share of the depth, within the band at the resolution; a measure that asks
     // for none there takes parry's converged one.
@@ -435,7 +435,7 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
                 need.share * (depth + margins.0 + margins.1 + need.tol)
             }
         };
-        let found = (need.share > 0.0).then(|| penetration(&pos12, a, b, simplex, allowance))??;
+        let found = (need.share > 0.0).then(|| penetration(&relative, a, b, simplex, allowance))??;
         (need.resolution > 0.0 || !shallow(found.depth)).then_some(found)
     };
     let early = (result == GJKResult::Intersection).then(|| depth.and_then(|need| deep(need, &simplex))).flatten();
@@ -469,7 +469,7 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
         }
         // Intersecting (measure the depth), or GJK did not converge (try again).
         _ => {
-            if let Some(contact) = contact_support_map_support_map(&pos12, a, b, f64::MAX) {
+            if let Some(contact) = contact_support_map_support_map(&relative.pose, a, b, f64::MAX) {
                 estimate.axis = contact.normal1.try_normalize().unwrap_or(toward);
                 let points =
                     grown((*pose_a * contact.point1, *pose_b * contact.point2), pose_a.rotation * estimate.axis);

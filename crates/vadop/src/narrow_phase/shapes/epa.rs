@@ -18,9 +18,8 @@
 //! plane that bounds `a - b`, so the least of them bounds the depth from above: the gap between the
 //! two says how tight the bound is, and the loop stops once the caller's allowance covers it.
 
-use super::gjk::Simplex;
+use super::gjk::{Relative, Simplex};
 use glam::DVec3;
-use parry3d_f64::math::Pose;
 use parry3d_f64::query::gjk::CsoPoint;
 use parry3d_f64::shape::SupportMap;
 use std::cell::RefCell;
@@ -50,11 +49,11 @@ pub(super) struct Penetration {
     pub(super) axis: DVec3,
 }
 
-/// The depth of the intersecting sets `g1` and `g2` (`pos12`: g2's pose in g1's frame) from
+/// The depth of the intersecting sets `g1` and `g2` (`relative`: g2's pose in g1's frame) from
 /// GJK's `simplex` enclosing the origin, once within `allowance(depth)` of the least support value
 /// along the normals tried (an upper bound on the depth); `None` where the polytope degenerates.
 pub(super) fn penetration<G1, G2>(
-    pos12: &Pose,
+    relative: &Relative,
     g1: &G1,
     g2: &G2,
     simplex: &Simplex,
@@ -64,7 +63,7 @@ where
     G1: ?Sized + SupportMap,
     G2: ?Sized + SupportMap,
 {
-    let support = |dir: DVec3| CsoPoint::from_shapes(pos12, g1, g2, dir);
+    let support = |dir: DVec3| relative.support(g1, g2, dir);
     // One polytope per thread, its buffers kept between calls: no allocation in steady state.
     POLYTOPE.with_borrow_mut(|polytope| {
         polytope.seed(simplex, support)?;
@@ -266,6 +265,7 @@ mod tests {
     use super::*;
     use crate::narrow_phase::shapes::gjk;
     use glam::DQuat;
+    use parry3d_f64::math::Pose;
     use parry3d_f64::query::gjk::GJKResult;
     use rand::{Rng, SeedableRng};
 
@@ -288,16 +288,17 @@ mod tests {
             let turn = DQuat::from_xyzw(random(), random(), random(), random()).normalize();
             let offset = DVec3::new(random(), random(), random()) * 0.8;
             let pos12 = Pose::from_parts(offset, turn);
-            let mut simplex = Simplex::new(CsoPoint::from_shapes(&pos12, a, b, -offset.normalize_or(DVec3::X)));
-            if gjk::closest_points(&pos12, a, b, &mut simplex) != GJKResult::Intersection {
+            let relative = Relative::new(pos12);
+            let mut simplex = Simplex::new(relative.support(a, b, -offset.normalize_or(DVec3::X)));
+            if gjk::closest_points(&relative, a, b, &mut simplex) != GJKResult::Intersection {
                 continue;
             }
             let Ok(Some(contact)) = parry3d_f64::query::contact(&Pose::IDENTITY, ga.as_ref(), &pos12, gb.as_ref(), 0.0)
             else {
                 continue;
             };
-            let support_value = |n: DVec3| CsoPoint::from_shapes(&pos12, a, b, n).point.dot(n);
-            check(case, penetration(&pos12, a, b, &simplex, allowance), -contact.dist, &support_value);
+            let support_value = |n: DVec3| relative.support(a, b, n).point.dot(n);
+            check(case, penetration(&relative, a, b, &simplex, allowance), -contact.dist, &support_value);
         }
     }
 
@@ -361,14 +362,14 @@ mod tests {
         use parry3d_f64::shape::Ball;
         let (a, b) = (Ball::new(0.5), Ball::new(0.3));
         let allowance = |depth: f64| depth / 4.0;
-        let simplex_along = |pos12: &Pose, dirs: &[DVec3]| {
-            let mut simplex = Simplex::new(CsoPoint::from_shapes(pos12, &a, &b, dirs[0]));
+        let simplex_along = |relative: &Relative, dirs: &[DVec3]| {
+            let mut simplex = Simplex::new(relative.support(&a, &b, dirs[0]));
             for &dir in &dirs[1..] {
-                assert!(simplex.add(CsoPoint::from_shapes(pos12, &a, &b, dir)));
+                assert!(simplex.add(relative.support(&a, &b, dir)));
             }
             simplex
         };
-        let centred = Pose::IDENTITY;
+        let centred = Relative::new(Pose::IDENTITY);
         let in_tilted_plane = |turn: f64| DVec3::new(turn.cos(), turn.sin(), 0.3 * turn.cos()).normalize();
         let turns = [0.0, 2.1, 4.2].map(in_tilted_plane);
         for dirs in [&[DVec3::new(0.2, 0.5, -0.3), DVec3::new(-0.2, -0.5, 0.3)][..], &turns[..]] {
@@ -379,7 +380,7 @@ mod tests {
                 dirs.len()
             );
         }
-        let touching = Pose::from_parts(DVec3::new(0.8, 0.0, 0.0), glam::DQuat::IDENTITY);
+        let touching = Relative::new(Pose::from_parts(DVec3::new(0.8, 0.0, 0.0), glam::DQuat::IDENTITY));
         let found = penetration(&touching, &a, &b, &simplex_along(&touching, &[DVec3::X]), allowance).unwrap();
         assert!(found.depth <= 1e-12, "touching: {found:?}");
     }
