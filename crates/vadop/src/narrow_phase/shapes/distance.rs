@@ -196,7 +196,7 @@ const ROUGH_ITERATIONS: usize = 32;
 
 /// What a distance query must measure, beyond bounds tight enough to decide near contact.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Need {
+pub(super) struct Need<'s> {
     /// `None`: an intersection need only be recognised; otherwise the share of its depth EPA may
     /// leave (see [`DepthNeed`]).
     pub(super) depth: Option<f64>,
@@ -210,8 +210,9 @@ pub(super) struct Need {
     /// probe's on a chain; `None` to start from the line between the shapes' middles.
     pub(super) start: Option<DVec3>,
     /// Points of the two cores whose differences GJK starts from instead: the last probe's
-    /// simplex on a chain, carried along with the bodies.
-    pub(super) simplex: Option<Simplex>,
+    /// simplex on a chain, carried along with the bodies. Lent, not copied: it is 200 bytes,
+    /// and a need passes through two calls.
+    pub(super) simplex: Option<&'s Simplex>,
 }
 
 /// Pairs of points, one of each core in that shape's own frame, whose differences are points of
@@ -251,15 +252,15 @@ impl Simplex {
     }
 }
 
-impl Need {
+impl Need<'_> {
     /// Converged bounds, with the depth to `depth`'s share, GJK started between the middles.
-    pub(super) fn converged(depth: Option<f64>) -> Need {
+    pub(super) fn converged(depth: Option<f64>) -> Self {
         Need { depth, gap_share: 0.0, resolution: 0.0, start: None, simplex: None }
     }
 
     /// A search's probe: bounds to [`PROBE_RESOLUTION`], the depth to `depth`'s share, GJK
     /// started between the middles.
-    pub(super) fn probe(depth: Option<f64>) -> Need {
+    pub(super) fn probe(depth: Option<f64>) -> Self {
         Need { resolution: PROBE_RESOLUTION, ..Need::converged(depth) }
     }
 }
@@ -543,7 +544,7 @@ fn measure(a: &Scaled, pose_a: &Pose, b: &Scaled, pose_b: &Pose, need: Need, tol
         Some(exact) => (exact, None),
         None => {
             let margins = (a.margin, b.margin);
-            let seed = need.simplex.as_ref().map(|simplex| Seed { simplex, verify: false });
+            let seed = need.simplex.map(|simplex| Seed { simplex, verify: false });
             let cores = (&a.core(), pose_a);
             let cores = gjk_estimate(cores, (&b.core(), pose_b), margins, toward, depth, rough, seed);
             let distance = cores.penetration.map_or(cores.upper, |(dist, _)| dist);

@@ -18,7 +18,7 @@ use crate::numeric::direction;
 use glam::{DQuat, DVec3};
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::SupportMap;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 /// Bounds on the signed distance at one instant, and on how fast they can move (scaled units).
 #[derive(Debug, Clone, Copy)]
@@ -256,8 +256,10 @@ pub(super) struct ConvexPair<'a> {
     pub(super) size: f64,
     /// Scaled contact tolerance.
     pub(super) tol: f64,
-    /// What the last probe found, to start the next one from.
-    pub(super) warm: Cell<Option<Warm>>,
+    /// What the last probe found, to start the next one from. Read and renewed in place: it is
+    /// 352 bytes, and copies of it (and of the simplex in it) were a fifth of the probes' memory
+    /// copies.
+    pub(super) warm: RefCell<Option<Warm>>,
     /// The balls about the shapes' middles ([`Scaled::middle_ball`], in the shapes' frames).
     pub(super) middles: (Option<ShapeBall>, Option<ShapeBall>),
     /// Where the shapes touch at the first contact probe made cold (the first of a contact's end
@@ -287,14 +289,25 @@ impl Warm {
     /// What a probe's `bounds` leave for the next one; `carry` maps each shape's moving frame to
     /// the probe's.
     pub(super) fn new(bounds: &Bounds, carry: (&Pose, &Pose)) -> Option<Warm> {
-        let (x, y) = bounds.witness?;
-        Some(Warm {
+        let mut slot = None;
+        Warm::renew(&mut slot, bounds, carry);
+        slot
+    }
+
+    /// [`Warm::new`] written into `slot`, the simplex copied once.
+    pub(super) fn renew(slot: &mut Option<Warm>, bounds: &Bounds, carry: (&Pose, &Pose)) {
+        let Some((x, y)) = bounds.witness else {
+            *slot = None;
+            return;
+        };
+        let warm = slot.insert(Warm {
             axis: (carry.0.rotation.inverse() * bounds.axis, carry.1.rotation.inverse() * bounds.axis),
             witness: (carry.0.inverse_transform_point(x), carry.1.inverse_transform_point(y)),
             upper: bounds.upper,
-            simplex: bounds.simplex,
+            simplex: None,
             inside: None,
-        })
+        });
+        warm.simplex = bounds.simplex;
     }
 
     /// How the point inside both shapes at `tau`, `point` (in the probe's frame, the first
@@ -306,9 +319,9 @@ impl Warm {
         (tau > before).then(|| pose_a.rotation * ((to - from) / (tau - before)))
     }
 
-    /// This warm start holding `point`, inside both shapes at `tau` (or none), fixed in the first.
-    fn inside_at(self, tau: f64, point: Option<DVec3>, pose_a: &Pose) -> Warm {
-        Warm { inside: point.map(|p| (tau, pose_a.inverse_transform_point(p))), ..self }
+    /// The warm start holds `point`, inside both shapes at `tau` (or none), fixed in the first.
+    fn hold_inside(&mut self, tau: f64, point: Option<DVec3>, pose_a: &Pose) {
+        self.inside = point.map(|p| (tau, pose_a.inverse_transform_point(p)));
     }
 
     /// An upper bound on the signed distance from what the last full measure found, with no
@@ -611,7 +624,7 @@ impl Gauge for ConvexPair<'_> {
         let grow = velocity.length() + self.spin;
         let bend = self.acceleration.length();
         if measure == Measure::Contact {
-            if let Some(warm) = self.warm.get() {
+            if let Some(warm) = self.warm.borrow_mut().as_mut() {
                 let (upper, deepest) = warm.contact_upper((ga, &pose_a), (gb, &pose_b), slack);
                 let room = |upper: f64| 2.0 * self.tol - upper;
                 if upper <= CARRIED_UPPER * self.tol && room(upper) >= STALE_ROOM * room(warm.upper) {
@@ -623,7 +636,8 @@ impl Gauge for ConvexPair<'_> {
                         Deepest::Witnesses(..) => None,
                     };
                     let slide = warm.slide(tau, point, &pose_a);
-                    self.warm.set(Some(Warm { upper: upper.min(warm.upper), ..warm }.inside_at(tau, point, &pose_a)));
+                    warm.upper = upper.min(warm.upper);
+                    warm.hold_inside(tau, point, &pose_a);
                     let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slide, slack);
                     return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
                 }
@@ -631,7 +645,8 @@ impl Gauge for ConvexPair<'_> {
         }
         // Each shape's frame moves with its body.
         let carry = (&pose_a, &pose_b);
-        let warm = self.warm.get();
+        let mut slot = self.warm.borrow_mut();
+        let warm = slot.as_ref();
         // GJK starts from the last probe's axis turned with a; a gap far from contact needs its
         // distance only to a share (it steps the search and decides nothing).
         let gap = measure == Measure::Gap;
@@ -640,7 +655,7 @@ impl Gauge for ConvexPair<'_> {
             gap_share: if gap { GAP_SHARE } else { 0.0 },
             resolution: PROBE_RESOLUTION,
             start: warm.map(|warm| pose_a.rotation * warm.axis.0),
-            simplex: warm.and_then(|warm| warm.simplex),
+            simplex: warm.and_then(|warm| warm.simplex.as_ref()),
         };
         let bounds = match warm {
             // A contact's end search starts cold at the contact's start, where the caller reports
@@ -659,7 +674,11 @@ impl Gauge for ConvexPair<'_> {
         };
         let inside = inside_point(&bounds);
         let slide = warm.and_then(|warm| warm.slide(tau, inside, &pose_a));
-        self.warm.set(Warm::new(&bounds, carry).map(|next| next.inside_at(tau, inside, &pose_a)));
+        Warm::renew(&mut slot, &bounds, carry);
+        if let Some(next) = slot.as_mut() {
+            next.hold_inside(tau, inside, &pose_a);
+        }
+        drop(slot);
         // Negative where the pair leaves along the axis faster than turning can close it.
         let shrink = self.spin_along(bounds.axis) - velocity.dot(bounds.axis);
         // Apart and never closer along the axis: the start search's step on it is infinite, so
@@ -693,13 +712,13 @@ impl Gauge for ConvexPair<'_> {
     }
 
     fn forget(&self) {
-        self.warm.set(None);
+        *self.warm.borrow_mut() = None;
     }
     fn warm_start(&self) -> Option<Option<Warm>> {
-        Some(self.warm.get())
+        Some(*self.warm.borrow())
     }
     fn set_warm_start(&self, warm: Option<Warm>) {
-        self.warm.set(warm);
+        *self.warm.borrow_mut() = warm;
     }
     fn translating(&self) -> bool {
         // On a bent relative path the distance need not be convex in time.

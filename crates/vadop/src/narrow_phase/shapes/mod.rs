@@ -391,7 +391,7 @@ fn pair_searcher<'a, S: Spin, T: Spin>(
                 spin,
                 size: size * scale,
                 tol,
-                warm: Cell::new(None),
+                warm: RefCell::new(None),
                 measured: Cell::new(None),
             })
         }
