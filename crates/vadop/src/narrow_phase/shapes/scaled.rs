@@ -224,18 +224,20 @@ pub(super) fn hull_nearest(hull: &ConvexPolyhedron, planes: &[(DVec3, f64)], p: 
     if !(depth < 0.0) {
         return HullPoint::Inside(depth.max(0.0));
     }
-    let ring = |k: usize| {
+    // A face's edges as its ring of corners turns, each from a corner to the next (the last back
+    // to the first, by a comparison: an index modulo the ring's length was an integer division).
+    let edges = |k: usize| {
         let face = &hull.faces()[k];
         let first = face.first_vertex_or_edge as usize;
-        &corners[first..first + face.num_vertices_or_edges as usize]
+        let ring = &corners[first..first + face.num_vertices_or_edges as usize];
+        let corner = move |i: usize| points[ring[if i == ring.len() { 0 } else { i }] as usize];
+        (0..ring.len()).map(move |i| (corner(i), corner(i + 1)))
     };
-    let corner = |ring: &[u32], i: usize| points[ring[i % ring.len()] as usize];
     let (normal, _) = planes[farthest];
     let foot = p + normal * depth;
-    let around = ring(farthest);
     // On the same side of every edge, as the ring turns: inside the face.
-    let turn = |i: usize| normal.dot((corner(around, i + 1) - corner(around, i)).cross(foot - corner(around, i)));
-    if (0..around.len()).all(|i| turn(i) > 0.0) || (0..around.len()).all(|i| turn(i) < 0.0) {
+    let turn = |(a, b): (DVec3, DVec3)| normal.dot((b - a).cross(foot - a));
+    if edges(farthest).all(|edge| turn(edge) > 0.0) || edges(farthest).all(|edge| turn(edge) < 0.0) {
         return HullPoint::Outside(foot);
     }
     let mut best: Option<(f64, DVec3)> = None;
@@ -243,9 +245,8 @@ pub(super) fn hull_nearest(hull: &ConvexPolyhedron, planes: &[(DVec3, f64)], p: 
         if !(offset - normal.dot(p) < 0.0) {
             continue;
         }
-        let around = ring(k);
-        for i in 0..around.len() {
-            let (a, along) = (corner(around, i), corner(around, i + 1) - corner(around, i));
+        for (a, b) in edges(k) {
+            let along = b - a;
             let t = ((p - a).dot(along) / along.length_squared()).clamp(0.0, 1.0);
             let on = a + along * t;
             let distance = on.distance_squared(p);
@@ -255,7 +256,8 @@ pub(super) fn hull_nearest(hull: &ConvexPolyhedron, planes: &[(DVec3, f64)], p: 
         }
     }
     // A hull's edges have length: a corner (on the hull) only if rounding made them all none.
-    HullPoint::Outside(best.map_or_else(|| corner(ring(farthest), 0), |(_, on)| on))
+    let corner = || edges(farthest).next().map_or(foot, |(a, _)| a);
+    HullPoint::Outside(best.map_or_else(corner, |(_, on)| on))
 }
 
 /// The support map of a shape's core.
