@@ -43,9 +43,17 @@ const TRIALS: usize = 4;
 /// The longest time found (in a few trials of the chord's far end) over which the signed
 /// distance of the two shapes certainly stays at most `level`, from the point `p` fixed in
 /// `own` followed through `other`'s signed distance; 0 when the chord does not even hold now.
-/// `slack` covers the rounding of the probe's frame and coordinates.
-pub(super) fn chord_hold(p: DVec3, own: &Moving, other: &Moving, level: f64, slack: f64) -> f64 {
-    let own_depth = own.shape.signed_distance_above(own.pose.inverse_transform_point(p));
+/// `slack` covers the rounding of the probe's frame and coordinates. `signed`: p's signed
+/// distances from `own`'s shape and from `other`'s when the caller has them (a point inside both
+/// whose depths it measured, to the bit what [`Scaled::signed_distance_above`] gives there).
+pub(super) fn chord_hold(
+    p: DVec3,
+    signed: Option<(f64, f64)>,
+    own: &Moving,
+    other: &Moving,
+    level: f64,
+    slack: f64,
+) -> f64 {
     let lever = p - own.centre;
     let reach = p - other.centre;
     let relative = own.velocity - other.velocity;
@@ -53,7 +61,9 @@ pub(super) fn chord_hold(p: DVec3, own: &Moving, other: &Moving, level: f64, sla
     let moving = relative + own.turning.omega.cross(lever);
     let start = other.pose.inverse_transform_point(p);
     let heading = other.pose.rotation.inverse() * (moving - other.turning.omega.cross(reach));
-    let near = other.shape.signed_distance_above(start);
+    let (own_depth, near) = signed.unwrap_or_else(|| {
+        (own.shape.signed_distance_above(own.pose.inverse_transform_point(p)), other.shape.signed_distance_above(start))
+    });
     let (w_own, w_other) = (own.turning.speed, other.turning.speed);
     // |d/ds (p - other's centre)| at every time, and |P''| over [0, s]: p's own turning, the
     // frame's turning of p's offset, and twice the frame's turning of p's velocity (Coriolis).
@@ -88,7 +98,14 @@ pub(super) fn chord_hold(p: DVec3, own: &Moving, other: &Moving, level: f64, sla
 /// |q| + 2 w_o |q'| + |p''|`, `q` its offset from `other`'s centre, and `|p''| <= (alpha + w²) |r|
 /// + 2 w |drift|` from `own`'s turning of the sliding point at `r` from its centre). The sum of
 /// the two signed distances with that rest is convex over `[0, S]`: at most the larger of its ends.
-pub(super) fn sliding_hold(p: DVec3, drift: DVec3, own: &Moving, other: &Moving, level: f64, slack: f64) -> f64 {
+pub(super) fn sliding_hold(
+    (p, signed): (DVec3, Option<(f64, f64)>),
+    drift: DVec3,
+    own: &Moving,
+    other: &Moving,
+    level: f64,
+    slack: f64,
+) -> f64 {
     let lever = p - own.centre;
     let reach = p - other.centre;
     let (w_own, w_other) = (own.turning.speed, other.turning.speed);
@@ -103,7 +120,7 @@ pub(super) fn sliding_hold(p: DVec3, drift: DVec3, own: &Moving, other: &Moving,
         own.shape.signed_distance_above(start_own + heading_own * s)
             + other.shape.signed_distance_above(start + heading * s)
     };
-    let near = depth(0.0);
+    let near = signed.map_or_else(|| depth(0.0), |(own, other)| own + other);
     let slide = drift.length();
     let curvature = |s: f64| {
         let own_bend = (own.turning.acceleration + w_own * w_own) * (lever.length() + s * slide) + 2.0 * w_own * slide;
@@ -338,7 +355,7 @@ mod tests {
                 let start = other.shape.signed_distance_above(other.pose.inverse_transform_point(p));
                 let size = case.geometry[0].size() + case.geometry[1].size();
                 let level = start + depth + size * 10f64.powf(rng.random_range(-6.0..-1.0));
-                let held = chord_hold(p, own, other, level, 1e-15);
+                let held = chord_hold(p, None, own, other, level, 1e-15);
                 if held == 0.0 {
                     return;
                 }
@@ -381,7 +398,7 @@ mod tests {
             let start = sum(own.pose.inverse_transform_point(p), p, other.pose);
             let size = case.geometry[0].size() + case.geometry[1].size();
             let level = start + size * 10f64.powf(rng.random_range(-6.0..-1.0));
-            let held = sliding_hold(p, drift, own, other, level, 1e-15);
+            let held = sliding_hold((p, None), drift, own, other, level, 1e-15);
             if held == 0.0 {
                 return;
             }

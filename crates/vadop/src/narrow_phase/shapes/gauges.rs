@@ -484,14 +484,18 @@ impl ConvexPair<'_> {
         // point inside both sliding through a; none when a spin does not give its angular
         // velocity.
         let Some((moving_a, moving_b)) = self.moving(tau, (a, pose_a), (b, pose_b)) else { return balls };
-        let (points, inside) = match deepest {
-            Deepest::Inside { point, .. } => ((point, point), point),
-            Deepest::Witnesses(x, y) => ((x, y), 0.5 * (x + y)),
+        // The deepest point's signed distances from a and from b are minus its depths there, to
+        // the bit: the chords need not measure them again (two of a chord's five or so).
+        let (points, inside, signed) = match deepest {
+            Deepest::Inside { point, depths, .. } => ((point, point), point, Some((-depths.0, -depths.1))),
+            Deepest::Witnesses(x, y) => ((x, y), 0.5 * (x + y), None),
         };
+        let swapped = signed.map(|(in_a, in_b)| (in_b, in_a));
         let level = ending(self.tol);
-        let fixed = chord_hold(points.0, &moving_a, &moving_b, level, slack)
-            .max(chord_hold(points.1, &moving_b, &moving_a, level, slack));
-        let sliding = slide.map_or(0.0, |drift| sliding_hold(inside, drift, &moving_a, &moving_b, level, slack));
+        let fixed = chord_hold(points.0, signed, &moving_a, &moving_b, level, slack)
+            .max(chord_hold(points.1, swapped, &moving_b, &moving_a, level, slack));
+        let sliding =
+            slide.map_or(0.0, |drift| sliding_hold((inside, signed), drift, &moving_a, &moving_b, level, slack));
         balls.max(fixed).max(sliding)
     }
 
