@@ -88,7 +88,7 @@ pub(super) fn nearest(shape: &Scaled, pose: &Pose, point: DVec3) -> Option<(f64,
             Capsule::new(c.segment.a * s, c.segment.b * s, c.radius * s).project_local_point(local, true)
         }
         Kind::Cylinder(c) => Cylinder::new(c.half_height * s, c.radius * s).project_local_point(local, true),
-        Kind::Cone(c) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
+        Kind::Cone(c, _) => Cone::new(c.half_height * s, c.radius * s).project_local_point(local, true),
         Kind::Hull(hull, planes) => match hull_nearest(hull, planes, local * shape.inverse_scale) {
             HullPoint::Outside(on) => PointProjection::new(false, on * s),
             HullPoint::Inside(_) => return None,

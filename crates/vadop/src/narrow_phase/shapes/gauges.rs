@@ -458,7 +458,7 @@ impl ConvexPair<'_> {
         // or leave each other, their centres part at the rate along the contact's normal, not
         // at the pair's whole speed. A centre outside its shape holds no ball.
         let inside = |shape: &Scaled, pose: &Pose, centre: DVec3| {
-            let depth = shape.depth_at(pose.inverse_transform_point(centre)).0;
+            let depth = shape.depth_only(pose.inverse_transform_point(centre));
             (depth > 0.0).then_some((centre, depth))
         };
         let (near, inward) = match deepest {

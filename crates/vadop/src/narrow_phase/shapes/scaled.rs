@@ -39,7 +39,8 @@ pub(super) enum Kind<'a> {
     Capsule(&'a Capsule),
     Cuboid(&'a Cuboid),
     Cylinder(&'a Cylinder),
-    Cone(&'a Cone),
+    /// With its slant height, `sqrt(4 h² + r²)` for half height `h` and radius `r`.
+    Cone(&'a Cone, f64),
     /// A hull with its face planes (see [`ShapeGeometry::face_planes`]).
     Hull(&'a ConvexPolyhedron, &'a [(DVec3, f64)]),
     /// Any other shape (a triangle of a mesh): no closed form.
@@ -57,7 +58,8 @@ impl<'a> Kind<'a> {
         } else if let Some(cylinder) = shape.as_cylinder() {
             Kind::Cylinder(cylinder)
         } else if let Some(cone) = shape.as_cone() {
-            Kind::Cone(cone)
+            let (h, r) = (cone.half_height, cone.radius);
+            Kind::Cone(cone, (4.0 * h * h + r * r).sqrt())
         } else if let Some(hull) = shape.as_convex_polyhedron() {
             debug_assert_eq!(planes.len(), hull.faces().len(), "a hull's planes come with it");
             Kind::Hull(hull, planes)
@@ -108,14 +110,27 @@ impl<'a> Scaled<'a> {
     /// direction (in the shape's frame) in which that depth grows fastest, away from the nearest
     /// face. A kind without a closed form counts every point 0 deep.
     pub(super) fn depth_at(&self, p: DVec3) -> (f64, DVec3) {
+        self.depth_with::<true>(p)
+    }
+
+    /// [`Self::depth_at`]'s depth alone, to the bit: without the direction's divisions, which
+    /// sat on the chain of every depth a distance bound asked for.
+    pub(super) fn depth_only(&self, p: DVec3) -> f64 {
+        self.depth_with::<false>(p).0
+    }
+
+    /// The depth, and with `INWARD` its direction (zero without).
+    #[inline(always)]
+    fn depth_with<const INWARD: bool>(&self, p: DVec3) -> (f64, DVec3) {
+        let unit = |v: DVec3| if INWARD { v.normalize_or_zero() } else { DVec3::ZERO };
         match &self.core {
-            Core::Point => (self.margin - p.length(), -p.normalize_or_zero()),
+            Core::Point => (self.margin - p.length(), -unit(p)),
             Core::Segment(segment) => {
                 let on = segment.project_local_point(p, true).point;
-                (self.margin - on.distance(p), (on - p).normalize_or_zero())
+                (self.margin - on.distance(p), unit(on - p))
             }
             Core::Solid(_) => {
-                let (depth, inward) = solid_depth(self.kind, p * self.inverse_scale);
+                let (depth, inward) = solid_depth::<INWARD>(self.kind, p * self.inverse_scale);
                 (depth * self.scale, inward)
             }
         }
@@ -134,7 +149,7 @@ impl<'a> Scaled<'a> {
                 HullPoint::Inside(depth) => -depth * self.scale,
             };
         }
-        let (depth, _) = self.depth_at(p);
+        let depth = self.depth_only(p);
         if depth > 0.0 || !matches!(self.core, Core::Solid(_)) {
             return -depth;
         }
@@ -155,29 +170,31 @@ impl<'a> Scaled<'a> {
 /// How deep `p` lies inside a solid without a core, in the shape's own lengths, and the
 /// direction away from the nearest face: the nearest of the planes of its faces, and for round
 /// sides the exact distance to them; 0 for a kind without a closed form.
-fn solid_depth(kind: Kind, p: DVec3) -> (f64, DVec3) {
-    let nearest = |faces: &mut dyn Iterator<Item = (f64, DVec3)>| {
-        faces.fold((f64::INFINITY, DVec3::ZERO), |x, y| if y.0 < x.0 { y } else { x })
-    };
+#[inline(always)]
+fn solid_depth<const INWARD: bool>(kind: Kind, p: DVec3) -> (f64, DVec3) {
+    fn nearest(faces: impl IntoIterator<Item = (f64, DVec3)>) -> (f64, DVec3) {
+        faces.into_iter().fold((f64::INFINITY, DVec3::ZERO), |x, y| if y.0 < x.0 { y } else { x })
+    }
     if let Kind::Cuboid(cuboid) = kind {
         let inward = |axis: usize| -DVec3::AXES[axis] * p[axis].signum();
-        return nearest(&mut (0..3).map(|k| (cuboid.half_extents[k] - p[k].abs(), inward(k))));
+        return nearest((0..3).map(|k| (cuboid.half_extents[k] - p[k].abs(), inward(k))));
     }
     let across = DVec3::new(p.x, 0.0, p.z);
-    let (radius, outward) = (across.length(), across.normalize_or_zero());
+    let radius = across.length();
+    let outward = if INWARD { across.normalize_or_zero() } else { DVec3::ZERO };
     if let Kind::Cylinder(cylinder) = kind {
-        let faces =
-            [(cylinder.radius - radius, -outward), (cylinder.half_height - p.y.abs(), -DVec3::Y * p.y.signum())];
-        return nearest(&mut faces.into_iter());
+        return nearest([
+            (cylinder.radius - radius, -outward),
+            (cylinder.half_height - p.y.abs(), -DVec3::Y * p.y.signum()),
+        ]);
     }
-    if let Kind::Cone(cone) = kind {
+    if let Kind::Cone(cone, slant) = kind {
         // Apex at +h, base of radius r at -h: a point inside is nearest the base or the side's
         // generator through it, whose line it meets at right angles (the half angle is acute).
         let (h, r) = (cone.half_height, cone.radius);
-        let slant = (4.0 * h * h + r * r).sqrt();
         let side = (r * (h - p.y) / (2.0 * h) - radius) * (2.0 * h) / slant;
-        let side_inward = -(outward * (2.0 * h) + DVec3::Y * r) / slant;
-        return nearest(&mut [(side, side_inward), (p.y + h, DVec3::Y)].into_iter());
+        let side_inward = if INWARD { -(outward * (2.0 * h) + DVec3::Y * r) / slant } else { DVec3::ZERO };
+        return nearest([(side, side_inward), (p.y + h, DVec3::Y)]);
     }
     if let Kind::Hull(_, planes) = kind {
         // The nearest plane by its index: its normal is read once, not carried through the scan.
@@ -412,7 +429,7 @@ impl Scaled<'_> {
     /// no closed-form depth.
     pub(super) fn middle_ball(&self) -> Option<ShapeBall> {
         let middle = self.middle();
-        let depth = self.depth_at(middle).0;
+        let depth = self.depth_only(middle);
         (depth > 0.0).then_some((middle, depth))
     }
 }
