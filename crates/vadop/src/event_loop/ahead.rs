@@ -185,6 +185,14 @@ pub(super) fn is_current(bodies: &Bodies, event: &Event) -> bool {
     current(event.body as usize, event.body_stamp) && partner_current
 }
 
+/// True when `second`, the entry after `first` in the calendar's order, is the same contact held
+/// by its other body.
+#[inline]
+pub(super) fn same_contact(first: &Entry, second: &Entry) -> bool {
+    let (a, b) = (&first.scheduled, &second.scheduled);
+    !a.cell_crossing && !b.cell_crossing && matches!(b.event.partner, Partner::Body(_)) && a.event == b.event
+}
+
 /// True when two motions are the same to the bit.
 #[inline]
 pub(super) fn same_bits(a: &Motion, b: &Motion) -> bool {

@@ -58,10 +58,12 @@ use std::time::Instant;
 
 /// The parallel loop runs from this many threads on. On 2 its workers share the searches, most
 /// of an event's cost, but an event's handling in order stays on one thread: measured with
-/// callgrind on the gas at n = 10^5 and packing 0.2, the workers execute about 10.5 k
-/// instructions per pair collision and the thread that handles the events in order 3.4 k, where
-/// the serial loop executes 11 k in all, which bounds 2 threads to 1.2x (and the batches' hand-offs
-/// took that back: 0.96x measured); from 3 threads on the bound passes 1.5x.
+/// callgrind on the periodic gas at n = 10^5, per pair collision, the workers execute 10.5 k,
+/// 9.0 k and 12.2 k instructions at packing 0.05, 0.2 and 0.4 and the thread that handles the
+/// events in order 7.3 k, 3.0 k and 2.4 k, where the serial loop executes 15.5 k, 10.7 k and
+/// 9.1 k in all (with neighbour lists at 0.4, which the parallel loop cannot keep), which bounds 2
+/// threads to 1.24x, 1.41x and 1.07x before the batches' hand-offs (0.96x measured at a bound of
+/// 1.2), and 3 threads to 1.44x, 1.76x and 1.41x.
 const AHEAD_THREADS: usize = 3;
 /// The grid is rebuilt when the bodies have grown past this many times those it was sized for.
 const GROWTH: usize = 2;
@@ -431,8 +433,14 @@ impl EventLoop {
             };
             self.workers.par_iter_mut().enumerate().for_each(|(k, worker)| {
                 worker.worked.clear();
-                for entry in batch.iter().skip(k * share).take(share) {
-                    let worked = seen.work_out(entry, worker);
+                for (at, entry) in batch.iter().enumerate().skip(k * share).take(share) {
+                    // The second owner's entry of a contact: handling the first reschedules both
+                    // bodies, so this one is stale by its turn (if not, it is handled there).
+                    let worked = if at > 0 && ahead::same_contact(&batch[at - 1], entry) {
+                        Worked::Nothing
+                    } else {
+                        seen.work_out(entry, worker)
+                    };
                     worker.worked.push(worked);
                 }
             });
@@ -480,6 +488,8 @@ impl EventLoop {
         t1: f64,
         out: &mut Output,
     ) {
+        // Read in place, not moved out: a worker's result is a few hundred bytes.
+        let workers = std::mem::take(&mut self.workers);
         for (k, entry) in batch.iter().enumerate() {
             // Events predicted since, and due before this one, come first.
             while let Some(first) = self.calendar.peek_entry() {
@@ -490,29 +500,29 @@ impl EventLoop {
                 self.dispatch(bodies, physics, first, out);
             }
             if self.calendar.is_current_entry(entry) {
-                let worked = std::mem::replace(&mut self.workers[k / share].worked[k % share], Worked::Nothing);
-                self.commit(bodies, physics, *entry, worked, out);
+                self.commit(bodies, physics, *entry, &workers[k / share].worked[k % share], out);
             }
         }
+        self.workers = workers;
     }
 
     /// Handles `entry` with what a worker found for it, when nothing it read has changed since.
-    fn commit(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, worked: Worked, out: &mut Output) {
+    fn commit(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, worked: &Worked, out: &mut Output) {
         let i = entry.owner as usize;
         match worked {
-            Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
+            &Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
                 self.marks.mark(self.cells.cell_of(i));
                 self.cells.step_across(i, self.calendar.events(i).crossing);
                 self.marks.mark(self.cells.cell_of(i));
                 self.calendar.schedule(i as u32, Events { next, crossing });
             }
-            Worked::Voided { next } if self.untouched_around(i) => {
+            &Worked::Voided { next } if self.untouched_around(i) => {
                 out.stats.invalidations += 1;
                 out.stats.retests += 1;
                 let crossing = self.calendar.events(i).crossing;
                 self.calendar.schedule(i as u32, Events { next, crossing });
             }
-            Worked::Pushed(pushed) if self.untouched_pair(bodies, &pushed, entry.scheduled.event) => {
+            Worked::Pushed(pushed) if self.untouched_pair(bodies, pushed, entry.scheduled.event) => {
                 self.commit_pushed(bodies, physics, pushed, entry.scheduled.event.time, out);
             }
             _ => self.dispatch(bodies, physics, entry, out),
@@ -533,7 +543,7 @@ impl EventLoop {
     /// The contact of bodies `pushed.pair` at `t`, handled with what a worker found: what
     /// [`respond::pair_impact`] and [`Self::pair_contact`] do for two frictionless spheres pushed
     /// apart, from the same arithmetic on the same motions.
-    fn commit_pushed(&mut self, bodies: &mut Bodies, physics: &Physics, pushed: Pushed, t: f64, out: &mut Output) {
+    fn commit_pushed(&mut self, bodies: &mut Bodies, physics: &Physics, pushed: &Pushed, t: f64, out: &mut Output) {
         let [a, b] = pushed.pair;
         let (i, j) = (a as usize, b as usize);
         let rule = self.impacts.rules.pair(a, b, t, physics.restitution, physics.contact_duration);
