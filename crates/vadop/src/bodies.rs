@@ -777,7 +777,7 @@ impl Bodies {
                 log.push(overwritten);
             }
         }
-        self.state[i].motion = Motion { position: self.position_at(i, t), since: t, velocity };
+        self.state[i].motion = self.state[i].motion.moved_on(t, velocity, self.gravity_on(i));
         // A new motion falls: an impact moved the body off whatever held it up.
         self.set_rest(i, Rest::Falling);
         self.stamp[i] = self.stamp[i].wrapping_add(1);

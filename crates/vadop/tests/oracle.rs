@@ -178,6 +178,32 @@ fn grazing_and_head_on_pairs() {
     }
 }
 
+/// Fast spheres bouncing off the walls in detect mode: the grid runs each body's first bounce
+/// of a window ahead (its proxy, binned partners and their contacts made at the window's start,
+/// on every worker) and the event loop takes them when the bounce pops. Frames of many lengths
+/// (windows cut mid-frame and frames across windows), one and two workers: the oracle's contacts.
+#[test]
+fn wall_bounces_run_ahead_give_the_oracles_contacts() {
+    let scene = paper(800, 0.15, 5.0, 28);
+    for method in [Method::Auto, Method::Grid] {
+        for threads in [1, 2] {
+            let config =
+                |method| WorldConfig { method, mode: Mode::Detect, threads: Some(threads), ..WorldConfig::default() };
+            let (mut found, mut oracle) =
+                (scene.world(config(method)).unwrap(), scene.world(config(Method::Brute)).unwrap());
+            let mut walls = 0;
+            for (frame, factor) in
+                [1.0, 0.3, 2.5, 1.0, 0.05, 4.0, 1.0, 1.7, 0.6, 1.0].into_iter().cycle().take(30).enumerate()
+            {
+                let contacts = found.step(factor * DT).unwrap().to_vec();
+                assert_eq!(contacts, oracle.step(factor * DT).unwrap(), "{method:?}, {threads} threads, frame {frame}");
+                walls += contacts.iter().filter(|c| matches!(c.touched, vadop::Touched::Wall(_))).count();
+            }
+            assert!(walls > 200, "{method:?}: {walls} wall contacts");
+        }
+    }
+}
+
 /// Regression (found by the property test): the grid rebinned a body between its velocity change
 /// in a collision and the update of its box, so its cells described its old path.
 #[test]

@@ -18,7 +18,7 @@
 use super::box_columns::BoxColumns;
 use super::{BroadPhase, PrepareCounts};
 use crate::bodies::BodyState;
-use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Proxies, Reported};
+use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Path, Proxies, Reported};
 use crate::memory::prefetch;
 use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
@@ -81,8 +81,9 @@ struct Level {
     cell_start: Vec<u32>,
     /// Head of each cell's list of late pieces in `Grid::late`.
     late_head: Vec<u32>,
-    /// Pieces binned into this level at the window's start.
+    /// Pieces binned into this level at the window's start, and entered since.
     count: usize,
+    late: usize,
 }
 
 impl Level {
@@ -104,6 +105,7 @@ impl Level {
         self.late_head.clear();
         self.late_head.resize(cells, NONE);
         self.count = 0;
+        self.late = 0;
     }
 
     #[inline]
@@ -131,11 +133,23 @@ impl Level {
     /// (given relative to the grid origin): its low corner lies within one cell below `low`.
     #[inline]
     fn cells_near(&self, low: DVec3, high: DVec3) -> impl Iterator<Item = usize> + use<> {
+        self.columns_near(low, high).flat_map(|(first, last)| first..=last)
+    }
+
+    /// The columns of cells that can hold the low corner of a box of this level overlapping
+    /// `[low, high]` (as [`Self::cells_near`]), each as its first and last cell: cells along z
+    /// are adjacent, so a column's binned pieces are one run of slots.
+    #[inline]
+    fn columns_near(&self, low: DVec3, high: DVec3) -> impl Iterator<Item = (usize, usize)> + use<> {
         let a = self.coordinates(low - self.cell);
         let b = self.coordinates(high);
         let [_, ny, nz] = self.dims;
-        (a[0]..=b[0])
-            .flat_map(move |x| (a[1]..=b[1]).flat_map(move |y| ((x * ny + y) * nz + a[2])..=((x * ny + y) * nz + b[2])))
+        (a[0]..=b[0]).flat_map(move |x| {
+            (a[1]..=b[1]).map(move |y| {
+                let column = (x * ny + y) * nz;
+                (column + a[2], column + b[2])
+            })
+        })
     }
 
     /// The binned pieces of cell `c`, as a range of slots.
@@ -174,6 +188,8 @@ pub struct Grid {
     hits: Vec<u32>,
     /// Scratch of the binning: each cell's piece count, then the slot of its next piece.
     next_slot: Vec<u32>,
+    /// The binned pieces stay as the window's start left them (see [`BroadPhase::fix_binned`]).
+    binned_fixed: bool,
 }
 
 impl Grid {
@@ -196,6 +212,7 @@ impl Grid {
             runs: Vec::new(),
             hits: Vec::new(),
             next_slot: Vec::new(),
+            binned_fixed: false,
         }
     }
 
@@ -207,10 +224,9 @@ impl Grid {
     /// still fits a base cell: were the widening left out, every cut piece would land one level
     /// up, in cells of eight times the volume.
     #[inline]
-    fn plan_pieces(&self, proxies: Proxies, i: usize) -> (u32, i32) {
-        let radius = proxies.radius(i);
-        let (origin, velocity) = proxies.origin_and_velocity(i);
-        let length = velocity.length() * proxies.window_of(i).duration();
+    fn plan_pieces(&self, path: &Path) -> (u32, i32) {
+        let Path { origin, velocity, radius, window, .. } = *path;
+        let length = velocity.length() * window.duration();
         let scale = 1.0 + 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING;
         let widening = 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING * origin.abs().max_element()
             + 4.0 * f32::EPSILON as f64 * (self.extent.max_element() + 2.0 * radius + length);
@@ -221,15 +237,14 @@ impl Grid {
         (count, self.exponent_for(extent))
     }
 
-    /// Calls `f` with the box and window of every piece of proxy `i`, cut into `count` pieces.
+    /// Calls `f` with the box and window of every piece of `path`, cut into `count` pieces.
     #[inline]
-    fn for_each_piece(proxies: Proxies, i: usize, count: u32, mut f: impl FnMut(CompactBox, Window)) {
-        let window = proxies.window_of(i);
+    fn for_each_piece(proxies: Proxies, path: &Path, count: u32, mut f: impl FnMut(CompactBox, Window)) {
+        let Path { origin, velocity, radius, window, bbox } = *path;
         if count == 1 {
-            f(proxies.bbox(i), window);
+            f(bbox, window);
             return;
         }
-        let ((origin, velocity), radius) = (proxies.origin_and_velocity(i), proxies.radius(i));
         let step = window.duration() / count as f64;
         let (mut from, mut start) = (origin, window.start);
         for k in 1..=count {
@@ -269,7 +284,7 @@ impl Grid {
             if level.cells_before + last < owned.start || level.cells_before + first >= owned.end {
                 continue;
             }
-            Grid::for_each_piece(proxies, i, count, |bbox, window| {
+            Grid::for_each_piece(proxies, &proxies.path(i), count, |bbox, window| {
                 let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
                 if owned.contains(&cell) {
                     f(i, cell, bbox, window);
@@ -303,23 +318,25 @@ impl Grid {
         self.levels.len() - 1
     }
 
-    /// [`BroadPhase::query`], leaving the body's new pieces in `self.pieces`; returns the exponent
-    /// of the level they fit, so an entry need not plan them again.
+    /// [`BroadPhase::query`] (of the late pieces alone unless `binned`), leaving the body's new
+    /// pieces in `self.pieces`; returns the exponent of the level they fit, so an entry need not
+    /// plan them again.
     fn query_pieces(
         &mut self,
         body: u32,
         proxies: Proxies,
-        skip: Option<u32>,
+        (skip, binned): (Option<u32>, bool),
         mut report: impl FnMut(Reported, Window),
     ) -> i32 {
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
-        let (count, exponent) = self.plan_pieces(proxies, body as usize);
-        Grid::for_each_piece(proxies, body as usize, count, |bbox, window| pieces.push((bbox, window)));
+        let path = proxies.path(body as usize);
+        let (count, exponent) = self.plan_pieces(&path);
+        Grid::for_each_piece(proxies, &path, count, |bbox, window| pieces.push((bbox, window)));
         for &(bbox, window) in &pieces {
             let piece = Entry { bbox, body, stamp: 0 };
             for k in 0..self.levels.len() {
-                self.for_each_overlapping(k, &piece, proxies, |other, other_window, motion| {
+                self.for_each_overlapping(k, &piece, proxies, binned, |other, other_window, motion| {
                     if other.body != body && Some(other.body) != skip {
                         let common = window.intersect(other_window);
                         if !common.is_empty() {
@@ -333,8 +350,33 @@ impl Grid {
         exponent
     }
 
-    /// Calls `visit(entry, window, motion)` for every current piece, binned or late, of level `k`
-    /// whose box overlaps `query`, unlinking the stale late
+    /// Calls `report(other, window)` for every current binned piece (one of the window's start)
+    /// whose box overlaps a piece of `path`, body `body`'s path, and whose window meets the
+    /// piece's: the part of [`BroadPhase::query`] that no later entry changes once
+    /// [`BroadPhase::fix_binned`] is set. Reads the grid alone, so workers may run it side by
+    /// side.
+    fn query_binned_pieces(&self, body: u32, path: &Path, proxies: Proxies, mut report: impl FnMut(Reported, Window)) {
+        let (count, _) = self.plan_pieces(path);
+        Grid::for_each_piece(proxies, path, count, |bbox, window| {
+            let (low, high) = bbox.corners();
+            for level in &self.levels {
+                for (first, last) in level.columns_near(low, high) {
+                    let run = level.first + level.cell_start[first] as usize
+                        ..level.first + level.cell_start[last + 1] as usize;
+                    self.boxes.for_each_overlap(&bbox, run, |e| {
+                        let Owner { body: other, stamp, window: other_window } = self.owners[e];
+                        let common = window.intersect(other_window);
+                        if other != body && !common.is_empty() && proxies.is_current(other as usize, stamp) {
+                            report(Reported { body: other, stamp, state: &self.motions[e] }, common);
+                        }
+                    });
+                }
+            }
+        });
+    }
+
+    /// Calls `visit(entry, window, motion)` for every current piece, binned (unless not
+    /// `binned`) or late, of level `k` whose box overlaps `query`, unlinking the stale late
     /// pieces it passes, so a busy cell's list stays short.
     #[inline]
     fn for_each_overlapping(
@@ -342,73 +384,102 @@ impl Grid {
         k: usize,
         query: &Entry,
         proxies: Proxies,
+        binned: bool,
         mut visit: impl FnMut(&Entry, Window, &BodyState),
     ) {
         let Grid { levels, late, late_motions, boxes, owners, motions, runs, hits, .. } = self;
         let level = &mut levels[k];
+        // A query of the late pieces alone skips a level that holds none yet.
+        if !binned && level.late == 0 {
+            return;
+        }
         let (low, high) = query.bbox.corners();
-        let a = level.coordinates(low - level.cell);
-        let b = level.coordinates(high);
-        let [_, ny, nz] = level.dims;
         // In phases, each a loop of independent loads, rather than column by column: a query
         // meets a few memory misses per column (its cell bounds, its boxes, their owners and
         // stamps), and a phase lets the processor wait for all of a kind at once instead of for
         // each in turn. That cut a re-test's cost by about an eighth at n = 10^5 (BENCHMARKS.md).
-        runs.clear();
-        for x in a[0]..=b[0] {
-            for y in a[1]..=b[1] {
+        // The late lists alone: one pass over the cells, their heads read as it goes.
+        if binned {
+            runs.clear();
+            for (first, last) in level.columns_near(low, high) {
                 // The binned pieces of cells z = a..=b of a column are one run.
-                let column = (x * ny + y) * nz;
-                runs.push((level.cell_start[column + a[2]], level.cell_start[column + b[2] + 1]));
-                for &head in &level.late_head[column + a[2]..=column + b[2]] {
+                runs.push((level.cell_start[first], level.cell_start[last + 1]));
+                for &head in &level.late_head[first..=last] {
                     if let Some(first) = late.get(head as usize) {
                         prefetch(first);
                     }
                 }
             }
-        }
-        hits.clear();
-        for &(start, end) in runs.iter() {
-            let run = level.first + start as usize..level.first + end as usize;
-            boxes.for_each_overlap(&query.bbox, run, |e| hits.push(e as u32));
-        }
-        for &e in hits.iter() {
-            prefetch(&owners[e as usize]);
-            prefetch(&motions[e as usize]);
-        }
-        for &e in hits.iter() {
-            proxies.prefetch_stamp(owners[e as usize].body as usize);
-        }
-        for &e in hits.iter() {
-            let e = e as usize;
-            let Owner { body, stamp, window } = owners[e];
-            if proxies.is_current(body as usize, stamp) {
-                visit(&Entry { bbox: boxes.get(e), body, stamp }, window, &motions[e]);
+            hits.clear();
+            for &(start, end) in runs.iter() {
+                let run = level.first + start as usize..level.first + end as usize;
+                boxes.for_each_overlap(&query.bbox, run, |e| hits.push(e as u32));
+            }
+            for &e in hits.iter() {
+                prefetch(&owners[e as usize]);
+                prefetch(&motions[e as usize]);
+            }
+            for &e in hits.iter() {
+                proxies.prefetch_stamp(owners[e as usize].body as usize);
+            }
+            for &e in hits.iter() {
+                let e = e as usize;
+                let Owner { body, stamp, window } = owners[e];
+                if proxies.is_current(body as usize, stamp) {
+                    visit(&Entry { bbox: boxes.get(e), body, stamp }, window, &motions[e]);
+                }
             }
         }
-        for x in a[0]..=b[0] {
-            for y in a[1]..=b[1] {
-                let column = (x * ny + y) * nz;
-                for c in column + a[2]..=column + b[2] {
-                    let (mut previous, mut current) = (NONE, level.late_head[c]);
-                    while current != NONE {
-                        let (entry, window, next) = late[current as usize];
-                        if proxies.is_current(entry.body as usize, entry.stamp) {
-                            if query.overlaps(&entry) {
-                                visit(&entry, window, &late_motions[current as usize]);
-                            }
-                            previous = current;
-                        } else if previous == NONE {
-                            level.late_head[c] = next;
-                        } else {
-                            late[previous as usize].2 = next;
+        for (first, last) in level.columns_near(low, high) {
+            for c in first..=last {
+                let (mut previous, mut current) = (NONE, level.late_head[c]);
+                while current != NONE {
+                    let (entry, window, next) = late[current as usize];
+                    if proxies.is_current(entry.body as usize, entry.stamp) {
+                        if query.overlaps(&entry) {
+                            visit(&entry, window, &late_motions[current as usize]);
                         }
-                        current = next;
+                        previous = current;
+                    } else if previous == NONE {
+                        level.late_head[c] = next;
+                    } else {
+                        late[previous as usize].2 = next;
                     }
+                    current = next;
                 }
             }
         }
     }
+    /// Enters body `body`'s pieces, just built by [`Self::query_pieces`] into the level of
+    /// `exponent`.
+    fn enter_pieces(&mut self, body: u32, proxies: Proxies, exponent: i32) {
+        let i = body as usize;
+        let k = self.level_for(exponent);
+        let (boxes, owners, motions) = (&mut self.boxes, &mut self.owners, &mut self.motions);
+        let level = &mut self.levels[k];
+        for n in 0..self.pieces.len() {
+            let (bbox, window) = self.pieces[n];
+            let cell = level.index(level.coordinates(bbox.corners().0));
+            let entry = Entry { bbox, body, stamp: proxies.stamp(i) };
+            // One piece in a cell that holds a binned piece of the body (of a path it left: its
+            // stamp has moved on): replace that one where it lies, rather than keep a body's
+            // slot by id (4 bytes a body) to find it. A cell holds a handful of pieces. Not once
+            // the binned pieces are fixed: queries run ahead read them as they were.
+            if self.pieces.len() == 1 && !self.binned_fixed {
+                if let Some(old) = level.run(cell).find(|&e| owners[e].body == body) {
+                    owners[old] = Owner { body, stamp: entry.stamp, window };
+                    boxes.set(old, bbox);
+                    motions[old] = *proxies.state(i);
+                    continue;
+                }
+            }
+            self.late.push((entry, window, level.late_head[cell]));
+            level.late += 1;
+            self.late_motions.push(*proxies.state(i));
+            level.late_head[cell] = (self.late.len() - 1) as u32;
+        }
+    }
+
     /// Calls `report` for every candidate pair found from the cells of level `k` with x in
     /// `slabs`: each cell against itself and 13 of its neighbours, each piece against the
     /// coarser levels.
@@ -520,7 +591,7 @@ impl BroadPhase for Grid {
                 if !proxies.is_live(i) {
                     continue;
                 }
-                let (count, exponent) = this.plan_pieces(proxies, i);
+                let (count, exponent) = this.plan_pieces(&proxies.path(i));
                 *plan = (count, exponent as u32);
                 match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
                     Some((_, n)) => *n += count as usize,
@@ -633,6 +704,7 @@ impl BroadPhase for Grid {
             });
         });
         self.next_slot = next_slot;
+        self.binned_fixed = false;
         self.late.clear();
         self.late_motions.clear();
         self.plan = plan;
@@ -665,35 +737,26 @@ impl BroadPhase for Grid {
     }
 
     fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        self.query_pieces(body, proxies, skip, report);
+        self.query_pieces(body, proxies, (skip, true), report);
     }
 
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        let exponent = self.query_pieces(body, proxies, skip, report);
-        // The pieces the query just built.
-        let i = body as usize;
-        let k = self.level_for(exponent);
-        let (boxes, owners, motions) = (&mut self.boxes, &mut self.owners, &mut self.motions);
-        let level = &mut self.levels[k];
-        for n in 0..self.pieces.len() {
-            let (bbox, window) = self.pieces[n];
-            let cell = level.index(level.coordinates(bbox.corners().0));
-            let entry = Entry { bbox, body, stamp: proxies.stamp(i) };
-            // One piece in a cell that holds a binned piece of the body (of a path it left: its
-            // stamp has moved on): replace that one where it lies, rather than keep a body's
-            // slot by id (4 bytes a body) to find it. A cell holds a handful of pieces.
-            if self.pieces.len() == 1 {
-                if let Some(old) = level.run(cell).find(|&e| owners[e].body == body) {
-                    owners[old] = Owner { body, stamp: entry.stamp, window };
-                    boxes.set(old, bbox);
-                    motions[old] = *proxies.state(i);
-                    continue;
-                }
-            }
-            self.late.push((entry, window, level.late_head[cell]));
-            self.late_motions.push(*proxies.state(i));
-            level.late_head[cell] = (self.late.len() - 1) as u32;
-        }
+        let exponent = self.query_pieces(body, proxies, (skip, true), report);
+        self.enter_pieces(body, proxies, exponent);
+    }
+
+    fn fix_binned(&mut self) -> bool {
+        self.binned_fixed = true;
+        true
+    }
+
+    fn query_binned(&self, body: u32, path: &Path, proxies: Proxies, report: impl FnMut(Reported, Window)) {
+        self.query_binned_pieces(body, path, proxies, report);
+    }
+
+    fn update_late(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
+        let exponent = self.query_pieces(body, proxies, (skip, false), report);
+        self.enter_pieces(body, proxies, exponent);
     }
 
     fn memory_bytes(&self) -> usize {

@@ -23,7 +23,7 @@ pub mod grid;
 pub mod proxy;
 pub mod sweep_prune;
 
-use crate::broad_phase::proxy::{Proxies, Reported};
+use crate::broad_phase::proxy::{Path, Proxies, Reported};
 use crate::parallel::Workers;
 use crate::window::Window;
 
@@ -37,7 +37,7 @@ pub struct PrepareCounts {
 }
 
 /// The interface every broad phase offers the frame pipeline.
-pub trait BroadPhase {
+pub trait BroadPhase: Sync {
     /// Window start: every live proxy has just been refreshed; bin or sort them (c_sort),
     /// spreading the work over `workers`.
     fn prepare(&mut self, proxies: Proxies, workers: &Workers) -> PrepareCounts;
@@ -61,6 +61,32 @@ pub trait BroadPhase {
     /// Body `body`'s proxy was just refreshed (it was added or changed velocity): reports its
     /// candidate partners other than `skip` as [`Self::query`] does, then enters it.
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window));
+
+    /// Keeps the entries made at the window's start as they are until the next
+    /// [`Self::prepare`] (later entries go beside them), so a query of those alone
+    /// ([`Self::query_binned`]) may run ahead of the updates, on any worker; false when this
+    /// broad phase cannot split its queries so.
+    fn fix_binned(&mut self) -> bool {
+        false
+    }
+
+    /// Calls `report(other, window)` for every candidate partner of body `body` on `path` among
+    /// the window start's entries (see [`Self::fix_binned`]), without entering it.
+    fn query_binned(&self, _body: u32, _path: &Path, _proxies: Proxies, _report: impl FnMut(Reported, Window)) {
+        unreachable!("only asked of a broad phase whose window-start entries are fixed")
+    }
+
+    /// [`Self::update`], reporting only the candidates among the entries made since the window's
+    /// start (the rest were found by [`Self::query_binned`]).
+    fn update_late(
+        &mut self,
+        _body: u32,
+        _proxies: Proxies,
+        _skip: Option<u32>,
+        _report: impl FnMut(Reported, Window),
+    ) {
+        unreachable!("only asked of a broad phase whose window-start entries are fixed")
+    }
 
     /// Bytes held (capacity, not just length).
     fn memory_bytes(&self) -> usize;

@@ -23,6 +23,7 @@
 use crate::bodies::{Bodies, BodyState};
 use crate::broad_phase::ghosts::Ghosts;
 use crate::memory::prefetch;
+use crate::motion::Motion;
 use crate::narrow_phase::spheres::wall_contact_time;
 use crate::parallel::Workers;
 use crate::walls::BoxBounds;
@@ -41,6 +42,17 @@ pub struct Reported<'a> {
     pub body: u32,
     pub stamp: u32,
     pub state: &'a BodyState,
+}
+
+/// A proxy's straight path as a broad phase cuts it into pieces: the centre and velocity at its
+/// start, its bounding radius, its window and its swept box.
+#[derive(Debug, Clone, Copy)]
+pub struct Path {
+    pub origin: DVec3,
+    pub velocity: DVec3,
+    pub radius: f64,
+    pub window: Window,
+    pub bbox: CompactBox,
 }
 
 /// Where and when a proxy bounds its body: over `[start, end)`, inside `bbox`.
@@ -380,9 +392,23 @@ impl ProxyTable {
     /// Enters body `i` (added, or changed velocity at time `t`) with its motion from `t` on,
     /// with fresh ghosts (see [`Self::slots_of`]).
     pub fn enter(&mut self, i: usize, bodies: &Bodies, t: f64) {
+        let made = self.rule().span(i, bodies, t);
+        self.enter_made(i, bodies, made);
+    }
+
+    /// The proxy and flags body `i` would get on entering at `t` with `motion` instead of its
+    /// own, to the bit: what [`Self::enter_made`] takes once the body moves so.
+    pub fn made_ahead(&self, i: usize, bodies: &Bodies, motion: &Motion, t: f64) -> (Span, u8) {
+        self.rule().span_of(i, bodies, motion, t)
+    }
+
+    /// [`Self::enter`] with the proxy and flags [`Self::made_ahead`] made for the body's motion.
+    /// Always inline: a call costs [`Self::enter`] 60 instructions of passing the proxy.
+    #[inline(always)]
+    pub fn enter_made(&mut self, i: usize, bodies: &Bodies, (span, flags): (Span, u8)) {
         debug_assert!(self.fits(i, bodies), "a body the window's ghosts are not sized for");
         self.resize(bodies.slots());
-        (self.spans[i], self.flags[i]) = self.rule().span(i, bodies, t);
+        (self.spans[i], self.flags[i]) = (span, flags);
         self.stamps[i] = bodies.stamp[i];
         self.live[i] = true;
         if self.ghosts.active() {
@@ -559,8 +585,30 @@ impl<'a> Proxies<'a> {
         (motion.at_under(start, gravity), motion.velocity_under(start, gravity))
     }
 
-    /// The acceleration proxy `i`'s body moves under (a ghost's is its owner's).
-    #[inline]
+    /// Proxy `i`'s path.
+    #[inline(always)]
+    pub fn path(&self, i: usize) -> Path {
+        let (origin, velocity) = self.origin_and_velocity(i);
+        Path { origin, velocity, radius: self.radius(i), window: self.window_of(i), bbox: self.bbox(i) }
+    }
+
+    /// The path of body `i` (a body's own slot) over `span` with the motion and radius `state`
+    /// (see [`ProxyTable::made_ahead`]).
+    pub fn path_ahead(&self, i: usize, state: &BodyState, span: &Span) -> Path {
+        let gravity = self.gravity_on(i);
+        let (motion, start) = (&state.motion, span.start);
+        Path {
+            origin: motion.at_under(start, gravity),
+            velocity: motion.velocity_under(start, gravity),
+            radius: state.radius + self.table.bend,
+            window: Window::new(span.start, span.end),
+            bbox: span.bbox,
+        }
+    }
+
+    /// The acceleration proxy `i`'s body moves under (a ghost's is its owner's). Always inline:
+    /// cutting every path at a window's start asks it (a call there costs 20 instructions a body).
+    #[inline(always)]
     fn gravity_on(&self, i: usize) -> DVec3 {
         if self.table.gravity == DVec3::ZERO {
             return DVec3::ZERO;
@@ -590,10 +638,16 @@ struct ProxyRule {
 impl ProxyRule {
     /// Body `i`'s proxy from time `t` on, and its flags: [`EXPIRES`] when it ends because of its
     /// reach, [`NO_WALL`] when the body meets no wall before the window's end.
-    #[inline]
+    #[inline(always)]
     fn span(&self, i: usize, bodies: &Bodies, t: f64) -> (Span, u8) {
+        self.span_of(i, bodies, &bodies.motion(i), t)
+    }
+
+    /// [`Self::span`] of body `i` on `motion` rather than its own.
+    #[inline(always)]
+    fn span_of(&self, i: usize, bodies: &Bodies, motion: &Motion, t: f64) -> (Span, u8) {
         let start = t.max(self.window.start);
-        let (motion, gravity) = (bodies.motion(i), bodies.gravity_on(i));
+        let gravity = bodies.gravity_on(i);
         let velocity = motion.velocity_under(start, gravity);
         let body_radius = bodies.bounding_radius(i);
         // A body at rest, or sliding under a pull its floor takes whole, moves straight: its
@@ -606,11 +660,11 @@ impl ProxyRule {
         // on to the window's end, and its own wall contact changes its velocity.
         let wall = bodies
             .is_sphere(i)
-            .then(|| wall_contact_time(&motion, body_radius, self.walls.0, self.walls.1, gravity))
+            .then(|| wall_contact_time(motion, body_radius, self.walls.0, self.walls.1, gravity))
             .flatten();
         // Up to and including the crossing of a periodic face too, where the body comes back
         // through the opposite face on a fresh motion.
-        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(&motion, 0.0, low, high, gravity));
+        let crossing = self.faces.and_then(|(low, high)| wall_contact_time(motion, 0.0, low, high, gravity));
         let first = match (wall, crossing) {
             (Some((a, _)), Some((b, _))) => Some(a.min(b)),
             (a, b) => a.or(b).map(|(t, _)| t),

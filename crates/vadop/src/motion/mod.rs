@@ -24,6 +24,13 @@ impl Motion {
         self.position + (t - self.since) * self.velocity
     }
 
+    /// The motion on from time `t` with `velocity`, from where this one's centre is then under
+    /// `gravity`.
+    #[inline]
+    pub fn moved_on(&self, t: f64, velocity: DVec3, gravity: DVec3) -> Motion {
+        Motion { position: self.at_under(t, gravity), since: t, velocity }
+    }
+
     /// Centre at time `t` under the uniform acceleration `gravity`: a parabola from `position`
     /// with `velocity` at `since` (the straight path, to the bit, without gravity).
     ///

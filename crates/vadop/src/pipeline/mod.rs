@@ -21,6 +21,7 @@
 //! method finds it. It never validates input (the world does), never reads a broad phase's
 //! internals and never computes an impulse.
 
+mod bounce_ahead;
 pub(crate) mod jam;
 mod pass_through;
 mod passed;
@@ -45,6 +46,7 @@ use crate::pipeline::touching::Touching;
 use crate::response::impact::{passes_through, Impacts, Resolution};
 use crate::walls::BoxBounds;
 use crate::window::Window;
+use bounce_ahead::BouncesAhead;
 use glam::DVec3;
 use pass_through::Searched;
 use passed::PassedContacts;
@@ -146,6 +148,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     /// The step's contacts of spheres passing through each other, their geometry still to work
     /// out.
     passed: PassedContacts,
+    /// The window's first wall bounces, their re-tests run ahead (see [`bounce_ahead`]).
+    bounces_ahead: BouncesAhead,
 }
 
 impl<B: BroadPhase> Pipeline<B> {
@@ -177,6 +181,7 @@ impl<B: BroadPhase> Pipeline<B> {
             cluster_members: Vec::new(),
             near: Vec::new(),
             passed: PassedContacts::default(),
+            bounces_ahead: BouncesAhead::default(),
         }
     }
 
@@ -201,6 +206,7 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.cluster.memory_bytes()
             + (self.cluster_members.capacity() + self.near.capacity()) * 4
             + self.passed.memory_bytes()
+            + self.bounces_ahead.memory_bytes()
     }
 
     /// Body `i` was added or changed velocity between frames at time `t`: it enters the window
@@ -243,6 +249,7 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             let until = t1.min(self.window.end);
             let start = Instant::now();
+            self.retest_bounces_ahead(bodies, physics, until);
             self.process_events(bodies, physics, until, out);
             out.stats.response_seconds += start.elapsed().as_secs_f64();
             // An interrupted step is undone by the world: the rest of it need not run.
@@ -358,6 +365,8 @@ impl<B: BroadPhase> Pipeline<B> {
         // Asked once per window rather than of every body: most boxes have no periodic face and
         // most worlds no static body.
         let (periodic, level) = (physics.bounds.is_periodic(), !statics.is_empty());
+        // Each body's own events (walls, crossings, the level, renewals) follow the pairs'.
+        let own_from = predicted.len();
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
                 push_found(found, predict_wall(bodies, &proxies, &physics.bounds, i as u32, window));
@@ -377,6 +386,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 predicted.extend(predict_end(bodies, a, b, since, window));
             }
         }
+        self.plan_bounces_ahead(bodies, physics, &predicted[own_from..]);
         self.queue.set_bulk(predicted, &self.workers);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;

@@ -30,16 +30,19 @@ impl<B: BroadPhase> Pipeline<B> {
         t: f64,
         stats: &mut FrameStats,
     ) {
-        self.proxies.enter(body as usize, bodies, t);
         self.updates += 1;
         stats.retests += 1;
         let window = self.window.from(t);
-        // The body's own proxy, then (in a periodic box) its ghosts: each meets the bodies near
-        // it. `skip` names a body, which a ghost's partners are told apart by.
-        for slot in self.proxies.slots_of(body as usize) {
-            let slot = slot as u32;
-            let (skip_slot, skip_body) = if slot == body { (skip, None) } else { (None, skip) };
-            self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
+        // A wall bounce's binned partners may have been tested ahead (see [`super::bounce_ahead`]).
+        if skip.is_some() || !self.retest_from_ahead(body, bodies, window, stats) {
+            self.proxies.enter(body as usize, bodies, t);
+            // The body's own proxy, then (in a periodic box) its ghosts: each meets the bodies
+            // near it. `skip` names a body, which a ghost's partners are told apart by.
+            for slot in self.proxies.slots_of(body as usize) {
+                let slot = slot as u32;
+                let (skip_slot, skip_body) = if slot == body { (skip, None) } else { (None, skip) };
+                self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
+            }
         }
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
         if let Some(event) = predict_wall(bodies, &self.proxies, &physics.bounds, body, window) {

@@ -10,6 +10,7 @@ use super::rest;
 use super::rules::{ContactRules, Rule};
 use crate::bodies::Bodies;
 use crate::frame::{FrameStats, Mode, Physics};
+use crate::motion::Motion;
 use crate::narrow_phase::contacts::{self, ManifoldScratch};
 use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
 use crate::walls::Wall;
@@ -115,6 +116,13 @@ pub(crate) fn bounce_off_wall(bodies: &mut Bodies, i: usize, wall: Wall, t: f64,
     let bounced = wall_bounce(v, wall.axis(), restitution);
     bodies.set_velocity_at(i, t, bounced);
     bodies.mass[i] * (v - bounced).length()
+}
+
+/// The motion [`bounce_off_wall`] gives sphere `i` of a world without spins (nothing changed).
+#[inline]
+pub(crate) fn motion_off_wall(bodies: &Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> Motion {
+    let bounced = wall_bounce(bodies.velocity_at(i, t), wall.axis(), restitution);
+    bodies.motion(i).moved_on(t, bounced, bodies.gravity_on(i))
 }
 
 /// The scratch an engine keeps for its impacts: the contact rules' history and the contact
