@@ -241,14 +241,14 @@ impl Simplex {
         Simplex { points: std::array::from_fn(pair), count: simplex.len() }
     }
 
-    /// The pairs as GJK's simplex of the sets at `relative`, less any that would make it degenerate.
-    fn at(&self, relative: &Relative) -> gjk::Simplex {
+    /// The pairs as GJK's simplex of the sets at `relative`, less any that would make it
+    /// degenerate, written into `simplex`.
+    fn load(&self, relative: &Relative, simplex: &mut gjk::Simplex) {
         let vertex = |(x, y): (DVec3, DVec3)| CsoPoint::new(x, relative.apply(y));
-        let mut simplex = gjk::Simplex::new(vertex(self.points[0]));
+        simplex.restart(vertex(self.points[0]));
         for &pair in &self.points[1..self.count] {
             simplex.add(vertex(pair));
         }
-        simplex
     }
 }
 
@@ -407,22 +407,28 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     let mut estimate =
         Estimate { upper: f64::INFINITY, axis: toward, witness: None, search: None, penetration: None, simplex: None };
     let grown = |(p1, p2): (DVec3, DVec3), n: DVec3| (p1 + n * margins.0, p2 - n * margins.1);
-    let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<Seed>| {
-        let fresh = || gjk::Simplex::new(relative.support(a, b, dir));
-        let mut simplex = seed.map_or_else(fresh, |seed| seed.simplex.at(&relative));
-        let stopped = rough.and_then(|rough| rough_closest(&relative, (a, b), margins, rough, &mut simplex));
-        let result = stopped.unwrap_or_else(|| match gjk::closest_points(&relative, a, b, &mut simplex) {
+    // GJK from `dir` (or the seed) in `simplex`, which it leaves as it ends.
+    let gjk_from = |dir: DVec3, rough: Option<Rough>, seed: Option<Seed>, simplex: &mut gjk::Simplex| {
+        let fresh = |simplex: &mut gjk::Simplex| simplex.restart(relative.support(a, b, dir));
+        match seed {
+            Some(seed) => seed.simplex.load(&relative, simplex),
+            None => fresh(simplex),
+        }
+        if let Some(stopped) = rough.and_then(|rough| rough_closest(&relative, (a, b), margins, rough, simplex)) {
+            return stopped;
+        }
+        match gjk::closest_points(&relative, a, b, simplex) {
             GJKResult::ClosestPoints(p1, p2, _)
                 if seed.is_some_and(|seed| seed.verify) && !converged(&relative, (a, b), (p1, p2)) =>
             {
-                simplex = fresh();
-                gjk::closest_points(&relative, a, b, &mut simplex)
+                fresh(simplex);
+                gjk::closest_points(&relative, a, b, simplex)
             }
             found => found,
-        });
-        (result, simplex)
+        }
     };
-    let (mut result, simplex) = gjk_from(-toward, rough, seed);
+    let mut simplex = gjk::Simplex::new(CsoPoint::ZERO);
+    let mut result = gjk_from(-toward, rough, seed, &mut simplex);
     estimate.simplex = Some(Simplex::of(&simplex, &relative));
     // A depth need only be as tight as asked: EPA from GJK's simplex, stopped early, deep inside
     // each other at a share of the depth, within the band at the resolution; a measure that asks
@@ -445,7 +451,7 @@ pub(super) fn gjk_estimate<A: SupportMap, B: SupportMap>(
     // other (to rounding: a hair apart after all, an axis separates them and EPA's points bound
     // their distance).
     if early.is_none() && !matches!(result, GJKResult::ClosestPoints(..)) {
-        let (again, _) = gjk_from(toward, None, None);
+        let again = gjk_from(toward, None, None, &mut gjk::Simplex::new(CsoPoint::ZERO));
         if matches!(again, GJKResult::ClosestPoints(..)) {
             result = again;
         }

@@ -90,6 +90,12 @@ impl Simplex {
         Simplex { vertices: [first; 4], weights: [1.0, 0.0, 0.0, 0.0], count: 1 }
     }
 
+    /// Becomes [`Simplex::new`]'s of `first`, in place: a simplex is 328 bytes, and one made
+    /// anew and moved into a query's was two memory copies a query.
+    pub(super) fn restart(&mut self, first: CsoPoint) {
+        (self.vertices, self.weights, self.count) = ([first; 4], [1.0, 0.0, 0.0, 0.0], 1);
+    }
+
     /// How many points it has (1 to 4).
     pub(super) fn len(&self) -> usize {
         self.count
