@@ -11,7 +11,7 @@
 //! It never schedules, responds or changes a body.
 
 use crate::bodies::{Bodies, BodyState};
-use crate::error::{Result, VadopError};
+use crate::error::VadopError;
 use crate::motion::{Motion, RigidMotion};
 use crate::narrow_phase::falling::may_touch_within;
 use crate::narrow_phase::parked::ParkedSearches;
@@ -37,19 +37,25 @@ use parry3d_f64::shape::{HalfSpace, Shape as ParryShape};
 pub(crate) type Found = Option<(f64, bool)>;
 
 /// A search's answer within `window`, an undecided search answered as stalled where it stopped.
-fn settled(found: Result<Option<f64>>, window: Window) -> Found {
-    settled_parked(found.map(|found| (found, None)), window).0
+fn settled(found: std::result::Result<Option<f64>, &VadopError>, window: Window) -> Found {
+    let found = match found {
+        Ok(found) => found.map(|t| (t, false)),
+        Err(VadopError::ContactSearchStalled { time, .. }) => Some((*time, true)),
+        // The shape narrow phase fails in no other way on validated bodies.
+        Err(_) => None,
+    };
+    found.filter(|&(t, _)| window.contains(t))
 }
 
-/// [`settled`] for a search that may park, with where it parked.
-fn settled_parked(found: Result<(Option<f64>, Option<Resume>)>, window: Window) -> (Found, Option<Resume>) {
-    let (found, parked) = match found {
-        Ok((found, parked)) => (found.map(|t| (t, false)), parked),
-        Err(VadopError::ContactSearchStalled { time, .. }) => (Some((time, true)), None),
-        // The shape narrow phase fails in no other way on validated bodies.
-        Err(_) => (None, None),
-    };
-    (found.filter(|&(t, _)| window.contains(t)), parked)
+/// Where a search parked, taken out of its answer, tested first: an empty option taken is still
+/// copied whole (a resume is 392 bytes, and it was copied three times a search), and most searches
+/// the broad phase asks for never park.
+fn take_parked(parked: &mut Option<Resume>) -> Option<Resume> {
+    if parked.is_some() {
+        parked.take()
+    } else {
+        None
+    }
 }
 
 /// A shape pair's search parked: the pair (lower id first), the motion epochs it ran on, and
@@ -86,18 +92,20 @@ pub(crate) fn pair_start(
 /// [`pair_start_parked`], with their shift): kept out of line, off the spheres' path.
 #[inline(never)]
 fn shape_pair_start(bodies: &Bodies, a: usize, b: usize, window: Window) -> Found {
-    pair_start_parked(bodies, (a, b, DVec3::ZERO), window, None).0
+    pair_start_parked(bodies, (a, b, DVec3::ZERO), window, None, |_| {})
 }
 
 /// [`pair_start`] for a pair that is not two spheres, taking the search up where `parked` holds
-/// it (from an earlier window, on the same motions), with where it parks now.
+/// it (from an earlier window, on the same motions), with where it parks now handed to `park`
+/// (not returned: an empty option of a resume returned through two calls was copied whole).
 pub(crate) fn pair_start_parked(
     bodies: &Bodies,
     (a, b, shift): (usize, usize, DVec3),
     window: Window,
     parked: Option<&ParkedSearches>,
-) -> (Found, Option<Parking>) {
-    let (Some(ga), Some(gb)) = (bodies.geometry(a), bodies.geometry(b)) else { return (None, None) };
+    park: impl FnOnce(Parking),
+) -> Found {
+    let (Some(ga), Some(gb)) = (bodies.geometry(a), bodies.geometry(b)) else { return None };
     let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
     // A pair across periodic faces is searched afresh each time: its parked search would be
     // of one image, and it is rare.
@@ -105,9 +113,14 @@ pub(crate) fn pair_start_parked(
     let (key, epochs) = parking_key(bodies, a, b);
     let resume = parked.filter(|_| !across).and_then(|p| p.get(key.0, key.1, epochs));
     let turns_back = bodies.mode.turns_back(bodies.is_fixed(a) || bodies.is_fixed(b));
-    let search = pair_first_start((ga, &ma), (gb, &mb), window, resume, turns_back);
-    let (found, parks) = settled_parked(search.map(|(s, p)| (s.found, p)), window);
-    (found, parks.filter(|_| !across).map(|r| (key, epochs, r)))
+    let mut search = pair_first_start((ga, &ma), (gb, &mb), window, resume, turns_back);
+    let found = settled(search.as_ref().map(|(s, _)| s.found), window);
+    if let Ok((_, parked)) = &mut search {
+        if let Some(resume) = take_parked(parked).filter(|_| !across) {
+            park((key, epochs, resume));
+        }
+    }
+    found
 }
 
 /// A motion shifted by whole sides `shift`: a body's image across periodic faces.
@@ -142,10 +155,14 @@ pub(crate) fn pair_start_after(
     let shift = bodies.image_shift(a, b, start);
     let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
     let (key, epochs) = parking_key(bodies, a, b);
-    let search = shape_contact_after_measured((ga, &ma), (gb, &mb), start, window);
+    let mut search = shape_contact_after_measured((ga, &ma), (gb, &mb), start, window);
     let measured = search.as_ref().ok().and_then(|(_, _, at_start)| at_start.map(|c| (c.point, c.normal)));
-    let (found, parks) = settled_parked(search.map(|(found, parked, _)| (found, parked)), window);
-    (found, parks.filter(|_| shift == DVec3::ZERO).map(|r| (key, epochs, r)), measured)
+    let found = settled(search.as_ref().map(|(found, _, _)| *found), window);
+    let parks = match &mut search {
+        Ok((_, parked, _)) if shift == DVec3::ZERO => take_parked(parked).map(|r| (key, epochs, r)),
+        _ => None,
+    };
+    (found, parks, measured)
 }
 
 /// The canonical time in `window` at which touching bodies `a` and `b` (`a` the lower id), in
@@ -165,7 +182,7 @@ pub(crate) fn pair_end(bodies: &Bodies, a: usize, b: usize, since: f64, window: 
     let (ma, mb) = (bodies.rigid_motion(a), shifted(bodies.rigid_motion(b), shift));
     // Searched from the contact's start, not the window's: the search's steps depend on where it
     // starts, and windows differ between runs (a resumed one starts its first at the saved time).
-    settled(contact_end_time((ga, &ma), (gb, &mb), since, window.end), window)
+    settled(contact_end_time((ga, &ma), (gb, &mb), since, window.end).as_ref().copied(), window)
 }
 
 /// Body `i`'s first contact with a wall of `bounds` in `window`: the time and the wall, or

@@ -134,24 +134,23 @@ pub(super) enum Prediction {
 }
 
 /// [`predict_pair`] in a world of shapes: a shape pair's search taken up where `parked` holds it,
-/// with where it parks now.
+/// with where it parks now handed to `park`.
 #[inline]
 pub(super) fn predict_pair_parked(
     bodies: &Bodies,
     proxies: &ProxyTable,
-    x: Reported,
-    y: Reported,
-    window: Window,
+    (x, y, window): (Reported, Reported, Window),
     parked: &ParkedSearches,
-) -> (Option<Event>, Option<Parking>) {
-    let Some(((a, shift_a), (b, shift_b))) = resolved(proxies, x, y) else { return (None, None) };
+    park: impl FnOnce(Parking),
+) -> Option<Event> {
+    let ((a, shift_a), (b, shift_b)) = resolved(proxies, x, y)?;
     let (i, j) = (a.body as usize, b.body as usize);
     if bodies.are_spheres(i, j) {
-        return (sphere_event(bodies, (a, shift_a), (b, shift_b), window), None);
+        return sphere_event(bodies, (a, shift_a), (b, shift_b), window);
     }
     let shift = relative_shift(shift_a, shift_b);
-    let (found, parks) = contacts::pair_start_parked(bodies, (i, j, shift), window, Some(parked));
-    (found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found)), parks)
+    let found = contacts::pair_start_parked(bodies, (i, j, shift), window, Some(parked), park);
+    found.map(|found| pair_event((a.body, a.stamp), (b.body, b.stamp), found))
 }
 
 /// [`predict_pair_parked`] for `(x, y, window)` into `out`, for [`sort_predictions`].
@@ -163,9 +162,10 @@ pub(super) fn predict_into(
     parked: &ParkedSearches,
     out: &mut Vec<Prediction>,
 ) {
-    let (event, parks) = predict_pair_parked(bodies, proxies, x, y, window, parked);
+    // A pair's parked search goes in before its event: the two go to different stores.
+    let event =
+        predict_pair_parked(bodies, proxies, (x, y, window), parked, |parks| out.push(Prediction::Parked(parks)));
     out.extend(event.map(Prediction::Event));
-    out.extend(parks.map(Prediction::Parked));
 }
 
 /// Empties `found` in its order: each event to `event`, each parked search into `parked` (pairs
