@@ -11,12 +11,16 @@
 //! mid-frame is evaluated exactly as p(t) = p + (t - since) * v by every method alike.
 //! The motion and the radius share one cache line per body ([`BodyState`]): it is what the
 //! narrow phase reads for a candidate pair, and the proxy table reads it from here rather than
-//! keeping a copy.
+//! keeping a copy. The mass, the stamp and the generation share 16 bytes per body ([`BodyTag`]):
+//! the event loop reads the stamps of an event's bodies to see it is current, and then, for a
+//! collision, their masses and generations.
 
 use crate::frame::Mode;
 use crate::handle::BodyHandle;
 use crate::memory::prefetch;
 use crate::motion::free_rotation::FreeRotation;
+use crate::motion::hold::without_axes;
+pub use crate::motion::hold::Rest;
 use crate::motion::Motion;
 use crate::motion::{RigidMotion, Spin};
 use crate::shape::ShapeGeometry;
@@ -51,63 +55,19 @@ impl Default for BodyState {
     }
 }
 
-/// How a moving body is held up under gravity, in simulate mode with restitution below 1 (see
-/// [`crate::response::rest`]): it falls (the default), slides along walls that hold it up
-/// (gravity's pull into them is gone, its motion along them goes on), or lies still on walls or
-/// on bodies lying still (no velocity, no acceleration) until an impact moves it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Rest {
-    #[default]
-    Falling,
-    /// On the walls across the axes whose bits are set (bit `k` for axis `k`): a floor, and in a
-    /// corner under tilted gravity the side walls it is pressed into.
-    Sliding(u8),
-    Still,
-}
-
-impl Rest {
-    /// The acceleration of a moving body held up so under `gravity`.
-    #[inline]
-    pub fn acceleration(self, gravity: DVec3) -> DVec3 {
-        match self {
-            Rest::Falling => gravity,
-            Rest::Sliding(axes) => without_axes(gravity, axes),
-            Rest::Still => DVec3::ZERO,
-        }
-    }
-
-    /// The axes of the walls a sliding body slides on (bit `k` for axis `k`); none otherwise.
-    #[inline]
-    pub fn sliding_axes(self) -> u8 {
-        match self {
-            Rest::Sliding(axes) => axes,
-            Rest::Falling | Rest::Still => 0,
-        }
-    }
-
-    /// Whether a body with `velocity` may be held up so in a world under `gravity`: rest needs
-    /// gravity, a sliding body moves only along the walls it slides on (axes as bits 1 to 7),
-    /// one lying still not at all.
-    pub(crate) fn fits(self, velocity: DVec3, gravity: DVec3) -> bool {
-        match self {
-            Rest::Falling => true,
-            _ if gravity == DVec3::ZERO => false,
-            Rest::Sliding(axes) => (1..8).contains(&axes) && without_axes(velocity, axes) == velocity,
-            Rest::Still => velocity == DVec3::ZERO,
-        }
-    }
-}
-
-/// `v` with its components along the axes whose bits are set in `axes` dropped.
-#[inline]
-pub(crate) fn without_axes(mut v: DVec3, axes: u8) -> DVec3 {
-    for axis in 0..3 {
-        if axes & (1 << axis) != 0 {
-            v[axis] = 0.0;
-        }
-    }
-    v
+/// What the event loop reads of a body beside its motion, together: the stamp that tells an
+/// event is current, and a collision's mass and handle. In one record rather than three arrays
+/// the line an event's check misses on serves its collision too (8 bytes of `mass` and 4 of each
+/// counter: four bodies a line).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C, align(16))]
+pub struct BodyTag {
+    pub mass: f64,
+    /// Bumped on every velocity change (and on removal): predictions made earlier are void.
+    pub stamp: u32,
+    /// Of a live slot, its body's generation; of a removed one, the generation its next body
+    /// gets (above [`BodyHandle::MAX_GENERATION`]: retired, never reused).
+    pub(crate) generation: u32,
 }
 
 /// Flat store of all bodies; removed slots stay until reused (lowest first, by the world).
@@ -115,13 +75,9 @@ pub(crate) fn without_axes(mut v: DVec3, axes: u8) -> DVec3 {
 pub struct Bodies {
     /// Motion and radius of each body.
     pub state: Vec<BodyState>,
-    pub mass: Vec<f64>,
-    /// Bumped on every velocity change (and on removal): predictions made earlier are void.
-    pub stamp: Vec<u32>,
+    /// Mass, stamp and generation of each body.
+    pub tags: Vec<BodyTag>,
     pub alive: Vec<bool>,
-    /// Of a live slot, its body's generation; of a removed one, the generation its next body
-    /// gets (above [`BodyHandle::MAX_GENERATION`]: retired, never reused).
-    pub(crate) generation: Vec<u32>,
     /// No live body is faster than this: raised by every velocity written and lowered only by
     /// `Bodies::tighten_speed_bound`, so a step need not read every body to rule out an absurd
     /// speed.
@@ -463,22 +419,40 @@ impl Bodies {
         self.state[i].motion.velocity
     }
 
-    /// Asks for the cache lines of body `i`'s state, stamp and liveness ahead of their use (a
+    /// Asks for the cache lines of body `i`'s state, tag and liveness ahead of their use (a
     /// hint: nothing changes).
     #[inline]
     pub fn prefetch(&self, i: usize) {
         if i < self.slots() {
             prefetch(&self.state[i]);
-            prefetch(&self.stamp[i]);
+            prefetch(&self.tags[i]);
             prefetch(&self.alive[i]);
         }
+    }
+
+    /// Mass of body `i` (infinite for a static body).
+    #[inline]
+    pub fn mass(&self, i: usize) -> f64 {
+        self.tags[i].mass
+    }
+
+    /// Body `i`'s stamp (see [`BodyTag::stamp`]).
+    #[inline]
+    pub fn stamp(&self, i: usize) -> u32 {
+        self.tags[i].stamp
+    }
+
+    /// Of live slot `i`, its body's generation; of a removed one, its next body's.
+    #[inline]
+    pub(crate) fn generation(&self, i: usize) -> u32 {
+        self.tags[i].generation
     }
 
     /// Inverse mass of body `i`, computed rather than stored: 8 bytes per body less, for a
     /// division only where a response needs it.
     #[inline]
     pub fn inverse_mass(&self, i: usize) -> f64 {
-        1.0 / self.mass[i]
+        1.0 / self.mass(i)
     }
 
     /// Radius of sphere `i`; of another shape, its bounding radius about its centre of mass.
@@ -573,7 +547,7 @@ impl Bodies {
     /// Principal moments of inertia of body `i`: its shape's for its mass (a solid ball's in a
     /// world of spheres).
     pub fn principal_inertia(&self, i: usize) -> DVec3 {
-        inertia_of(self.geometry(i), self.mass[i], self.radius(i))
+        inertia_of(self.geometry(i), self.mass(i), self.radius(i))
     }
 
     /// Velocity at `t` of body `i`'s material point at `point`: zero for a static body.
@@ -638,10 +612,8 @@ impl Bodies {
     /// bodies holds a million slots, not the next power of two.
     pub(crate) fn reserve(&mut self, additional: usize) {
         self.state.reserve_exact(additional);
-        self.mass.reserve_exact(additional);
-        self.stamp.reserve_exact(additional);
+        self.tags.reserve_exact(additional);
         self.alive.reserve_exact(additional);
-        self.generation.reserve_exact(additional);
     }
 
     /// Writes `sphere` into slot `i`, appending when `i` is one past the end; a reused slot keeps
@@ -665,10 +637,8 @@ impl Bodies {
         };
         if i == self.slots() {
             self.state.push(state);
-            self.mass.push(sphere.mass);
-            self.stamp.push(0);
+            self.tags.push(BodyTag { mass: sphere.mass, stamp: 0, generation: 0 });
             self.alive.push(true);
-            self.generation.push(0);
             if self.has_rigid() {
                 self.rigid.shape.push(SPHERE);
                 self.rigid.spin.push(steady());
@@ -678,8 +648,8 @@ impl Bodies {
             }
         } else {
             self.state[i] = state;
-            self.mass[i] = sphere.mass;
-            self.stamp[i] = self.stamp[i].wrapping_add(1);
+            self.tags[i].mass = sphere.mass;
+            self.renew(i);
             self.new_motion(i);
             self.alive[i] = true;
             if let Some(crossed) = self.crossings.get_mut(i) {
@@ -711,20 +681,20 @@ impl Bodies {
             self.rigid.statics_revision += 1;
         }
         self.alive[i] = false;
-        self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.renew(i);
         self.new_motion(i);
-        self.generation[i] += 1;
+        self.tags[i].generation += 1;
     }
 
     /// The handle of the body in live slot `i`.
     #[inline]
     pub fn handle(&self, i: usize) -> BodyHandle {
-        BodyHandle::new(i as u32, self.generation[i])
+        BodyHandle::new(i as u32, self.generation(i))
     }
 
     /// True when removed slot `i` may hold another body: its generation has not run out.
     pub(crate) fn is_reusable(&self, i: usize) -> bool {
-        self.generation[i] <= BodyHandle::MAX_GENERATION
+        self.generation(i) <= BodyHandle::MAX_GENERATION
     }
 
     /// Moves body `i` to time `t` and gives it a new velocity, voiding its predictions; its spin
@@ -780,7 +750,7 @@ impl Bodies {
         self.state[i].motion = self.state[i].motion.moved_on(t, velocity, self.gravity_on(i));
         // A new motion falls: an impact moved the body off whatever held it up.
         self.set_rest(i, Rest::Falling);
-        self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.renew(i);
         self.new_motion(i);
         self.speed_bound = self.speed_bound.max(speed(velocity));
     }
@@ -794,7 +764,7 @@ impl Bodies {
     /// Voids body `i`'s predictions without changing its motion (its proxy is being renewed).
     #[inline]
     pub(crate) fn renew(&mut self, i: usize) {
-        self.stamp[i] = self.stamp[i].wrapping_add(1);
+        self.tags[i].stamp = self.tags[i].stamp.wrapping_add(1);
     }
 
     /// The sphere in slot `i` as of time `t`.
@@ -803,7 +773,7 @@ impl Bodies {
             position: self.position_at(i, t),
             velocity: self.velocity_at(i, t),
             radius: self.radius(i),
-            mass: self.mass[i],
+            mass: self.mass(i),
         }
     }
 

@@ -378,8 +378,9 @@ impl ProxyTable {
             }
         });
         // A removed body's stamp moved on at its removal, so its entries stay stale.
-        let n = self.stamps.len().min(bodies.stamp.len());
-        self.stamps[..n].copy_from_slice(&bodies.stamp[..n]);
+        for (stamp, tag) in self.stamps.iter_mut().zip(&bodies.tags) {
+            *stamp = tag.stamp;
+        }
         if self.ghosts.active() {
             for i in 0..bodies.slots() {
                 if self.live[i] {
@@ -409,7 +410,7 @@ impl ProxyTable {
         debug_assert!(self.fits(i, bodies), "a body the window's ghosts are not sized for");
         self.resize(bodies.slots());
         (self.spans[i], self.flags[i]) = (span, flags);
-        self.stamps[i] = bodies.stamp[i];
+        self.stamps[i] = bodies.stamp(i);
         self.live[i] = true;
         if self.ghosts.active() {
             self.retire_ghosts(i);
@@ -462,7 +463,7 @@ impl ProxyTable {
         let (spans, stamps, live, flags) = (&mut self.spans, &mut self.stamps, &mut self.live, &mut self.flags);
         let own = spans[i];
         let (low, high) = own.bbox.corners();
-        self.ghosts.make(i, (low, high), &bodies.state[i], bodies.stamp[i], |shift, stamp| {
+        self.ghosts.make(i, (low, high), &bodies.state[i], bodies.stamp(i), |shift, stamp| {
             spans.push(Span { bbox: CompactBox::new(low + shift, high + shift, DVec3::ZERO), ..own });
             stamps.push(stamp);
             live.push(true);

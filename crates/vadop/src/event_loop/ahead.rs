@@ -150,7 +150,7 @@ impl Seen<'_> {
         let virial = virial_of(self.bodies, (i, j), t, (self.bodies.velocity_at(j, t), vj));
         let moved = |k: usize, velocity| Motion { position: self.bodies.position_at(k, t), since: t, velocity };
         let motions = [moved(i, vi), moved(j, vj)];
-        let stamps = [self.bodies.stamp[i].wrapping_add(1), self.bodies.stamp[j].wrapping_add(1)];
+        let stamps = [self.bodies.stamp(i).wrapping_add(1), self.bodies.stamp(j).wrapping_add(1)];
         let state = |k: usize, motion| BodyState { motion, radius: self.bodies.radius(k) };
         search.overlay =
             Overlay::default().with(a, state(i, motions[0]), stamps[0]).with(b, state(j, motions[1]), stamps[1]);
@@ -177,7 +177,7 @@ impl Seen<'_> {
 /// True when the bodies of `event` still have the motions it was predicted from.
 #[inline]
 pub(super) fn is_current(bodies: &Bodies, event: &Event) -> bool {
-    let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
+    let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp(k) == stamp;
     let partner_current = match event.partner {
         Partner::Body(j) => current(j as usize, event.partner_stamp),
         _ => true,

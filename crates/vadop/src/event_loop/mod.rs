@@ -383,12 +383,12 @@ impl EventLoop {
         }
     }
 
-    /// [`Self::prefetch`] of body `i`'s records: its motion, stamp, events, place in the cells.
+    /// [`Self::prefetch`] of body `i`'s records: its motion, tag (stamp), events, place in the cells.
     #[inline]
     fn prefetch_body(&self, bodies: &Bodies, i: usize) {
-        if let (Some(state), Some(stamp)) = (bodies.state.get(i), bodies.stamp.get(i)) {
+        if let (Some(state), Some(tag)) = (bodies.state.get(i), bodies.tags.get(i)) {
             prefetch(state);
-            prefetch(stamp);
+            prefetch(tag);
             self.cells.prefetch(i);
             self.calendar.prefetch(i);
             if let Some(lists) = &self.lists {
@@ -556,7 +556,7 @@ impl EventLoop {
         for k in 0..2 {
             let i = pushed.pair[k] as usize;
             debug_assert!(
-                ahead::same_bits(&bodies.motion(i), &pushed.motions[k]) && bodies.stamp[i] == pushed.stamps[k]
+                ahead::same_bits(&bodies.motion(i), &pushed.motions[k]) && bodies.stamp(i) == pushed.stamps[k]
             );
             self.marks.mark(self.cells.cell_of(i));
             self.calendar.schedule(pushed.pair[k], Events { next: pushed.next[k], crossing: pushed.crossings[k] });

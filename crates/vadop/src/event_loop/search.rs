@@ -308,7 +308,7 @@ impl<'a> Search<'a> {
     /// Body `i`'s stamp: the overlay's, or the store's.
     #[inline(always)]
     fn stamp_of(&self, i: usize) -> u32 {
-        self.overlay.find(i).map_or(self.bodies.stamp[i], |(_, stamp, _)| *stamp)
+        self.overlay.find(i).map_or(self.bodies.stamp(i), |(_, stamp, _)| *stamp)
     }
 
     #[inline]

@@ -4,6 +4,7 @@
 //! types, so all of them see the same bits; they never change a body nor know about contacts.
 
 pub mod free_rotation;
+pub mod hold;
 
 pub use free_rotation::FreeRotation;
 

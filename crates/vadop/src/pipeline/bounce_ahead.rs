@@ -63,7 +63,7 @@ impl BouncesAhead {
             let (p, v) = (m.position.to_array(), m.velocity.to_array());
             [p[0], p[1], p[2], m.since, v[0], v[1], v[2]].map(f64::to_bits)
         };
-        if stamp != bodies.stamp[body as usize] || bits(&motion) != bits(&now) {
+        if stamp != bodies.stamp(body as usize) || bits(&motion) != bits(&now) {
             return None;
         }
         let end = self.bounces.get(k + 1).map_or(self.found.len(), |&(_, next)| next as usize);
@@ -118,7 +118,7 @@ impl<B: BroadPhase> Pipeline<B> {
         self.workers.extend_ranges(pending.len(), &mut ahead.found, |range, found| {
             for &Event { time, body, partner, body_stamp, .. } in &pending[range] {
                 let (i, Partner::Wall(wall)) = (body as usize, partner) else { unreachable!("wall contacts") };
-                if !(from <= time && time < until) || bodies.stamp[i] != body_stamp {
+                if !(from <= time && time < until) || bodies.stamp(i) != body_stamp {
                     continue;
                 }
                 let motion = motion_off_wall(bodies, i, wall, time, physics.restitution);

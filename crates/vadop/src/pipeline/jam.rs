@@ -105,8 +105,8 @@ impl Cluster {
         let (mut touches_min, mut touches_max) = ([false; 3], [false; 3]);
         for &m in &cluster {
             let m = m as usize;
-            mass += bodies.mass[m];
-            momentum += bodies.mass[m] * bodies.velocity_at(m, t);
+            mass += bodies.mass(m);
+            momentum += bodies.mass(m) * bodies.velocity_at(m, t);
             // Within a few of the body's own contact tolerances: a shape's is a thousand times a
             // sphere's, and one touching a floor a shape's tolerance away, not counted as on it,
             // kept its fall, touched the floor again at the same instant and jammed for ever.
@@ -135,7 +135,7 @@ impl Cluster {
         let mut virial = 0.0;
         for &m in &cluster {
             let m = m as usize;
-            let gained = bodies.mass[m] * (velocity - bodies.velocity_at(m, t));
+            let gained = bodies.mass(m) * (velocity - bodies.velocity_at(m, t));
             // A cluster spans less than half a periodic side: its members' nearest images.
             virial += bodies.offset_at(first, m, t).dot(gained);
             rules.freeze(m as u32, t);

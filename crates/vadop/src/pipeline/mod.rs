@@ -410,12 +410,12 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             let partner_current = match event.partner {
                 Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) => {
-                    bodies.alive[j as usize] && bodies.stamp[j as usize] == event.partner_stamp
+                    bodies.alive[j as usize] && bodies.stamp(j as usize) == event.partner_stamp
                 }
                 Partner::Wall(_) | Partner::WallStalled | Partner::Cross(_) | Partner::Renew => true,
             };
             let i = event.body as usize;
-            if !(bodies.alive[i] && bodies.stamp[i] == event.body_stamp && partner_current) {
+            if !(bodies.alive[i] && bodies.stamp(i) == event.body_stamp && partner_current) {
                 out.stats.invalidations += 1;
                 continue;
             }
@@ -463,11 +463,11 @@ impl<B: BroadPhase> Pipeline<B> {
             self.report_pair_contact(bodies, physics, (a, b), t, unknown, Resolution::Passed, out);
             return;
         }
-        let stamps = (bodies.stamp[i], bodies.stamp[j]);
+        let stamps = (bodies.stamp(i), bodies.stamp(j));
         let (point, normal, resolution, impulse) = respond::pair_impact(self, bodies, physics, (a, b), t, out.stats);
         // Spinning shapes may touch again on the same motions (spheres never do): with nothing
         // changed, the pair's next contact is predicted now, as a later window would find it.
-        if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp[i] == stamps.0 && bodies.stamp[j] == stamps.1 {
+        if impulse == 0.0 && !bodies.are_spheres(i, j) && bodies.stamp(i) == stamps.0 && bodies.stamp(j) == stamps.1 {
             let later = self.window.from(t.next_up());
             let (found, parks, _) = contacts::pair_start_after(bodies, i, j, t, later);
             self.follow_pair((a, stamps.0), (b, stamps.1), found, parks);

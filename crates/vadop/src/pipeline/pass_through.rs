@@ -103,7 +103,7 @@ impl<B: BroadPhase> Pipeline<B> {
             events.push(event);
         }
         events.iter().for_each(|&event| self.queue.put_back(event));
-        let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp[k] == stamp;
+        let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp(k) == stamp;
         let ahead = &self.ahead;
         events.retain(|event| {
             let Partner::Body(j) = event.partner else { return false };

@@ -31,8 +31,8 @@ pub(super) fn predict_end(bodies: &Bodies, a: u32, b: u32, since: f64, window: W
         time,
         body: a,
         partner: if stalled { Partner::Stalled(b) } else { Partner::End(b) },
-        body_stamp: bodies.stamp[i],
-        partner_stamp: bodies.stamp[j],
+        body_stamp: bodies.stamp(i),
+        partner_stamp: bodies.stamp(j),
     })
 }
 
@@ -210,7 +210,7 @@ pub(super) fn for_each_static_event(
     let window = proxies.window_of(i).intersect(window);
     let own = proxies.reported(i);
     statics.for_each_near(proxies.box_min() + low, proxies.box_min() + high, |s| {
-        let fixed = Reported { body: s, stamp: bodies.stamp[s as usize], state: &bodies.state[s as usize] };
+        let fixed = Reported { body: s, stamp: bodies.stamp(s as usize), state: &bodies.state[s as usize] };
         if let Some(event) = predict_pair(bodies, &proxies, own, fixed, window) {
             found(event);
         }
@@ -225,7 +225,7 @@ pub(super) fn renewal(bodies: &Bodies, proxies: &ProxyTable, body: u32) -> Event
         time: proxies.window_of(i).end,
         body,
         partner: Partner::Renew,
-        body_stamp: bodies.stamp[i],
+        body_stamp: bodies.stamp(i),
         partner_stamp: 0,
     }
 }
@@ -249,7 +249,7 @@ pub(super) fn predict_wall(
         Ok((time, wall)) => (time, Partner::Wall(wall)),
         Err(time) => (time, Partner::WallStalled),
     };
-    Some(Event { time, body, partner, body_stamp: bodies.stamp[i], partner_stamp: 0 })
+    Some(Event { time, body, partner, body_stamp: bodies.stamp(i), partner_stamp: 0 })
 }
 
 /// Body `body`'s crossing of a periodic face of `bounds` if its canonical time lies in `window`:
@@ -261,7 +261,7 @@ pub(crate) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, w
         return None;
     }
     let i = body as usize;
-    crossing_event((body, bodies.stamp[i]), &bodies.motion(i), bodies.gravity_on(i), bounds, window)
+    crossing_event((body, bodies.stamp(i)), &bodies.motion(i), bodies.gravity_on(i), bounds, window)
 }
 
 /// [`predict_crossing`] of body `body` (stamped as given) on `motion` under `gravity`: a motion

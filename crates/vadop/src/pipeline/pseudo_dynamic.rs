@@ -192,7 +192,7 @@ impl PseudoDynamic {
                         let v = bodies.velocity_at(i, t);
                         let stopped = v - v.dot(wall.outward_normal()).max(0.0) * wall.outward_normal();
                         bodies.set_velocity_at(i, t, stopped);
-                        bodies.mass[i] * (v - stopped).length()
+                        bodies.mass(i) * (v - stopped).length()
                     }
                     // Under gravity with restitution below 1 it comes to rest on a floor as in the
                     // continuous methods (see [`crate::response::rest`]), or it would bounce
@@ -201,7 +201,7 @@ impl PseudoDynamic {
                         let (v, before) = (bodies.velocity_at(i, t), bodies.rest_of(i));
                         if rest::on_wall(bodies, physics, i, wall, t, restitution, false) {
                             out.stats.rest_contacts += 1;
-                            bodies.mass[i] * (v - bodies.velocity(i)).length()
+                            bodies.mass(i) * (v - bodies.velocity(i)).length()
                         } else {
                             let impulse = bounce_off_wall(bodies, i, wall, t, restitution);
                             rest::keep_held(bodies, physics, i, t, before);

@@ -65,7 +65,7 @@ pub(crate) fn pair_impact(
                 stats.pair_virial += virial;
             }
             if by_rule {
-                impulse = (bodies.mass[i] * (before - bodies.velocity(i)).dot(normal)).max(0.0);
+                impulse = (bodies.mass(i) * (before - bodies.velocity(i)).dot(normal)).max(0.0);
             }
         }
         Resolution::Pushed(total) => {
@@ -106,7 +106,7 @@ pub(crate) fn wall_contact(
         Resolution::Jammed { by_rule: true } => {
             let before = bodies.velocity_at(i, t);
             engine.freeze_cluster(bodies, physics, &[a], t, out.stats);
-            bodies.mass[i] * (before - bodies.velocity(i)).length()
+            bodies.mass(i) * (before - bodies.velocity(i)).length()
         }
         Resolution::Jammed { by_rule: false } => {
             engine.freeze_cluster(bodies, physics, &[a], t, out.stats);

@@ -107,7 +107,7 @@ pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, b
 #[inline]
 pub(crate) fn virial_of(bodies: &Bodies, (i, j): (usize, usize), t: f64, (before, after): (DVec3, DVec3)) -> f64 {
     let separation = bodies.offset_at(i, j, t);
-    separation.dot(bodies.mass[j] * (after - before))
+    separation.dot(bodies.mass(j) * (after - before))
 }
 
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
@@ -115,7 +115,7 @@ pub(crate) fn bounce_off_wall(bodies: &mut Bodies, i: usize, wall: Wall, t: f64,
     let v = bodies.velocity_at(i, t);
     let bounced = wall_bounce(v, wall.axis(), restitution);
     bodies.set_velocity_at(i, t, bounced);
-    bodies.mass[i] * (v - bounced).length()
+    bodies.mass(i) * (v - bounced).length()
 }
 
 /// The motion [`bounce_off_wall`] gives sphere `i` of a world without spins (nothing changed).
@@ -257,7 +257,7 @@ impl Impacts {
             let velocity = bodies.velocity_at(i, t);
             if rest::on_wall(bodies, physics, i, wall, t, restitution, changed) {
                 stats.rest_contacts += 1;
-                return Resolution::Pushed(bodies.mass[i] * (velocity - bodies.velocity(i)).length());
+                return Resolution::Pushed(bodies.mass(i) * (velocity - bodies.velocity(i)).length());
             }
         }
         let resolution = match rule {

@@ -56,8 +56,9 @@
 //! This module decides and changes the bodies of one contact; which bodies are near (the
 //! bodies to wake, the cluster to freeze) is the engine's knowledge.
 
-use crate::bodies::{without_axes, Bodies, Rest};
+use crate::bodies::{Bodies, Rest};
 use crate::frame::{Mode, Physics};
+use crate::motion::hold::without_axes;
 use crate::walls::Wall;
 use glam::DVec3;
 
@@ -191,7 +192,7 @@ pub(crate) fn against_still(
     let speed = with_spin(bodies, k, t, speed);
     if pressed && (quick || speed < limit) {
         bodies.lie_still(k, t);
-        return Some((k, bodies.mass[k] * velocity.length()));
+        return Some((k, bodies.mass(k) * velocity.length()));
     }
     // Bouncing off by its centre's velocity suits a ball only: a turning shape's point may still
     // approach, so any other shape takes the ordinary impact (a static support holds it anyway).
@@ -205,7 +206,7 @@ pub(crate) fn against_still(
     }
     let bounced = velocity + (leaving - normal_speed) * out;
     bodies.set_velocity_at(k, t, bounced);
-    Some((k, bodies.mass[k] * (leaving - normal_speed)))
+    Some((k, bodies.mass(k) * (leaving - normal_speed)))
 }
 
 /// Of bodies `i` and `j`, touching along `normal` (from `i` to `j`) with their accelerations as

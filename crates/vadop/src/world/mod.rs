@@ -9,7 +9,7 @@
 //! produce bit-identical contact sequences. It never decides what touches or how bodies respond.
 
 use crate::axis_pool::AxisPool;
-use crate::bodies::{Bodies, Rest, Sphere};
+use crate::bodies::{Bodies, BodyTag, Rest, Sphere};
 use crate::broad_phase::sweep_prune::SweepPrune;
 use crate::error::{check_length, check_magnitude, check_vector, Result, VadopError};
 use crate::frame::{Contact, FrameStats, Mode, Touched};
@@ -432,7 +432,7 @@ impl World {
     /// ```
     pub fn translational_kinetic_energy(&self) -> f64 {
         let b = &self.bodies;
-        self.moving_ids().map(|i| 0.5 * b.mass[i] * b.velocity_at(i, self.time).length_squared()).sum()
+        self.moving_ids().map(|i| 0.5 * b.mass(i) * b.velocity_at(i, self.time).length_squared()).sum()
     }
     /// Potential energy of the moving bodies in the world's gravity, `-sum m g . p`, zero at the
     /// origin (0 without gravity): kinetic plus potential is what an elastic run keeps.
@@ -452,11 +452,11 @@ impl World {
     pub fn potential_energy(&self) -> f64 {
         let (b, g) = (&self.bodies, self.config.gravity);
         // Along a periodic axis a body falls on through the faces: its height unwrapped.
-        self.moving_ids().map(|i| -b.mass[i] * g.dot(b.unwrapped_at(i, self.time))).sum()
+        self.moving_ids().map(|i| -b.mass(i) * g.dot(b.unwrapped_at(i, self.time))).sum()
     }
     /// Total linear momentum.
     pub fn momentum(&self) -> DVec3 {
-        self.moving_ids().map(|i| self.bodies.mass[i] * self.bodies.velocity_at(i, self.time)).sum()
+        self.moving_ids().map(|i| self.bodies.mass(i) * self.bodies.velocity_at(i, self.time)).sum()
     }
 
     /// Advances the world by `dt` and returns the frame's contacts in time order: every contact
@@ -624,7 +624,7 @@ impl World {
     /// The slot of the live body `handle`, or why there is none.
     fn live_slot(&self, handle: BodyHandle) -> Result<usize> {
         let i = handle.index() as usize;
-        let Some(&generation) = self.bodies.generation.get(i) else {
+        let Some(&BodyTag { generation, .. }) = self.bodies.tags.get(i) else {
             return Err(VadopError::NoSuchBody(handle));
         };
         let alive = self.bodies.alive[i];

@@ -198,7 +198,7 @@ impl World {
         let t = self.time;
         self.moving_ids()
             .map(|i| {
-                let p = self.bodies.position_at(i, t).cross(self.bodies.mass[i] * self.bodies.velocity_at(i, t));
+                let p = self.bodies.position_at(i, t).cross(self.bodies.mass(i) * self.bodies.velocity_at(i, t));
                 p + self.bodies.spin_momentum(i)
             })
             .sum()
@@ -342,7 +342,7 @@ impl World {
             orientation,
             velocity: b.velocity_at(i, t),
             angular_velocity: b.angular_velocity_at(i, t),
-            mass: b.mass[i],
+            mass: b.mass(i),
         }
     }
 

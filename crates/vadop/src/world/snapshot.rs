@@ -142,9 +142,9 @@ impl World {
                 velocity: b.velocity(i),
                 since: b.state[i].motion.since,
                 radius: b.radius(i),
-                mass: if b.is_fixed(i) { 0.0 } else { b.mass[i] },
+                mass: if b.is_fixed(i) { 0.0 } else { b.mass(i) },
                 alive: b.alive[i],
-                generation: b.generation[i],
+                generation: b.generation(i),
                 last_contact: self.last_contact(i),
                 crossings: b.crossings_of(i),
                 rest: b.rest_of(i),
@@ -288,7 +288,7 @@ impl World {
                 }
             }
             world.bodies.alive[i] = slot.alive;
-            world.bodies.generation[i] = generation;
+            world.bodies.tags[i].generation = generation;
             if slot.crossings != [0; 3] {
                 if !world.bounds.is_periodic() {
                     return Err(bad(format!("slot {i}: crossings are counted in a periodic box only")));

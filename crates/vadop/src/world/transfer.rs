@@ -67,7 +67,7 @@ impl World {
             since: motion.since,
             velocity: motion.velocity,
             radius: self.bodies.radius(i),
-            mass: self.bodies.mass[i],
+            mass: self.bodies.mass(i),
             last_contact: self.last_contact(i),
             crossings: self.bodies.crossings_of(i),
             rest: self.bodies.rest_of(i),
