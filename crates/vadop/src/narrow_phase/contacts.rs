@@ -115,8 +115,8 @@ pub(crate) fn pair_start_parked(
     let turns_back = bodies.mode.turns_back(bodies.is_fixed(a) || bodies.is_fixed(b));
     let mut search = pair_first_start((ga, &ma), (gb, &mb), window, resume, turns_back);
     let found = settled(search.as_ref().map(|(s, _)| s.found), window);
-    if let Ok((_, parked)) = &mut search {
-        if let Some(resume) = take_parked(parked).filter(|_| !across) {
+    if let (false, Ok((_, parked))) = (across, &mut search) {
+        if let Some(resume) = take_parked(parked) {
             park((key, epochs, resume));
         }
     }

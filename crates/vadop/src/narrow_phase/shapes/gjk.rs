@@ -22,8 +22,9 @@ use parry3d_f64::shape::SupportMap;
 /// a support point of the difference turns a direction into the second's frame and the point back,
 /// which a quaternion does in about twice the arithmetic of a matrix product, on the dependency
 /// chain of every GJK and EPA iteration (parry's `support_point`, 10 % of the shapes' samples at
-/// 5 d/f). Every support point, and every point of a simplex carried between probes, goes
-/// through the matrices: one rounding for all of them.
+/// 5 d/f). GJK's and EPA's support points, and the points of a simplex carried between probes, go
+/// through the matrices: one rounding for all of them (parry's fallback contact query keeps its
+/// quaternion).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Relative {
     pub(super) pose: Pose,
