@@ -2,26 +2,26 @@
 //! their turn, then handled in the calendar's order, each worker's result used only when nothing
 //! it read has changed since, so the world steps to the same bits on any number of threads.
 //!
-//! It owns the batch and what a worker finds for an event of it. The next events (as many as
-//! [`PER_WORKER`] per worker) are taken from the calendar; the workers find, from the world as it
-//! stands and without changing it, what handling each would find: for a contact of two spheres,
-//! the impact's new motions and both bodies' next events and cell crossings; for a voided event,
-//! its body's next event; for a cell crossing, the contacts with the cells it reaches and its
-//! next crossing. Then one thread handles the events in order, the batch's and any the calendar
-//! now holds before them (events predicted by those just handled), with the serial loop's own
-//! code. A worker's result is used when no cell it read was marked since the batch started (a
-//! body in it moved, changed cells or took part in a contact) and, for a contact, when the
-//! impact, done again on its turn, gives the very motions the worker assumed; otherwise the
-//! event is worked out again on its turn. So every event is handled as the serial loop handles
-//! it, in the same order, and what the workers share is the searches, most of an event's cost.
-//! This is speculation with in-order commit (as in Khan and Herbordt's parallel event-driven MD)
-//! over one calendar: no region of the box is a thread's, so there is no border to agree on. It
-//! never schedules or handles an event itself.
+//! It owns what a worker finds for an event of a batch, the copy of the world the workers read,
+//! and the rule that tells when a result can be used. The next events (as many as [`PER_THREAD`]
+//! per thread) are taken from the calendar; the workers find, from the [`Mirror`] and without
+//! changing it, what handling each would find: for a contact of two spheres, the impact's new
+//! motions and both bodies' next events and cell crossings; for a voided event, its body's next
+//! event; for a cell crossing, the contacts with the cells it reaches and its next crossing. One
+//! thread handles the events in order, with the serial loop's own code, while the workers work
+//! out the next batch (see [`super::in_order`]). A worker's result is used when no cell it read
+//! was marked since its world (a body in it moved, changed cells or took part in a contact:
+//! [`Marks`]) and, for a contact, when the impact, done again on its turn, gives the very motions
+//! the worker assumed; otherwise the event is worked out again on its turn. So every event is
+//! handled as the serial loop handles it, in the same order, and what the workers share is the
+//! searches, most of an event's cost. This is speculation with in-order commit (as in Khan and
+//! Herbordt's parallel event-driven MD) over one calendar: no region of the box is a thread's,
+//! so there is no border to agree on. It never schedules or handles an event itself.
 
 use super::calendar::{Calendar, Entry, Events};
-use super::cells::{Cells, Crossing};
+use super::cells::{Cells, Crossing, NONE};
 use super::search::{Candidate, Eligible, Near, Overlay, Search};
-use crate::bodies::{Bodies, BodyState};
+use crate::bodies::{Bodies, BodyState, BodyTag};
 use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
 use crate::motion::Motion;
@@ -30,17 +30,19 @@ use crate::response::impact::{spheres_pushed, virial_of};
 use crate::response::rules::ContactRules;
 use crate::walls::BoxBounds;
 use glam::DVec3;
+use rayon::prelude::*;
 
-/// Events each worker works out per batch: enough that waking the workers costs little against
-/// the batch, few enough that events handled early in it rarely change what later ones read (an
-/// event reads about 50 cells and changes 2 or 3, so with a batch of k events over C cells about
-/// 75 k / C of them were worked out in vain): at most this many, at least [`MIN_PER_WORKER`],
-/// and a batch no larger than one event per [`CELLS_PER_EVENT`] cells.
-pub(super) const PER_WORKER: usize = 32;
-pub(super) const MIN_PER_WORKER: usize = 8;
+/// Events a batch holds per thread: enough that waking the workers costs little against the
+/// batch, few enough that events handled early rarely change what later ones read (an event reads
+/// about 50 cells and changes 2 or 3, and a result is checked against the changes of two commits,
+/// so with batches of k events over C cells about 150 k / C of them were worked out in vain): at
+/// most this many, at least [`MIN_PER_THREAD`], and a batch no larger than one event per
+/// [`CELLS_PER_EVENT`] cells.
+pub(super) const PER_THREAD: usize = 32;
+pub(super) const MIN_PER_THREAD: usize = 8;
 pub(super) const CELLS_PER_EVENT: usize = 2048;
 
-/// What a worker found for an event, from the world as the batch found it. Kept unboxed: the
+/// What a worker found for an event, from the world it read (the [`Mirror`]). Kept unboxed: the
 /// workers' vectors are reused from batch to batch, and a box would allocate per event.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy)]
@@ -77,12 +79,11 @@ pub(super) struct Pushed {
     pub crossings: [Crossing; 2],
 }
 
-/// A worker's scratch, and what it found for its share of the batch.
+/// A worker's scratch, and what it counts.
 #[derive(Debug, Default)]
 pub(super) struct Worker {
     candidates: Vec<Candidate>,
     near: Box<Near>,
-    pub worked: Vec<Worked>,
     /// Exact pair tests made.
     pub tests: u64,
 }
@@ -95,11 +96,28 @@ pub(super) struct Seen<'a> {
     pub physics: &'a Physics,
     pub rules: &'a ContactRules,
     pub screen: bool,
-    /// The calendar, with each body's next event and next cell crossing.
-    pub calendar: &'a Calendar,
+    /// Each body's next event and next cell crossing, as the calendar booked them.
+    pub events: &'a [Events],
 }
 
 impl Seen<'_> {
+    /// What handling each event of `batch` would find, into `worked` (one result an event),
+    /// shared among `workers` in runs of consecutive events.
+    pub(super) fn work_out_batch(&self, workers: &mut [Worker], batch: &[Entry], worked: &mut Vec<Worked>) {
+        worked.clear();
+        worked.resize(batch.len(), Worked::Nothing);
+        let share = batch.len().div_ceil(workers.len()).max(1);
+        worked.par_chunks_mut(share).zip(workers.par_iter_mut()).enumerate().for_each(|(k, (results, worker))| {
+            for (at, result) in (k * share..).zip(results) {
+                // The second owner's entry of a contact: handling the first reschedules both
+                // bodies, so this one is stale by its turn (if not, it is handled there).
+                if !(at > 0 && same_contact(&batch[at - 1], &batch[at])) {
+                    *result = self.work_out(&batch[at], worker);
+                }
+            }
+        });
+    }
+
     /// What handling `entry` would find, worked out without changing anything. (Kept out of line:
     /// a profile then tells the workers' share of a step from the rest.)
     #[inline(never)]
@@ -117,7 +135,7 @@ impl Seen<'_> {
             tests: 0,
         };
         let worked = if entry.scheduled.cell_crossing {
-            let Events { next: before, crossing } = *self.calendar.events(owner);
+            let Events { next: before, crossing } = self.events[owner];
             let into = self.cells.stepped(owner, crossing);
             let next = search.after_crossing(owner, (into, crossing), time, before);
             Worked::Crossed { next, crossing: self.cells.next_crossing_from(&self.bodies.motion(owner), into.0, time) }
@@ -202,51 +220,198 @@ pub(super) fn same_bits(a: &Motion, b: &Motion) -> bool {
     bits(a) == bits(b)
 }
 
-/// Per cell, whether anything in it changed since the batch started: a body in it moved, took
-/// part in a contact, or came or left. Two bytes per cell, the batch's number modulo 2^16: a mark
-/// from 2^16 batches before reads as marked, which only costs working an event out again.
+/// Per cell, whether anything in it changed since the world the workers read: in the commit of
+/// this batch or of the one before (the workers of a batch work while the batch before it is
+/// committed, from the world as the commit before that left it: see [`Mirror`]). Two bytes per
+/// cell, the number of the batch whose commit last changed it, modulo 2^16: a mark from 2^16
+/// batches before reads as a change, which only costs working an event out again. And the cells
+/// this batch's commit changed, listed, for the mirror.
 #[derive(Debug, Default)]
 pub(super) struct Marks {
     batch: Vec<u16>,
     current: u16,
+    changed: Vec<u32>,
 }
 
 impl Marks {
-    /// A new batch over `cells` cells: nothing is marked.
+    /// A new batch over `cells` cells: nothing changed in its commit yet.
     pub(super) fn next_batch(&mut self, cells: usize) {
-        if self.batch.len() != cells {
-            self.batch = vec![0; cells];
-        }
         self.current = self.current.wrapping_add(1);
+        if self.batch.len() != cells {
+            // Neither this batch's number nor the one before.
+            self.batch = vec![self.current.wrapping_sub(2); cells];
+        }
+        self.changed.clear();
     }
 
     /// Something in cell `cell` changed.
     #[inline]
     pub(super) fn mark(&mut self, cell: u32) {
         if let Some(b) = self.batch.get_mut(cell as usize) {
-            *b = self.current;
+            if *b != self.current {
+                *b = self.current;
+                self.changed.push(cell);
+            }
         }
     }
 
-    /// True when something in cell `cell` may have changed since the batch started.
+    /// True when `batch` is this batch's number or the one before.
+    #[inline(always)]
+    fn recent(&self, batch: u16) -> bool {
+        self.current.wrapping_sub(batch) <= 1
+    }
+
+    /// True when something in cell `cell` may have changed since the world the workers read.
     #[inline]
     pub(super) fn is_marked(&self, cell: u32) -> bool {
-        self.batch.get(cell as usize).is_some_and(|&b| b == self.current)
+        self.batch.get(cell as usize).is_some_and(|&b| self.recent(b))
     }
 
     /// True when something in a cell of the rows of 3 cells starting at `rows` may have changed
-    /// since the batch started.
+    /// since the world the workers read.
     #[inline]
     pub(super) fn any_in_rows(&self, rows: &[usize; 9]) -> bool {
-        let (marks, current) = (&self.batch[..], self.current);
         rows.iter().fold(false, |any, &first| {
-            let row = &marks[first..first + 3];
-            any | (row[0] == current) | (row[1] == current) | (row[2] == current)
+            let row = &self.batch[first..first + 3];
+            any | self.recent(row[0]) | self.recent(row[1]) | self.recent(row[2])
         })
+    }
+
+    /// The cells this batch's commit changed, each once.
+    pub(super) fn changed(&self) -> &[u32] {
+        &self.changed
     }
 
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
-        self.batch.capacity() * 2
+        self.batch.capacity() * 2 + self.changed.capacity() * 4
+    }
+}
+
+/// What the workers read, a copy of the world kept apart from it: the workers of a batch read
+/// it while the commit of the batch before changes the world itself, so the two run at once.
+/// Between two commits it takes what the earlier one changed (the cells it marked, with their
+/// lists and their bodies' records, and the events of the bodies it scheduled): then it is the
+/// world as that commit left it, and the next batch's results are checked against the cells
+/// marked since (see [`Marks`]). Copied whole when the world changed otherwise (bodies entered
+/// or removed, the grid rebuilt, contact histories restored).
+#[derive(Debug, Default)]
+pub(super) struct Mirror {
+    pub bodies: Bodies,
+    pub cells: Cells,
+    pub events: Vec<Events>,
+    pub rules: ContactRules,
+    /// Not the world as it stands: to be copied whole before the next batch.
+    pub stale: bool,
+}
+
+impl Mirror {
+    /// What the workers read: the mirror, in the box `bounds`, under `physics`, the search's
+    /// screen on when `screen`.
+    pub(super) fn seen<'a>(&'a self, bounds: &'a BoxBounds, physics: &'a Physics, screen: bool) -> Seen<'a> {
+        Seen {
+            bodies: &self.bodies,
+            cells: &self.cells,
+            bounds,
+            physics,
+            rules: &self.rules,
+            screen,
+            events: &self.events,
+        }
+    }
+
+    /// The world copied whole.
+    pub(super) fn copy_all(&mut self, bodies: &Bodies, cells: &Cells, calendar: &Calendar, rules: &ContactRules) {
+        self.bodies.clone_from(bodies);
+        self.cells.clone_from(cells);
+        self.events.clear();
+        self.events.extend((0..bodies.slots()).map(|i| *calendar.events(i)));
+        self.rules.clone_from(rules);
+        self.stale = false;
+    }
+
+    /// What a commit changed copied from the world: the cells `changed` with the records of the
+    /// bodies listed there (every body whose motion, stamp, place or history a commit changes
+    /// is in a cell it marked), and the events of those bodies and of `owners`, the bodies whose
+    /// events it handled (the only others it schedules).
+    pub(super) fn copy_changed(
+        &mut self,
+        (bodies, cells, calendar, rules): (&Bodies, &Cells, &Calendar, &ContactRules),
+        changed: &[u32],
+        owners: &[u32],
+    ) {
+        for &cell in changed {
+            self.cells.copy_cell(cells, cell);
+            let mut q = cells.first(cell);
+            while q != NONE {
+                let i = q as usize;
+                (self.bodies.state[i], self.bodies.tags[i]) = (bodies.state[i], bodies.tags[i]);
+                self.bodies.alive[i] = bodies.alive[i];
+                self.events[i] = *calendar.events(i);
+                self.rules.copy_history(rules, i);
+                q = cells.after(q);
+            }
+        }
+        for &owner in owners {
+            self.events[owner as usize] = *calendar.events(owner as usize);
+        }
+    }
+
+    /// Tests: the mirror is the world as it stands (what the workers read of it).
+    #[cfg(test)]
+    pub(super) fn check(&self, (bodies, cells, calendar, rules): (&Bodies, &Cells, &Calendar, &ContactRules)) {
+        assert!(self.cells.same_lists(cells), "the mirror's cells differ");
+        for i in 0..bodies.slots() {
+            assert_eq!(
+                (self.bodies.state[i], self.bodies.tags[i], self.bodies.alive[i]),
+                (bodies.state[i], bodies.tags[i], bodies.alive[i]),
+                "the mirror's body {i} differs"
+            );
+            assert_eq!(format!("{:?}", self.events[i]), format!("{:?}", calendar.events(i)), "body {i}'s events");
+            assert_eq!(self.rules.last_contact(i).to_bits(), rules.last_contact(i).to_bits(), "body {i}'s history");
+        }
+    }
+
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        let bodies = &self.bodies;
+        bodies.state.capacity() * std::mem::size_of::<BodyState>()
+            + bodies.tags.capacity() * std::mem::size_of::<BodyTag>()
+            + bodies.alive.capacity()
+            + self.cells.memory_bytes()
+            + self.events.capacity() * std::mem::size_of::<Events>()
+            + self.rules.memory_bytes()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The overlap's conflict rule: a result worked out from the world the commit before last
+    /// left is used only when no cell it read changed since, in the commit before or in this one;
+    /// a change two commits back is in the workers' world already.
+    #[test]
+    fn a_cell_reads_changed_through_this_commit_and_the_one_before() {
+        let mut marks = Marks::default();
+        marks.next_batch(64);
+        assert!((0..64).all(|c| !marks.is_marked(c)), "a new grid reads unchanged");
+        marks.mark(5);
+        marks.mark(5);
+        marks.mark(9);
+        assert_eq!(marks.changed(), &[5, 9], "each changed cell listed once");
+        assert!(marks.is_marked(5) && marks.is_marked(9) && !marks.is_marked(6));
+        marks.next_batch(64);
+        assert!(marks.changed().is_empty());
+        assert!(marks.is_marked(5) && marks.is_marked(9), "changed in the commit before");
+        marks.mark(9);
+        marks.mark(20);
+        assert_eq!(marks.changed(), &[9, 20], "a cell changed again is listed for this commit too");
+        marks.next_batch(64);
+        assert!(!marks.is_marked(5), "changed two commits back: the workers' world has it");
+        assert!(marks.is_marked(9) && marks.is_marked(20));
+        let unchanged = [0, 30, 33, 36, 40, 44, 48, 52, 56];
+        assert!(!marks.any_in_rows(&unchanged));
+        assert!(marks.any_in_rows(&[0, 30, 33, 36, 40, 44, 48, 52, 19]), "cell 20 in the last row");
     }
 }

@@ -70,7 +70,7 @@ pub(super) struct Slab {
 const MAX_PER_AXIS: f64 = 65_535.0;
 
 /// The grid and its lists.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub(super) struct Cells {
     min: DVec3,
     side: DVec3,
@@ -325,6 +325,28 @@ impl Cells {
             bits |= self.occupied[word + 1] << (64 - bit);
         }
         (bits & 7) as u32
+    }
+
+    /// Cell `cell` of `other`, a grid of the same cells, copied: its head, and the places of the
+    /// bodies listed there (a body that left it is listed in another cell, copied too).
+    pub(super) fn copy_cell(&mut self, other: &Cells, cell: u32) {
+        let (c, word, bit) = (cell as usize, cell as usize / 64, 1u64 << (cell % 64));
+        self.head[c] = other.head[c];
+        self.occupied[word] = (self.occupied[word] & !bit) | (other.occupied[word] & bit);
+        let mut q = other.head[c];
+        while q != NONE {
+            self.listing[q as usize] = other.listing[q as usize];
+            q = other.listing[q as usize].next;
+        }
+    }
+
+    /// Tests: the same cells hold the same bodies, in the same order, as in `other`.
+    #[cfg(test)]
+    pub(super) fn same_lists(&self, other: &Cells) -> bool {
+        let place = |l: &Listing| (l.next, l.prev, l.cell, l.at);
+        self.head == other.head
+            && self.occupied == other.occupied
+            && self.listing.iter().map(place).eq(other.listing.iter().map(place))
     }
 
     /// The body after `i` in its cell, or [`NONE`].

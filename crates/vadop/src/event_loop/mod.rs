@@ -36,6 +36,7 @@
 mod ahead;
 mod calendar;
 mod cells;
+mod in_order;
 mod lists;
 mod search;
 
@@ -46,25 +47,31 @@ use crate::memory::prefetch;
 use crate::pipeline::jam::Cluster;
 use crate::pipeline::respond::{self, Responder};
 use crate::response::impact::{Impacts, Resolution};
-use crate::response::rules::Rule;
+use crate::response::rules::ContactRules;
 use crate::walls::BoxBounds;
-use ahead::{Marks, Pushed, Seen, Worked, Worker, CELLS_PER_EVENT, MIN_PER_WORKER, PER_WORKER};
+use ahead::{Marks, Mirror, Worked, Worker};
 use calendar::{Calendar, Entry, Events};
 use cells::{Cells, Crossing, NONE};
 use lists::Lists;
-use rayon::prelude::*;
 use search::{Candidate, Eligible, Near, Overlay, Search};
 use std::time::Instant;
 
-/// The parallel loop runs from this many threads on. On 2 its workers share the searches, most
-/// of an event's cost, but an event's handling in order stays on one thread: measured with
-/// callgrind on the periodic gas at n = 10^5, per pair collision, the workers execute 10.5 k,
-/// 9.0 k and 12.2 k instructions at packing 0.05, 0.2 and 0.4 and the thread that handles the
-/// events in order 7.3 k, 3.0 k and 2.4 k, where the serial loop executes 15.5 k, 10.7 k and
-/// 9.1 k in all (with neighbour lists at 0.4, which the parallel loop cannot keep), which bounds 2
-/// threads to 1.24x, 1.41x and 1.07x before the batches' hand-offs (0.96x measured at a bound of
-/// 1.2), and 3 threads to 1.44x, 1.76x and 1.41x.
-const AHEAD_THREADS: usize = 3;
+/// The parallel loop runs from this many threads on. Its thread that handles the events in order
+/// commits one batch while the workers work out the next (see [`in_order`]), so on 2 threads both
+/// share all of the work but the mirror's upkeep: measured with callgrind on the periodic gas at
+/// n = 10^5, per pair collision, at packing 0.05 and 0.2 the commit (with taking the next batch)
+/// executes 7.2 k and 3.2 k instructions, the workers 10.6 k and 9.1 k, the mirror's upkeep 1.5 k
+/// and 0.5 k, where the serial loop executes 15.3 k and 10.7 k in all: 2 threads are bounded to
+/// 1.47x and 1.60x before the batches' hand-offs.
+const AHEAD_THREADS: usize = 2;
+/// The parallel loop's threshold where the serial loop keeps neighbour lists (a dense world, see
+/// [`Lists::paying`]): the parallel loop keeps cells, and at packing 0.4 its workers alone execute
+/// 12.3 k instructions per collision against the serial loop's 9.1 k with lists, which bounds 2
+/// threads to 1.15x (a bound of 1.2 measured 0.96x before the overlap), 3 threads to 1.68x.
+const AHEAD_THREADS_LISTED: usize = 3;
+/// Workers of the parallel loop a thread: a batch's searches are shared in this many runs a
+/// thread, so that the thread that commits the batch before takes those left when it is done.
+const WORKERS_PER_THREAD: usize = 4;
 /// The grid is rebuilt when the bodies have grown past this many times those it was sized for.
 const GROWTH: usize = 2;
 /// The records of the event this many after the next are asked for while the next is handled
@@ -99,11 +106,21 @@ pub(crate) struct EventLoop {
     /// screen is trusted (see [`search::screen_trusted`]).
     scale: f64,
     min_radius: f64,
-    /// With more than one thread: the workers of the parallel loop (see [`ahead`]), the batch
-    /// they work out, and the cells changed since it started.
+    /// With more than one thread (`threads`), the parallel loop (see [`in_order`]): its workers
+    /// (a few a thread, so that a thread done early takes a share of those left), the batch
+    /// committed and what the workers found for it, the batch worked out ahead and its results,
+    /// the batch after it, the cells changed since the world the workers read, the bodies whose events a commit
+    /// handled, and the world the workers read.
+    threads: usize,
     workers: Vec<Worker>,
     batch: Vec<Entry>,
+    worked: Vec<Worked>,
+    ahead: Vec<Entry>,
+    worked_ahead: Vec<Worked>,
+    later: Vec<Entry>,
     marks: Marks,
+    owners: Vec<u32>,
+    mirror: Mirror,
     /// Tests: every step ends checking the search's screen, and the lists when kept.
     #[cfg(test)]
     checking: bool,
@@ -141,9 +158,20 @@ impl EventLoop {
             sized_for: 0,
             scale: bounds.min.abs().max(bounds.max.abs()).max_element() + bounds.side().max_element(),
             min_radius: f64::INFINITY,
-            workers: if workers > 1 { (0..workers).map(|_| Worker::default()).collect() } else { Vec::new() },
+            threads: workers,
+            workers: if workers > 1 {
+                (0..workers * WORKERS_PER_THREAD).map(|_| Worker::default()).collect()
+            } else {
+                Vec::new()
+            },
             batch: Vec::new(),
+            worked: Vec::new(),
+            ahead: Vec::new(),
+            worked_ahead: Vec::new(),
+            later: Vec::new(),
             marks: Marks::default(),
+            owners: Vec::new(),
+            mirror: Mirror { stale: true, ..Mirror::default() },
             #[cfg(test)]
             checking: false,
             #[cfg(test)]
@@ -171,8 +199,10 @@ impl EventLoop {
             + self.members.capacity() * 4
             + self.held.capacity()
             + self.marks.memory_bytes()
-            + self.batch.capacity() * std::mem::size_of::<Entry>()
-            + self.workers.iter().map(|w| w.worked.capacity() * std::mem::size_of::<Worked>()).sum::<usize>()
+            + (self.batch.capacity() + self.ahead.capacity() + self.later.capacity()) * std::mem::size_of::<Entry>()
+            + (self.worked.capacity() + self.worked_ahead.capacity()) * std::mem::size_of::<Worked>()
+            + self.owners.capacity() * 4
+            + self.mirror.memory_bytes()
             + self.candidates.capacity() * std::mem::size_of::<Candidate>()
             + self.lists.as_ref().map_or(0, Lists::memory_bytes)
     }
@@ -185,6 +215,7 @@ impl EventLoop {
             self.held.resize(bodies.slots(), false);
         }
         self.held[i] = true;
+        self.mirror.stale = true;
         self.min_radius = self.min_radius.min(bodies.radius(i));
         if self.stale {
             return;
@@ -208,11 +239,19 @@ impl EventLoop {
         self.predict(bodies, i, t, Eligible::From(t), stats);
     }
 
+    /// The contact rules, to be changed from outside the loop (a step taken back restores them):
+    /// the workers' copy is then taken whole before the next batch.
+    pub(crate) fn rules_mut(&mut self) -> &mut ContactRules {
+        self.mirror.stale = true;
+        &mut self.impacts.rules
+    }
+
     /// Body `i` was removed: it leaves its cell, and its event is void.
     pub(crate) fn remove(&mut self, i: u32) {
         if let Some(held) = self.held.get_mut(i as usize) {
             *held = false;
         }
+        self.mirror.stale = true;
         if self.cells.cell_of(i as usize) != NONE {
             if let Some(lists) = &mut self.lists {
                 lists.remove(i as usize);
@@ -237,12 +276,14 @@ impl EventLoop {
         let ids: Vec<u32> = self.bodies().collect();
         let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
         // The parallel loop keeps cells: its workers' results are checked against the cells
-        // marked since their batch began, and a list built anew changes the lists around it.
+        // marked since their world, and a list built anew changes the lists around it. Where
+        // lists pay, the serial loop steps with them on fewer than `AHEAD_THREADS_LISTED`.
         #[cfg(not(test))]
         let always = None;
         #[cfg(test)]
         let always = self.always_lists;
-        self.lists = self.workers.is_empty().then(|| Lists::paying(&self.bounds, bodies, &ids, always)).flatten();
+        let may_list = self.workers.is_empty() || self.threads < AHEAD_THREADS_LISTED;
+        self.lists = may_list.then(|| Lists::paying(&self.bounds, bodies, &ids, always)).flatten();
         let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
         self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
@@ -264,6 +305,7 @@ impl EventLoop {
         }
         stats.retests += ids.len() as u64;
         self.stale = false;
+        self.mirror.stale = true;
         self.calendar.retune(t);
     }
 
@@ -321,7 +363,7 @@ impl EventLoop {
         } else if self.calendar.needs_tuning() {
             self.calendar.retune(t0);
         }
-        if self.workers.is_empty() {
+        if self.workers.is_empty() || self.lists.is_some() {
             let mut handled = 0u32;
             while let Some(entry) = self.calendar.peek_entry() {
                 if !(entry.scheduled.time() < t1) {
@@ -409,191 +451,6 @@ impl EventLoop {
         } else {
             self.handle(bodies, physics, owner, entry.scheduled.event, out);
         }
-    }
-
-    /// [`Self::step`] on every worker: batch after batch of the next events before `t1`, worked
-    /// out on every worker, then handled in order (see [`ahead`]).
-    fn step_ahead(&mut self, bodies: &mut Bodies, physics: &Physics, t1: f64, out: &mut Output) {
-        loop {
-            let batch = self.take_batch(t1);
-            if batch.is_empty() {
-                self.batch = batch;
-                return;
-            }
-            self.marks.next_batch(self.cells.len());
-            let share = batch.len().div_ceil(self.workers.len());
-            let seen = Seen {
-                bodies,
-                cells: &self.cells,
-                bounds: &self.bounds,
-                physics,
-                rules: &self.impacts.rules,
-                screen: search::screen_trusted(self.scale, self.min_radius),
-                calendar: &self.calendar,
-            };
-            self.workers.par_iter_mut().enumerate().for_each(|(k, worker)| {
-                worker.worked.clear();
-                for (at, entry) in batch.iter().enumerate().skip(k * share).take(share) {
-                    // The second owner's entry of a contact: handling the first reschedules both
-                    // bodies, so this one is stale by its turn (if not, it is handled there).
-                    let worked = if at > 0 && ahead::same_contact(&batch[at - 1], entry) {
-                        Worked::Nothing
-                    } else {
-                        seen.work_out(entry, worker)
-                    };
-                    worker.worked.push(worked);
-                }
-            });
-            self.commit_batch(bodies, physics, &batch, share, t1, out);
-            for worker in &mut self.workers {
-                out.stats.narrow_tests += std::mem::take(&mut worker.tests);
-            }
-            self.batch = batch;
-            if crate::interrupt::raised() {
-                return;
-            }
-        }
-    }
-
-    /// The next events before `t1` taken from the calendar, as many as the workers share.
-    #[inline(never)]
-    fn take_batch(&mut self, t1: f64) -> Vec<Entry> {
-        let mut batch = std::mem::take(&mut self.batch);
-        batch.clear();
-        // Fewer events a batch in a small world: one handled early in a batch then changes what
-        // another read less often.
-        let size = (self.cells.len() / CELLS_PER_EVENT).clamp(MIN_PER_WORKER, PER_WORKER) * self.workers.len();
-        while batch.len() < size {
-            match self.calendar.peek_entry() {
-                Some(entry) if entry.scheduled.time() < t1 => {
-                    self.calendar.pop();
-                    batch.push(entry);
-                }
-                _ => break,
-            }
-        }
-        batch
-    }
-
-    /// The events of `batch` handled in order, each with what the workers found (`share` events
-    /// each), and before each the events predicted since that are due before it. (Kept out of line:
-    /// a profile then tells the serial share of a step.)
-    #[inline(never)]
-    fn commit_batch(
-        &mut self,
-        bodies: &mut Bodies,
-        physics: &Physics,
-        batch: &[Entry],
-        share: usize,
-        t1: f64,
-        out: &mut Output,
-    ) {
-        // Read in place, not moved out: a worker's result is a few hundred bytes.
-        let workers = std::mem::take(&mut self.workers);
-        for (k, entry) in batch.iter().enumerate() {
-            // Events predicted since, and due before this one, come first.
-            while let Some(first) = self.calendar.peek_entry() {
-                if !(first.scheduled.time() < t1 && first.precedes(entry)) {
-                    break;
-                }
-                self.calendar.pop();
-                self.dispatch(bodies, physics, first, out);
-            }
-            if self.calendar.is_current_entry(entry) {
-                self.commit(bodies, physics, *entry, &workers[k / share].worked[k % share], out);
-            }
-        }
-        self.workers = workers;
-    }
-
-    /// Handles `entry` with what a worker found for it, when nothing it read has changed since.
-    fn commit(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, worked: &Worked, out: &mut Output) {
-        let i = entry.owner as usize;
-        match worked {
-            &Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
-                self.marks.mark(self.cells.cell_of(i));
-                self.cells.step_across(i, self.calendar.events(i).crossing);
-                self.marks.mark(self.cells.cell_of(i));
-                self.calendar.schedule(i as u32, Events { next, crossing });
-            }
-            &Worked::Voided { next } if self.untouched_around(i) => {
-                out.stats.invalidations += 1;
-                out.stats.retests += 1;
-                let crossing = self.calendar.events(i).crossing;
-                self.calendar.schedule(i as u32, Events { next, crossing });
-            }
-            Worked::Pushed(pushed) if self.untouched_pair(bodies, pushed, entry.scheduled.event) => {
-                self.commit_pushed(bodies, physics, pushed, entry.scheduled.event.time, out);
-            }
-            _ => self.dispatch(bodies, physics, entry, out),
-        }
-    }
-
-    /// True when the contact `event`, which a worker found `pushed` apart, can be handled as it
-    /// found: its bodies have the motions it was predicted from, no cell around either was
-    /// marked in this batch, and the contact rules would not jam them.
-    fn untouched_pair(&self, bodies: &Bodies, pushed: &Pushed, event: Event) -> bool {
-        let [a, b] = pushed.pair;
-        ahead::is_current(bodies, &event)
-            && self.untouched_around(a as usize)
-            && self.untouched_around(b as usize)
-            && !self.impacts.rules.would_jam(a, b, event.time)
-    }
-
-    /// The contact of bodies `pushed.pair` at `t`, handled with what a worker found: what
-    /// [`respond::pair_impact`] and [`Self::pair_contact`] do for two frictionless spheres pushed
-    /// apart, from the same arithmetic on the same motions.
-    fn commit_pushed(&mut self, bodies: &mut Bodies, physics: &Physics, pushed: &Pushed, t: f64, out: &mut Output) {
-        let [a, b] = pushed.pair;
-        let (i, j) = (a as usize, b as usize);
-        let rule = self.impacts.rules.pair(a, b, t, physics.restitution, physics.contact_duration);
-        let Rule::Impulse { restitution, changed } = rule else { unreachable!("checked: the rules do not jam them") };
-        debug_assert_eq!(restitution.to_bits(), pushed.restitution.to_bits());
-        out.stats.tc_contacts += changed as u64;
-        bodies.set_velocity_at(i, t, pushed.velocities[0]);
-        bodies.set_velocity_at(j, t, pushed.velocities[1]);
-        out.stats.pair_virial += pushed.virial;
-        for k in 0..2 {
-            let i = pushed.pair[k] as usize;
-            debug_assert!(
-                ahead::same_bits(&bodies.motion(i), &pushed.motions[k]) && bodies.stamp(i) == pushed.stamps[k]
-            );
-            self.marks.mark(self.cells.cell_of(i));
-            self.calendar.schedule(pushed.pair[k], Events { next: pushed.next[k], crossing: pushed.crossings[k] });
-        }
-        out.stats.retests += 2;
-        out.stats.pair_contacts += 1;
-        let (body, touched) = (bodies.handle(i), Touched::Body(bodies.handle(j)));
-        out.contacts.push(Contact {
-            time: t,
-            body,
-            touched,
-            point: pushed.point,
-            normal: pushed.normal,
-            impulse: pushed.impulse,
-        });
-    }
-
-    /// True when no cell around body `i`'s was marked in this batch.
-    fn untouched_around(&self, i: usize) -> bool {
-        match self.cells.rows_around(i) {
-            Some(rows) => !self.marks.any_in_rows(&rows),
-            None => {
-                let mut untouched = true;
-                self.cells.for_each_around(i, |n| untouched &= !self.marks.is_marked(n.cell));
-                untouched
-            }
-        }
-    }
-
-    /// True when neither body `i`'s cell nor the cells its next crossing brings within reach were
-    /// marked in this batch.
-    fn untouched_crossing(&self, i: usize) -> bool {
-        let crossing = self.calendar.events(i).crossing;
-        let mut untouched = !self.marks.is_marked(self.cells.cell_of(i));
-        self.cells
-            .for_each_new(self.cells.stepped(i, crossing), crossing, |n| untouched &= !self.marks.is_marked(n.cell));
-        untouched
     }
 
     /// Body `i` crosses into the next cell at `t`: it is listed there, and tested against the

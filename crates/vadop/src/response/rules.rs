@@ -96,6 +96,11 @@ impl ContactRules {
         (history.last_contact, history.at_instant) = (f64::NEG_INFINITY, 0);
     }
 
+    /// Body `i`'s history copied from `other`'s.
+    pub(crate) fn copy_history(&mut self, other: &ContactRules, i: usize) {
+        self.history[i] = other.history[i];
+    }
+
     /// The time of body `i`'s last contact (`-inf` before the first, or for a body not held).
     pub(crate) fn last_contact(&self, i: usize) -> f64 {
         self.history.get(i).map_or(f64::NEG_INFINITY, |h| h.last_contact)
