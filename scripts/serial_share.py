@@ -20,7 +20,7 @@ import sys
 
 PARALLEL = ["BroadPhase>::find_pairs", "BroadPhase>::prepare", "ProxyTable::refresh_all",
             "PassedContacts::resolve", "EventQueue::set_bulk", "Workers::extend_ranges",
-            "retest_bounces_ahead"]
+            "retest_bounces_ahead", "PassedContacts::work_out_ahead"]
 
 
 def tree(profile):

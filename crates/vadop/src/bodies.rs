@@ -17,7 +17,7 @@
 
 use crate::frame::Mode;
 use crate::handle::BodyHandle;
-use crate::memory::prefetch;
+use crate::memory::prefetch_item;
 use crate::motion::free_rotation::FreeRotation;
 use crate::motion::hold::without_axes;
 pub use crate::motion::hold::Rest;
@@ -423,11 +423,9 @@ impl Bodies {
     /// hint: nothing changes).
     #[inline]
     pub fn prefetch(&self, i: usize) {
-        if i < self.slots() {
-            prefetch(&self.state[i]);
-            prefetch(&self.tags[i]);
-            prefetch(&self.alive[i]);
-        }
+        prefetch_item(&self.state, i);
+        prefetch_item(&self.tags, i);
+        prefetch_item(&self.alive, i);
     }
 
     /// Mass of body `i` (infinite for a static body).

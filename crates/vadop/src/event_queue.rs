@@ -243,12 +243,26 @@ impl EventQueue {
             workers.sort_unstable(&mut self.bulk);
         }
     }
-    /// The earliest event (valid or not), from whichever part holds it.
+    /// The earliest event (valid or not), and whether the heap holds it (else the bulk part).
     #[inline]
-    fn peek(&self) -> Option<&Event> {
+    fn earliest(&self) -> Option<(Event, bool)> {
         match (self.heap.peek(), self.bulk.last()) {
-            (Some(h), Some(b)) => Some(if h > b { h } else { b }),
-            (h, b) => h.or(b),
+            // Times told apart by one float comparison each way (where they differ as numbers,
+            // `total_cmp` agrees); the whole order only when they do not.
+            (Some(h), Some(b)) if h.time < b.time => Some((*h, true)),
+            (Some(h), Some(b)) if b.time < h.time => Some((*b, false)),
+            (Some(h), Some(b)) => Some(if h > b { (*h, true) } else { (*b, false) }),
+            (Some(h), None) => Some((*h, true)),
+            (None, b) => b.map(|b| (*b, false)),
+        }
+    }
+    /// Drops the earliest event, from the part [`Self::earliest`] said holds it.
+    #[inline]
+    fn remove_earliest(&mut self, from_heap: bool) {
+        if from_heap {
+            self.heap.pop();
+        } else {
+            self.bulk.pop();
         }
     }
     /// The event `ahead` places after the earliest in the bulk part: most events come from there,
@@ -264,47 +278,50 @@ impl EventQueue {
         self.last = None;
     }
     /// Time of the earliest event (valid or not) but repeats of the event popped last, which it
-    /// drops: what [`Self::pop`] returns next is this one.
+    /// drops: what [`Self::pop_before`] returns next is this one.
     #[inline]
     pub fn peek_time(&mut self) -> Option<f64> {
-        while let Some(&event) = self.peek() {
+        while let Some((event, from_heap)) = self.earliest() {
             if !self.is_repeat(&event) {
                 return Some(event.time);
             }
-            self.take();
+            self.remove_earliest(from_heap);
         }
         None
+    }
+    /// Removes and returns the earliest event (valid or not: the caller checks stamps) when its
+    /// time is before `until`, dropping repeats of the event popped before it; leaves it queued
+    /// otherwise. One look at which part holds the earliest event where a peek and then a pop
+    /// took two: the event loop asks this once per event. With the event, the place it held in
+    /// the bulk part (see [`Self::bulk_before`]), or `None` when it was pushed one at a time.
+    #[inline]
+    pub fn pop_before(&mut self, until: f64) -> Option<(Event, Option<usize>)> {
+        loop {
+            let (event, from_heap) = self.earliest()?;
+            let repeat = self.is_repeat(&event);
+            if !repeat && !(event.time < until) {
+                return None;
+            }
+            self.remove_earliest(from_heap);
+            if !repeat {
+                self.last = Some(event);
+                return Some((event, (!from_heap).then_some(self.bulk.len())));
+            }
+        }
+    }
+    /// The bulk part's events with a time before `until`, the next to pop last, and the place of
+    /// the first of them: the bulk part only shrinks from its end until the next window's
+    /// [`Self::take_bulk`], so each keeps its place until it pops, and work done ahead for an
+    /// event can be found by the place [`Self::pop_before`] gives.
+    pub fn bulk_before(&self, until: f64) -> (usize, &[Event]) {
+        let first = self.bulk.partition_point(|event| !(event.time < until));
+        (first, &self.bulk[first..])
     }
     /// True when `event` repeats the event popped last. Times almost never tie: the rest of the
     /// order is only looked at when they do.
     #[inline(always)]
     fn is_repeat(&self, event: &Event) -> bool {
         self.last.as_ref().is_some_and(|last| last.time.to_bits() == event.time.to_bits() && last == event)
-    }
-    /// Removes and returns the earliest event (valid or not: the caller checks stamps), dropping
-    /// repeats of the event popped before it.
-    #[inline]
-    pub fn pop(&mut self) -> Option<Event> {
-        loop {
-            let event = self.take()?;
-            if !self.is_repeat(&event) {
-                self.last = Some(event);
-                return Some(event);
-            }
-        }
-    }
-    /// Removes the earliest event, from whichever part holds it.
-    #[inline]
-    fn take(&mut self) -> Option<Event> {
-        let from_heap = match (self.heap.peek(), self.bulk.last()) {
-            (Some(h), Some(b)) => h > b,
-            (h, _) => h.is_some(),
-        };
-        if from_heap {
-            self.heap.pop()
-        } else {
-            self.bulk.pop()
-        }
     }
     /// Drops every event, keeping the allocation.
     pub fn clear(&mut self) {
@@ -337,7 +354,7 @@ mod tests {
         let mut queue = EventQueue::default();
         queue.push(Event { time: 0.5, body: 3, partner: Partner::Body(7), body_stamp: 0, partner_stamp: 0 });
         queue.push(Event { time: 0.2, body: 1, partner: Partner::Body(2), body_stamp: 0, partner_stamp: 0 });
-        assert_eq!(queue.pop().map(|e| e.body), Some(1));
+        assert_eq!(queue.pop_before(f64::INFINITY).map(|(e, _)| e.body), Some(1));
     }
 
     fn event(time: f64, body: u32, partner: Partner) -> Event {
@@ -351,8 +368,9 @@ mod tests {
         q.push(event(1.0, 4, Partner::Body(9)));
         q.push(event(1.0, 2, Partner::Body(5)));
         q.push(event(0.5, 8, Partner::Body(9)));
-        let order: Vec<(f64, u32, Partner)> =
-            std::iter::from_fn(|| q.pop()).map(|e| (e.time, e.body, e.partner)).collect();
+        let order: Vec<(f64, u32, Partner)> = std::iter::from_fn(|| q.pop_before(f64::INFINITY).map(|(e, _)| e))
+            .map(|e| (e.time, e.body, e.partner))
+            .collect();
         assert_eq!(
             order,
             vec![
@@ -408,12 +426,32 @@ mod tests {
         }
     }
 
+    /// An event popped from the bulk part comes with the place it held there, as
+    /// `bulk_before` numbered it; one pushed on its own comes with none.
+    #[test]
+    fn a_bulk_event_pops_with_its_place() {
+        let mut q = EventQueue::default();
+        let bulk =
+            vec![event(3.0, 1, Partner::Body(2)), event(1.0, 2, Partner::Body(3)), event(2.0, 4, Partner::Body(5))];
+        q.set_bulk(bulk, &Workers::new(1));
+        q.push(event(1.5, 6, Partner::Body(7)));
+        let (first, before) = q.bulk_before(2.5);
+        let times: Vec<f64> = before.iter().map(|e| e.time).collect();
+        assert_eq!((first, times), (1, vec![2.0, 1.0]));
+        let mut popped = std::iter::from_fn(|| q.pop_before(2.5)).map(|(e, place)| (e.time, place));
+        assert_eq!(popped.next(), Some((1.0, Some(2))));
+        assert_eq!(popped.next(), Some((1.5, None)));
+        assert_eq!(popped.next(), Some((2.0, Some(1))));
+        assert_eq!(popped.next(), None);
+        assert_eq!(q.len(), 1);
+    }
+
     #[test]
     fn a_prediction_made_twice_pops_once() {
         let mut q = EventQueue::default();
         q.push(event(1.0, 2, Partner::Body(5)));
         q.push(event(1.0, 2, Partner::Body(5)));
         q.push(Event { body_stamp: 1, ..event(1.0, 2, Partner::Body(5)) });
-        assert_eq!(std::iter::from_fn(|| q.pop()).count(), 2);
+        assert_eq!(std::iter::from_fn(|| q.pop_before(f64::INFINITY).map(|(e, _)| e)).count(), 2);
     }
 }

@@ -24,6 +24,23 @@ pub(crate) fn raised() -> bool {
     FLAG.with(|flag| flag.borrow().as_ref().is_some_and(|f| f.load(Ordering::Relaxed)))
 }
 
+/// The flag of the step this thread works on, read once: a loop that looks at it before every
+/// event then pays an atomic load, not a thread-local lookup each time.
+pub(crate) struct Watch(Option<Arc<AtomicBool>>);
+
+impl Watch {
+    /// The flag of the step this thread works on now (none outside a watched step).
+    pub(crate) fn current() -> Watch {
+        Watch(FLAG.with(|flag| flag.borrow().clone()))
+    }
+
+    /// True when the step was asked to stop (as [`raised`]).
+    #[inline]
+    pub(crate) fn raised(&self) -> bool {
+        self.0.as_ref().is_some_and(|f| f.load(Ordering::Relaxed))
+    }
+}
+
 /// Runs `step` with `flag` visible to the calling thread and every thread of `pool`.
 pub(crate) fn watching<R>(flag: &Arc<AtomicBool>, pool: Option<&rayon::ThreadPool>, step: impl FnOnce() -> R) -> R {
     let set = |value: Option<Arc<AtomicBool>>| FLAG.with(|f| *f.borrow_mut() = value);

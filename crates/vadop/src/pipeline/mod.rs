@@ -250,6 +250,7 @@ impl<B: BroadPhase> Pipeline<B> {
             let until = t1.min(self.window.end);
             let start = Instant::now();
             self.retest_bounces_ahead(bodies, physics, until);
+            self.passed.work_out_ahead(bodies, physics, self.queue.bulk_before(until), &self.workers);
             self.process_events(bodies, physics, until, out);
             out.stats.response_seconds += start.elapsed().as_secs_f64();
             // An interrupted step is undone by the world: the rest of it need not run.
@@ -395,11 +396,11 @@ impl<B: BroadPhase> Pipeline<B> {
 
     /// Pops and handles contacts with a time before `until`; may end the window early.
     fn process_events(&mut self, bodies: &mut Bodies, physics: &Physics, until: f64, out: &mut Output) {
-        while let Some(time) = self.queue.peek_time() {
-            if !(time < until) || crate::interrupt::raised() {
-                break;
-            }
-            let event = self.queue.pop().expect("peeked");
+        let interrupt = crate::interrupt::Watch::current();
+        // No body is added within the loop: its refresh limit is known now.
+        let most_updates = UPDATES_PER_BODY * self.proxies.body_slots().max(64);
+        while !interrupt.raised() {
+            let Some((event, bulk_place)) = self.queue.pop_before(until) else { break };
             // The bodies of an event a few ahead: their records are random memory accesses, and
             // asking early lets them arrive while this one is handled.
             if let Some(next) = self.queue.upcoming(EVENTS_AHEAD) {
@@ -422,7 +423,7 @@ impl<B: BroadPhase> Pipeline<B> {
             match event.partner {
                 Partner::Body(j) => match self.searched_ahead(bodies, physics, &event, until) {
                     Some(searched) => self.pass_through(bodies, physics, &event, searched, out),
-                    None => self.pair_contact(bodies, physics, event.body, j, event.time, out),
+                    None => self.pair_contact(bodies, physics, (event.body, j), event.time, bulk_place, out),
                 },
                 Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
                 Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
@@ -439,7 +440,7 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             // Too many fresh proxies: start afresh at the next event's time, strictly after this
             // one, so nothing already handled is predicted again.
-            if self.updates > UPDATES_PER_BODY * self.proxies.body_slots().max(64) {
+            if self.updates > most_updates {
                 if let Some(next) = self.queue.peek_time() {
                     if next > event.time && next < self.window.end {
                         self.window.end = next;
@@ -449,18 +450,32 @@ impl<B: BroadPhase> Pipeline<B> {
                 }
             }
         }
-        if self.updates * 4 < UPDATES_PER_BODY * self.proxies.body_slots().max(64) {
+        if self.updates * 4 < most_updates {
             self.shrink = (self.shrink * 2.0).min(1.0);
         }
     }
 
-    fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, b: u32, t: f64, out: &mut Output) {
+    /// The contact of bodies `a < b` at `t`, popped valid from place `bulk_place` of the queue's
+    /// bulk part (if it was there).
+    fn pair_contact(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        (a, b): (u32, u32),
+        t: f64,
+        bulk_place: Option<usize>,
+        out: &mut Output,
+    ) {
         let (i, j) = (a as usize, b as usize);
         if bodies.are_spheres(i, j) && passes_through(bodies, physics, i, j) {
-            // Nothing changes: where they touch is worked out at the step's end, on every worker.
-            self.passed.defer(bodies, (a, b), out.contacts.len());
-            let unknown = (DVec3::ZERO, DVec3::ZERO, 0.0);
-            self.report_pair_contact(bodies, physics, (a, b), t, unknown, Resolution::Passed, out);
+            // Nothing changes: where they touch was worked out before the step's events, or is
+            // at its end, on every worker.
+            let (point, normal) = bulk_place.and_then(|place| self.passed.worked_out(place)).unwrap_or_else(|| {
+                self.passed.defer(bodies, (a, b), out.contacts.len());
+                (DVec3::ZERO, DVec3::ZERO)
+            });
+            let contact = pair_record(bodies, (a, b), t, (point, normal, 0.0));
+            self.report_pair_contact(bodies, physics, (a, b), contact, Resolution::Passed, out);
             return;
         }
         let stamps = (bodies.stamp(i), bodies.stamp(j));
@@ -472,7 +487,8 @@ impl<B: BroadPhase> Pipeline<B> {
             let (found, parks, _) = contacts::pair_start_after(bodies, i, j, t, later);
             self.follow_pair((a, stamps.0), (b, stamps.1), found, parks);
         }
-        self.report_pair_contact(bodies, physics, (a, b), t, (point, normal, impulse), resolution, out);
+        let contact = pair_record(bodies, (a, b), t, (point, normal, impulse));
+        self.report_pair_contact(bodies, physics, (a, b), contact, resolution, out);
     }
 
     /// What the search after a contact of bodies `a < b` (each with its stamp) found: their next
@@ -499,46 +515,30 @@ impl<B: BroadPhase> Pipeline<B> {
         let Partner::Body(b) = event.partner else { unreachable!("a pass-through is a pair contact") };
         self.follow_pair((event.body, event.body_stamp), (b, event.partner_stamp), searched.next, searched.parks);
         let (point, normal) = searched.point_normal;
-        self.report_pair_contact(
-            bodies,
-            physics,
-            (event.body, b),
-            event.time,
-            (point, normal, 0.0),
-            Resolution::Passed,
-            out,
-        );
+        let contact = pair_record(bodies, (event.body, b), event.time, (point, normal, 0.0));
+        self.report_pair_contact(bodies, physics, (event.body, b), contact, Resolution::Passed, out);
     }
 
-    /// Reports the contact of bodies `a < b` at `t` (where, its normal and the impulse applied),
-    /// and starts following it to its end when it was passed through with ends reported.
-    #[allow(clippy::too_many_arguments)]
+    /// Reports `contact`, of bodies `a < b` (see [`pair_record`]), and starts following it to its
+    /// end when it was passed through with ends reported.
     fn report_pair_contact(
         &mut self,
         bodies: &Bodies,
         physics: &Physics,
         (a, b): (u32, u32),
-        t: f64,
-        (point, normal, impulse): (DVec3, DVec3, f64),
+        contact: Contact,
         resolution: Resolution,
         out: &mut Output,
     ) {
         out.stats.pair_contacts += 1;
         if physics.report_ends && resolution == Resolution::Passed {
+            let t = contact.time;
             self.touching.insert(a, b, t);
             if let Some(event) = predict_end(bodies, a, b, t, self.window.from(t)) {
                 self.queue.push(event);
             }
         }
-        let (i, j) = (a as usize, b as usize);
-        out.contacts.push(Contact {
-            time: t,
-            body: bodies.handle(i),
-            touched: Touched::Body(bodies.handle(j)),
-            point,
-            normal,
-            impulse,
-        });
+        out.contacts.push(contact);
     }
 
     /// A search that could not decide stopped at `t` with `stuck` (one body and a wall, or two
@@ -632,4 +632,12 @@ impl<B: BroadPhase> Pipeline<B> {
         self.cluster_members = members;
         virial
     }
+}
+
+/// The record of the contact of bodies `a < b` at `t`: where, its normal and the impulse applied.
+#[inline]
+pub(super) fn pair_record(bodies: &Bodies, (a, b): (u32, u32), t: f64, geometry: (DVec3, DVec3, f64)) -> Contact {
+    let (point, normal, impulse) = geometry;
+    let (body, touched) = (bodies.handle(a as usize), Touched::Body(bodies.handle(b as usize)));
+    Contact { time: t, body, touched, point, normal, impulse }
 }

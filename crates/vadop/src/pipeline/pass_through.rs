@@ -57,7 +57,8 @@ impl Searched {
 fn passes_through(bodies: &Bodies, physics: &Physics, event: &Event) -> bool {
     let Partner::Body(j) = event.partner else { return false };
     let (i, j) = (event.body as usize, j as usize);
-    impact::passes_through(bodies, physics, i, j) && !bodies.are_spheres(i, j)
+    // Spheres first: a world of spheres answers with one load.
+    !bodies.are_spheres(i, j) && impact::passes_through(bodies, physics, i, j)
 }
 
 impl<B: BroadPhase> Pipeline<B> {
@@ -95,11 +96,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let limit = AHEAD_PER_WORKER * self.workers.threads();
         // Popping drops repeats of the event popped before (those of `first` too).
         while events.len() < limit {
-            let Some(event) = self.queue.pop() else { break };
-            if !(event.time < until) {
-                self.queue.put_back(event);
-                break;
-            }
+            let Some((event, _)) = self.queue.pop_before(until) else { break };
             events.push(event);
         }
         events.iter().for_each(|&event| self.queue.put_back(event));

@@ -1,16 +1,24 @@
 //! Pair contacts that change nothing: two spheres passing through each other in detect mode.
 //!
 //! It owns when their geometry (where they touch, the normal) is worked out: not in the event
-//! loop, which runs on one thread, but once the step's events are done, by every worker. The
-//! contact is reported in its place at once, with the two paths it happened on kept beside it; a
-//! path copied outlives the bodies' later velocity changes (a wall bounce later in the step), and
-//! each contact's geometry is a function of its own record alone, so the bits are those the event
-//! loop would have computed, for every thread count. It never handles an event.
+//! loop, which runs on one thread, but by every worker, before the step's events for the window
+//! start's predictions and once they are done for the rest. A window start's prediction that
+//! pops valid has its bodies' stamps as they were before the step's events, and every change of
+//! a body's motion bumps its stamp, so the paths it happened on are the paths before the step:
+//! its geometry is worked out then, for every such prediction before the step's end, and the
+//! loop reports it with the contact. Any other such contact (predicted mid-step) is reported
+//! in its place at once, with the two paths it happened on kept beside it; a path copied
+//! outlives the bodies' later velocity changes (a wall bounce later in the step), and each
+//! contact's geometry is a function of its own record alone. Either way the bits are those the
+//! event loop would have computed, for every thread count. It never handles an event.
 
 use crate::bodies::Bodies;
-use crate::frame::Contact;
+use crate::event_queue::{Event, Partner};
+use crate::frame::{Contact, Physics};
 use crate::narrow_phase::contacts::{sphere_pair_geometry, SpherePath};
 use crate::parallel::Workers;
+use crate::response::impact::passes_through;
+use glam::DVec3;
 
 /// A reported contact of spheres `i` and `j` whose geometry is still to be worked out.
 #[derive(Debug, Clone, Copy)]
@@ -28,6 +36,11 @@ struct Pending {
 #[derive(Debug, Default)]
 pub(super) struct PassedContacts {
     pending: Vec<Pending>,
+    /// Where the spheres of the queue's bulk events from place `ahead_first` on touch, and the
+    /// normal, worked out before the step's events (see [`Self::work_out_ahead`]); only the
+    /// places of valid pass-throughs of spheres hold them.
+    ahead: Vec<Option<(DVec3, DVec3)>>,
+    ahead_first: usize,
 }
 
 impl PassedContacts {
@@ -37,6 +50,37 @@ impl PassedContacts {
     pub(super) fn defer(&mut self, bodies: &Bodies, (i, j): (u32, u32), contact: usize) {
         let paths = [SpherePath::of(bodies, i as usize), SpherePath::of(bodies, j as usize)];
         self.pending.push(Pending { contact, i, j, paths });
+    }
+
+    /// Before the step's events: the geometry of each of `events` (the queue's bulk events
+    /// before the step's end, the first at place `first`) that is two spheres passing through
+    /// each other on their current paths, on every worker. Out of line: a profile then tells
+    /// its share apart.
+    #[inline(never)]
+    pub(super) fn work_out_ahead(
+        &mut self,
+        bodies: &Bodies,
+        physics: &Physics,
+        (first, events): (usize, &[Event]),
+        workers: &Workers,
+    ) {
+        self.ahead.clear();
+        self.ahead_first = first;
+        if physics.turns_back(false) || bodies.has_rigid() {
+            // Simulate mode: no two bodies pass through each other. A world with shapes: most
+            // pairs are not two spheres, and the few that are wait for the step's end.
+            return;
+        }
+        workers.extend_ranges(events.len(), &mut self.ahead, |range, ahead| {
+            ahead.extend(events[range].iter().map(|event| passing_geometry(bodies, physics, event)));
+        });
+    }
+
+    /// Where the spheres of the bulk event at `place` touch, and the normal, as worked out ahead:
+    /// for a valid pass-through of two spheres, when the step started with it before its end.
+    #[inline]
+    pub(super) fn worked_out(&self, place: usize) -> Option<(DVec3, DVec3)> {
+        *self.ahead.get(place.checked_sub(self.ahead_first)?)?
     }
 
     /// Works out the pending contacts' geometry into `contacts`, on every worker: each chunk of
@@ -59,5 +103,23 @@ impl PassedContacts {
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
         self.pending.capacity() * std::mem::size_of::<Pending>()
+            + self.ahead.capacity() * std::mem::size_of::<Option<(DVec3, DVec3)>>()
     }
+}
+
+/// Where the spheres of `event` touch on their current paths, and the normal, when it is a valid
+/// contact of two spheres passing through each other (an event void now stays void, and whether
+/// two bodies pass through does not change within a step).
+#[inline]
+fn passing_geometry(bodies: &Bodies, physics: &Physics, event: &Event) -> Option<(DVec3, DVec3)> {
+    let Partner::Body(j) = event.partner else { return None };
+    let (i, j) = (event.body as usize, j as usize);
+    let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp(k) == stamp;
+    let passing = bodies.are_spheres(i, j) && passes_through(bodies, physics, i, j);
+    let valid = current(i, event.body_stamp) && current(j, event.partner_stamp);
+    let paths = || (SpherePath::of(bodies, i), SpherePath::of(bodies, j));
+    (passing && valid).then(|| {
+        let (path_i, path_j) = paths();
+        sphere_pair_geometry(bodies, (i, &path_i), (j, &path_j), event.time)
+    })
 }
