@@ -56,6 +56,7 @@ impl Gauge for PlanePair<'_> {
             far: (height - slack, (-approach).max(0.0)),
             hold: 0.0,
             bend: self.acceleration.dot(n).abs(),
+            parting: false,
         }
     }
 
@@ -247,7 +248,7 @@ impl Gauge for MeshPair<'_> {
                 None => (f64::INFINITY, f64::INFINITY),
             };
         let bend = self.acceleration.length();
-        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0, bend }
+        Probe { lower, upper, shrink: rate, grow: rate, far: NO_FAR, hold: 0.0, bend, parting: false }
     }
 
     /// The body's bounding sphere against the mesh's box, in the mesh's frame (it does not turn):
@@ -380,6 +381,7 @@ impl Gauge for WallGauge<'_> {
             // A hold away from the wall steps a start search only, never a contact's end.
             hold: if measure == Measure::Gap && lower > guard(self.tol) { self.apart(tau, &pose, slack) } else { 0.0 },
             bend: self.pull.abs(),
+            parting: false,
         }
     }
 

@@ -10,6 +10,7 @@ use super::distance::{
 };
 use super::fixed_gauges::{MeshPair, PlanePair};
 use super::inner_balls::{held, InnerBall, ShapeBall};
+use super::parting::parts_for_good;
 use super::scaled::{along, speeding, Body, Scaled};
 use super::{ceiling, cleared, contact_point, ending, guard, starting, ContactPoint, SLACK};
 use crate::narrow_phase::falling::bent_reach;
@@ -44,6 +45,9 @@ pub(super) struct Probe {
     /// relative acceleration along the axes they are taken on (0 on a straight relative motion,
     /// as between two bodies falling under one gravity).
     pub(super) bend: f64,
+    /// The signed distance only grows from this probe on, for good (see
+    /// [`super::parting`]): no contact can follow the one in progress.
+    pub(super) parting: bool,
 }
 
 /// No spin-free bound.
@@ -56,10 +60,21 @@ pub(super) enum Measure {
     Gap,
     /// The signed distance both ways, its depth too when the shapes intersect.
     Depth,
-    /// Within a contact, looking for its end: while the shapes lie deep inside each other only
-    /// an upper bound on the signed distance steps the search, and a cheap one will do. The
-    /// first, cold at the contact's start, is exact: the contact's reported geometry.
-    Contact,
+    /// Within a contact, looking for its end (or for what follows it): while the shapes lie deep
+    /// inside each other only an upper bound on the signed distance steps the search, and a
+    /// cheap one will do. The first, cold at the contact's start, is exact: the contact's
+    /// reported geometry.
+    Contact(Then),
+}
+
+/// What a search through a contact is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Then {
+    /// The contact's end.
+    End,
+    /// The next contact start after it: a probe that shows the pair parting for good (see
+    /// [`super::parting`]) ends the search, and needs no step out of it.
+    NextStart,
 }
 
 /// A contact probe takes the carried upper bound on the signed distance (see
@@ -627,7 +642,7 @@ impl Gauge for ConvexPair<'_> {
         let velocity = self.velocity_at(tau);
         let grow = velocity.length() + self.spin;
         let bend = self.acceleration.length();
-        if measure == Measure::Contact {
+        if matches!(measure, Measure::Contact(_)) {
             if let Some(warm) = self.warm.borrow_mut().as_mut() {
                 let (upper, deepest) = warm.contact_upper((ga, &pose_a), (gb, &pose_b), slack);
                 let room = |upper: f64| 2.0 * self.tol - upper;
@@ -643,7 +658,8 @@ impl Gauge for ConvexPair<'_> {
                     warm.upper = upper.min(warm.upper);
                     warm.hold_inside(tau, point, &pose_a);
                     let hold = self.hold(tau, (ga, &pose_a), (gb, &pose_b), deepest, slide, slack);
-                    return Probe { lower: f64::NEG_INFINITY, upper, shrink: grow, grow, far: NO_FAR, hold, bend };
+                    let lower = f64::NEG_INFINITY;
+                    return Probe { lower, upper, shrink: grow, grow, far: NO_FAR, hold, bend, parting: false };
                 }
             }
         }
@@ -665,7 +681,7 @@ impl Gauge for ConvexPair<'_> {
             // A contact's end search starts cold at the contact's start, where the caller reports
             // where the shapes touch: one exact measure serves both (the slack then added, as a
             // probe's bounds must hold it).
-            None if measure == Measure::Contact => {
+            None if matches!(measure, Measure::Contact(_)) => {
                 let exact = self.exact_bounds((&pose_a, &pose_b));
                 if self.measured.get().is_none() {
                     self.measured.set(Some((tau, self.contact_point(tau, (&pose_a, &pose_b), exact))));
@@ -689,9 +705,14 @@ impl Gauge for ConvexPair<'_> {
         // neither the certificate nor the spin-free bound could step it farther; most pairs a
         // broad phase reports that never touch end on such a probe, often their first.
         let receding = gap && bend == 0.0 && shrink <= 0.0 && bounds.lower > guard(self.tol);
+        let in_contact = matches!(measure, Measure::Contact(_)) && !(bounds.lower > cleared(self.tol));
+        let parting = in_contact
+            && measure == Measure::Contact(Then::NextStart)
+            && parts_for_good(self, (&pose_a, &pose_b), &bounds, slack);
         let hold = match (measure, bounds.witness) {
-            // A contact whose end this probe finds needs no step out of it.
-            (Measure::Contact, Some((x, y))) if !(bounds.lower > cleared(self.tol)) => {
+            // A contact whose end this probe finds needs no step out of it, nor one that parts
+            // for good from here when only what follows it is asked.
+            (_, Some((x, y))) if in_contact && !parting => {
                 self.hold(tau, (ga, &pose_a), (gb, &pose_b), Deepest::Witnesses(x, y), slide, slack)
             }
             (Measure::Gap, _) if bounds.lower > guard(self.tol) && !receding => {
@@ -708,6 +729,7 @@ impl Gauge for ConvexPair<'_> {
             far: if gap && !receding { self.far(tau, (ga, &pose_a), (gb, &pose_b), slack) } else { NO_FAR },
             hold,
             bend,
+            parting,
         }
     }
 

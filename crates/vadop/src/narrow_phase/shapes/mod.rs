@@ -177,6 +177,7 @@ mod fixed_gauges;
 mod gauges;
 mod gjk;
 mod inner_balls;
+mod parting;
 mod scaled;
 mod searcher;
 mod walls;
@@ -897,8 +898,9 @@ mod tests {
     }
 
     /// A spinning pair that leaves along the ending probe's axis faster than turning can close
-    /// it touches no more: the search after its contact stops at the end's probe, with no probe
-    /// of a start search after it.
+    /// it touches no more: the search after its contact stops at the end's probe at the latest
+    /// (earlier where a probe shows the pair parting for good, see [`parting`]), with no probe of
+    /// a start search after it.
     #[test]
     fn a_fast_pass_through_of_spinning_shapes_ends_the_search_at_its_end() {
         use crate::motion::FreeRotation;
@@ -918,7 +920,7 @@ mod tests {
         assert_eq!(after.first_start_after(start, window).unwrap(), None);
         let mut end = pair_searcher(a, b).unwrap().unwrap();
         assert!(end.end_of(start, window.end).unwrap().is_some());
-        assert_eq!(after.probes(), end.probes(), "the end's probes and no more");
+        assert!(after.probes() <= end.probes(), "the end's probes and no more");
         assert_eq!(after.parked, Some(Parked::DONE));
         // The search from the reference agrees, past the contact's start.
         assert_eq!(shape_contact_time(a, b, Window::new(start.next_up(), 10.0)).unwrap(), None);

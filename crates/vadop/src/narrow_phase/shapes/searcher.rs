@@ -2,7 +2,7 @@
 //! contact start and end it finds, with the restart points, the budgets and the termination guard
 //! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
 
-use super::gauges::{Gauge, Measure, Probe, Reach};
+use super::gauges::{Gauge, Measure, Probe, Reach, Then};
 use super::{ceiling, cleared, ending, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
 use crate::error::{Result, VadopError};
 use crate::window::Window;
@@ -171,8 +171,12 @@ impl<G: Gauge> Searcher<G> {
         }
     }
 
-    /// The end of the contact in progress at `tau`, before absolute time `end`.
-    pub(super) fn contact_end(&mut self, mut tau: f64, end: f64) -> Result<Option<End>> {
+    /// The end of the contact in progress at `tau`, before absolute time `end`. A search for
+    /// what follows the contact ([`Then::NextStart`]) stops, the chain done, at a probe from
+    /// which the distance only grows for good: nothing can follow, and where exactly the contact
+    /// ends does not matter. The answers are the same: the search for the end would have found
+    /// no start after it.
+    pub(super) fn contact_end(&mut self, mut tau: f64, end: f64, then: Then) -> Result<Option<End>> {
         if self.gauge.translating() {
             return match self.translating_end(tau)? {
                 // Their distance is convex in time: once it has grown past the band, it only grows.
@@ -196,7 +200,10 @@ impl<G: Gauge> Searcher<G> {
                 // The bounding volumes have parted: more than `2 tol` apart.
                 return Ok(Some(End { tau, last: true }));
             }
-            let p = self.probe(tau, Measure::Contact)?;
+            let p = self.probe(tau, Measure::Contact(then))?;
+            if p.parting {
+                return Ok(self.done());
+            }
             if p.lower > self.clear() {
                 // Leaving along an axis faster than turning can bring the surfaces back along it
                 // (a pair passing through another at speed): no start can follow, and the start
@@ -368,7 +375,7 @@ impl<G: Gauge> Searcher<G> {
     pub(super) fn resume(&mut self, parked: Parked, spent: u32, window: Window) -> Result<Option<f64>> {
         (self.iterations, self.restarted, self.carried) = (spent, 0, spent);
         let tau = if parked.in_contact {
-            let end = self.contact_end(parked.tau, window.end)?;
+            let end = self.contact_end(parked.tau, window.end, Then::NextStart)?;
             match self.past(end) {
                 Some(tau) => tau,
                 None => return Ok(None),
@@ -402,7 +409,7 @@ impl<G: Gauge> Searcher<G> {
             return Ok(self.done());
         }
         let tau = self.restart_at(start);
-        let end = self.contact_end(tau, until)?;
+        let end = self.contact_end(tau, until, Then::NextStart)?;
         Ok(self.past(end))
     }
 
@@ -429,7 +436,7 @@ impl<G: Gauge> Searcher<G> {
     /// holds), before `until`.
     pub(super) fn end_of(&mut self, start: f64, until: f64) -> Result<Option<f64>> {
         let tau = self.restart_at(start);
-        Ok(self.contact_end(tau, until)?.map(|end| end.tau))
+        Ok(self.contact_end(tau, until, Then::End)?.map(|end| end.tau))
     }
 
     /// The end, before `until`, of the contact in progress at absolute time `at`, found by
@@ -443,7 +450,7 @@ impl<G: Gauge> Searcher<G> {
             let end = match self.classify(p0, deep_is_contact)? {
                 AtReference::Approaching | AtReference::Inside => {
                     let tau = self.restart_at(self.reference);
-                    self.contact_end(tau, until)?
+                    self.contact_end(tau, until, Then::End)?
                 }
                 AtReference::Ended(end) => Some(End { tau: end, last: false }),
                 AtReference::Resting => None,
@@ -458,7 +465,7 @@ impl<G: Gauge> Searcher<G> {
         let before = at.next_up();
         while let Some(start) = self.next_start(tau, before)? {
             let start = self.restart_at(self.reference + start);
-            match self.contact_end(start, until)? {
+            match self.contact_end(start, until, Then::End)? {
                 Some(end) if self.reference + end.tau > at => return Ok(Some(end.tau)),
                 Some(End { last: true, .. }) => break,
                 Some(end) => tau = self.restart_at(self.reference + end.tau),
