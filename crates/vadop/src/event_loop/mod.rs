@@ -62,8 +62,11 @@ use std::time::Instant;
 /// n = 10^5, per pair collision, at packing 0.05 and 0.2 the commit (with taking the next batch)
 /// executes 7.2 k and 3.2 k instructions, the workers 10.6 k and 9.1 k, the mirror's upkeep 1.5 k
 /// and 0.5 k, where the serial loop executes 15.3 k and 10.7 k in all: 2 threads are bounded to
-/// 1.47x and 1.60x before the batches' hand-offs.
-const AHEAD_THREADS: usize = 2;
+/// 1.47x and 1.60x before the batches' hand-offs. Timed (five pairs of runs, one thread pinned
+/// against two, BENCHMARKS.md's fifteenth session) 2 threads gave 0.91x at packing 0.05 and 1.18x
+/// at 0.2: the hand-offs cost more than the bound leaves in a thin gas, so 2 threads keep the
+/// serial loop until they pay at every packing.
+const AHEAD_THREADS: usize = 3;
 /// The parallel loop's threshold where the serial loop keeps neighbour lists (a dense world, see
 /// [`Lists::paying`]): the parallel loop keeps cells, and at packing 0.4 its workers alone execute
 /// 12.3 k instructions per collision against the serial loop's 9.1 k with lists, which bounds 2
