@@ -440,6 +440,13 @@ impl Bodies {
         self.tags[i].stamp
     }
 
+    /// True when body `i` is live with `stamp`: a prediction stamped so was made from its
+    /// present motion.
+    #[inline]
+    pub fn has_stamp(&self, i: usize, stamp: u32) -> bool {
+        self.alive[i] && self.stamp(i) == stamp
+    }
+
     /// Of live slot `i`, its body's generation; of a removed one, its next body's.
     #[inline]
     pub(crate) fn generation(&self, i: usize) -> u32 {

@@ -11,6 +11,7 @@
 //! the repeat is dropped, so no contact is ever reported twice. It never computes contacts or
 //! changes bodies.
 
+use crate::bodies::Bodies;
 use crate::parallel::Workers;
 use crate::walls::Wall;
 use std::cmp::Ordering;
@@ -72,6 +73,18 @@ pub struct Event {
 }
 
 impl Event {
+    /// True when the bodies of this event still have the motions it was predicted from.
+    #[inline]
+    pub fn is_current(&self, bodies: &Bodies) -> bool {
+        bodies.has_stamp(self.body as usize, self.body_stamp)
+            && match self.partner {
+                Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) => {
+                    bodies.has_stamp(j as usize, self.partner_stamp)
+                }
+                Partner::Wall(_) | Partner::WallStalled | Partner::Cross(_) | Partner::Renew => true,
+            }
+    }
+
     #[inline]
     fn order(&self, other: &Self) -> Ordering {
         // Lazily: times almost never tie, and the rest is only worked out when they do.

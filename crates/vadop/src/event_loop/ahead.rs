@@ -141,7 +141,7 @@ impl Seen<'_> {
             Worked::Crossed { next, crossing: self.cells.next_crossing_from(&self.bodies.motion(owner), into.0, time) }
         } else {
             let event = entry.scheduled.event;
-            match (is_current(self.bodies, &event), event.partner) {
+            match (event.is_current(self.bodies), event.partner) {
                 (false, _) => Worked::Voided { next: search.next_event(owner, time, Eligible::After(event)) },
                 (true, Partner::Body(b)) => self.pushed(&mut search, event.body, b, time),
                 (true, _) => Worked::Nothing,
@@ -190,17 +190,6 @@ impl Seen<'_> {
             crossings,
         })
     }
-}
-
-/// True when the bodies of `event` still have the motions it was predicted from.
-#[inline]
-pub(super) fn is_current(bodies: &Bodies, event: &Event) -> bool {
-    let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp(k) == stamp;
-    let partner_current = match event.partner {
-        Partner::Body(j) => current(j as usize, event.partner_stamp),
-        _ => true,
-    };
-    current(event.body as usize, event.body_stamp) && partner_current
 }
 
 /// True when `second`, the entry after `first` in the calendar's order, is the same contact held

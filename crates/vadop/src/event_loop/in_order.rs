@@ -199,7 +199,7 @@ impl EventLoop {
     /// marked since the world the workers read, and the contact rules would not jam them.
     fn untouched_pair(&self, bodies: &Bodies, pushed: &Pushed, event: Event) -> bool {
         let [a, b] = pushed.pair;
-        ahead::is_current(bodies, &event)
+        event.is_current(bodies)
             && self.untouched_around(a as usize)
             && self.untouched_around(b as usize)
             && !self.impacts.rules.would_jam(a, b, event.time)

@@ -493,7 +493,7 @@ impl EventLoop {
     /// it was predicted from; otherwise `owner`'s events after it are found again.
     fn handle(&mut self, bodies: &mut Bodies, physics: &Physics, owner: usize, event: Event, out: &mut Output) {
         let i = event.body as usize;
-        if !ahead::is_current(bodies, &event) {
+        if !event.is_current(bodies) {
             out.stats.invalidations += 1;
             self.predict(bodies, owner, event.time, Eligible::After(event), out.stats);
             return;

@@ -409,14 +409,8 @@ impl<B: BroadPhase> Pipeline<B> {
                     bodies.prefetch(j as usize);
                 }
             }
-            let partner_current = match event.partner {
-                Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) => {
-                    bodies.alive[j as usize] && bodies.stamp(j as usize) == event.partner_stamp
-                }
-                Partner::Wall(_) | Partner::WallStalled | Partner::Cross(_) | Partner::Renew => true,
-            };
             let i = event.body as usize;
-            if !(bodies.alive[i] && bodies.stamp(i) == event.body_stamp && partner_current) {
+            if !event.is_current(bodies) {
                 out.stats.invalidations += 1;
                 continue;
             }

@@ -100,12 +100,11 @@ impl<B: BroadPhase> Pipeline<B> {
             events.push(event);
         }
         events.iter().for_each(|&event| self.queue.put_back(event));
-        let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp(k) == stamp;
         let ahead = &self.ahead;
         events.retain(|event| {
-            let Partner::Body(j) = event.partner else { return false };
-            let valid = current(event.body as usize, event.body_stamp) && current(j as usize, event.partner_stamp);
-            valid && passes_through(bodies, physics, event) && !ahead.iter().any(|s| s.event == *event)
+            event.is_current(bodies)
+                && passes_through(bodies, physics, event)
+                && !ahead.iter().any(|s| s.event == *event)
         });
         events.insert(0, first);
         let (window, mut searched) = (self.window, std::mem::take(&mut self.searched));

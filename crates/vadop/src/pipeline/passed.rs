@@ -114,12 +114,9 @@ impl PassedContacts {
 fn passing_geometry(bodies: &Bodies, physics: &Physics, event: &Event) -> Option<(DVec3, DVec3)> {
     let Partner::Body(j) = event.partner else { return None };
     let (i, j) = (event.body as usize, j as usize);
-    let current = |k: usize, stamp: u32| bodies.alive[k] && bodies.stamp(k) == stamp;
     let passing = bodies.are_spheres(i, j) && passes_through(bodies, physics, i, j);
-    let valid = current(i, event.body_stamp) && current(j, event.partner_stamp);
-    let paths = || (SpherePath::of(bodies, i), SpherePath::of(bodies, j));
-    (passing && valid).then(|| {
-        let (path_i, path_j) = paths();
+    (passing && event.is_current(bodies)).then(|| {
+        let (path_i, path_j) = (SpherePath::of(bodies, i), SpherePath::of(bodies, j));
         sphere_pair_geometry(bodies, (i, &path_i), (j, &path_j), event.time)
     })
 }
