@@ -16,7 +16,8 @@
 //! Along any axis n the separation is at most `n.(y - x) - r_a - r_b` for balls of radii r about
 //! x in a and y in b, whose largest over the closing axes has a closed form: the balls about the
 //! shapes' middles, and balls about the witness points moved into their shapes along the relative
-//! motion (a's behind, b's ahead), where a pair passing through still overlaps along it.
+//! motion (a's behind, b's ahead), where a pair passing through still overlaps along it, or along
+//! the bound's axis, where a grazing pass leaves a shape at a corner along the motion.
 //!
 //! It owns that certificate only: it never chooses a probe time and never measures a distance.
 
@@ -56,12 +57,14 @@ pub(super) fn parts_for_good(pair: &ConvexPair, (pose_a, pose_b): (&Pose, &Pose)
     }
     let Some((x, y)) = bounds.witness else { return false };
     let (ga, gb) = &pair.shapes;
-    WITNESS_REACHES.iter().any(|reach| {
-        let reach = reach * bounds.lower.abs().max(pair.tol);
-        let (x, y) = (x - heading * reach, y + heading * reach);
-        let (depth_a, depth_b) =
-            (ga.depth_only(pose_a.inverse_transform_point(x)), gb.depth_only(pose_b.inverse_transform_point(y)));
-        depth_a > 0.0 && depth_b > 0.0 && below(widest(y - x) - depth_a - depth_b)
+    [heading, bounds.axis].into_iter().any(|inward| {
+        WITNESS_REACHES.iter().any(|reach| {
+            let reach = reach * bounds.lower.abs().max(pair.tol);
+            let (x, y) = (x - inward * reach, y + inward * reach);
+            let (depth_a, depth_b) =
+                (ga.depth_only(pose_a.inverse_transform_point(x)), gb.depth_only(pose_b.inverse_transform_point(y)));
+            depth_a > 0.0 && depth_b > 0.0 && below(widest(y - x) - depth_a - depth_b)
+        })
     })
 }
 
