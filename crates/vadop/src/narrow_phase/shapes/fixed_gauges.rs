@@ -5,7 +5,8 @@
 
 use super::chord::{wall_hold, Moving};
 use super::distance::{convex_bounds, Bounds, Need, PROBE_DEPTH_SHARE};
-use super::gauges::{Gauge, Measure, Probe, Reach, Warm, NO_FAR};
+use super::gauges::{Gauge, Measure, Probe, Warm, NO_FAR};
+use super::reach::Reach;
 use super::scaled::{along, speeding, Body, Scaled};
 use super::{guard, starting, SLACK};
 use glam::DVec3;

@@ -2,7 +2,8 @@
 //! contact start and end it finds, with the restart points, the budgets and the termination guard
 //! of the module doc. It owns the stepping only; what is measured at a probe is the gauge's.
 
-use super::gauges::{Gauge, Measure, Probe, Reach, Then};
+use super::gauges::{Gauge, Measure, Probe, Then};
+use super::reach::Reach;
 use super::{ceiling, cleared, ending, guard, MARGIN, MAX_ITERATIONS, RESTING_BUDGET};
 use crate::error::{Result, VadopError};
 use crate::window::Window;
