@@ -84,7 +84,8 @@ impl PassedContacts {
     }
 
     /// Works out the pending contacts' geometry into `contacts`, on every worker: each chunk of
-    /// the contacts fills its own pending ones.
+    /// the contacts fills its own pending ones. Out of line: a profile then tells its share apart.
+    #[inline(never)]
     pub(super) fn resolve(&mut self, bodies: &Bodies, contacts: &mut [Contact], workers: &Workers) {
         let Some(first) = self.pending.first().map(|p| p.contact) else { return };
         let pending = &self.pending;
