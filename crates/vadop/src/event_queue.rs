@@ -123,10 +123,14 @@ impl Ord for Event {
 }
 
 /// Min-heap of events by time, with deterministic ties.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct EventQueue {
     /// Events pushed one at a time.
     heap: BinaryHeap<Event>,
+    /// The time of the heap's earliest event, infinite when it is empty (NaN when that time is
+    /// NaN): kept as events are pushed and popped, so that a bulk event strictly before it is
+    /// known to be the earliest without a look into the heap (see [`EventQueue::pop_before`]).
+    heap_earliest: f64,
     /// Events predicted all at once (a window's start), sorted latest first and popped from the
     /// end: one sort is cheaper than as many heap pushes, and most never move again.
     bulk: Vec<Event>,
@@ -134,6 +138,18 @@ pub struct EventQueue {
     last: Option<Event>,
     /// Buffers of the bulk part's radix sort, reused window after window.
     radix: RadixBuffers,
+}
+
+impl Default for EventQueue {
+    fn default() -> Self {
+        EventQueue {
+            heap: BinaryHeap::new(),
+            heap_earliest: f64::INFINITY,
+            bulk: Vec::new(),
+            last: None,
+            radix: RadixBuffers::default(),
+        }
+    }
 }
 
 /// Below this many events the bulk part is sorted by comparisons: a radix pass costs its bins.
@@ -235,6 +251,11 @@ impl EventQueue {
     /// Adds a predicted contact.
     #[inline]
     pub fn push(&mut self, event: Event) {
+        // A NaN time stays until the heap's next pop tells the earliest again: no bulk event is
+        // taken as before it meanwhile.
+        if event.time < self.heap_earliest || event.time.is_nan() {
+            self.heap_earliest = event.time;
+        }
         self.heap.push(event);
     }
     /// Empties the queue and hands over the bulk part's storage, to be filled with the next
@@ -274,6 +295,7 @@ impl EventQueue {
     fn remove_earliest(&mut self, from_heap: bool) {
         if from_heap {
             self.heap.pop();
+            self.heap_earliest = self.heap.peek().map_or(f64::INFINITY, |event| event.time);
         } else {
             self.bulk.pop();
         }
@@ -286,7 +308,7 @@ impl EventQueue {
     }
     /// Puts back an event popped but not handled: it pops again in its order.
     pub fn put_back(&mut self, event: Event) {
-        self.heap.push(event);
+        self.push(event);
         // It is not a repeat of itself.
         self.last = None;
     }
@@ -309,6 +331,22 @@ impl EventQueue {
     /// the bulk part (see [`Self::bulk_before`]), or `None` when it was pushed one at a time.
     #[inline]
     pub fn pop_before(&mut self, until: f64) -> Option<(Event, Option<usize>)> {
+        // Most events are the bulk part's, popped in order between the heap's few: one strictly
+        // before the heap's earliest time is the earliest, told by two float comparisons (a NaN
+        // on either side fails them, and the general way below decides).
+        if let Some(&event) = self.bulk.last() {
+            if event.time < self.heap_earliest && event.time < until && !self.is_repeat(&event) {
+                let place = self.bulk.len() - 1;
+                self.bulk.truncate(place);
+                self.last = Some(event);
+                return Some((event, Some(place)));
+            }
+        }
+        self.pop_earliest_before(until)
+    }
+    /// [`Self::pop_before`] in general: from either part, repeats dropped, ties broken by the
+    /// whole order.
+    fn pop_earliest_before(&mut self, until: f64) -> Option<(Event, Option<usize>)> {
         loop {
             let (event, from_heap) = self.earliest()?;
             let repeat = self.is_repeat(&event);
@@ -339,6 +377,7 @@ impl EventQueue {
     /// Drops every event, keeping the allocation.
     pub fn clear(&mut self) {
         self.heap.clear();
+        self.heap_earliest = f64::INFINITY;
         self.bulk.clear();
         self.last = None;
     }
@@ -457,6 +496,27 @@ mod tests {
         assert_eq!(popped.next(), Some((2.0, Some(1))));
         assert_eq!(popped.next(), None);
         assert_eq!(q.len(), 1);
+    }
+
+    /// Events pushed between the bulk part's pops come out in their place: before a bulk event
+    /// they precede, by the rest of the order on a tie, and after the heap's earliest is popped
+    /// the bulk part's next is taken from the heap's next earliest again.
+    #[test]
+    fn pushes_between_bulk_pops_keep_the_order() {
+        let mut q = EventQueue::default();
+        let bulk =
+            vec![event(3.0, 5, Partner::Body(6)), event(2.0, 5, Partner::Body(6)), event(1.0, 5, Partner::Body(6))];
+        q.set_bulk(bulk, &Workers::new(1));
+        let mut order = vec![q.pop_before(10.0).map(|(e, _)| (e.time, e.body))];
+        q.push(event(1.5, 7, Partner::Body(8)));
+        q.push(event(2.0, 1, Partner::Body(8)));
+        q.push(event(2.5, 9, Partner::Body(10)));
+        order.extend(std::iter::from_fn(|| q.pop_before(2.75)).map(|(e, _)| Some((e.time, e.body))));
+        let expected = [(1.0, 5), (1.5, 7), (2.0, 1), (2.0, 5), (2.5, 9)].map(Some);
+        assert_eq!(order, expected);
+        q.push(event(f64::NAN, 2, Partner::Body(3)));
+        assert_eq!(q.pop_before(10.0).map(|(e, _)| e.time), Some(3.0));
+        assert!(q.pop_before(10.0).is_none(), "a NaN time is never before the step's end");
     }
 
     #[test]

@@ -322,6 +322,13 @@ impl ProxyTable {
         self.live.get(i).copied().unwrap_or(false)
     }
 
+    /// How many of the first `slots` slots (the bodies': the ghosts' follow) are live: one pass
+    /// over the flags, which the compiler vectorises (a window's start asks it, on one thread,
+    /// where a look per slot cost 4 instructions a body).
+    pub fn live_count(&self, slots: usize) -> usize {
+        self.live[..slots.min(self.live.len())].iter().filter(|&&live| live).count()
+    }
+
     /// True when a broad-phase entry of body `i` made with `stamp` is current. One load: a
     /// removed body's stamp has moved on (see [`Self::remove`]), so liveness needs no check of
     /// its own, and a query's stale-entry test costs one memory access instead of two. An entry

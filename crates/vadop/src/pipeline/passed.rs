@@ -79,12 +79,14 @@ impl PassedContacts {
     /// Where the spheres of the bulk event at `place` touch, and the normal, as worked out ahead:
     /// for a valid pass-through of two spheres, when the step started with it before its end.
     #[inline]
-    pub(super) fn worked_out(&self, place: usize) -> Option<(DVec3, DVec3)> {
-        *self.ahead.get(place.checked_sub(self.ahead_first)?)?
+    pub(super) fn worked_out(&self, place: usize) -> Option<&(DVec3, DVec3)> {
+        // A place before the first wraps past the end.
+        self.ahead.get(place.wrapping_sub(self.ahead_first))?.as_ref()
     }
 
     /// Works out the pending contacts' geometry into `contacts`, on every worker: each chunk of
-    /// the contacts fills its own pending ones.
+    /// the contacts fills its own pending ones. Out of line: a profile then tells its share apart.
+    #[inline(never)]
     pub(super) fn resolve(&mut self, bodies: &Bodies, contacts: &mut [Contact], workers: &Workers) {
         let Some(first) = self.pending.first().map(|p| p.contact) else { return };
         let pending = &self.pending;
