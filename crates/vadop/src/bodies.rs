@@ -441,10 +441,14 @@ impl Bodies {
     }
 
     /// True when body `i` is live with `stamp`: a prediction stamped so was made from its
-    /// present motion.
+    /// present motion. The stamp alone tells: predictions are made of live bodies only, and a
+    /// removal renews the stamp, so no prediction holds a removed body's stamp; `alive` (a line
+    /// of its own) is not read on the event loop's every check.
     #[inline]
     pub fn has_stamp(&self, i: usize, stamp: u32) -> bool {
-        self.alive[i] && self.stamp(i) == stamp
+        let current = self.stamp(i) == stamp;
+        debug_assert!(!current || self.alive[i], "a prediction holds removed body {i}'s stamp");
+        current
     }
 
     /// Of live slot `i`, its body's generation; of a removed one, its next body's.

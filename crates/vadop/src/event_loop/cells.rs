@@ -6,7 +6,7 @@
 //! bodies, so moving a body costs O(1) and nothing is allocated while stepping; with neighbour
 //! lists, see [`super::lists`], a body is listed by its shell's centre instead, in cells wider
 //! by two shells, and has no crossings) with a bit per cell that tells an empty cell without
-//! reading its list's head, a body's
+//! reading its list's head and one that tells a cell of one body without reading past it, a body's
 //! neighbourhood (the 27 cells around its own, or the 9 it has just come within reach of) with
 //! the whole sides that bring each neighbour cell's bodies to their nearest image across periodic
 //! faces, and the crossing times. Two bodies that touch are always in neighbouring cells, so a
@@ -91,6 +91,10 @@ pub(super) struct Cells {
     /// a cell's head: in a thin gas most cells are empty, and the heads (4 bytes a cell) outgrow
     /// the caches where the bits (one a cell) do not, so an empty cell costs no cache miss.
     occupied: Vec<u64>,
+    /// Per cell, one bit: it holds more than one body. A search that finds it clear takes the
+    /// head for the cell's only body and does not read that body's place in the lists for a
+    /// next one: in a thin gas most occupied cells hold one body, and each such read is a miss.
+    crowded: Vec<u64>,
     /// Per body: its place in the lists (see [`Listing`]).
     listing: Vec<Listing>,
 }
@@ -158,6 +162,7 @@ impl Cells {
             reach,
             head: vec![NONE; total],
             occupied: vec![0; total.div_ceil(64)],
+            crowded: vec![0; total.div_ceil(64)],
             listing: Vec::new(),
         }
     }
@@ -170,7 +175,7 @@ impl Cells {
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
         self.head.capacity() * 4
-            + self.occupied.capacity() * 8
+            + (self.occupied.capacity() + self.crowded.capacity()) * 8
             + self.listing.capacity() * std::mem::size_of::<Listing>()
     }
 
@@ -280,6 +285,7 @@ impl Cells {
         self.listing[i] = Listing { next: first, prev: NONE, cell, at: at.map(|c| c as u16) };
         if first != NONE {
             self.listing[first as usize].prev = i as u32;
+            self.crowded[cell as usize / 64] |= 1 << (cell % 64);
         } else {
             self.occupied[cell as usize / 64] |= 1 << (cell % 64);
         }
@@ -288,6 +294,16 @@ impl Cells {
 
     fn unlink(&mut self, i: usize) {
         let Listing { next, prev, cell, .. } = self.listing[i];
+        // One body left: `i` was the head and its next is the last, or `i` was the last and its
+        // previous the head (lines the unlinking writes anyway).
+        let one_left = if prev == NONE {
+            next != NONE && self.listing[next as usize].next == NONE
+        } else {
+            next == NONE && self.listing[prev as usize].prev == NONE
+        };
+        if one_left {
+            self.crowded[cell as usize / 64] &= !(1 << (cell % 64));
+        }
         if prev == NONE {
             self.head[cell as usize] = next;
             if next == NONE {
@@ -306,6 +322,12 @@ impl Cells {
     #[inline]
     pub(super) fn first(&self, cell: u32) -> u32 {
         self.head[cell as usize]
+    }
+
+    /// True when cell `cell` holds more than one body (see [`Self::crowded`]).
+    #[inline(always)]
+    pub(super) fn is_crowded(&self, cell: u32) -> bool {
+        self.crowded[cell as usize / 64] & (1 << (cell % 64)) != 0
     }
 
     /// True when cell `cell` holds a body (see [`Self::occupied`]).
@@ -333,6 +355,7 @@ impl Cells {
         let (c, word, bit) = (cell as usize, cell as usize / 64, 1u64 << (cell % 64));
         self.head[c] = other.head[c];
         self.occupied[word] = (self.occupied[word] & !bit) | (other.occupied[word] & bit);
+        self.crowded[word] = (self.crowded[word] & !bit) | (other.crowded[word] & bit);
         let mut q = other.head[c];
         while q != NONE {
             self.listing[q as usize] = other.listing[q as usize];
@@ -346,6 +369,7 @@ impl Cells {
         let place = |l: &Listing| (l.next, l.prev, l.cell, l.at);
         self.head == other.head
             && self.occupied == other.occupied
+            && self.crowded == other.crowded
             && self.listing.iter().map(place).eq(other.listing.iter().map(place))
     }
 

@@ -218,7 +218,7 @@ impl<'a> Search<'a> {
                     while occupied != 0 {
                         let cell = first as u32 + occupied.trailing_zeros();
                         occupied &= occupied - 1;
-                        self.gather_list(own.p, cells.first(cell), 0);
+                        self.gather_list(own.p, cell, 0);
                     }
                 }
             }
@@ -330,16 +330,16 @@ impl<'a> Search<'a> {
         self.near.origins[k] = own.position - n.shift;
         self.near.shifts[k] = n.shift;
         self.near.cells += 1;
-        self.gather_list(own.p, self.cells.first(n.cell), k as u8);
+        self.gather_list(own.p, n.cell, k as u8);
     }
 
-    /// [`Self::gather`] of the cell whose first body is `first`, its shift the `k`-th of the
-    /// neighbourhood's.
+    /// [`Self::gather`] of cell `cell`, its shift the `k`-th of the neighbourhood's. A cell
+    /// that is not crowded holds its head alone, whose place in the lists is then not read.
     /// A body of the overlay met this way waits aside (see [`Self::screen_all`]).
     #[inline(always)]
-    fn gather_list(&mut self, p: usize, first: u32, k: u8) {
+    fn gather_list(&mut self, p: usize, cell: u32, k: u8) {
         let (cells, states) = (self.cells, &self.bodies.state[..]);
-        let mut q = first;
+        let (mut q, crowded) = (cells.first(cell), cells.is_crowded(cell));
         while q != NONE {
             if q as usize != p {
                 if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
@@ -349,7 +349,7 @@ impl<'a> Search<'a> {
                     self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
                 }
             }
-            q = cells.after(q);
+            q = if crowded { cells.after(q) } else { NONE };
         }
     }
 
