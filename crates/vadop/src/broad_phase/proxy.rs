@@ -404,6 +404,15 @@ impl ProxyTable {
         self.enter_made(i, bodies, made);
     }
 
+    /// Counts body `i` among the live ones without a proxy yet: added when no window is under
+    /// way, it gets its proxy and ghosts with every other body's at the next window's start (see
+    /// [`Self::refresh_all`]). Entered now, a body of a periodic box could fall past the ended
+    /// window's ghost slots or be wider than its ghosts were sized for.
+    pub fn admit(&mut self, i: usize, bodies: &Bodies) {
+        self.resize(bodies.slots());
+        self.live[i] = true;
+    }
+
     /// The proxy and flags body `i` would get on entering at `t` with `motion` instead of its
     /// own, to the bit: what [`Self::enter_made`] takes once the body moves so.
     pub fn made_ahead(&self, i: usize, bodies: &Bodies, motion: &Motion, t: f64) -> (Span, u8) {

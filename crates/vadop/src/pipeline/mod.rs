@@ -220,7 +220,8 @@ impl<B: BroadPhase> Pipeline<B> {
         if self.window.end > t {
             self.retest(i, None, bodies, physics, t, stats);
         } else {
-            self.proxies.enter(i as usize, bodies, t);
+            // The next step starts a window, which makes every live body's proxy and ghosts.
+            self.proxies.admit(i as usize, bodies);
         }
     }
 
