@@ -24,6 +24,10 @@ step "layout (no import circle between the core's modules, no oversized file)" p
 step "lints (cargo clippy; builds the workspace the first time: several minutes)" \
   cargo clippy --release --workspace --all-targets -- -D warnings
 step "Rust tests (cargo test --all-targets)" cargo test --release --workspace --all-targets
+# Debug assertions guard the engine's invariants, which the optimised build never checks: the
+# periodic box, the oracle and the thread-count tests once more in a debug build (a few minutes).
+step "debug assertions (the periodic, oracle and determinism tests in a debug build)" \
+  cargo test -p vadop --test periodic --test oracle --test determinism
 # The doctests include README.md's Rust examples (crates/vadop/src/lib.rs, ReadmeExamples).
 step "doctests, the README's Rust examples included" cargo test --release --workspace --doc
 step "API documentation (cargo doc, warnings are errors)" \
