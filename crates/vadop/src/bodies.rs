@@ -419,13 +419,13 @@ impl Bodies {
         self.state[i].motion.velocity
     }
 
-    /// Asks for the cache lines of body `i`'s state, tag and liveness ahead of their use (a
-    /// hint: nothing changes).
+    /// Asks for the cache lines of body `i`'s state and tag ahead of their use (a hint: nothing
+    /// changes). Not its liveness: an event's check reads the stamp alone (see
+    /// [`Self::has_stamp`]).
     #[inline]
     pub fn prefetch(&self, i: usize) {
         prefetch_item(&self.state, i);
         prefetch_item(&self.tags, i);
-        prefetch_item(&self.alive, i);
     }
 
     /// Mass of body `i` (infinite for a static body).

@@ -123,14 +123,10 @@ impl Ord for Event {
 }
 
 /// Min-heap of events by time, with deterministic ties.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct EventQueue {
     /// Events pushed one at a time.
     heap: BinaryHeap<Event>,
-    /// The time of the heap's earliest event, infinite when it is empty (NaN when that time is
-    /// NaN): kept as events are pushed and popped, so that a bulk event strictly before it is
-    /// known to be the earliest without a look into the heap (see [`EventQueue::pop_before`]).
-    heap_earliest: f64,
     /// Events predicted all at once (a window's start), sorted latest first and popped from the
     /// end: one sort is cheaper than as many heap pushes, and most never move again.
     bulk: Vec<Event>,
@@ -138,18 +134,6 @@ pub struct EventQueue {
     last: Option<Event>,
     /// Buffers of the bulk part's radix sort, reused window after window.
     radix: RadixBuffers,
-}
-
-impl Default for EventQueue {
-    fn default() -> Self {
-        EventQueue {
-            heap: BinaryHeap::new(),
-            heap_earliest: f64::INFINITY,
-            bulk: Vec::new(),
-            last: None,
-            radix: RadixBuffers::default(),
-        }
-    }
 }
 
 /// Below this many events the bulk part is sorted by comparisons: a radix pass costs its bins.
@@ -251,11 +235,6 @@ impl EventQueue {
     /// Adds a predicted contact.
     #[inline]
     pub fn push(&mut self, event: Event) {
-        // A NaN time stays until the heap's next pop tells the earliest again: no bulk event is
-        // taken as before it meanwhile.
-        if event.time < self.heap_earliest || event.time.is_nan() {
-            self.heap_earliest = event.time;
-        }
         self.heap.push(event);
     }
     /// Empties the queue and hands over the bulk part's storage, to be filled with the next
@@ -295,7 +274,6 @@ impl EventQueue {
     fn remove_earliest(&mut self, from_heap: bool) {
         if from_heap {
             self.heap.pop();
-            self.heap_earliest = self.heap.peek().map_or(f64::INFINITY, |event| event.time);
         } else {
             self.bulk.pop();
         }
@@ -335,7 +313,8 @@ impl EventQueue {
         // before the heap's earliest time is the earliest, told by two float comparisons (a NaN
         // on either side fails them, and the general way below decides).
         if let Some(&event) = self.bulk.last() {
-            if event.time < self.heap_earliest && event.time < until && !self.is_repeat(&event) {
+            let heap_earliest = self.heap.peek().map_or(f64::INFINITY, |first| first.time);
+            if event.time < heap_earliest && event.time < until && !self.is_repeat(&event) {
                 let place = self.bulk.len() - 1;
                 self.bulk.truncate(place);
                 self.last = Some(event);
@@ -377,7 +356,6 @@ impl EventQueue {
     /// Drops every event, keeping the allocation.
     pub fn clear(&mut self) {
         self.heap.clear();
-        self.heap_earliest = f64::INFINITY;
         self.bulk.clear();
         self.last = None;
     }

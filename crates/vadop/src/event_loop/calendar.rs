@@ -174,7 +174,6 @@ impl Ring {
         self.filled.clear();
         self.filled.resize(buckets, 0);
         self.spill.resize_with(buckets, Vec::new);
-        self.spill.truncate(buckets);
         self.spill.iter_mut().for_each(Vec::clear);
     }
 

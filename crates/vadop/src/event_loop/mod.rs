@@ -43,7 +43,6 @@ mod search;
 use crate::bodies::Bodies;
 use crate::event_queue::{Event, Partner};
 use crate::frame::{Contact, FrameStats, Output, Physics, Touched};
-use crate::memory::prefetch;
 use crate::pipeline::jam::Cluster;
 use crate::pipeline::respond::{self, Responder};
 use crate::response::impact::{Impacts, Resolution};
@@ -65,13 +64,11 @@ use std::time::Instant;
 /// 1.47x and 1.60x before the batches' hand-offs. Timed (five pairs of runs, one thread pinned
 /// against two, BENCHMARKS.md's fifteenth session) 2 threads gave 0.91x at packing 0.05 and 1.18x
 /// at 0.2: the hand-offs cost more than the bound leaves in a thin gas, so 2 threads keep the
-/// serial loop until they pay at every packing.
+/// serial loop until they pay at every packing. In a dense world the parallel loop keeps cells
+/// where the serial loop keeps neighbour lists ([`Lists::paying`]): at packing 0.4 its workers
+/// alone execute 12.3 k instructions per collision against the serial loop's 9.1 k with lists,
+/// which bounds 2 threads to 1.15x, 3 threads to 1.68x.
 const AHEAD_THREADS: usize = 3;
-/// The parallel loop's threshold where the serial loop keeps neighbour lists (a dense world, see
-/// [`Lists::paying`]): the parallel loop keeps cells, and at packing 0.4 its workers alone execute
-/// 12.3 k instructions per collision against the serial loop's 9.1 k with lists, which bounds 2
-/// threads to 1.15x (a bound of 1.2 measured 0.96x before the overlap), 3 threads to 1.68x.
-const AHEAD_THREADS_LISTED: usize = 3;
 /// Workers of the parallel loop a thread: a batch's searches are shared in this many runs a
 /// thread, so that the thread that commits the batch before takes those left when it is done.
 const WORKERS_PER_THREAD: usize = 4;
@@ -279,14 +276,12 @@ impl EventLoop {
         let ids: Vec<u32> = self.bodies().collect();
         let max_radius = ids.iter().map(|&i| bodies.radius(i as usize)).fold(0.0, f64::max);
         // The parallel loop keeps cells: its workers' results are checked against the cells
-        // marked since their world, and a list built anew changes the lists around it. Where
-        // lists pay, the serial loop steps with them on fewer than `AHEAD_THREADS_LISTED`.
+        // marked since their world, and a list built anew changes the lists around it.
         #[cfg(not(test))]
         let always = None;
         #[cfg(test)]
         let always = self.always_lists;
-        let may_list = self.workers.is_empty() || self.threads < AHEAD_THREADS_LISTED;
-        self.lists = may_list.then(|| Lists::paying(&self.bounds, bodies, &ids, always)).flatten();
+        self.lists = self.workers.is_empty().then(|| Lists::paying(&self.bounds, bodies, &ids, always)).flatten();
         let shell = self.lists.as_ref().map_or(0.0, |lists| lists.shell);
         self.cells = Cells::new(&self.bounds, max_radius, shell, ids.len());
         (self.listed, self.sized_for) = (ids.len(), ids.len());
@@ -366,7 +361,7 @@ impl EventLoop {
         } else if self.calendar.needs_tuning() {
             self.calendar.retune(t0);
         }
-        if self.workers.is_empty() || self.lists.is_some() {
+        if self.workers.is_empty() {
             let mut handled = 0u32;
             while let Some(entry) = self.calendar.peek_entry() {
                 if !(entry.scheduled.time() < t1) {
@@ -431,14 +426,11 @@ impl EventLoop {
     /// [`Self::prefetch`] of body `i`'s records: its motion, tag (stamp), events, place in the cells.
     #[inline]
     fn prefetch_body(&self, bodies: &Bodies, i: usize) {
-        if let (Some(state), Some(tag)) = (bodies.state.get(i), bodies.tags.get(i)) {
-            prefetch(state);
-            prefetch(tag);
-            self.cells.prefetch(i);
-            self.calendar.prefetch(i);
-            if let Some(lists) = &self.lists {
-                lists.prefetch(i);
-            }
+        bodies.prefetch(i);
+        self.cells.prefetch(i);
+        self.calendar.prefetch(i);
+        if let Some(lists) = &self.lists {
+            lists.prefetch(i);
         }
     }
 

@@ -382,9 +382,9 @@ mod tests {
     }
 
     /// The parallel event loop gives the serial loop's bits, contacts and states, frame after frame,
-    /// on 2 and 3 workers (on 2 the dense cases step the serial loop with lists), in walled and
-    /// periodic boxes, elastic and not, with frames of changing lengths; and after every batch the
-    /// copy of the world its workers read is the world (see `ahead::Mirror::check`).
+    /// on 2 and 3 workers, in walled and periodic boxes, elastic and not, with frames of changing
+    /// lengths; and after every batch the copy of the world its workers read is the world (see
+    /// `ahead::Mirror::check`).
     #[test]
     fn the_parallel_event_loop_gives_the_serial_loop_s_bits() {
         let cases =
