@@ -17,12 +17,18 @@
 //! x in a and y in b, whose largest over the closing axes has a closed form: the balls about the
 //! shapes' middles, and balls about the witness points moved into their shapes along the relative
 //! motion (a's behind, b's ahead), where a pair passing through still overlaps along it, or along
-//! the bound's axis, where a grazing pass leaves a shape at a corner along the motion.
+//! the bound's axis, where a grazing pass leaves a shape at a corner along the motion. Where the
+//! balls cannot tell (a shallow grazing pass: a closing axis a little off the bound's, and the
+//! balls deep inside), the separation along n is minus the support value of the shapes'
+//! difference `a - b` along n, bounded below by a polytope of the difference's points grown
+//! toward the closing axes that fail (see [`closing_supports_exceed`]).
 //!
 //! It owns that certificate only: it never chooses a probe time and never measures a distance.
 
 use super::distance::Bounds;
+use super::epa::closing_supports_exceed;
 use super::gauges::ConvexPair;
+use super::gjk::Relative;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
 
@@ -57,7 +63,7 @@ pub(super) fn parts_for_good(pair: &ConvexPair, (pose_a, pose_b): (&Pose, &Pose)
     }
     let Some((x, y)) = bounds.witness else { return false };
     let (ga, gb) = &pair.shapes;
-    [heading, bounds.axis].into_iter().any(|inward| {
+    let balls = [heading, bounds.axis].into_iter().any(|inward| {
         WITNESS_REACHES.iter().any(|reach| {
             let reach = reach * bounds.lower.abs().max(pair.tol);
             let (x, y) = (x - inward * reach, y + inward * reach);
@@ -65,7 +71,27 @@ pub(super) fn parts_for_good(pair: &ConvexPair, (pose_a, pose_b): (&Pose, &Pose)
                 (ga.depth_only(pose_a.inverse_transform_point(x)), gb.depth_only(pose_b.inverse_transform_point(y)));
             depth_a > 0.0 && depth_b > 0.0 && below(widest(y - x) - depth_a - depth_b)
         })
-    })
+    });
+    balls || {
+        // The shapes' support functions over the closing axes, from a ball about the origin
+        // inside their difference: about the witnesses' midpoint, where it lies in both.
+        let middle = 0.5 * (x + y);
+        let (depth_a, depth_b) = (
+            ga.depth_only(pose_a.inverse_transform_point(middle)),
+            gb.depth_only(pose_b.inverse_transform_point(middle)),
+        );
+        let level = 3.0 * slack - bounds.lower;
+        depth_a >= 0.0 && depth_b >= 0.0 && level > 0.0 && {
+            // First the closing axis nearest the bound's, where the separation comes nearest it.
+            let across = (bounds.axis - heading * bounds.axis.dot(heading))
+                .try_normalize()
+                .unwrap_or_else(|| heading.any_orthonormal_vector());
+            let nearest = heading * cap + across * (1.0 - cap * cap).sqrt();
+            let (relative, local) = (Relative::new(pose_a.inv_mul(pose_b)), pose_a.rotation.inverse());
+            let closing = (local * heading, cap);
+            closing_supports_exceed(&relative, (ga, gb), depth_a + depth_b, closing, level, local * nearest)
+        }
+    }
 }
 
 #[cfg(test)]
