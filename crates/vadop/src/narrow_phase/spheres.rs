@@ -198,17 +198,71 @@ pub fn pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64, (ga, gb): (DVe
 /// ```
 #[inline(always)]
 pub fn straight_pair_contact_time(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+    let (reference, offset) = straight_offset(a, b);
+    approach_time(reference, (a.velocity, b.velocity), offset, radius_sum)
+}
+
+/// [`straight_pair_contact_time`] of a pair that [`straight_paths_clearly_miss`] has passed: the
+/// same bits (past its screen the exact test is all that runs), without asking the screen again.
+#[inline(always)]
+pub fn straight_pair_contact_time_past_screen(a: &Motion, b: &Motion, radius_sum: f64) -> Option<f64> {
+    let (reference, offset) = straight_offset(a, b);
+    approach_time_by(exact_sphere_time, reference, (a.velocity, b.velocity), offset, radius_sum)
+}
+
+/// True when [`straight_pair_contact_time`] of `a` and `b` is `None` by its first screen (the
+/// centres' lines pass clearly apart), from the very floats it computes, in either order (the
+/// offset and relative velocity of `b, a` are those of `a, b` negated, exactly, so every square
+/// and cross product is the same). For a pair sweep to tell its many such candidates before
+/// anything else of the pair is looked at.
+///
+/// ```
+/// use glam::DVec3;
+/// use vadop::motion::Motion;
+/// use vadop::narrow_phase::spheres::{straight_pair_contact_time, straight_paths_clearly_miss};
+/// let a = Motion { position: DVec3::new(2.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(1.5, 0.0, 0.0) };
+/// // Parallel lines 3 apart: they never come within 1.
+/// let b = Motion { position: DVec3::new(2.0, 8.0, 5.0), since: 0.5, velocity: DVec3::new(-1.5, 0.0, 0.0) };
+/// assert!(straight_paths_clearly_miss(&a, &b, 1.0) && straight_paths_clearly_miss(&b, &a, 1.0));
+/// assert_eq!(straight_pair_contact_time(&a, &b, 1.0), None);
+/// // Head on: not a clear miss.
+/// let c = Motion { position: DVec3::new(9.0, 5.0, 5.0), since: 0.0, velocity: DVec3::new(-1.5, 0.0, 0.0) };
+/// assert!(!straight_paths_clearly_miss(&a, &c, 1.0));
+/// ```
+#[inline(always)]
+pub fn straight_paths_clearly_miss(a: &Motion, b: &Motion, radius_sum: f64) -> bool {
+    let (_, offset) = straight_offset(a, b);
+    paths_clearly_miss(offset, b.velocity - a.velocity, radius_sum)
+}
+
+/// The reference instant of two straight motions (the later `since`) and `b`'s centre less
+/// `a`'s then: what [`straight_pair_contact_time`] and its screen start from.
+#[inline(always)]
+fn straight_offset(a: &Motion, b: &Motion) -> (f64, DVec3) {
     let reference = a.since.max(b.since);
     // `at` is `at_under` without a pull, to the bit.
-    approach_time(reference, (a.velocity, b.velocity), b.at(reference) - a.at(reference), radius_sum)
+    (reference, b.at(reference) - a.at(reference))
 }
 
 /// The contact time of two spheres `offset` apart at `reference` with velocities `(va, vb)` and
 /// no relative acceleration: [`sphere_sphere_time`] from `reference`, unless the relative
 /// velocity is rounding noise.
 #[inline(always)]
-fn approach_time(reference: f64, (va, vb): (DVec3, DVec3), offset: DVec3, radius_sum: f64) -> Option<f64> {
-    let tau = sphere_sphere_time(offset, vb - va, radius_sum)?;
+fn approach_time(reference: f64, velocities: (DVec3, DVec3), offset: DVec3, radius_sum: f64) -> Option<f64> {
+    approach_time_by(sphere_sphere_time, reference, velocities, offset, radius_sum)
+}
+
+/// [`approach_time`] with `time` for [`sphere_sphere_time`] (or its exact test alone, for a pair
+/// already screened).
+#[inline(always)]
+fn approach_time_by(
+    time: impl FnOnce(DVec3, DVec3, f64) -> Option<f64>,
+    reference: f64,
+    (va, vb): (DVec3, DVec3),
+    offset: DVec3,
+    radius_sum: f64,
+) -> Option<f64> {
+    let tau = time(offset, vb - va, radius_sum)?;
     // Checked only for predicted contacts, which are far fewer than candidate pairs.
     let scale = unit_scale(va.abs().max_element().max(vb.abs().max_element()));
     let (va, vb) = (va * scale, vb * scale);

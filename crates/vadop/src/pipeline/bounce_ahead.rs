@@ -16,7 +16,7 @@
 //! full re-test would push, and the stats count the same tests, for every thread count; other
 //! re-tests run as before. It never handles an event, and never changes a body.
 
-use super::predict::{predict_own_pair, predict_pair};
+use super::predict::{predict_pair, predict_straight_sphere_pair};
 use super::Pipeline;
 use crate::bodies::{Bodies, BodyState};
 use crate::broad_phase::proxy::{Reported, Span};
@@ -128,7 +128,9 @@ impl<B: BroadPhase> Pipeline<B> {
                 found.push(Ahead::Bounce { body, stamp, motion, made });
                 let (own, rest) = (Reported { body, stamp, state: &state }, window.from(time));
                 broad.query_binned(body, &proxies.path_ahead(i, &state, &made.0), proxies, |other, bounds| {
-                    let event = predict_own_pair(bodies, own, other, bounds.intersect(rest));
+                    // Bounces run ahead only in a world of spheres on straight paths (see
+                    // `plan_bounces_ahead`), and the binned pieces are of the window start's bodies.
+                    let event = predict_straight_sphere_pair(bodies, own, other, bounds.intersect(rest));
                     found.push(Ahead::Partner { body: other.body, stamp: other.stamp, event });
                 });
             }

@@ -33,7 +33,7 @@ pub(crate) mod touching;
 mod wake;
 
 use crate::bodies::Bodies;
-use crate::broad_phase::proxy::{sampled_quantile, ProxyTable};
+use crate::broad_phase::proxy::{sampled_quantile, Proxies, ProxyTable, Reported};
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, EventQueue, Partner};
 use crate::frame::{Contact, FrameStats, Mode, Touched};
@@ -50,7 +50,10 @@ use bounce_ahead::BouncesAhead;
 use glam::DVec3;
 use pass_through::Searched;
 use passed::PassedContacts;
-use predict::{for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_own_pair};
+use predict::{
+    for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_own_pair,
+    predict_straight_sphere_pair,
+};
 use predict::{predict_pair, push_found};
 use predict::{predict_wall, renewal, sort_predictions, Prediction};
 use std::collections::VecDeque;
@@ -344,23 +347,15 @@ impl<B: BroadPhase> Pipeline<B> {
             candidates
         } else {
             let (table, view, workers) = (&self.proxies, self.proxies.view(bodies), &self.workers);
+            let (broad, found) = (&mut self.broad, &mut predicted);
             if table.has_ghosts() {
-                let found = &mut predicted;
-                self.broad.find_pairs(
-                    view,
-                    workers,
-                    |a, b, w, out| push_found(out, predict_pair(bodies, table, a, b, w)),
-                    found,
-                )
+                find_pair_events(broad, view, workers, found, |a, b, w| predict_pair(bodies, table, a, b, w))
+            } else if bodies.straight_paths() {
+                // Every proxy is its body's own (no owners to look up for each candidate), and
+                // every body a sphere on a straight path: the exact test's screen first.
+                find_pair_events(broad, view, workers, found, |a, b, w| predict_straight_sphere_pair(bodies, a, b, w))
             } else {
-                // Every proxy is its body's own: no owners to look up for each candidate.
-                let found = &mut predicted;
-                self.broad.find_pairs(
-                    view,
-                    workers,
-                    |a, b, w, out| push_found(out, predict_own_pair(bodies, a, b, w)),
-                    found,
-                )
+                find_pair_events(broad, view, workers, found, |a, b, w| predict_own_pair(bodies, a, b, w))
             }
         };
         let (proxies, statics, window) = (self.proxies.view(bodies), &self.statics, self.window);
@@ -639,4 +634,16 @@ pub(super) fn pair_record(bodies: &Bodies, (a, b): (u32, u32), t: f64, geometry:
     let (point, normal, impulse) = geometry;
     let (body, touched) = (bodies.handle(a as usize), Touched::Body(bodies.handle(b as usize)));
     Contact { time: t, body, touched, point, normal, impulse }
+}
+
+/// [`BroadPhase::find_pairs`] in a world of spheres, each candidate pair's event (if any) by
+/// `predict`, pushed into `found`; returns the candidates' count.
+fn find_pair_events<B: BroadPhase>(
+    broad: &mut B,
+    view: Proxies,
+    workers: &Workers,
+    found: &mut Vec<Event>,
+    predict: impl Fn(Reported, Reported, Window) -> Option<Event> + Sync + Send,
+) -> u64 {
+    broad.find_pairs(view, workers, |a, b, w, out| push_found(out, predict(a, b, w)), found)
 }

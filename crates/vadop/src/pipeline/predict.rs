@@ -14,7 +14,9 @@ use crate::event_queue::{Event, Partner};
 use crate::motion::Motion;
 use crate::narrow_phase::contacts::{self, Parking};
 use crate::narrow_phase::parked::ParkedSearches;
-use crate::narrow_phase::spheres::wall_contact_time;
+use crate::narrow_phase::spheres::{
+    straight_pair_contact_time_past_screen, straight_paths_clearly_miss, wall_contact_time,
+};
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::walls::BoxBounds;
 use crate::window::Window;
@@ -65,6 +67,34 @@ pub(super) fn predict_own_pair(bodies: &Bodies, x: Reported, y: Reported, window
         return None;
     }
     sphere_event(bodies, (a, None), (b, None), window)
+}
+
+/// [`predict_own_pair`] of two spheres on straight paths (no gravity), for the pair sweep of a
+/// world of spheres: most candidate pairs of fast bodies pass clearly apart, and the exact
+/// test's own first screen, asked here of the motions reported, tells them without the rest of
+/// the test (the pair's order, the world's flags, the stamps); the others take the exact test
+/// alone, out of line so the sweep's loop stays small. The bounces run ahead test their
+/// candidates so too.
+#[inline(always)]
+pub(super) fn predict_straight_sphere_pair(bodies: &Bodies, x: Reported, y: Reported, window: Window) -> Option<Event> {
+    debug_assert!(bodies.are_spheres(x.body as usize, y.body as usize) && bodies.straight_paths());
+    let (a, b) = (x.state, y.state);
+    if straight_paths_clearly_miss(&a.motion, &b.motion, a.radius + b.radius) {
+        return None;
+    }
+    straight_sphere_event_past_screen(x, y, window)
+}
+
+/// [`predict_own_pair`] of two spheres on straight paths that [`straight_paths_clearly_miss`]
+/// has passed: the same arithmetic (the lower id first, the exact test, the window, the stamps)
+/// without the screen asked again or the world's flags read.
+#[inline(never)]
+fn straight_sphere_event_past_screen(x: Reported, y: Reported, window: Window) -> Option<Event> {
+    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
+    debug_assert!(a.body != b.body, "a body reported against itself");
+    let (sa, sb) = (a.state, b.state);
+    let time = straight_pair_contact_time_past_screen(&sa.motion, &sb.motion, sa.radius + sb.radius)?;
+    window.contains(time).then(|| pair_event((a.body, a.stamp), (b.body, b.stamp), (time, false)))
 }
 
 /// Pushes `event`, if any: not `out.extend(event)`, which reserves room for it even when there is
