@@ -482,6 +482,22 @@ impl Cells {
         Self::for_each_in(self.around(0, at[0]), self.around(1, at[1]), self.around(2, at[2]), visit);
     }
 
+    /// The cells a body came within reach of by a step across `crossing` into the cell
+    /// `(at, cell)`, when none of them lies across a face of the box (most crossings' case): the
+    /// 9 of the plane beyond it in the direction it moved, in [`Self::for_each_new`]'s order.
+    #[inline(always)]
+    pub(super) fn cells_ahead(&self, (at, cell): ([u16; 3], u32), crossing: Crossing) -> Option<[u32; 9]> {
+        let inside = (0..3).all(|a| at[a] >= 1 && (at[a] as i64) + 2 <= self.counts[a]);
+        inside.then(|| {
+            let axis = crossing.axis as usize;
+            let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+            let ahead = cell as i64 + if crossing.up { self.strides[axis] } else { -self.strides[axis] };
+            let (su, sw) = (self.strides[u], self.strides[w]);
+            let (a, b, c) = (ahead - su - sw, ahead - su, ahead - su + sw);
+            [a, a + su, a + 2 * su, b, b + su, b + 2 * su, c, c + su, c + 2 * su].map(|cell| cell as u32)
+        })
+    }
+
     /// Calls `visit` with the cells a body came within reach of by a step across `crossing` into
     /// the cell `(at, cell)`: the 9 beyond it in the direction it moved.
     #[inline(always)]
@@ -491,20 +507,14 @@ impl Cells {
         crossing: Crossing,
         mut visit: impl FnMut(Neighbour),
     ) {
-        let at = at.map(i64::from);
-        let axis = crossing.axis as usize;
-        if (0..3).all(|a| at[a] >= 1 && at[a] + 2 <= self.counts[a]) {
-            // Away from every face: the 9 cells of the plane ahead, none across a face.
-            let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
-            let ahead = cell as i64 + if crossing.up { self.strides[axis] } else { -self.strides[axis] };
-            for dw in [-1, 0, 1] {
-                for du in [-1, 0, 1] {
-                    let cell = (ahead + du * self.strides[u] + dw * self.strides[w]) as u32;
-                    visit(Neighbour { cell, shift: DVec3::ZERO });
-                }
+        if let Some(ahead) = self.cells_ahead((at, cell), crossing) {
+            for cell in ahead {
+                visit(Neighbour { cell, shift: DVec3::ZERO });
             }
             return;
         }
+        let at = at.map(i64::from);
+        let axis = crossing.axis as usize;
         let mut steps: [AxisSteps; 3] = std::array::from_fn(|a| self.around(a, at[a]));
         let ahead = self.step(axis, at[axis], if crossing.up { 1 } else { -1 });
         steps[axis] = ([ahead.unwrap_or((0, 0.0)); 3], ahead.is_some() as usize);

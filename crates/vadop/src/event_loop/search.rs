@@ -248,7 +248,18 @@ impl<'a> Search<'a> {
         }
         self.candidates.clear();
         self.near.cells = 0;
-        cells.for_each_new(into, crossing, |n| self.gather(&own, n));
+        match cells.cells_ahead(into, crossing) {
+            Some(ahead) => {
+                // No cell across a face: one origin for all, and an empty cell costs a bit's test.
+                (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
+                for cell in ahead {
+                    if cells.is_occupied(cell) {
+                        self.gather_list(own.p, cell, 0);
+                    }
+                }
+            }
+            None => cells.for_each_new(into, crossing, |n| self.gather(&own, n)),
+        }
         self.screen_all(&own, &mut best);
         self.test_candidates(&own, Eligible::From(now), &mut best);
         best.event
