@@ -17,6 +17,10 @@
 //! the face expanded next. Conversely each support value along a face's normal is the distance of a
 //! plane that bounds `a - b`, so the least of them bounds the depth from above: the gap between the
 //! two says how tight the bound is, and the loop stops once the caller's allowance covers it.
+//!
+//! The same mesh, grown from a small tetrahedron about the origin toward the axes of a cone instead
+//! of the nearest face, proves lower bounds on the difference's support values over that cone (see
+//! [`closing_supports_exceed`]): what the parting certificate needs of a shallow grazing pass.
 
 use super::gjk::{Relative, Simplex};
 use glam::DVec3;
