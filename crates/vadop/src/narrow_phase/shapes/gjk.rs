@@ -51,7 +51,7 @@ impl Relative {
     }
 
     /// The difference's support point along `dir` (in the first's frame), with the two sets'.
-    #[inline]
+    #[inline(always)]
     pub(super) fn support<A: ?Sized + SupportMap, B: ?Sized + SupportMap>(&self, a: &A, b: &B, dir: DVec3) -> CsoPoint {
         let on_b = self.apply(b.local_support_point(self.inverse * -dir));
         CsoPoint::new(a.local_support_point(dir), on_b)
