@@ -316,7 +316,7 @@ fn inside_point(bounds: &Bounds) -> Option<DVec3> {
 /// the point as deep as it lies in a shape lies in that shape, and two shapes holding balls of
 /// radii `r_a` and `r_b` about one point must move `r_a + r_b` apart to part: the bound holds at
 /// every point, the moves only tighten it.
-fn deepest_point(
+pub(super) fn deepest_point(
     seeds: &[DVec3],
     (a, pose_a): (&Scaled, &Pose),
     (b, pose_b): (&Scaled, &Pose),

@@ -27,7 +27,7 @@
 
 use super::distance::Bounds;
 use super::epa::closing_supports_exceed;
-use super::gauges::ConvexPair;
+use super::gauges::{deepest_point, ConvexPair};
 use super::gjk::Relative;
 use glam::DVec3;
 use parry3d_f64::math::Pose;
@@ -74,14 +74,21 @@ pub(super) fn parts_for_good(pair: &ConvexPair, (pose_a, pose_b): (&Pose, &Pose)
     });
     balls || {
         // The shapes' support functions over the closing axes, from a ball about the origin
-        // inside their difference: about the witnesses' midpoint, where it lies in both.
+        // inside their difference: about a point inside both, the witnesses' midpoint or, where
+        // that lies outside one, a point moved from it into both.
         let middle = 0.5 * (x + y);
         let (depth_a, depth_b) = (
             ga.depth_only(pose_a.inverse_transform_point(middle)),
             gb.depth_only(pose_b.inverse_transform_point(middle)),
         );
+        let inner = if depth_a >= 0.0 && depth_b >= 0.0 {
+            Some(depth_a + depth_b)
+        } else {
+            deepest_point(&[middle], (ga, pose_a), (gb, pose_b)).map(|(depth, _)| depth)
+        };
         let level = 3.0 * slack - bounds.lower;
-        depth_a >= 0.0 && depth_b >= 0.0 && level > 0.0 && {
+        let Some(inner) = inner.filter(|_| level > 0.0) else { return false };
+        {
             // First the closing axis nearest the bound's, where the separation comes nearest it.
             let across = (bounds.axis - heading * bounds.axis.dot(heading))
                 .try_normalize()
@@ -89,7 +96,7 @@ pub(super) fn parts_for_good(pair: &ConvexPair, (pose_a, pose_b): (&Pose, &Pose)
             let nearest = heading * cap + across * (1.0 - cap * cap).sqrt();
             let (relative, local) = (Relative::new(pose_a.inv_mul(pose_b)), pose_a.rotation.inverse());
             let closing = (local * heading, cap);
-            closing_supports_exceed(&relative, (ga, gb), depth_a + depth_b, closing, level, local * nearest)
+            closing_supports_exceed(&relative, (ga, gb), inner, closing, level, local * nearest)
         }
     }
 }
