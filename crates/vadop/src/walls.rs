@@ -171,11 +171,24 @@ impl Periodic {
     pub fn shift(&self, offset: DVec3) -> DVec3 {
         DVec3::from_array(std::array::from_fn(|a| {
             if self.axes[a] {
-                -self.side[a] * (offset[a] / self.side[a]).round()
+                -self.side[a] * round_within_half_side(offset[a] / self.side[a])
             } else {
                 0.0
             }
         }))
+    }
+}
+
+/// `x.round()`, its common case answered without the library's call: an offset within half a
+/// side (most pairs, neighbours in a box of at least [`MIN_PERIODIC_DIAMETERS`]) rounds to a
+/// zero of its own sign, as `round` gives it (the sign reaches the shift's zero, and through it
+/// an offset of zero's sign).
+#[inline(always)]
+fn round_within_half_side(x: f64) -> f64 {
+    if x.abs() < 0.5 {
+        0.0f64.copysign(x)
+    } else {
+        x.round()
     }
 }
 
@@ -221,5 +234,19 @@ impl Wall {
 impl std::fmt::Display for Wall {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_within_half_side;
+
+    #[test]
+    fn round_within_half_side_is_round_to_the_bit() {
+        let below_half = 0.5f64.next_down();
+        for x in [0.0, -0.0, 1e-300, -1e-300, 0.25, -0.25, below_half, -below_half, 0.5, -0.5, 0.75, -1.5, 2.5, 1e300] {
+            assert_eq!(round_within_half_side(x).to_bits(), x.round().to_bits(), "{x}");
+        }
+        assert!(round_within_half_side(f64::NAN).is_nan());
     }
 }

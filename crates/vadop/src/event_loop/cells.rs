@@ -534,17 +534,21 @@ impl Cells {
     /// [`Self::next_crossing`] of a body on `motion` in the cell at `at`.
     #[inline]
     pub(super) fn next_crossing_from(&self, motion: &Motion, at: [u16; 3], now: f64) -> Crossing {
+        // The vectors read as arrays: a vector indexed by the loop's axis picks its component
+        // by a branch each time, an array by the axis alone (and the loop unrolls).
+        let (velocity, position) = (motion.velocity.to_array(), motion.position.to_array());
+        let (min, width) = (self.min.to_array(), self.width.to_array());
         let mut best = Crossing::NEVER;
         for (a, &c) in at.iter().enumerate() {
-            let (v, c) = (motion.velocity[a], c as i64);
+            let (v, c) = (velocity[a], c as i64);
             let (face, up) = if v > 0.0 && c + 1 < self.counts[a] {
-                (self.min[a] + (c + 1) as f64 * self.width[a], true)
+                (min[a] + (c + 1) as f64 * width[a], true)
             } else if v < 0.0 && c > 0 {
-                (self.min[a] + c as f64 * self.width[a], false)
+                (min[a] + c as f64 * width[a], false)
             } else {
                 continue;
             };
-            let time = motion.since + (face - motion.position[a]) / v;
+            let time = motion.since + (face - position[a]) / v;
             if time < best.time {
                 best = Crossing { time: time.max(now), axis: a as u8, up };
             }
