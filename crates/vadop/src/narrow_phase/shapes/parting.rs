@@ -72,33 +72,29 @@ pub(super) fn parts_for_good(pair: &ConvexPair, (pose_a, pose_b): (&Pose, &Pose)
             depth_a > 0.0 && depth_b > 0.0 && below(widest(y - x) - depth_a - depth_b)
         })
     });
-    balls || {
-        // The shapes' support functions over the closing axes, from a ball about the origin
-        // inside their difference: about a point inside both, the witnesses' midpoint or, where
-        // that lies outside one, a point moved from it into both.
-        let middle = 0.5 * (x + y);
-        let (depth_a, depth_b) = (
-            ga.depth_only(pose_a.inverse_transform_point(middle)),
-            gb.depth_only(pose_b.inverse_transform_point(middle)),
-        );
-        let inner = if depth_a >= 0.0 && depth_b >= 0.0 {
-            Some(depth_a + depth_b)
-        } else {
-            deepest_point(&[middle], (ga, pose_a), (gb, pose_b)).map(|(depth, _)| depth)
-        };
-        let level = 3.0 * slack - bounds.lower;
-        let Some(inner) = inner.filter(|_| level > 0.0) else { return false };
-        {
-            // First the closing axis nearest the bound's, where the separation comes nearest it.
-            let across = (bounds.axis - heading * bounds.axis.dot(heading))
-                .try_normalize()
-                .unwrap_or_else(|| heading.any_orthonormal_vector());
-            let nearest = heading * cap + across * (1.0 - cap * cap).sqrt();
-            let (relative, local) = (Relative::new(pose_a.inv_mul(pose_b)), pose_a.rotation.inverse());
-            let closing = (local * heading, cap);
-            closing_supports_exceed(&relative, (ga, gb), inner, closing, level, local * nearest)
-        }
+    if balls {
+        return true;
     }
+    // The shapes' support functions over the closing axes, from a ball about the origin inside
+    // their difference: about a point inside both, the witnesses' midpoint or, where that lies
+    // outside one, a point moved from it into both.
+    let middle = 0.5 * (x + y);
+    let (depth_a, depth_b) =
+        (ga.depth_only(pose_a.inverse_transform_point(middle)), gb.depth_only(pose_b.inverse_transform_point(middle)));
+    let inner = if depth_a >= 0.0 && depth_b >= 0.0 {
+        Some(depth_a + depth_b)
+    } else {
+        deepest_point(&[middle], (ga, pose_a), (gb, pose_b)).map(|(depth, _)| depth)
+    };
+    let level = 3.0 * slack - bounds.lower;
+    let Some(inner) = inner.filter(|_| level > 0.0) else { return false };
+    // First the closing axis nearest the bound's, where the separation comes nearest it.
+    let across = (bounds.axis - heading * bounds.axis.dot(heading))
+        .try_normalize()
+        .unwrap_or_else(|| heading.any_orthonormal_vector());
+    let nearest = heading * cap + across * (1.0 - cap * cap).sqrt();
+    let (relative, local) = (Relative::new(pose_a.inv_mul(pose_b)), pose_a.rotation.inverse());
+    closing_supports_exceed(&relative, (ga, gb), inner, (local * heading, cap), level, local * nearest)
 }
 
 #[cfg(test)]
