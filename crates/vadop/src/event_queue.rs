@@ -278,11 +278,12 @@ impl EventQueue {
             self.bulk.pop();
         }
     }
-    /// The event `ahead` places after the earliest in the bulk part: most events come from there,
-    /// in this order, so the caller may fetch the bodies it will need a few events early.
+    /// The event `ahead` places after the earliest in the bulk part, with its place: most events
+    /// come from there, in this order, so the caller may fetch the bodies it will need a few
+    /// events early.
     #[inline]
-    pub fn upcoming(&self, ahead: usize) -> Option<&Event> {
-        self.bulk.len().checked_sub(ahead + 1).map(|k| &self.bulk[k])
+    pub fn upcoming(&self, ahead: usize) -> Option<(usize, &Event)> {
+        self.bulk.len().checked_sub(ahead + 1).map(|k| (k, &self.bulk[k]))
     }
     /// Puts back an event popped but not handled: it pops again in its order.
     pub fn put_back(&mut self, event: Event) {

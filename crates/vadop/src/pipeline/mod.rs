@@ -49,7 +49,7 @@ use crate::window::Window;
 use bounce_ahead::BouncesAhead;
 use glam::DVec3;
 use pass_through::Searched;
-use passed::PassedContacts;
+use passed::{Ahead, PassedContacts};
 use predict::{
     for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_own_pair,
     predict_straight_sphere_pair,
@@ -397,35 +397,34 @@ impl<B: BroadPhase> Pipeline<B> {
         let most_updates = UPDATES_PER_BODY * self.proxies.body_slots().max(64);
         while !interrupt.raised() {
             let Some((event, bulk_place)) = self.queue.pop_before(until) else { break };
-            // The bodies of an event a few ahead: their records are random memory accesses, and
-            // asking early lets them arrive while this one is handled.
-            if let Some(next) = self.queue.upcoming(EVENTS_AHEAD) {
-                bodies.prefetch(next.body as usize);
-                if let Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) = next.partner {
-                    bodies.prefetch(j as usize);
+            // The bodies of an event a few ahead, unless it was worked out ahead: their records
+            // are random memory accesses, and asking early lets them arrive while this one is
+            // handled.
+            if let Some((place, next)) = self.queue.upcoming(EVENTS_AHEAD) {
+                if !self.passed.is_worked_out(place) {
+                    bodies.prefetch(next.body as usize);
+                    if let Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) = next.partner {
+                        bodies.prefetch(j as usize);
+                    }
                 }
             }
-            let i = event.body as usize;
-            if !event.is_current(bodies) {
-                out.stats.invalidations += 1;
-                continue;
-            }
-            match event.partner {
-                Partner::Body(j) => match self.searched_ahead(bodies, physics, &event, until) {
-                    Some(searched) => self.pass_through(bodies, physics, &event, searched, out),
-                    None => self.pair_contact(bodies, physics, (event.body, j), event.time, bulk_place, out),
-                },
-                Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
-                Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
-                Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, event.time, out),
-                Partner::WallStalled => self.stalled(bodies, physics, &[event.body], event.time, out),
-                Partner::Cross(face) => {
-                    bodies.wrap(i, face, event.time);
-                    self.retest(event.body, None, bodies, physics, event.time, out.stats);
+            // Most events of a step in detect mode: spheres passing through each other, their
+            // record made ahead.
+            match bulk_place.map_or(Ahead::Unknown, |place| self.passed.ahead_of(bodies, place, &event)) {
+                Ahead::Current(contact) => {
+                    let Partner::Body(j) = event.partner else { unreachable!("worked out ahead: a pair") };
+                    self.report_pair_contact(bodies, physics, (event.body, j), contact, Resolution::Passed, out);
                 }
-                Partner::Renew => {
-                    bodies.renew(i);
-                    self.retest(event.body, None, bodies, physics, event.time, out.stats);
+                Ahead::Void => {
+                    out.stats.invalidations += 1;
+                    continue;
+                }
+                Ahead::Unknown => {
+                    if !event.is_current(bodies) {
+                        out.stats.invalidations += 1;
+                        continue;
+                    }
+                    self.handle(bodies, physics, &event, until, out);
                 }
             }
             // Too many fresh proxies: start afresh at the next event's time, strictly after this
@@ -445,28 +444,38 @@ impl<B: BroadPhase> Pipeline<B> {
         }
     }
 
-    /// The contact of bodies `a < b` at `t`, popped valid from place `bulk_place` of the queue's
-    /// bulk part (if it was there).
-    fn pair_contact(
-        &mut self,
-        bodies: &mut Bodies,
-        physics: &Physics,
-        (a, b): (u32, u32),
-        t: f64,
-        bulk_place: Option<usize>,
-        out: &mut Output,
-    ) {
+    /// Handles `event`, popped current, that was not worked out ahead.
+    fn handle(&mut self, bodies: &mut Bodies, physics: &Physics, event: &Event, until: f64, out: &mut Output) {
+        let i = event.body as usize;
+        match event.partner {
+            Partner::Body(j) => match self.searched_ahead(bodies, physics, event, until) {
+                Some(searched) => self.pass_through(bodies, physics, event, searched, out),
+                None => self.pair_contact(bodies, physics, (event.body, j), event.time, out),
+            },
+            Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
+            Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
+            Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, event.time, out),
+            Partner::WallStalled => self.stalled(bodies, physics, &[event.body], event.time, out),
+            Partner::Cross(face) => {
+                bodies.wrap(i, face, event.time);
+                self.retest(event.body, None, bodies, physics, event.time, out.stats);
+            }
+            Partner::Renew => {
+                bodies.renew(i);
+                self.retest(event.body, None, bodies, physics, event.time, out.stats);
+            }
+        }
+    }
+
+    /// The contact of bodies `a < b` at `t`, popped valid and not worked out ahead.
+    fn pair_contact(&mut self, bodies: &mut Bodies, physics: &Physics, (a, b): (u32, u32), t: f64, out: &mut Output) {
         let (i, j) = (a as usize, b as usize);
         if bodies.are_spheres(i, j) && passes_through(bodies, physics, i, j) {
-            // Nothing changes: where they touch was worked out before the step's events, or is
-            // at its end, on every worker.
-            let contact = match bulk_place.and_then(|place| self.passed.worked_out(place)) {
-                Some(&(point, normal)) => pair_record(bodies, (a, b), t, (point, normal, 0.0)),
-                None => {
-                    self.passed.defer(bodies, (a, b), out.contacts.len());
-                    pair_record(bodies, (a, b), t, (DVec3::ZERO, DVec3::ZERO, 0.0))
-                }
-            };
+            // Nothing changes, and it was predicted mid-step (those of the window's start were
+            // worked out ahead): where they touch is worked out at the step's end, on every
+            // worker.
+            self.passed.defer(bodies, (a, b), out.contacts.len());
+            let contact = pair_record(bodies, (a, b), t, (DVec3::ZERO, DVec3::ZERO, 0.0));
             self.report_pair_contact(bodies, physics, (a, b), contact, Resolution::Passed, out);
             return;
         }

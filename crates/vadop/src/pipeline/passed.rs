@@ -5,16 +5,19 @@
 //! start's predictions and once they are done for the rest. A window start's prediction that
 //! pops valid has its bodies' stamps as they were before the step's events, and every change of
 //! a body's motion bumps its stamp, so the paths it happened on are the paths before the step:
-//! its geometry is worked out then, for every such prediction before the step's end, and the
-//! loop reports it with the contact. Any other such contact (predicted mid-step) is reported
-//! in its place at once, with the two paths it happened on kept beside it; a path copied
+//! its geometry and its bodies' handles are worked out then, for every such prediction before
+//! the step's end, with the stamps marked ([`Bodies::mark_stamps`]); when it pops, it is still
+//! current unless either stamp was bumped since, which one bit a body tells, and the loop
+//! reports it without reading either body. Any other such contact (predicted mid-step) is
+//! reported in its place at once, with the two paths it happened on kept beside it; a path copied
 //! outlives the bodies' later velocity changes (a wall bounce later in the step), and each
 //! contact's geometry is a function of its own record alone. Either way the bits are those the
 //! event loop would have computed, for every thread count. It never handles an event.
 
 use crate::bodies::Bodies;
 use crate::event_queue::{Event, Partner};
-use crate::frame::{Contact, Physics};
+use crate::frame::{Contact, Physics, Touched};
+use crate::handle::BodyHandle;
 use crate::narrow_phase::contacts::{sphere_pair_geometry, SpherePath};
 use crate::parallel::Workers;
 use crate::response::impact::passes_through;
@@ -36,11 +39,30 @@ struct Pending {
 #[derive(Debug, Default)]
 pub(super) struct PassedContacts {
     pending: Vec<Pending>,
-    /// Where the spheres of the queue's bulk events from place `ahead_first` on touch, and the
-    /// normal, worked out before the step's events (see [`Self::work_out_ahead`]); only the
-    /// places of valid pass-throughs of spheres hold them.
-    ahead: Vec<Option<(DVec3, DVec3)>>,
+    /// The queue's bulk events from place `ahead_first` on, worked out before the step's events
+    /// (see [`Self::work_out_ahead`]); only the places of valid pass-throughs of spheres hold
+    /// them.
+    ahead: Vec<Option<Worked>>,
     ahead_first: usize,
+}
+
+/// A pass-through of two spheres worked out ahead: where they touch, the normal, and the two
+/// bodies' generations (their handles', which no step changes).
+#[derive(Debug, Clone, Copy)]
+struct Worked {
+    point: DVec3,
+    normal: DVec3,
+    generations: [u32; 2],
+}
+
+/// What [`PassedContacts::ahead_of`] knows of a bulk event as it pops.
+pub(super) enum Ahead {
+    /// Nothing: the event loop handles it as any event.
+    Unknown,
+    /// A pass-through worked out ahead whose bodies changed motion since: void.
+    Void,
+    /// A pass-through worked out ahead, still current: its record.
+    Current(Contact),
 }
 
 impl PassedContacts {
@@ -52,14 +74,14 @@ impl PassedContacts {
         self.pending.push(Pending { contact, i, j, paths });
     }
 
-    /// Before the step's events: the geometry of each of `events` (the queue's bulk events
-    /// before the step's end, the first at place `first`) that is two spheres passing through
-    /// each other on their current paths, on every worker. Out of line: a profile then tells
-    /// its share apart.
+    /// Before the step's events: the geometry and handles of each of `events` (the queue's bulk
+    /// events before the step's end, the first at place `first`) that is two spheres passing
+    /// through each other on their current paths, on every worker, and the stamps marked. Out of
+    /// line: a profile then tells its share apart.
     #[inline(never)]
     pub(super) fn work_out_ahead(
         &mut self,
-        bodies: &Bodies,
+        bodies: &mut Bodies,
         physics: &Physics,
         (first, events): (usize, &[Event]),
         workers: &Workers,
@@ -71,17 +93,42 @@ impl PassedContacts {
             // pairs are not two spheres, and the few that are wait for the step's end.
             return;
         }
+        let passing = &*bodies;
         workers.extend_ranges(events.len(), &mut self.ahead, |range, ahead| {
-            ahead.extend(events[range].iter().map(|event| passing_geometry(bodies, physics, event)));
+            ahead.extend(events[range].iter().map(|event| passing_geometry(passing, physics, event)));
         });
+        bodies.mark_stamps();
     }
 
-    /// Where the spheres of the bulk event at `place` touch, and the normal, as worked out ahead:
-    /// for a valid pass-through of two spheres, when the step started with it before its end.
+    /// Whether the bulk event at `place` was worked out ahead (a valid pass-through of two
+    /// spheres when the step started with it before its end): the loop then reads neither body.
     #[inline]
-    pub(super) fn worked_out(&self, place: usize) -> Option<&(DVec3, DVec3)> {
+    pub(super) fn is_worked_out(&self, place: usize) -> bool {
         // A place before the first wraps past the end.
-        self.ahead.get(place.wrapping_sub(self.ahead_first))?.as_ref()
+        self.ahead.get(place.wrapping_sub(self.ahead_first)).is_some_and(Option::is_some)
+    }
+
+    /// What was worked out ahead of `event`, just popped from the bulk's `place`.
+    #[inline]
+    pub(super) fn ahead_of(&self, bodies: &Bodies, place: usize, event: &Event) -> Ahead {
+        let (Some(Some(worked)), Partner::Body(j)) =
+            (self.ahead.get(place.wrapping_sub(self.ahead_first)), event.partner)
+        else {
+            return Ahead::Unknown;
+        };
+        let i = event.body;
+        if bodies.bumped_since_mark(i as usize) || bodies.bumped_since_mark(j as usize) {
+            return Ahead::Void;
+        }
+        let [generation_i, generation_j] = worked.generations;
+        Ahead::Current(Contact {
+            time: event.time,
+            body: BodyHandle::new(i, generation_i),
+            touched: Touched::Body(BodyHandle::new(j, generation_j)),
+            point: worked.point,
+            normal: worked.normal,
+            impulse: 0.0,
+        })
     }
 
     /// Works out the pending contacts' geometry into `contacts`, on every worker: each chunk of
@@ -105,20 +152,21 @@ impl PassedContacts {
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
         self.pending.capacity() * std::mem::size_of::<Pending>()
-            + self.ahead.capacity() * std::mem::size_of::<Option<(DVec3, DVec3)>>()
+            + self.ahead.capacity() * std::mem::size_of::<Option<Worked>>()
     }
 }
 
-/// Where the spheres of `event` touch on their current paths, and the normal, when it is a valid
-/// contact of two spheres passing through each other (an event void now stays void, and whether
-/// two bodies pass through does not change within a step).
+/// Where the spheres of `event` touch on their current paths, the normal and their generations,
+/// when it is a valid contact of two spheres passing through each other (an event void now stays
+/// void, and whether two bodies pass through does not change within a step).
 #[inline]
-fn passing_geometry(bodies: &Bodies, physics: &Physics, event: &Event) -> Option<(DVec3, DVec3)> {
+fn passing_geometry(bodies: &Bodies, physics: &Physics, event: &Event) -> Option<Worked> {
     let Partner::Body(j) = event.partner else { return None };
     let (i, j) = (event.body as usize, j as usize);
     let passing = bodies.are_spheres(i, j) && passes_through(bodies, physics, i, j);
     (passing && event.is_current(bodies)).then(|| {
         let (path_i, path_j) = (SpherePath::of(bodies, i), SpherePath::of(bodies, j));
-        sphere_pair_geometry(bodies, (i, &path_i), (j, &path_j), event.time)
+        let (point, normal) = sphere_pair_geometry(bodies, (i, &path_i), (j, &path_j), event.time);
+        Worked { point, normal, generations: [bodies.generation(i), bodies.generation(j)] }
     })
 }
