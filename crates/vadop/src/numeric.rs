@@ -13,7 +13,7 @@ pub(crate) fn exponent(x: f64) -> i32 {
 
 /// `2^k` for k in the normal range.
 #[inline]
-pub(crate) fn power_of_two(k: i32) -> f64 {
+pub(crate) const fn power_of_two(k: i32) -> f64 {
     f64::from_bits(((1023 + k) as u64) << 52)
 }
 

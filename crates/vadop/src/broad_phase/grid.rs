@@ -16,7 +16,10 @@
 //! reads shapes or computes contact times.
 
 use super::box_columns::BoxColumns;
-use super::{BroadPhase, PrepareCounts};
+#[cfg(target_arch = "x86_64")]
+use super::candidates::Screened;
+use super::candidates::{Candidates, Owner, Reporting};
+use super::{screened_one_by_one, BroadPhase, PairScreen, PrepareCounts};
 use crate::bodies::BodyState;
 use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Path, Proxies, Reported};
 use crate::memory::prefetch;
@@ -53,15 +56,6 @@ impl Entry {
     fn overlaps(&self, other: &Entry) -> bool {
         self.bbox.overlaps(&other.bbox)
     }
-}
-
-/// Whose a binned piece is (the body and the stamp of the proxy it was cut from) and when it
-/// holds: what a box that overlaps is checked for next, in one load.
-#[derive(Debug, Clone, Copy, Default)]
-struct Owner {
-    body: u32,
-    stamp: u32,
-    window: Window,
 }
 
 /// One level of the hierarchy: cubic cells of one size.
@@ -480,27 +474,48 @@ impl Grid {
         }
     }
 
-    /// Calls `report` for every candidate pair found from the cells of level `k` with x in
-    /// `slabs`: each cell against itself and 13 of its neighbours, each piece against the
-    /// coarser levels.
-    fn slab_pairs(&self, k: usize, slabs: std::ops::Range<usize>, report: &mut impl FnMut(Reported, Reported, Window)) {
+    /// [`BroadPhase::find_pairs`] with each worker's candidates given to `candidates(reporting)`.
+    fn sweep<'a, T: Send, C: Candidates>(
+        &'a self,
+        workers: &Workers,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+        candidates: impl Fn(Reporting<'a>) -> C + Sync,
+    ) -> u64 {
+        let mut count = 0;
+        for k in 0..self.levels.len() {
+            let reporting = Reporting { owners: &self.owners, motions: &self.motions };
+            let counts = workers.extend_ranges(self.levels[k].dims[0], out, |slabs, found| {
+                let (mut reported, mut candidates) = (0u64, candidates(reporting));
+                let mut report = |x: Reported, y: Reported, window| {
+                    reported += 1;
+                    predict(x, y, window, found);
+                };
+                self.slab_pairs(k, slabs, &mut candidates, &mut report);
+                candidates.finish(&mut report);
+                reported + candidates.cleared()
+            });
+            count += counts.iter().sum::<u64>();
+        }
+        count
+    }
+
+    /// Hands `candidates` every candidate pair found from the cells of level `k` with x in
+    /// `slabs` (each cell against itself and 13 of its neighbours, each piece against the
+    /// coarser levels), with `report` for the pairs it passes on.
+    fn slab_pairs(
+        &self,
+        k: usize,
+        slabs: std::ops::Range<usize>,
+        candidates: &mut impl Candidates,
+        report: &mut impl FnMut(Reported, Reported, Window),
+    ) {
         // Half of the 26 neighbours, so each pair of adjacent cells is swept once. Cells along z
         // are adjacent in memory, so the 13 cells are 5 contiguous runs: the next cell of this
         // column, then z - 1 ..= z + 1 of the columns (x, y + 1) and (x + 1, y - 1 ..= y + 1);
         // column offsets are stored +1 in y so that -1 needs no signed arithmetic.
         const COLUMNS: [[usize; 2]; 4] = [[0, 2], [1, 0], [1, 1], [1, 2]];
-        let (boxes, owners, motions) = (&self.boxes, &self.owners[..], &self.motions[..]);
-        // Reports binned pieces a and b when they belong to different bodies and their windows
-        // meet (their boxes are known to overlap).
-        let mut hit = |a: usize, b: usize| {
-            let (ea, eb) = (owners[a], owners[b]);
-            let window = ea.window.intersect(eb.window);
-            if ea.body != eb.body && !window.is_empty() {
-                let x = Reported { body: ea.body, stamp: ea.stamp, state: &motions[a] };
-                let y = Reported { body: eb.body, stamp: eb.stamp, state: &motions[b] };
-                report(x, y, window);
-            }
-        };
+        let boxes = &self.boxes;
         let level = &self.levels[k];
         let [nx, ny, nz] = level.dims;
         let starts = &level.cell_start[..];
@@ -544,18 +559,22 @@ impl Grid {
                         let reach = level.coordinates(bbox.corners().1);
                         let beyond = usize::from(reach[0] > x) | usize::from(reach[1] > y) << 1;
                         let across_z = reach[2] > z;
-                        boxes.for_each_overlap(&bbox, a + 1..if across_z { next_z_end } else { to }, |b| hit(a, b));
+                        boxes.for_each_overlap(&bbox, a + 1..if across_z { next_z_end } else { to }, |b| {
+                            candidates.overlap(a, b, report)
+                        });
                         for &(other_from, within, across, faces) in &runs[..count] {
                             if beyond & faces == faces {
                                 let other_to = if across_z { across } else { within };
-                                boxes.for_each_overlap(&bbox, other_from..other_to, |b| hit(a, b));
+                                boxes.for_each_overlap(&bbox, other_from..other_to, |b| {
+                                    candidates.overlap(a, b, report)
+                                });
                             }
                         }
                         // Coarser levels: the cells that can hold an overlapping box there.
                         let (low, high) = bbox.corners();
                         for coarser in &self.levels[k + 1..] {
                             for c2 in coarser.cells_near(low, high) {
-                                boxes.for_each_overlap(&bbox, coarser.run(c2), |b| hit(a, b));
+                                boxes.for_each_overlap(&bbox, coarser.run(c2), |b| candidates.overlap(a, b, report));
                             }
                         }
                     }
@@ -720,20 +739,25 @@ impl BroadPhase for Grid {
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64 {
-        let mut candidates = 0;
-        for k in 0..self.levels.len() {
-            let this = &*self;
-            let counts = workers.extend_ranges(this.levels[k].dims[0], out, |slabs, found| {
-                let mut count = 0u64;
-                this.slab_pairs(k, slabs, &mut |x, y, window| {
-                    count += 1;
-                    predict(x, y, window, found);
-                });
-                count
-            });
-            candidates += counts.iter().sum::<u64>();
+        self.sweep(workers, predict, out, |reporting| reporting)
+    }
+
+    /// Where the processor has AVX (asked once per sweep), each piece's candidates are screened
+    /// four at a time ([`Screened`]); elsewhere one by one, as any broad phase does.
+    fn find_pairs_screened<T: Send>(
+        &mut self,
+        proxies: Proxies,
+        workers: &Workers,
+        screen: &impl PairScreen,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+    ) -> u64 {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx") {
+            // SAFETY: the processor has AVX, and the sweep hands on only its own pieces.
+            return self.sweep(workers, predict, out, |reporting| unsafe { Screened::new(reporting, screen) });
         }
-        candidates
+        self.find_pairs(proxies, workers, screened_one_by_one(screen, predict), out)
     }
 
     fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {

@@ -17,12 +17,14 @@
 
 pub mod box_columns;
 pub mod brute_force;
+mod candidates;
 pub(crate) mod coherent_sort;
 pub(crate) mod ghosts;
 pub mod grid;
 pub mod proxy;
 pub mod sweep_prune;
 
+use crate::bodies::BodyState;
 use crate::broad_phase::proxy::{Path, Proxies, Reported};
 use crate::parallel::Workers;
 use crate::window::Window;
@@ -53,6 +55,20 @@ pub trait BroadPhase: Sync {
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64;
+
+    /// [`Self::find_pairs`] with `predict` asked only of the candidates `screen` does not clear
+    /// (the cleared ones counted all the same). A broad phase that can ask it of several
+    /// candidates at once does.
+    fn find_pairs_screened<T: Send>(
+        &mut self,
+        proxies: Proxies,
+        workers: &Workers,
+        screen: &impl PairScreen,
+        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        out: &mut Vec<T>,
+    ) -> u64 {
+        self.find_pairs(proxies, workers, screened_one_by_one(screen, predict), out)
+    }
 
     /// Calls `report(other, window)` for every candidate partner of body `body`'s current proxy
     /// other than `skip`, without entering the proxy.
@@ -90,4 +106,32 @@ pub trait BroadPhase: Sync {
 
     /// Bytes held (capacity, not just length).
     fn memory_bytes(&self) -> usize;
+}
+
+/// A test of two reported states alone that clears candidate pairs with no event, for a broad
+/// phase to ask before anything else of a pair (see [`BroadPhase::find_pairs_screened`]).
+pub trait PairScreen: Sync {
+    /// True when the pair of `a` and `b` has no event.
+    fn clears(&self, a: &BodyState, b: &BodyState) -> bool;
+
+    /// Bit k (k < 4) set when [`Self::clears`] the pair of `a[k]` and `b[k]`: its very
+    /// verdicts, four at once in AVX's lanes.
+    ///
+    /// # Safety
+    /// The processor has AVX.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn clears_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> u32;
+}
+
+/// `predict` of the candidates `screen` does not clear, asked one by one.
+#[inline(always)]
+fn screened_one_by_one<'a, T>(
+    screen: &'a impl PairScreen,
+    predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send + 'a,
+) -> impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send + 'a {
+    move |x, y, window, out| {
+        if !screen.clears(x.state, y.state) {
+            predict(x, y, window, out);
+        }
+    }
 }

@@ -11,7 +11,9 @@ pub use free_rotation::FreeRotation;
 use glam::{DQuat, DVec3};
 
 /// A body's straight motion: at `since` its centre is at `position`, then it moves with `velocity`.
+/// In declaration order: a pair screen loads the position and `since` as one row of four.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
 pub struct Motion {
     pub position: DVec3,
     pub since: f64,

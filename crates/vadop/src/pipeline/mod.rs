@@ -52,7 +52,7 @@ use pass_through::Searched;
 use passed::{Ahead, PassedContacts};
 use predict::{
     for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_own_pair,
-    predict_straight_sphere_pair,
+    straight_sphere_event_past_screen, StraightSpheres,
 };
 use predict::{predict_pair, push_found};
 use predict::{predict_wall, renewal, sort_predictions, Prediction};
@@ -352,8 +352,15 @@ impl<B: BroadPhase> Pipeline<B> {
                 find_pair_events(broad, view, workers, found, |a, b, w| predict_pair(bodies, table, a, b, w))
             } else if bodies.straight_paths() {
                 // Every proxy is its body's own (no owners to look up for each candidate), and
-                // every body a sphere on a straight path: the exact test's screen first.
-                find_pair_events(broad, view, workers, found, |a, b, w| predict_straight_sphere_pair(bodies, a, b, w))
+                // every body a sphere on a straight path: the exact test's screen first, by the
+                // broad phase, then the rest of the test for the pairs it keeps.
+                broad.find_pairs_screened(
+                    view,
+                    workers,
+                    &StraightSpheres,
+                    |a, b, w, out| push_found(out, straight_sphere_event_past_screen(a, b, w)),
+                    found,
+                )
             } else {
                 find_pair_events(broad, view, workers, found, |a, b, w| predict_own_pair(bodies, a, b, w))
             }

@@ -10,12 +10,14 @@
 
 use crate::bodies::{Bodies, BodyState};
 use crate::broad_phase::proxy::{Proxies, ProxyTable, Reported};
+use crate::broad_phase::PairScreen;
 use crate::event_queue::{Event, Partner};
 use crate::motion::Motion;
 use crate::narrow_phase::contacts::{self, Parking};
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::spheres::{
-    straight_pair_contact_time_past_screen, straight_paths_clearly_miss, wall_contact_time,
+    straight_pair_contact_time_past_screen, straight_paths_clearly_miss, straight_paths_clearly_miss_four,
+    wall_contact_time,
 };
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::walls::BoxBounds;
@@ -85,11 +87,29 @@ pub(super) fn predict_straight_sphere_pair(bodies: &Bodies, x: Reported, y: Repo
     straight_sphere_event_past_screen(x, y, window)
 }
 
+/// The exact test's first screen for spheres on straight paths ([`straight_paths_clearly_miss`]),
+/// for a broad phase's sweep to ask of its candidates, four at a time where it can.
+pub(super) struct StraightSpheres;
+
+impl PairScreen for StraightSpheres {
+    #[inline(always)]
+    fn clears(&self, a: &BodyState, b: &BodyState) -> bool {
+        straight_paths_clearly_miss(&a.motion, &b.motion, a.radius + b.radius)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn clears_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> u32 {
+        // SAFETY: the caller's.
+        unsafe { straight_paths_clearly_miss_four(a, b) }
+    }
+}
+
 /// [`predict_own_pair`] of two spheres on straight paths that [`straight_paths_clearly_miss`]
 /// has passed: the same arithmetic (the lower id first, the exact test, the window, the stamps)
 /// without the screen asked again or the world's flags read.
 #[inline(never)]
-fn straight_sphere_event_past_screen(x: Reported, y: Reported, window: Window) -> Option<Event> {
+pub(super) fn straight_sphere_event_past_screen(x: Reported, y: Reported, window: Window) -> Option<Event> {
     let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
     debug_assert!(a.body != b.body, "a body reported against itself");
     let (sa, sb) = (a.state, b.state);
