@@ -350,7 +350,7 @@ impl<'a> Search<'a> {
     #[inline(always)]
     fn gather_list(&mut self, p: usize, cell: u32, k: u8) {
         let (cells, states) = (self.cells, &self.bodies.state[..]);
-        let (mut q, crowded) = (cells.first(cell), cells.is_crowded(cell));
+        let (mut q, crowded) = cells.first_of_occupied(cell);
         while q != NONE {
             if q as usize != p {
                 if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
