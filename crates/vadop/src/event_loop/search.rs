@@ -410,10 +410,13 @@ impl<'a> Search<'a> {
         let (states, origins) = (&self.bodies.state[..], &self.near.origins);
         let mut bound = best.bound;
         let mut kept = 0;
-        for k in 0..self.candidates.len() {
-            let c = self.candidates[k];
+        // Through a slice: its length stays in a register, where the `Vec`'s is read again
+        // after every write into it.
+        let candidates = &mut self.candidates[..];
+        for k in 0..candidates.len() {
+            let c = candidates[k];
             if let Some(earliest) = screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound) {
-                self.candidates[kept] = Candidate { earliest, ..c };
+                candidates[kept] = Candidate { earliest, ..c };
                 kept += 1;
             }
         }
