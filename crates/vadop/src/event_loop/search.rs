@@ -18,7 +18,7 @@ use super::cells::{Cells, Crossing, Neighbour, NONE};
 use super::lists::{self, Lists};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
-use crate::memory::prefetch;
+use crate::memory::{prefetch, prefetch_item};
 use crate::narrow_phase::contacts;
 use crate::pipeline::predict::{crossing_event, sphere_wall_event};
 use crate::walls::BoxBounds;
@@ -351,13 +351,16 @@ impl<'a> Search<'a> {
     fn gather_list(&mut self, p: usize, cell: u32, k: u8) {
         let (cells, states) = (self.cells, &self.bodies.state[..]);
         let (mut q, crowded) = cells.first_of_occupied(cell);
+        // The candidates' `Vec` reached once, not through the search at every push; and a
+        // prefetch, which never faults, without a bounds check.
+        let candidates = &mut *self.candidates;
         while q != NONE {
             if q as usize != p {
                 if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
                     self.overlay.met = Some((q, k));
                 } else {
-                    prefetch(&states[q as usize]);
-                    self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                    prefetch_item(states, q as usize);
+                    candidates.push(Candidate { earliest: 0.0, q, cell: k });
                 }
             }
             q = if crowded { cells.after(q) } else { NONE };
