@@ -18,7 +18,7 @@ use super::cells::{Cells, Crossing, Neighbour, NONE};
 use super::lists::{self, Lists};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
-use crate::memory::{prefetch, prefetch_item};
+use crate::memory::prefetch_item;
 use crate::narrow_phase::contacts;
 use crate::pipeline::predict::{crossing_event, sphere_wall_event};
 use crate::walls::BoxBounds;
@@ -378,15 +378,17 @@ impl<'a> Search<'a> {
         // The members' records, scattered in memory, asked for all at once: they then arrive
         // together rather than one after the other.
         for &entry in members {
-            prefetch(&states[lists::split(entry).0]);
+            prefetch_item(states, lists::split(entry).0);
         }
-        let mut bound = best.bound;
+        // The screen's switch and the candidates' `Vec` read once, not through the search at
+        // every member (as in `gather_list`).
+        let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
         for &entry in members {
             let (q, image) = lists::split(entry);
             if fresh && !lists.fresh(q) {
                 continue;
             }
-            let earliest = if self.screen {
+            let earliest = if screened {
                 match screen(own, &states[q], own.position - lists.images[image], &mut bound) {
                     Some(earliest) => earliest,
                     None => continue,
@@ -394,7 +396,7 @@ impl<'a> Search<'a> {
             } else {
                 f64::NEG_INFINITY
             };
-            self.candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+            candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
         }
         best.bound = bound;
     }
