@@ -197,6 +197,14 @@ impl Ring {
         self.filled.len()
     }
 
+    /// The ring's bucket that holds the calendar's bucket `k`: `k` modulo the ring's length, a
+    /// power of two, by a mask (the same for a negative `k`, as `rem_euclid`), not a division.
+    #[inline]
+    fn of(&self, k: i64) -> usize {
+        debug_assert!(self.len().is_power_of_two());
+        (k & (self.len() as i64 - 1)) as usize
+    }
+
     #[inline]
     fn push(&mut self, bucket: usize, slot: Slot) {
         let filled = self.filled[bucket] as usize;
@@ -364,8 +372,7 @@ impl Calendar {
         if k <= self.current {
             self.insert_near(Entry { scheduled, owner, version });
         } else if k < self.current + self.ring.len() as i64 {
-            let ring = self.ring.len() as i64;
-            self.ring.push((k % ring) as usize, slot);
+            self.ring.push(self.ring.of(k), slot);
             self.in_ring += 1;
         } else {
             self.overflow.push(Later { time, slot });
@@ -461,10 +468,10 @@ impl Calendar {
                 self.current = if turn > self.current { turn } else { next_turn };
             }
             self.current += 1;
-            if self.current.rem_euclid(ring) == 0 {
+            let bucket = self.ring.of(self.current);
+            if bucket == 0 {
                 self.sort_overflow();
             }
-            let bucket = self.current.rem_euclid(ring) as usize;
             let (in_place, spilled) = self.ring.bucket(bucket);
             for slot in in_place.iter().chain(spilled) {
                 if self.is_current(slot.owner, slot.version) {
@@ -497,7 +504,7 @@ impl Calendar {
                 let scheduled = self.booked[slot.owner as usize].events.scheduled(slot.owner);
                 self.insert_near(Entry { scheduled, owner: slot.owner, version: slot.version });
             } else if bucket < self.current + ring {
-                self.ring.push(bucket.rem_euclid(ring) as usize, slot);
+                self.ring.push(self.ring.of(bucket), slot);
                 self.in_ring += 1;
             } else {
                 overflow[kept] = overflow[k];

@@ -6,7 +6,8 @@
 //! bodies, so moving a body costs O(1) and nothing is allocated while stepping; with neighbour
 //! lists, see [`super::lists`], a body is listed by its shell's centre instead, in cells wider
 //! by two shells, and has no crossings) with a bit per cell that tells an empty cell without
-//! reading its list's head and one that tells a cell of one body without reading past it, a body's
+//! reading its list's head, and a bit in the head that tells a cell of one body without reading
+//! past it, a body's
 //! neighbourhood (the 27 cells around its own, or the 9 it has just come within reach of) with
 //! the whole sides that bring each neighbour cell's bodies to their nearest image across periodic
 //! faces, and the crossing times. Two bodies that touch are always in neighbouring cells, so a
@@ -21,6 +22,10 @@ use glam::DVec3;
 
 /// No body, or no cell.
 pub(super) const NONE: u32 = u32::MAX;
+
+/// The bit of a cell's head that says the cell holds more than one body (see [`Cells::head`]);
+/// the bits below it are the head's id.
+const CROWDED: u32 = 1 << 31;
 
 /// A cell is at least this much wider than the largest sum of two radii (relative), plus this many
 /// roundings of the box's largest coordinate, so rounding in a crossing time or a position never
@@ -85,16 +90,16 @@ pub(super) struct Cells {
     periodic: [bool; 3],
     /// The widest pair of bodies the grid was sized for (the sum of two radii).
     reach: f64,
-    /// Per cell: its first body, or [`NONE`].
+    /// Per cell: its first body, or [`NONE`]; with [`CROWDED`] set when the cell holds more than
+    /// one. A search that finds it clear takes the head for the cell's only body and does not
+    /// read that body's place in the lists for a next one: in a thin gas most occupied cells hold
+    /// one body, and each such read is a miss. (The flag rides in the head, which the search
+    /// reads anyway, rather than in a bit array of its own: one read a cell, not two.)
     head: Vec<u32>,
     /// Per cell, one bit: it holds a body (its head is not [`NONE`]). A search reads this before
     /// a cell's head: in a thin gas most cells are empty, and the heads (4 bytes a cell) outgrow
     /// the caches where the bits (one a cell) do not, so an empty cell costs no cache miss.
     occupied: Vec<u64>,
-    /// Per cell, one bit: it holds more than one body. A search that finds it clear takes the
-    /// head for the cell's only body and does not read that body's place in the lists for a
-    /// next one: in a thin gas most occupied cells hold one body, and each such read is a miss.
-    crowded: Vec<u64>,
     /// Per body: its place in the lists (see [`Listing`]).
     listing: Vec<Listing>,
 }
@@ -162,7 +167,6 @@ impl Cells {
             reach,
             head: vec![NONE; total],
             occupied: vec![0; total.div_ceil(64)],
-            crowded: vec![0; total.div_ceil(64)],
             listing: Vec::new(),
         }
     }
@@ -175,7 +179,7 @@ impl Cells {
     /// Bytes held.
     pub(super) fn memory_bytes(&self) -> usize {
         self.head.capacity() * 4
-            + (self.occupied.capacity() + self.crowded.capacity()) * 8
+            + self.occupied.capacity() * 8
             + self.listing.capacity() * std::mem::size_of::<Listing>()
     }
 
@@ -216,6 +220,9 @@ impl Cells {
     /// Lists body `i` in the cell of its centre at `t`.
     pub(super) fn insert(&mut self, bodies: &Bodies, i: usize, t: f64) {
         if self.listing.len() < bodies.slots() {
+            // Ids below the head's flag, and a crowded head never [`NONE`] (2^31 bodies would
+            // take hundreds of GiB anyway).
+            assert!(bodies.slots() < CROWDED as usize, "too many bodies for the cells");
             self.listing.resize(bodies.slots(), Listing::UNLISTED);
         }
         debug_assert_eq!(self.listing[i].cell, NONE, "body {i} listed twice");
@@ -281,15 +288,15 @@ impl Cells {
 
     fn link(&mut self, i: usize, at: [i64; 3]) {
         let cell = (at[0] + at[1] * self.strides[1] + at[2] * self.strides[2]) as u32;
-        let first = self.head[cell as usize];
+        let first = self.first(cell);
         self.listing[i] = Listing { next: first, prev: NONE, cell, at: at.map(|c| c as u16) };
-        if first != NONE {
+        self.head[cell as usize] = if first != NONE {
             self.listing[first as usize].prev = i as u32;
-            self.crowded[cell as usize / 64] |= 1 << (cell % 64);
+            i as u32 | CROWDED
         } else {
             self.occupied[cell as usize / 64] |= 1 << (cell % 64);
-        }
-        self.head[cell as usize] = i as u32;
+            i as u32
+        };
     }
 
     fn unlink(&mut self, i: usize) {
@@ -301,15 +308,16 @@ impl Cells {
         } else {
             next == NONE && self.listing[prev as usize].prev == NONE
         };
-        if one_left {
-            self.crowded[cell as usize / 64] &= !(1 << (cell % 64));
-        }
         if prev == NONE {
-            self.head[cell as usize] = next;
+            // `next` becomes the head, and the cell stays crowded unless it is the last.
+            self.head[cell as usize] = if next == NONE || one_left { next } else { next | CROWDED };
             if next == NONE {
                 self.occupied[cell as usize / 64] &= !(1 << (cell % 64));
             }
         } else {
+            if one_left {
+                self.head[cell as usize] &= !CROWDED;
+            }
             self.listing[prev as usize].next = next;
         }
         if next != NONE {
@@ -321,13 +329,19 @@ impl Cells {
     /// The first body of cell `cell`, or [`NONE`].
     #[inline]
     pub(super) fn first(&self, cell: u32) -> u32 {
-        self.head[cell as usize]
+        match self.head[cell as usize] {
+            NONE => NONE,
+            head => head & !CROWDED,
+        }
     }
 
-    /// True when cell `cell` holds more than one body (see [`Self::crowded`]).
+    /// The first body of cell `cell`, which holds one, and whether it holds more (see
+    /// [`Self::head`]).
     #[inline(always)]
-    pub(super) fn is_crowded(&self, cell: u32) -> bool {
-        self.crowded[cell as usize / 64] & (1 << (cell % 64)) != 0
+    pub(super) fn first_of_occupied(&self, cell: u32) -> (u32, bool) {
+        let head = self.head[cell as usize];
+        debug_assert_ne!(head, NONE, "cell {cell} is empty");
+        (head & !CROWDED, head & CROWDED != 0)
     }
 
     /// True when cell `cell` holds a body (see [`Self::occupied`]).
@@ -355,8 +369,7 @@ impl Cells {
         let (c, word, bit) = (cell as usize, cell as usize / 64, 1u64 << (cell % 64));
         self.head[c] = other.head[c];
         self.occupied[word] = (self.occupied[word] & !bit) | (other.occupied[word] & bit);
-        self.crowded[word] = (self.crowded[word] & !bit) | (other.crowded[word] & bit);
-        let mut q = other.head[c];
+        let mut q = other.first(cell);
         while q != NONE {
             self.listing[q as usize] = other.listing[q as usize];
             q = other.listing[q as usize].next;
@@ -369,7 +382,6 @@ impl Cells {
         let place = |l: &Listing| (l.next, l.prev, l.cell, l.at);
         self.head == other.head
             && self.occupied == other.occupied
-            && self.crowded == other.crowded
             && self.listing.iter().map(place).eq(other.listing.iter().map(place))
     }
 

@@ -18,7 +18,7 @@ use super::cells::{Cells, Crossing, Neighbour, NONE};
 use super::lists::{self, Lists};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
-use crate::memory::prefetch;
+use crate::memory::prefetch_item;
 use crate::narrow_phase::contacts;
 use crate::pipeline::predict::{crossing_event, sphere_wall_event};
 use crate::walls::BoxBounds;
@@ -350,14 +350,17 @@ impl<'a> Search<'a> {
     #[inline(always)]
     fn gather_list(&mut self, p: usize, cell: u32, k: u8) {
         let (cells, states) = (self.cells, &self.bodies.state[..]);
-        let (mut q, crowded) = (cells.first(cell), cells.is_crowded(cell));
+        let (mut q, crowded) = cells.first_of_occupied(cell);
+        // The candidates' `Vec` reached once, not through the search at every push; and a
+        // prefetch, which never faults, without a bounds check.
+        let candidates = &mut *self.candidates;
         while q != NONE {
             if q as usize != p {
                 if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
                     self.overlay.met = Some((q, k));
                 } else {
-                    prefetch(&states[q as usize]);
-                    self.candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                    prefetch_item(states, q as usize);
+                    candidates.push(Candidate { earliest: 0.0, q, cell: k });
                 }
             }
             q = if crowded { cells.after(q) } else { NONE };
@@ -375,15 +378,17 @@ impl<'a> Search<'a> {
         // The members' records, scattered in memory, asked for all at once: they then arrive
         // together rather than one after the other.
         for &entry in members {
-            prefetch(&states[lists::split(entry).0]);
+            prefetch_item(states, lists::split(entry).0);
         }
-        let mut bound = best.bound;
+        // The screen's switch and the candidates' `Vec` read once, not through the search at
+        // every member (as in `gather_list`).
+        let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
         for &entry in members {
             let (q, image) = lists::split(entry);
             if fresh && !lists.fresh(q) {
                 continue;
             }
-            let earliest = if self.screen {
+            let earliest = if screened {
                 match screen(own, &states[q], own.position - lists.images[image], &mut bound) {
                     Some(earliest) => earliest,
                     None => continue,
@@ -391,7 +396,7 @@ impl<'a> Search<'a> {
             } else {
                 f64::NEG_INFINITY
             };
-            self.candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+            candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
         }
         best.bound = bound;
     }
@@ -410,10 +415,13 @@ impl<'a> Search<'a> {
         let (states, origins) = (&self.bodies.state[..], &self.near.origins);
         let mut bound = best.bound;
         let mut kept = 0;
-        for k in 0..self.candidates.len() {
-            let c = self.candidates[k];
+        // Through a slice: its length stays in a register, where the `Vec`'s is read again
+        // after every write into it.
+        let candidates = &mut self.candidates[..];
+        for k in 0..candidates.len() {
+            let c = candidates[k];
             if let Some(earliest) = screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound) {
-                self.candidates[kept] = Candidate { earliest, ..c };
+                candidates[kept] = Candidate { earliest, ..c };
                 kept += 1;
             }
         }
