@@ -169,7 +169,8 @@ pub enum VadopError {
     /// The alignment angle phi was out of range.
     #[error("phi must be a finite angle in [rho, pi/2] radians (rho = {rho:.6}) so that every pair of bodies shares an axis, got {got}")]
     BadPhi { got: f64, rho: f64 },
-    /// Too many bodies for the 32-bit slot index of a [`BodyHandle`].
+    /// Too many bodies: a world holds fewer than 2^31 slots (the event loop flags a cell in a body
+    /// index's top bit).
     #[error("a world holds at most {0} bodies")]
     TooManyBodies(usize),
     /// A scene file or scene parameters could not be used.

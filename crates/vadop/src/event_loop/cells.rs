@@ -220,9 +220,9 @@ impl Cells {
     /// Lists body `i` in the cell of its centre at `t`.
     pub(super) fn insert(&mut self, bodies: &Bodies, i: usize, t: f64) {
         if self.listing.len() < bodies.slots() {
-            // Ids below the head's flag, and a crowded head never [`NONE`] (2^31 bodies would
-            // take hundreds of GiB anyway).
-            assert!(bodies.slots() < CROWDED as usize, "too many bodies for the cells");
+            // Ids below the head's flag, and a crowded head never [`NONE`]: the world holds
+            // fewer than 2^31 - 1 slots.
+            debug_assert!(bodies.slots() < CROWDED as usize - 1, "too many bodies for the cells");
             self.listing.resize(bodies.slots(), Listing::UNLISTED);
         }
         debug_assert_eq!(self.listing[i].cell, NONE, "body {i} listed twice");

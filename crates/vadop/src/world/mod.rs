@@ -36,6 +36,9 @@ pub use config::{Method, WorldConfig, AUTO_POOL_AXES, MAX_BOX_LENGTHS_PER_FRAME}
 pub use rigid::{Body, BodyShape, ShapeId};
 pub use transfer::SphereRecord;
 
+/// Most body slots a world holds: below 2^31, so the event loop's cells can keep a flag in the
+/// top bit of a body's index (2^31 bodies would take hundreds of GiB anyway).
+const MAX_SLOTS: usize = (1 << 31) - 2;
 /// Bounces a body may make on one wall in one step under gravity where bodies may not come to
 /// rest (elastic or detect mode: see [`crate::response::rest`]): a body resting on a floor
 /// would make infinitely many. One that nearly rests makes
@@ -213,8 +216,8 @@ impl World {
 
     /// Fails when `more` bodies would not fit the slots.
     fn check_room(&self, more: usize) -> Result<()> {
-        if self.used_slots() + more >= u32::MAX as usize - 1 {
-            return Err(VadopError::TooManyBodies(u32::MAX as usize - 1));
+        if self.used_slots() + more > MAX_SLOTS {
+            return Err(VadopError::TooManyBodies(MAX_SLOTS));
         }
         Ok(())
     }
