@@ -743,7 +743,7 @@ impl BroadPhase for Grid {
     }
 
     /// Where the processor has AVX (asked once per sweep), each piece's candidates are screened
-    /// four at a time ([`Screened`]); elsewhere one by one, as any broad phase does.
+    /// four at a time (`Screened`, in `candidates`); elsewhere one by one, as any broad phase does.
     fn find_pairs_screened<T: Send>(
         &mut self,
         proxies: Proxies,
