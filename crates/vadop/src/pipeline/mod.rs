@@ -83,6 +83,11 @@ const CALM_UPDATES: f64 = 0.1;
 /// A proxy reaches this many typical diameters along its path at most; then it is renewed, so a
 /// fast body's retest covers only where it can go before its next contact is likely.
 const REACH_DIAMETERS: f64 = 8.0;
+/// A window that would end within this share of a frame before the frame's end runs to it: a
+/// window start (every proxy refreshed and binned, every pair predicted) costs about what the
+/// window's events do at 5 diameters a frame, where windows last about one frame and the last
+/// sliver of a frame would otherwise start a window of its own.
+const SLIVER: f64 = 0.1;
 /// The quantile of travel times that sets the window.
 const WINDOW_QUANTILE: f64 = 0.1;
 /// The event loop fetches the bodies of the event this many places ahead.
@@ -249,7 +254,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let mut now = t0;
         loop {
             if !(self.window.end > now) {
-                self.start_window(bodies, physics, now, t1 - t0, out.stats);
+                self.start_window(bodies, physics, now, Window::new(t0, t1), out.stats);
             }
             let until = t1.min(self.window.end);
             let start = Instant::now();
@@ -300,14 +305,19 @@ impl<B: BroadPhase> Pipeline<B> {
         (quick * diameters * self.shrink).clamp(frame / FRAME_RATIO, longest)
     }
 
-    /// Starts a window at `now`: refreshes every proxy (c_update), prepares the broad phase
-    /// (c_sort) and predicts every pair and wall contact inside the window (c_test).
-    fn start_window(&mut self, bodies: &Bodies, physics: &Physics, now: f64, frame: f64, stats: &mut FrameStats) {
-        let length = self.window_length(bodies, physics.mode, frame);
+    /// Starts a window at `now`, inside the caller's `frame`: refreshes every proxy (c_update),
+    /// prepares the broad phase (c_sort) and predicts every pair and wall contact inside the
+    /// window (c_test).
+    fn start_window(&mut self, bodies: &Bodies, physics: &Physics, now: f64, frame: Window, stats: &mut FrameStats) {
+        let length = self.window_length(bodies, physics.mode, frame.duration());
         let mut end = now + length;
+        if end < frame.end && end >= frame.end - SLIVER * frame.duration() {
+            // Otherwise the frame's last sliver takes a window start of its own.
+            end = frame.end;
+        }
         if !(end > now) {
             // A window too short to move the clock on (a time far beyond the frame length).
-            end = now + frame;
+            end = now + frame.duration();
         }
         if !(end > now) {
             end = now.next_up();
