@@ -428,8 +428,7 @@ impl<B: BroadPhase> Pipeline<B> {
             // Most events of a step in detect mode: spheres passing through each other, their
             // record made ahead.
             match bulk_place.map_or(Ahead::Unknown, |place| self.passed.ahead_of(bodies, place, &event)) {
-                Ahead::Current(contact) => {
-                    let Partner::Body(j) = event.partner else { unreachable!("worked out ahead: a pair") };
+                Ahead::Current(contact, j) => {
                     self.report_pair_contact(bodies, physics, (event.body, j), contact, Resolution::Passed, out);
                 }
                 Ahead::Void => {

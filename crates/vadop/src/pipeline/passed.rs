@@ -61,8 +61,8 @@ pub(super) enum Ahead {
     Unknown,
     /// A pass-through worked out ahead whose bodies changed motion since: void.
     Void,
-    /// A pass-through worked out ahead, still current: its record.
-    Current(Contact),
+    /// A pass-through worked out ahead, still current: its record, and the event's partner.
+    Current(Contact, u32),
 }
 
 impl PassedContacts {
@@ -104,16 +104,20 @@ impl PassedContacts {
     /// spheres when the step started with it before its end): the loop then reads neither body.
     #[inline]
     pub(super) fn is_worked_out(&self, place: usize) -> bool {
+        self.worked(place).is_some()
+    }
+
+    /// What was worked out for the bulk event at `place`, if anything.
+    #[inline]
+    fn worked(&self, place: usize) -> Option<&Worked> {
         // A place before the first wraps past the end.
-        self.ahead.get(place.wrapping_sub(self.ahead_first)).is_some_and(Option::is_some)
+        self.ahead.get(place.wrapping_sub(self.ahead_first))?.as_ref()
     }
 
     /// What was worked out ahead of `event`, just popped from the bulk's `place`.
     #[inline]
     pub(super) fn ahead_of(&self, bodies: &Bodies, place: usize, event: &Event) -> Ahead {
-        let (Some(Some(worked)), Partner::Body(j)) =
-            (self.ahead.get(place.wrapping_sub(self.ahead_first)), event.partner)
-        else {
+        let (Some(worked), Partner::Body(j)) = (self.worked(place), event.partner) else {
             return Ahead::Unknown;
         };
         let i = event.body;
@@ -121,14 +125,15 @@ impl PassedContacts {
             return Ahead::Void;
         }
         let [generation_i, generation_j] = worked.generations;
-        Ahead::Current(Contact {
+        let contact = Contact {
             time: event.time,
             body: BodyHandle::new(i, generation_i),
             touched: Touched::Body(BodyHandle::new(j, generation_j)),
             point: worked.point,
             normal: worked.normal,
             impulse: 0.0,
-        })
+        };
+        Ahead::Current(contact, j)
     }
 
     /// Works out the pending contacts' geometry into `contacts`, on every worker: each chunk of

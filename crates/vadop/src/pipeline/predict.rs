@@ -80,8 +80,7 @@ pub(super) fn predict_own_pair(bodies: &Bodies, x: Reported, y: Reported, window
 #[inline(always)]
 pub(super) fn predict_straight_sphere_pair(bodies: &Bodies, x: Reported, y: Reported, window: Window) -> Option<Event> {
     debug_assert!(bodies.are_spheres(x.body as usize, y.body as usize) && bodies.straight_paths());
-    let (a, b) = (x.state, y.state);
-    if straight_paths_clearly_miss(&a.motion, &b.motion, a.radius + b.radius) {
+    if StraightSpheres.clears(x.state, y.state) {
         return None;
     }
     straight_sphere_event_past_screen(x, y, window)
