@@ -13,6 +13,10 @@ use std::ops::Range;
 /// How many chunks each thread gets: enough to even out chunks of unequal cost.
 const CHUNKS_PER_THREAD: usize = 4;
 
+/// Below this many items in all, the chunks' buffers are appended by the calling thread: waking
+/// the workers would cost more than the copy.
+const MOVED_TOGETHER: usize = 4096;
+
 /// The threads the pipeline may use.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Workers {
@@ -54,7 +58,7 @@ impl Workers {
         if self.threads == 1 {
             return vec![f(0..len, out)];
         }
-        let parts: Vec<(Vec<T>, R)> = self
+        let mut parts: Vec<(Vec<T>, R)> = self
             .ranges(len)
             .map(|range| {
                 let mut found = Vec::new();
@@ -62,13 +66,33 @@ impl Workers {
                 (found, result)
             })
             .collect();
-        parts
-            .into_iter()
-            .map(|(mut found, result)| {
-                out.append(&mut found);
-                result
-            })
-            .collect()
+        let total: usize = parts.iter().map(|(found, _)| found.len()).sum();
+        if total < MOVED_TOGETHER {
+            for (found, _) in &mut parts {
+                out.append(found);
+            }
+        } else {
+            // Each buffer moved into its own stretch of `out` by a worker: one thread moving them
+            // all (some megabytes a frame at 10^5 bodies) was a serial part of every frame.
+            out.reserve(total);
+            let filled = out.len();
+            let mut stretches = Vec::with_capacity(parts.len());
+            let mut spare = &mut out.spare_capacity_mut()[..total];
+            for (found, _) in &mut parts {
+                let (stretch, rest) = std::mem::take(&mut spare).split_at_mut(found.len());
+                stretches.push((stretch, found));
+                spare = rest;
+            }
+            stretches.into_par_iter().for_each(|(stretch, found)| {
+                for (slot, item) in stretch.iter_mut().zip(found.drain(..)) {
+                    slot.write(item);
+                }
+            });
+            // SAFETY: the stretches cover `filled..filled + total` and every slot of them was
+            // written above, each item moved out of its buffer once.
+            unsafe { out.set_len(filled + total) };
+        }
+        parts.into_iter().map(|(_, result)| result).collect()
     }
 
     /// `f(offset, chunk)` on contiguous chunks of `v`; the results in chunk order.
@@ -164,6 +188,19 @@ mod tests {
         });
         assert_eq!(evens, [0, 2, 4, 6, 8]);
         assert_eq!(counts.iter().sum::<usize>(), 5);
+    }
+
+    /// Enough items that the workers move the buffers into place: owned items (each moved once,
+    /// none dropped twice), after what `out` held, in the order one thread gives.
+    #[test]
+    fn extend_ranges_moves_large_outputs_in_order() {
+        let len = 3 * MOVED_TOGETHER;
+        let fill = |r: Range<usize>, out: &mut Vec<String>| out.extend(r.filter(|i| i % 3 != 1).map(|i| i.to_string()));
+        let (mut serial, mut shared) = (vec!["first".to_string()], vec!["first".to_string()]);
+        Workers::serial().extend_ranges(len, &mut serial, fill);
+        Workers::new(3).extend_ranges(len, &mut shared, fill);
+        assert!(shared.len() > MOVED_TOGETHER);
+        assert_eq!(shared, serial);
     }
 
     #[test]
