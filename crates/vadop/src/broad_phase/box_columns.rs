@@ -136,6 +136,28 @@ impl BoxColumns {
         }
     }
 
+    /// [`Self::for_each_overlap`] for a caller that has asked for AVX once (`AVX`: the processor
+    /// has it) rather than at every scan: called from a function compiled for AVX, the vector
+    /// scan inlines there.
+    ///
+    /// # Safety
+    /// `AVX` only where the processor has AVX.
+    #[inline(always)]
+    pub unsafe fn for_each_overlap_known<const AVX: bool>(
+        &self,
+        query: &CompactBox,
+        range: Range<usize>,
+        hit: impl FnMut(usize),
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            assert!(range.end <= self.len(), "range {range:?} beyond {} boxes", self.len());
+            // SAFETY: the range lies within the boxes, and the processor has AVX (the caller's).
+            return unsafe { self.scan(query, range, true, hit) };
+        }
+        self.for_each_overlap(query, range, hit)
+    }
+
     /// [`Self::for_each_overlap`] by vector code, eight boxes at a time with `avx`, four
     /// otherwise: up to 64 boxes' overlaps gathered as bits by a loop with no call inside, then
     /// reported. `hit` is a call, which clobbers every vector register: were it made inside the
@@ -200,6 +222,7 @@ impl BoxColumns {
     /// The processor has AVX, and `last <= self.len()`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
+    #[inline]
     unsafe fn overlaps_avx(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
         use std::arch::x86_64::*;
         let q_low = query.low.map(|v| _mm256_set1_ps(v));
