@@ -23,19 +23,24 @@ pub struct BoxColumns {
 /// eight at a time.
 const PADDING: usize = 7;
 
-/// Disjoint mutable windows onto the columns, one per worker.
+/// Disjoint mutable windows onto the columns, one per worker, all six of one length.
 pub struct BoxColumnsMut<'a> {
     low: [&'a mut [f32]; 3],
     high: [&'a mut [f32]; 3],
 }
 
 impl BoxColumnsMut<'_> {
-    /// Stores `bbox` at `k`, counted from the start of this part.
+    /// Stores `bbox` at `k`, counted from the start of this part. One bounds check for the six
+    /// columns rather than one each: the binning stores every box of a window's start this way.
     #[inline]
     pub fn set(&mut self, k: usize, bbox: CompactBox) {
+        assert!(k < self.low[0].len(), "box {k} beyond a part of {}", self.low[0].len());
         for axis in 0..3 {
-            self.low[axis][k] = bbox.low[axis];
-            self.high[axis][k] = bbox.high[axis];
+            // SAFETY: the six windows have one length (`BoxColumns::parts_mut`), above `k`.
+            unsafe {
+                *self.low[axis].get_unchecked_mut(k) = bbox.low[axis];
+                *self.high[axis].get_unchecked_mut(k) = bbox.high[axis];
+            }
         }
     }
 }
@@ -60,8 +65,8 @@ impl BoxColumns {
         }
     }
 
-    /// Box `i`.
-    #[inline]
+    /// Box `i`. Always inline: the sweep compiled for AVX left it a call, once per piece.
+    #[inline(always)]
     pub fn get(&self, i: usize) -> CompactBox {
         CompactBox {
             low: [self.low[0][i], self.low[1][i], self.low[2][i]],
@@ -90,7 +95,11 @@ impl BoxColumns {
             .zip(split(hx))
             .zip(split(hy))
             .zip(split(hz))
-            .map(|(((((lx, ly), lz), hx), hy), hz)| BoxColumnsMut { low: [lx, ly, lz], high: [hx, hy, hz] })
+            .map(|(((((lx, ly), lz), hx), hy), hz)| {
+                // The columns are of one length and cut at the same points: so are their parts.
+                debug_assert!([ly.len(), lz.len(), hx.len(), hy.len(), hz.len()].iter().all(|&len| len == lx.len()));
+                BoxColumnsMut { low: [lx, ly, lz], high: [hx, hy, hz] }
+            })
             .collect()
     }
 
@@ -134,6 +143,28 @@ impl BoxColumns {
                 hit(j);
             }
         }
+    }
+
+    /// [`Self::for_each_overlap`] for a caller that has asked for AVX once (`AVX`: the processor
+    /// has it) rather than at every scan: called from a function compiled for AVX, the vector
+    /// scan inlines there.
+    ///
+    /// # Safety
+    /// `AVX` only where the processor has AVX.
+    #[inline(always)]
+    pub unsafe fn for_each_overlap_known<const AVX: bool>(
+        &self,
+        query: &CompactBox,
+        range: Range<usize>,
+        hit: impl FnMut(usize),
+    ) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX {
+            assert!(range.end <= self.len(), "range {range:?} beyond {} boxes", self.len());
+            // SAFETY: the range lies within the boxes, and the processor has AVX (the caller's).
+            return unsafe { self.scan(query, range, true, hit) };
+        }
+        self.for_each_overlap(query, range, hit)
     }
 
     /// [`Self::for_each_overlap`] by vector code, eight boxes at a time with `avx`, four
@@ -200,6 +231,7 @@ impl BoxColumns {
     /// The processor has AVX, and `last <= self.len()`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
+    #[inline]
     unsafe fn overlaps_avx(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
         use std::arch::x86_64::*;
         let q_low = query.low.map(|v| _mm256_set1_ps(v));

@@ -135,9 +135,13 @@ impl<S: PairScreen> Candidates for Screened<'_, S> {
     fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window)) {
         let (owners, motions) = (self.reporting.owners.len(), self.reporting.motions.len());
         debug_assert!(a.max(b) < owners.min(motions));
-        self.held[self.len] = (a as u32, b as u32);
-        self.len += 1;
-        if self.len == HELD {
+        let len = self.len;
+        // SAFETY: `len < HELD`: the candidates are screened, and `len` reset, once `HELD` are
+        // held. Unchecked, and `len` kept in a register rather than read back past the store:
+        // once per candidate, in the scans' loops.
+        unsafe { *self.held.get_unchecked_mut(len) = (a as u32, b as u32) };
+        self.len = len + 1;
+        if len + 1 == HELD {
             // SAFETY: AVX, by `new`'s contract; a candidate is held.
             unsafe { self.screen_held(report) };
         }

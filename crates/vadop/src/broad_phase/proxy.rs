@@ -377,11 +377,17 @@ impl ProxyTable {
             self.ghosts.clear(bodies.slots());
         }
         let rule = self.rule();
+        // Without gravity every body moves straight: the proxy's arithmetic is the same with the
+        // pull known to be zero, and the compiler then drops its every test of the pull (with the
+        // wall test in line below, 29 % of the refresh's instructions at n = 10^5, 5 d/f).
+        let straight = bodies.straight_paths();
         workers.zip_chunks(&mut self.spans, &mut self.flags, |offset, spans, flags| {
-            for (k, (span, flags)) in spans.iter_mut().zip(flags).enumerate() {
-                if live[offset + k] {
-                    (*span, *flags) = rule.span(offset + k, bodies, window.start);
-                }
+            if straight {
+                rule.fill(offset, spans, flags, live, |i| {
+                    rule.span_under(i, bodies, &bodies.state[i].motion, window.start, DVec3::ZERO)
+                });
+            } else {
+                rule.fill(offset, spans, flags, live, |i| rule.span(i, bodies, window.start));
             }
         });
         // A removed body's stamp moved on at its removal, so its entries stay stale.
@@ -598,7 +604,13 @@ impl<'a> Proxies<'a> {
     /// a path into pieces needs for every proxy at a window's start.
     #[inline(always)]
     pub fn origin_and_velocity(&self, i: usize) -> (DVec3, DVec3) {
-        let (motion, start, gravity) = (&self.state(i).motion, self.table.spans[i].start, self.gravity_on(i));
+        let (motion, start) = (&self.state(i).motion, self.table.spans[i].start);
+        // Without gravity, the straight path's own arithmetic (`at_under`'s, to the bit), the
+        // pull not tested again.
+        if self.table.gravity == DVec3::ZERO {
+            return (motion.at(start), motion.velocity);
+        }
+        let gravity = self.gravity_on(i);
         (motion.at_under(start, gravity), motion.velocity_under(start, gravity))
     }
 
@@ -663,8 +675,32 @@ impl ProxyRule {
     /// [`Self::span`] of body `i` on `motion` rather than its own.
     #[inline(always)]
     fn span_of(&self, i: usize, bodies: &Bodies, motion: &Motion, t: f64) -> (Span, u8) {
+        self.span_under(i, bodies, motion, t, bodies.gravity_on(i))
+    }
+
+    /// The spans and flags of the live ones of the proxies `offset..offset + spans.len()`, each
+    /// from `made(i)`.
+    #[inline(always)]
+    fn fill(
+        &self,
+        offset: usize,
+        spans: &mut [Span],
+        flags: &mut [u8],
+        live: &[bool],
+        made: impl Fn(usize) -> (Span, u8),
+    ) {
+        let live = &live[offset..offset + spans.len()];
+        for (k, ((span, flags), &live)) in spans.iter_mut().zip(flags).zip(live).enumerate() {
+            if live {
+                (*span, *flags) = made(offset + k);
+            }
+        }
+    }
+
+    /// [`Self::span_of`] under the pull `gravity`, the one body `i` moves under.
+    #[inline(always)]
+    fn span_under(&self, i: usize, bodies: &Bodies, motion: &Motion, t: f64, gravity: DVec3) -> (Span, u8) {
         let start = t.max(self.window.start);
-        let gravity = bodies.gravity_on(i);
         let velocity = motion.velocity_under(start, gravity);
         let body_radius = bodies.bounding_radius(i);
         // A body at rest, or sliding under a pull its floor takes whole, moves straight: its
@@ -675,10 +711,11 @@ impl ProxyRule {
         // found with the motion before the bounce, whichever of the two events comes first. A
         // body of another shape reaches the walls later than its bounding sphere: its proxy goes
         // on to the window's end, and its own wall contact changes its velocity.
-        let wall = bodies
-            .is_sphere(i)
-            .then(|| wall_contact_time(motion, body_radius, self.walls.0, self.walls.1, gravity))
-            .flatten();
+        // Tested in line rather than through `bool::then`'s closure, which stayed a call and kept
+        // the zero pull of a straight path from folding into the wall test.
+        let sphere = bodies.is_sphere(i);
+        let wall =
+            if sphere { wall_contact_time(motion, body_radius, self.walls.0, self.walls.1, gravity) } else { None };
         // Up to and including the crossing of a periodic face too, where the body comes back
         // through the opposite face on a fresh motion.
         let crossing = self.faces.and_then(|(low, high)| wall_contact_time(motion, 0.0, low, high, gravity));
@@ -701,7 +738,7 @@ impl ProxyRule {
         // The very time the wall prediction would compute (same motion, radius and pull, the
         // body's own), so a wall contact at or past the window's end is known to be none of this
         // window's.
-        let no_wall = bodies.is_sphere(i) && wall.is_none_or(|(time, _)| !(time < self.window.end));
+        let no_wall = sphere && wall.is_none_or(|(time, _)| !(time < self.window.end));
         (Span { start, end, bbox }, (u8::from(expires) * EXPIRES) | (u8::from(no_wall) * NO_WALL))
     }
 }
