@@ -651,7 +651,10 @@ fn screen_four(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f
     // SAFETY: asked only where `lanes` found AVX.
     return unsafe { screen_four_avx(own, states, origins, bound) };
     #[cfg(not(target_arch = "x86_64"))]
-    return unreachable!("lanes are x86-64's");
+    {
+        let _ = (own, states, origins, bound);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
 }
 
 /// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
