@@ -74,7 +74,17 @@ impl Entry {
     #[inline]
     fn order(&self, other: &Entry) -> Ordering {
         let (a, b) = (&self.scheduled, &other.scheduled);
-        a.event.time.total_cmp(&b.event.time).then_with(|| {
+        // Two plain comparisons settle times that differ, most pairs a bucket's sort compares;
+        // `total_cmp` (its order, which they agree with) decides the rest: equal times, signed
+        // zeros and NaN.
+        let (s, t) = (a.event.time, b.event.time);
+        if s < t {
+            return Ordering::Less;
+        }
+        if s > t {
+            return Ordering::Greater;
+        }
+        s.total_cmp(&t).then_with(|| {
             // Cell crossings first, then the event queue's order (its `Ord` puts the earlier
             // event last), then the owner: two owners may hold one contact.
             let crossings = (a.cell_crossing(), b.cell_crossing());
