@@ -134,7 +134,7 @@ impl Seen<'_> {
             overlay: Overlay::default(),
             tests: 0,
         };
-        let worked = if entry.scheduled.cell_crossing {
+        let worked = if entry.scheduled.cell_crossing() {
             let Events { next: before, crossing } = self.events[owner];
             let into = self.cells.stepped(owner, crossing);
             let next = search.after_crossing(owner, (into, crossing), time, before);
@@ -197,7 +197,7 @@ impl Seen<'_> {
 #[inline]
 pub(super) fn same_contact(first: &Entry, second: &Entry) -> bool {
     let (a, b) = (&first.scheduled, &second.scheduled);
-    !a.cell_crossing && !b.cell_crossing && matches!(b.event.partner, Partner::Body(_)) && a.event == b.event
+    !a.cell_crossing() && !b.cell_crossing() && matches!(b.event.partner, Partner::Body(_)) && a.event == b.event
 }
 
 /// True when two motions are the same to the bit.

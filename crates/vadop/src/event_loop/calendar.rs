@@ -33,11 +33,12 @@ const EVENTS_PER_BUCKET: f64 = 6.0;
 const BUCKETS_PER_BODY: f64 = 0.125;
 
 /// A body's scheduled event: a predicted contact, wall contact or periodic crossing (`event`),
-/// or the crossing of its centre into another cell at `event.time`.
+/// or the crossing of its centre into another cell at `event.time`, told by its partner,
+/// [`Partner::Renew`], which the loop never predicts: no flag of its own, so a calendar entry
+/// takes 40 bytes, not 48, in the sorted list a bucket's sort and insertions move.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Scheduled {
     pub event: Event,
-    pub cell_crossing: bool,
 }
 
 impl Scheduled {
@@ -45,6 +46,12 @@ impl Scheduled {
     #[inline]
     pub(super) fn time(&self) -> f64 {
         self.event.time
+    }
+
+    /// True when it is the body's cell crossing, not a predicted event.
+    #[inline]
+    pub(super) fn cell_crossing(&self) -> bool {
+        self.event.partner == Partner::Renew
     }
 }
 
@@ -67,12 +74,24 @@ impl Entry {
     #[inline]
     fn order(&self, other: &Entry) -> Ordering {
         let (a, b) = (&self.scheduled, &other.scheduled);
-        a.event.time.total_cmp(&b.event.time).then_with(|| {
+        // Two plain comparisons settle times that differ, most pairs a bucket's sort compares;
+        // `total_cmp` (its order, which they agree with) decides the rest: equal times, signed
+        // zeros and NaN.
+        let (s, t) = (a.event.time, b.event.time);
+        if s < t {
+            return Ordering::Less;
+        }
+        if s > t {
+            return Ordering::Greater;
+        }
+        s.total_cmp(&t).then_with(|| {
             // Cell crossings first, then the event queue's order (its `Ord` puts the earlier
             // event last), then the owner: two owners may hold one contact.
-            b.cell_crossing
-                .cmp(&a.cell_crossing)
-                .then_with(|| if a.cell_crossing { Ordering::Equal } else { b.event.cmp(&a.event) })
+            let crossings = (a.cell_crossing(), b.cell_crossing());
+            crossings
+                .1
+                .cmp(&crossings.0)
+                .then_with(|| if crossings.0 { Ordering::Equal } else { b.event.cmp(&a.event) })
                 .then_with(|| self.owner.cmp(&other.owner))
         })
     }
@@ -113,7 +132,10 @@ impl Events {
     #[inline]
     fn scheduled(&self, owner: u32) -> Scheduled {
         match self.next {
-            Some(event) if event.time < self.crossing.time => Scheduled { event, cell_crossing: false },
+            Some(event) if event.time < self.crossing.time => {
+                debug_assert!(event.partner != Partner::Renew, "the loop predicts no renewal");
+                Scheduled { event }
+            }
             _ => {
                 let event = Event {
                     time: self.crossing.time,
@@ -122,7 +144,7 @@ impl Events {
                     body_stamp: 0,
                     partner_stamp: 0,
                 };
-                Scheduled { event, cell_crossing: true }
+                Scheduled { event }
             }
         }
     }
@@ -526,10 +548,12 @@ impl Calendar {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::walls::Wall;
     use rand::{Rng, SeedableRng};
 
+    /// A wall contact of `body` at `time` (a renewal would be a cell crossing).
     fn at(time: f64, body: u32) -> Events {
-        let event = Event { time, body, partner: Partner::Renew, body_stamp: 0, partner_stamp: 0 };
+        let event = Event { time, body, partner: Partner::Wall(Wall::MinX), body_stamp: 0, partner_stamp: 0 };
         Events { next: Some(event), crossing: Crossing::NEVER }
     }
 

@@ -399,7 +399,7 @@ impl EventLoop {
     #[inline]
     fn prefetch(&self, bodies: &Bodies, entry: &Entry) {
         self.prefetch_body(bodies, entry.owner as usize);
-        if let (false, Partner::Body(partner)) = (entry.scheduled.cell_crossing, entry.scheduled.event.partner) {
+        if let (false, Partner::Body(partner)) = (entry.scheduled.cell_crossing(), entry.scheduled.event.partner) {
             self.prefetch_body(bodies, partner as usize);
         }
     }
@@ -414,7 +414,7 @@ impl EventLoop {
         if self.lists.is_some() || self.cells.cell_of(owner) == NONE {
             return;
         }
-        if entry.scheduled.cell_crossing {
+        if entry.scheduled.cell_crossing() {
             // The entry may be stale: the body's crossing is the one of the cell it is in.
             let crossing = self.calendar.events(owner).crossing;
             if crossing.time.is_finite() {
@@ -437,7 +437,7 @@ impl EventLoop {
     /// The calendar's event `entry`, handled.
     fn dispatch(&mut self, bodies: &mut Bodies, physics: &Physics, entry: Entry, out: &mut Output) {
         let (owner, t) = (entry.owner as usize, entry.scheduled.time());
-        if entry.scheduled.cell_crossing {
+        if entry.scheduled.cell_crossing() {
             if self.lists.is_some() {
                 self.exit_shell(bodies, owner, t, out.stats);
             } else {

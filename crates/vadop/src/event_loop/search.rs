@@ -383,7 +383,23 @@ impl<'a> Search<'a> {
         // The screen's switch and the candidates' `Vec` read once, not through the search at
         // every member (as in `gather_list`).
         let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
-        for &entry in members {
+        // Four at a time in lanes, as in `screen_all`, when every member is screened.
+        let grouped = if screened && !fresh && lanes() { members.len() & !3 } else { 0 };
+        for k in (0..grouped).step_by(4) {
+            let group: [(usize, usize); 4] = std::array::from_fn(|lane| lists::split(members[k + lane]));
+            let origins = group.map(|(_, image)| own.position - lists.images[image]);
+            let four = screen_four(own, group.map(|(q, _)| &states[q]), origins, bound);
+            let mut left = four.left;
+            while left != 0 {
+                let lane = left.trailing_zeros() as usize;
+                left &= left - 1;
+                if let Some(earliest) = four.lane(lane, own, &mut bound) {
+                    let (q, image) = group[lane];
+                    candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+                }
+            }
+        }
+        for &entry in &members[grouped..] {
             let (q, image) = lists::split(entry);
             if fresh && !lists.fresh(q) {
                 continue;
@@ -418,7 +434,28 @@ impl<'a> Search<'a> {
         // Through a slice: its length stays in a register, where the `Vec`'s is read again
         // after every write into it.
         let candidates = &mut self.candidates[..];
-        for k in 0..candidates.len() {
+        // Four at a time in lanes (see `screen_four`), the steps that depend on the bound then
+        // for the lanes left, in order: every bound and result is the scalar screen's.
+        let grouped = if lanes() { candidates.len() & !3 } else { 0 };
+        for k in (0..grouped).step_by(4) {
+            let group = [candidates[k], candidates[k + 1], candidates[k + 2], candidates[k + 3]];
+            let four = screen_four(
+                own,
+                group.map(|c| &states[c.q as usize]),
+                group.map(|c| origins[c.cell as usize & 31]),
+                bound,
+            );
+            let mut left = four.left;
+            while left != 0 {
+                let lane = left.trailing_zeros() as usize;
+                left &= left - 1;
+                if let Some(earliest) = four.lane(lane, own, &mut bound) {
+                    candidates[kept] = Candidate { earliest, ..group[lane] };
+                    kept += 1;
+                }
+            }
+        }
+        for k in grouped..candidates.len() {
             let c = candidates[k];
             if let Some(earliest) = screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound) {
                 candidates[kept] = Candidate { earliest, ..c };
@@ -514,29 +551,270 @@ fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Optio
         return Some(f64::NEG_INFINITY);
     }
     let closing = -approach;
-    if gap - slack > 2.0 * closing * (*bound + own.rounding) * (1.0 + TIME_SLACK) {
+    bounded(own, (gap - slack, 2.0 * closing), bound, || {
+        let discriminant = approach * approach - v2 * gap;
+        let spread = slack * v2;
+        if discriminant < -spread {
+            return None;
+        }
+        let earliest = (gap - slack) / (closing * (1.0 + TIME_SLACK) + (discriminant + spread).sqrt())
+            * (1.0 - TIME_SLACK)
+            - own.rounding;
+        // Sure to touch (the exact test's noise rule aside: far faster than rounding noise), and
+        // after now: the contact comes by `latest` at the latest.
+        let sure = discriminant > spread
+            && earliest > 0.0
+            && v2 > NOISE * (own.velocity.length_squared() + motion.velocity.length_squared());
+        let latest = || {
+            (gap + slack) / (closing * (1.0 - TIME_SLACK) + (discriminant - spread).sqrt()) * (1.0 + TIME_SLACK)
+                + own.rounding
+        };
+        Some((earliest, sure.then(latest)))
+    })
+}
+
+/// The steps of [`screen`] that depend on `bound`, for a pair approaching with its gap clear of
+/// the slack: `late` the gap less the slack, `rate` twice the closing rate; `rest` the earliest
+/// it can touch (none when the paths pass wide) and the latest when it is sure to.
+#[inline(always)]
+fn bounded(
+    own: &Own,
+    (late, rate): (f64, f64),
+    bound: &mut f64,
+    rest: impl FnOnce() -> Option<(f64, Option<f64>)>,
+) -> Option<f64> {
+    if late > rate * (*bound + own.rounding) * (1.0 + TIME_SLACK) {
         return None;
     }
-    let discriminant = approach * approach - v2 * gap;
-    let spread = slack * v2;
-    if discriminant < -spread {
-        return None;
-    }
-    let earliest = (gap - slack) / (closing * (1.0 + TIME_SLACK) + (discriminant + spread).sqrt()) * (1.0 - TIME_SLACK)
-        - own.rounding;
+    let (earliest, latest) = rest()?;
     if earliest > *bound {
         return None;
     }
-    // Sure to touch (the exact test's noise rule aside: far faster than rounding noise), and
-    // after now: the contact comes by this at the latest.
-    if discriminant > spread
-        && earliest > 0.0
-        && v2 > NOISE * (own.velocity.length_squared() + motion.velocity.length_squared())
-    {
-        let latest = (gap + slack) / (closing * (1.0 - TIME_SLACK) + (discriminant - spread).sqrt())
-            * (1.0 + TIME_SLACK)
-            + own.rounding;
+    if let Some(latest) = latest {
         *bound = bound.min(latest);
     }
     Some(earliest)
+}
+
+/// True when [`screen`] can run four partners at a time (see [`screen_four`]).
+#[inline]
+fn lanes() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::arch::is_x86_feature_detected!("avx");
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
+}
+
+/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
+#[derive(Debug, Default, Clone, Copy)]
+struct Four {
+    /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
+    /// the bound (moving apart, passing wide, or unable to touch within the bound given, which
+    /// only falls along a search).
+    left: u32,
+    /// Of those, the lanes bounded by it (approaching, the gap clear of the slack: [`bounded`]'s
+    /// values follow); the others have no bound to trust.
+    bounded: u32,
+    /// Of those, the lanes sure to touch, by `latest`.
+    sure: u32,
+    late: [f64; 4],
+    rate: [f64; 4],
+    earliest: [f64; 4],
+    latest: [f64; 4],
+}
+
+impl Four {
+    /// [`screen`]'s answer for lane `lane`, one of those left, with the bound as it stands.
+    #[inline(always)]
+    fn lane(&self, lane: usize, own: &Own, bound: &mut f64) -> Option<f64> {
+        let bit = 1 << lane;
+        if self.bounded & bit == 0 {
+            return Some(f64::NEG_INFINITY);
+        }
+        let latest = (self.sure & bit != 0).then_some(self.latest[lane]);
+        bounded(own, (self.late[lane], self.rate[lane]), bound, || Some((self.earliest[lane], latest)))
+    }
+}
+
+/// [`screen`] of four partners of `own` (their states, and the origins their offsets are taken
+/// from) up to its steps that depend on the bound, `bound` as it stands before the first.
+/// Asked only where [`lanes`] holds.
+///
+/// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
+/// (AVX alone; division and square root are correctly rounded in both), so its floats are the
+/// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
+/// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
+/// would meet later in the search.
+#[inline]
+fn screen_four(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f64) -> Four {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_four_avx(own, states, origins, bound) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, origins, bound);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn screen_four_avx(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f64) -> Four {
+    use crate::narrow_phase::spheres::state_columns;
+    use std::arch::x86_64::*;
+    let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
+    let one = |value: f64| _mm256_set1_pd(value);
+    let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
+    let (greater, less, and, or) = (
+        |x, y| _mm256_cmp_pd::<_CMP_GT_OQ>(x, y),
+        |x, y| _mm256_cmp_pd::<_CMP_LT_OQ>(x, y),
+        |x, y| _mm256_and_pd(x, y),
+        |x, y| _mm256_or_pd(x, y),
+    );
+    let mask = |x| _mm256_movemask_pd(x) as u32;
+    // A negation flips the sign bit alone, as the scalar `-x` does.
+    let negated = |x| _mm256_xor_pd(x, one(-0.0));
+    let lane = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(&origins[3]), f(&origins[2]), f(&origins[1]), f(&origins[0]));
+    // `screen`, line by line.
+    let dt = sub(one(own.now), since);
+    let ox = sub(add(px, mul(dt, vx)), lane(|o| o.x));
+    let oy = sub(add(py, mul(dt, vy)), lane(|o| o.y));
+    let oz = sub(add(pz, mul(dt, vz)), lane(|o| o.z));
+    let (rx, ry, rz) = (sub(vx, one(own.velocity.x)), sub(vy, one(own.velocity.y)), sub(vz, one(own.velocity.z)));
+    let approach = add(add(mul(ox, rx), mul(oy, ry)), mul(oz, rz));
+    let d2 = add(add(mul(ox, ox), mul(oy, oy)), mul(oz, oz));
+    let v2 = add(add(mul(rx, rx), mul(ry, ry)), mul(rz, rz));
+    let clear = greater(mul(approach, approach), mul(mul(one(RECEDING * RECEDING), d2), v2));
+    let apart = greater(approach, one(0.0));
+    let reach = add(one(own.radius), radius);
+    let gap = sub(d2, mul(reach, reach));
+    let slack = add(mul(mul(one(GAP_SLACK), reach), reach), mul(one(OFFSET_SLACK), d2));
+    // Not apart (a NaN approach is not clear), clear, and the gap past the slack.
+    let screened = and(_mm256_andnot_pd(apart, clear), greater(gap, slack));
+    let closing = negated(approach);
+    let (late, rate) = (sub(gap, slack), mul(one(2.0), closing));
+    let too_late = greater(late, mul(mul(rate, one(bound + own.rounding)), one(1.0 + TIME_SLACK)));
+    let discriminant = sub(mul(approach, approach), mul(v2, gap));
+    let spread = mul(slack, v2);
+    let wide = less(discriminant, negated(spread));
+    let rejected = or(and(apart, clear), and(screened, or(too_late, wide)));
+    let mut four =
+        Four { left: mask(rejected) ^ 0b1111, bounded: mask(_mm256_andnot_pd(rejected, screened)), ..Four::default() };
+    if four.bounded == 0 {
+        return four;
+    }
+    let earliest = sub(
+        mul(
+            _mm256_div_pd(late, add(mul(closing, one(1.0 + TIME_SLACK)), _mm256_sqrt_pd(add(discriminant, spread)))),
+            one(1.0 - TIME_SLACK),
+        ),
+        one(own.rounding),
+    );
+    let latest = add(
+        mul(
+            _mm256_div_pd(
+                add(gap, slack),
+                add(mul(closing, one(1.0 - TIME_SLACK)), _mm256_sqrt_pd(sub(discriminant, spread))),
+            ),
+            one(1.0 + TIME_SLACK),
+        ),
+        one(own.rounding),
+    );
+    let speed_squared = add(add(mul(vx, vx), mul(vy, vy)), mul(vz, vz));
+    let noise = mul(one(NOISE), add(one(own.velocity.length_squared()), speed_squared));
+    four.sure = mask(and(and(greater(discriminant, spread), greater(earliest, one(0.0))), greater(v2, noise)));
+    // SAFETY (each store): four floats into four.
+    unsafe {
+        _mm256_storeu_pd(four.late.as_mut_ptr(), late);
+        _mm256_storeu_pd(four.rate.as_mut_ptr(), rate);
+        _mm256_storeu_pd(four.earliest.as_mut_ptr(), earliest);
+        _mm256_storeu_pd(four.latest.as_mut_ptr(), latest);
+    }
+    four
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Motion;
+    use rand::{Rng, SeedableRng};
+
+    /// A random float of every kind the screen may meet: ordinary, tiny, huge, zero of either
+    /// sign, or (rarely) not finite.
+    fn float(rng: &mut impl Rng, scale: f64) -> f64 {
+        match rng.random_range(0..40) {
+            0 => 0.0,
+            1 => -0.0,
+            2 => f64::NAN,
+            3 => f64::INFINITY,
+            4 => scale * 1e-300,
+            _ => scale * rng.random_range(-1.0..1.0),
+        }
+    }
+
+    /// The lanes' answers, taken in order with the bound as the scalar screen leaves it, are the
+    /// scalar screen's to the bit: every answer and every bound, for random partners near and
+    /// far, approaching and parting, touching, grazing (their paths' closest approach within a
+    /// hair of the reach), and with NaN, infinities, zeros of either sign and tiny numbers.
+    #[test]
+    fn the_screen_in_lanes_answers_as_the_scalar_screen() {
+        if !lanes() {
+            return;
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(27);
+        // How often the scalar screen rejected, had no bound, bounded, and lowered the bound.
+        let mut met = [0; 4];
+        for round in 0..100_000 {
+            let now = rng.random_range(0.0..10.0);
+            let own = {
+                let (position, velocity) = (
+                    DVec3::from_array([(); 3].map(|_| float(&mut rng, 3.0))),
+                    DVec3::from_array([(); 3].map(|_| float(&mut rng, 1.0))),
+                );
+                Own { p: 0, position, velocity, radius: 0.5, now, rounding: ROUNDINGS * f64::EPSILON * now }
+            };
+            let partner = |rng: &mut rand_chacha::ChaCha8Rng| {
+                let since = now - rng.random_range(0.0..1.0);
+                let velocity = DVec3::from_array([(); 3].map(|_| float(rng, 1.0)));
+                let position = match rng.random_range(0..4) {
+                    // Grazing: its closest approach to `own` a hair from the reach.
+                    0 => {
+                        let relative = velocity - own.velocity;
+                        let side = relative.any_orthonormal_vector() * (1.0 + rng.random_range(-1e-9..1e-9));
+                        own.position + side - relative * rng.random_range(0.0..2.0) - velocity * (now - since)
+                    }
+                    _ => own.position + DVec3::from_array([(); 3].map(|_| float(rng, 3.0))) - velocity * (now - since),
+                };
+                BodyState { motion: Motion { position, since, velocity }, radius: 0.5 }
+            };
+            let states: [BodyState; 4] = std::array::from_fn(|_| partner(&mut rng));
+            let origins: [DVec3; 4] =
+                std::array::from_fn(|_| own.position - DVec3::X * rng.random_range(-1..=1) as f64);
+            let start = match round % 4 {
+                0 => f64::INFINITY,
+                _ => rng.random_range(0.0..3.0),
+            };
+            let (mut scalar_bound, mut lanes_bound) = (start, start);
+            let four = screen_four(&own, states.each_ref(), origins, start);
+            for lane in 0..4 {
+                let before = scalar_bound;
+                let scalar = screen(&own, &states[lane], origins[lane], &mut scalar_bound);
+                met[match scalar {
+                    None => 0,
+                    Some(f64::NEG_INFINITY) => 1,
+                    Some(_) if scalar_bound == before => 2,
+                    Some(_) => 3,
+                }] += 1;
+                let in_lanes =
+                    if four.left & (1 << lane) != 0 { four.lane(lane, &own, &mut lanes_bound) } else { None };
+                assert_eq!(
+                    (scalar.map(f64::to_bits), scalar_bound.to_bits()),
+                    (in_lanes.map(f64::to_bits), lanes_bound.to_bits()),
+                    "round {round}, lane {lane}"
+                );
+            }
+        }
+        assert!(met.iter().all(|&n| n > 100), "every outcome met: {met:?}");
+    }
 }

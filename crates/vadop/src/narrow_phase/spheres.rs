@@ -260,26 +260,8 @@ pub fn straight_paths_clearly_miss(a: &Motion, b: &Motion, radius_sum: f64) -> b
 #[inline]
 pub unsafe fn straight_paths_clearly_miss_four(a: [&BodyState; 4], b: [&BodyState; 4]) -> u32 {
     use std::arch::x86_64::*;
-    let () = STATE_ROWS;
-    // Each state as two rows of four (position and since, velocity and radius), the rows of
-    // four states turned into columns: a coordinate of all four in one register.
-    let row = |state: &BodyState, half: usize| {
-        // SAFETY: a `BodyState` is 8 floats (`STATE_ROWS`); `half` is 0 or 1.
-        unsafe { _mm256_loadu_pd(std::ptr::from_ref(state).cast::<f64>().add(4 * half)) }
-    };
-    let columns = |states: [&BodyState; 4], half: usize| {
-        let [r0, r1, r2, r3] = states.map(|state| row(state, half));
-        let (low01, high01) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
-        let (low23, high23) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
-        [
-            _mm256_permute2f128_pd::<0x20>(low01, low23),
-            _mm256_permute2f128_pd::<0x20>(high01, high23),
-            _mm256_permute2f128_pd::<0x31>(low01, low23),
-            _mm256_permute2f128_pd::<0x31>(high01, high23),
-        ]
-    };
-    let ([ax, ay, az, since_a], [wx, wy, wz, radius_a]) = (columns(a, 0), columns(a, 1));
-    let ([bx, by, bz, since_b], [vx, vy, vz, radius_b]) = (columns(b, 0), columns(b, 1));
+    let ([ax, ay, az, since_a], [wx, wy, wz, radius_a]) = (state_columns(a, 0), state_columns(a, 1));
+    let ([bx, by, bz, since_b], [vx, vy, vz, radius_b]) = (state_columns(b, 0), state_columns(b, 1));
     let (position_a, velocity_a) = ([ax, ay, az], [wx, wy, wz]);
     let (position_b, velocity_b) = ([bx, by, bz], [vx, vy, vz]);
     let one = |value: f64| _mm256_set1_pd(value);
@@ -320,7 +302,32 @@ pub unsafe fn straight_paths_clearly_miss_four(a: [&BodyState; 4], b: [&BodyStat
     _mm256_movemask_pd(clears) as u32
 }
 
-/// What [`straight_paths_clearly_miss_four`] loads a state as: two rows of four floats, the
+/// Four states each as two rows of four floats (`half` 0: the position and `since`; 1: the
+/// velocity and the radius), the rows of the four turned into columns: a coordinate of all four
+/// in one register, the `k`-th state's in lane `k`.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+pub(crate) fn state_columns(states: [&BodyState; 4], half: usize) -> [std::arch::x86_64::__m256d; 4] {
+    use std::arch::x86_64::*;
+    let () = STATE_ROWS;
+    assert!(half < 2);
+    let row = |state: &BodyState| {
+        // SAFETY: a `BodyState` is 8 floats (`STATE_ROWS`); `half` is 0 or 1.
+        unsafe { _mm256_loadu_pd(std::ptr::from_ref(state).cast::<f64>().add(4 * half)) }
+    };
+    let [r0, r1, r2, r3] = states.map(row);
+    let (low01, high01) = (_mm256_unpacklo_pd(r0, r1), _mm256_unpackhi_pd(r0, r1));
+    let (low23, high23) = (_mm256_unpacklo_pd(r2, r3), _mm256_unpackhi_pd(r2, r3));
+    [
+        _mm256_permute2f128_pd::<0x20>(low01, low23),
+        _mm256_permute2f128_pd::<0x20>(high01, high23),
+        _mm256_permute2f128_pd::<0x31>(low01, low23),
+        _mm256_permute2f128_pd::<0x31>(high01, high23),
+    ]
+}
+
+/// What [`state_columns`] loads a state as: two rows of four floats, the
 /// position and `since`, then the velocity and the radius.
 #[cfg(target_arch = "x86_64")]
 const STATE_ROWS: () = {
