@@ -17,7 +17,7 @@
 
 mod sweep;
 
-use super::box_columns::BoxColumns;
+use super::box_columns::{BoxColumns, BoxColumnsMut};
 use super::candidates::Owner;
 #[cfg(target_arch = "x86_64")]
 use super::candidates::Screened;
@@ -155,6 +155,52 @@ impl Level {
     }
 }
 
+/// What the binning does with each piece a worker owns: count it in its cell, or store it in
+/// the cell's next slot. A trait with always-inline methods rather than a closure: the store,
+/// a closure called from the single-piece and the cut paths' loops, stayed a call (about 80
+/// instructions a piece, its captures read back from memory each time).
+trait PieceSink {
+    fn piece(&mut self, body: usize, cell: usize, bbox: CompactBox, window: Window);
+}
+
+/// Counts the pieces of the cells from `lowest` on.
+struct CountPieces<'a> {
+    counts: &'a mut [u32],
+    lowest: usize,
+}
+
+impl PieceSink for CountPieces<'_> {
+    #[inline(always)]
+    fn piece(&mut self, _: usize, cell: usize, _: CompactBox, _: Window) {
+        self.counts[cell - self.lowest] += 1;
+    }
+}
+
+/// Stores each piece of the cells from `lowest` on in its cell's next slot (`next_slot`, from
+/// `first_slot` on), with its owner and its body's motion.
+struct StorePieces<'a, 'p> {
+    proxies: Proxies<'p>,
+    next_slot: &'a mut [u32],
+    lowest: usize,
+    first_slot: usize,
+    owners: &'a mut [Owner],
+    boxes: BoxColumnsMut<'a>,
+    motions: &'a mut [BodyState],
+}
+
+impl PieceSink for StorePieces<'_, '_> {
+    #[inline(always)]
+    fn piece(&mut self, body: usize, cell: usize, bbox: CompactBox, window: Window) {
+        let next = &mut self.next_slot[cell - self.lowest];
+        let slot = *next as usize;
+        *next += 1;
+        let k = slot - self.first_slot;
+        self.owners[k] = Owner { body: body as u32, stamp: self.proxies.stamp(body), window };
+        self.boxes.set(k, bbox);
+        self.motions[k] = *self.proxies.state(body);
+    }
+}
+
 /// The grid broad phase.
 #[derive(Debug)]
 pub struct Grid {
@@ -255,15 +301,15 @@ impl Grid {
         }
     }
 
-    /// Calls `f(body, cell, box, window)` for every piece, in body order, whose cell (numbered
-    /// across levels) is in `owned`, per the bodies' `plan`.
+    /// Hands `sink` the body, cell, box and window of every piece, in body order, whose cell
+    /// (numbered across levels) is in `owned`, per the bodies' `plan`.
     #[inline(always)]
     fn for_each_owned_piece(
         levels: &[Level],
         plan: &[(u32, u32)],
         proxies: Proxies,
         owned: std::ops::Range<usize>,
-        mut f: impl FnMut(usize, usize, CompactBox, Window),
+        sink: &mut impl PieceSink,
     ) {
         for (i, &(count, level_or_cell)) in plan.iter().enumerate() {
             if count == 0 {
@@ -272,7 +318,7 @@ impl Grid {
             if count == 1 {
                 let cell = level_or_cell as usize;
                 if owned.contains(&cell) {
-                    f(i, cell, proxies.bbox(i), proxies.window_of(i));
+                    sink.piece(i, cell, proxies.bbox(i), proxies.window_of(i));
                 }
                 continue;
             }
@@ -287,7 +333,7 @@ impl Grid {
             Grid::for_each_piece(proxies, &proxies.path(i), count, |bbox, window| {
                 let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
                 if owned.contains(&cell) {
-                    f(i, cell, bbox, window);
+                    sink.piece(i, cell, bbox, window);
                 }
             });
         }
@@ -568,7 +614,7 @@ impl BroadPhase for Grid {
             .collect();
         workers.for_each_part(parts, |_, (counts, lowest)| {
             let owned = lowest..lowest + counts.len();
-            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, |_, cell, _, _| counts[cell - lowest] += 1);
+            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, &mut CountPieces { counts, lowest });
         });
         // Counts become starts: of each cell in its level, and of the next piece it takes.
         for level in &mut self.levels {
@@ -607,17 +653,10 @@ impl BroadPhase for Grid {
             .zip(std::iter::once(0).chain(cell_points.iter().copied()))
             .zip(std::iter::once(0).chain(slot_points.iter().copied()))
             .collect();
-        workers.for_each_part(parts, |_, ((((next_slot, (owners, mut boxes)), motions), lowest), first_slot)| {
+        workers.for_each_part(parts, |_, ((((next_slot, (owners, boxes)), motions), lowest), first_slot)| {
             let owned = lowest..lowest + next_slot.len();
-            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, |i, cell, bbox, window| {
-                let next = &mut next_slot[cell - lowest];
-                let slot = *next as usize;
-                *next += 1;
-                let k = slot - first_slot;
-                owners[k] = Owner { body: i as u32, stamp: proxies.stamp(i), window };
-                boxes.set(k, bbox);
-                motions[k] = *proxies.state(i);
-            });
+            let mut store = StorePieces { proxies, next_slot, lowest, first_slot, owners, boxes, motions };
+            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, &mut store);
         });
         self.next_slot = next_slot;
         self.binned_fixed = false;
