@@ -140,7 +140,8 @@ pub(super) struct Candidate {
 }
 
 /// The neighbour cells a search gathered bodies from, each with the whole sides that bring its
-/// bodies next to the searching body, and the searching body's centre less those.
+/// bodies next to the searching body, and the searching body's centre less those. (After a list
+/// is built anew, the origins are indexed by image instead: see [`Search::gather_fresh`].)
 #[derive(Debug)]
 pub(super) struct Near {
     cells: usize,
@@ -205,7 +206,7 @@ impl<'a> Search<'a> {
         self.candidates.clear();
         self.near.cells = 0;
         if let Some(lists) = self.lists {
-            self.screen_members(&own, lists, false, &mut best);
+            self.screen_members(&own, lists, &mut best);
             self.test_candidates(&own, eligible, &mut best);
             return best.event;
         }
@@ -284,7 +285,8 @@ impl<'a> Search<'a> {
             self.offer_own(p, now, Eligible::From(now), &mut best);
         }
         self.candidates.clear();
-        self.screen_members(&own, lists, true, &mut best);
+        self.gather_fresh(&own, lists);
+        self.screen_all(&own, &mut best);
         self.test_candidates(&own, Eligible::From(now), &mut best);
         best.event
     }
@@ -367,12 +369,29 @@ impl<'a> Search<'a> {
         }
     }
 
-    /// Screens the members of `own`'s list (only those [`Lists::fresh`] when `fresh`) as they are
-    /// read: those that pass wait in `self.candidates`, each with the earliest it can touch `own`
+    /// Lists the members new to `own`'s list (see [`Lists::fresh`]) in `self.candidates`, to be
+    /// screened as the cells' bodies are ([`Self::screen_all`], four at a time in lanes): the
+    /// origin of each image they are met through is set in `self.near` on the way (the screen's
+    /// offsets are then the same bits as [`Self::screen_members`]'), and their records asked for.
+    #[inline(always)]
+    fn gather_fresh(&mut self, own: &Own, lists: &Lists) {
+        debug_assert_eq!(self.overlay.len, 0, "the parallel loop keeps no lists");
+        let (states, origins, candidates) = (&self.bodies.state[..], &mut self.near.origins, &mut *self.candidates);
+        for &entry in lists.members(own.p) {
+            let (q, image) = lists::split(entry);
+            if lists.fresh(q) {
+                prefetch_item(states, q);
+                origins[image] = own.position - lists.images[image];
+                candidates.push(Candidate { earliest: 0.0, q: q as u32, cell: image as u8 });
+            }
+        }
+    }
+
+    /// Screens the members of `own`'s list as they are read: those that pass wait in `self.candidates`, each with the earliest it can touch `own`
     /// and its image (see [`Lists::images`]). One pass, nothing gathered first: a list is short
     /// and its members known, so the screen's reject, most members' fate, is all they cost.
     #[inline(always)]
-    fn screen_members(&mut self, own: &Own, lists: &Lists, fresh: bool, best: &mut Best) {
+    fn screen_members(&mut self, own: &Own, lists: &Lists, best: &mut Best) {
         debug_assert_eq!(self.overlay.len, 0, "the parallel loop keeps no lists");
         let (states, members) = (&self.bodies.state[..], lists.members(own.p));
         // The members' records, scattered in memory, asked for all at once: they then arrive
@@ -383,8 +402,8 @@ impl<'a> Search<'a> {
         // The screen's switch and the candidates' `Vec` read once, not through the search at
         // every member (as in `gather_list`).
         let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
-        // Four at a time in lanes, as in `screen_all`, when every member is screened.
-        let grouped = if screened && !fresh && lanes() { members.len() & !3 } else { 0 };
+        // Four at a time in lanes, as in `screen_all`.
+        let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
             let group: [(usize, usize); 4] = std::array::from_fn(|lane| lists::split(members[k + lane]));
             let origins = group.map(|(_, image)| own.position - lists.images[image]);
@@ -401,9 +420,6 @@ impl<'a> Search<'a> {
         }
         for &entry in &members[grouped..] {
             let (q, image) = lists::split(entry);
-            if fresh && !lists.fresh(q) {
-                continue;
-            }
             let earliest = if screened {
                 match screen(own, &states[q], own.position - lists.images[image], &mut bound) {
                     Some(earliest) => earliest,
