@@ -387,8 +387,9 @@ impl<'a> Search<'a> {
         }
     }
 
-    /// Screens the members of `own`'s list as they are read: those that pass wait in `self.candidates`, each with the earliest it can touch `own`
-    /// and its image (see [`Lists::images`]). One pass, nothing gathered first: a list is short
+    /// Screens the members of `own`'s list as they are read: those that pass wait in
+    /// `self.candidates`, each with the earliest it can touch `own` and its image (see
+    /// [`Lists::images`]). One pass, nothing gathered first: a list is short
     /// and its members known, so the screen's reject, most members' fate, is all they cost.
     #[inline(always)]
     fn screen_members(&mut self, own: &Own, lists: &Lists, best: &mut Best) {
