@@ -9,9 +9,10 @@
 //! reading its list's head, and a bit in the head that tells a cell of one body without reading
 //! past it), a body's neighbourhood (the 27 cells around its own, or the 9 it has just come
 //! within reach of) with the whole sides that bring each neighbour cell's bodies to their nearest
-//! image across periodic faces, and the crossing times. Two bodies that touch are always in neighbouring cells, so a
-//! body need only be tested against its neighbourhood, and again against the 9 new cells each
-//! time it crosses into a new one. It never computes a contact time nor changes a body.
+//! image across periodic faces, and the crossing times. Two bodies that touch are always in
+//! neighbouring cells, so a body need only be tested against its neighbourhood, and again
+//! against the 9 new cells each time it crosses into a new one. It never computes a contact time
+//! nor changes a body.
 
 use crate::bodies::Bodies;
 use crate::memory::prefetch;

@@ -389,8 +389,8 @@ impl<'a> Search<'a> {
 
     /// Screens the members of `own`'s list as they are read: those that pass wait in
     /// `self.candidates`, each with the earliest it can touch `own` and its image (see
-    /// [`Lists::images`]). One pass, nothing gathered first: a list is short
-    /// and its members known, so the screen's reject, most members' fate, is all they cost.
+    /// [`Lists::images`]). One pass, nothing gathered first: a list is short and its members
+    /// known, so the screen's reject, most members' fate, is all they cost.
     #[inline(always)]
     fn screen_members(&mut self, own: &Own, lists: &Lists, best: &mut Best) {
         debug_assert_eq!(self.overlay.len, 0, "the parallel loop keeps no lists");
