@@ -1,8 +1,9 @@
 //! What the grid's pair sweep does with a binned piece's candidates (the binned pieces whose
 //! boxes overlap its box), in the order the sweep finds them: each reported as it comes
 //! ([`Reporting`]), or held, asked of a [`PairScreen`] four at a time in AVX's lanes, and only
-//! the ones it keeps reported ([`Screened`]). Either way the pairs reported, their order and the
-//! candidates' count are the same. It knows nothing of cells or levels.
+//! the ones it keeps reported, with what the screen works out of them, again four at a time
+//! ([`Screened`]). Either way the pairs reported, their order and the candidates' count are the
+//! same. It knows nothing of cells or levels.
 
 use crate::bodies::BodyState;
 use crate::broad_phase::proxy::Reported;
@@ -21,11 +22,14 @@ pub(super) struct Owner {
 
 /// A receiver of the sweep's candidates, with `report(a, b, window)` for the pairs it passes on.
 pub(super) trait Candidates {
+    /// What is reported of a pair beside its two pieces and their window.
+    type Kept;
+
     /// Binned pieces `a` and `b` have overlapping boxes.
-    fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window));
+    fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window, Self::Kept));
 
     /// Every candidate of the sweep has been given to [`Self::overlap`].
-    fn finish(&mut self, report: &mut impl FnMut(Reported, Reported, Window));
+    fn finish(&mut self, report: &mut impl FnMut(Reported, Reported, Window, Self::Kept));
 
     /// Candidates told without a report (which counts the others).
     fn cleared(&self) -> u64;
@@ -38,22 +42,33 @@ pub(super) struct Reporting<'a> {
     pub motions: &'a [BodyState],
 }
 
+impl Reporting<'_> {
+    /// The reports of pieces `a` and `b` (of two bodies, as the caller knows) and their windows'
+    /// intersection.
+    #[inline(always)]
+    fn reports(&self, a: usize, b: usize) -> (Reported<'_>, Reported<'_>, Window) {
+        let (ea, eb) = (self.owners[a], self.owners[b]);
+        let x = Reported { body: ea.body, stamp: ea.stamp, state: &self.motions[a] };
+        let y = Reported { body: eb.body, stamp: eb.stamp, state: &self.motions[b] };
+        (x, y, ea.window.intersect(eb.window))
+    }
+}
+
 impl Candidates for Reporting<'_> {
+    type Kept = ();
+
     /// Out of line, as a call from the scans: inlined, it holds registers the scans' loops
     /// would keep (about 6 % more instructions in the shapes scene's sweep at 10^5 bodies).
     #[inline(never)]
-    fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window)) {
-        let (ea, eb) = (self.owners[a], self.owners[b]);
-        let window = ea.window.intersect(eb.window);
-        if ea.body != eb.body && !window.is_empty() {
-            let x = Reported { body: ea.body, stamp: ea.stamp, state: &self.motions[a] };
-            let y = Reported { body: eb.body, stamp: eb.stamp, state: &self.motions[b] };
-            report(x, y, window);
+    fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window, ())) {
+        let (x, y, window) = self.reports(a, b);
+        if x.body != y.body && !window.is_empty() {
+            report(x, y, window, ());
         }
     }
 
     #[inline(always)]
-    fn finish(&mut self, _: &mut impl FnMut(Reported, Reported, Window)) {}
+    fn finish(&mut self, _: &mut impl FnMut(Reported, Reported, Window, ())) {}
 
     fn cleared(&self) -> u64 {
         0
@@ -66,10 +81,11 @@ impl Candidates for Reporting<'_> {
 const HELD: usize = 64;
 
 /// The sweep's candidates held, then asked of `screen` four at a time
-/// ([`PairScreen::clears_four_avx`]): the ones it keeps go on to [`Reporting`] in the order
-/// found; the ones it clears are only counted, as [`Reporting`] would have counted them (pieces
-/// of two bodies whose windows meet). Per candidate the screen's arithmetic is about half its
-/// scalar form's, the other pieces' loads included.
+/// ([`PairScreen::clears_four_avx`]): the ones it keeps and [`Reporting`] would report (pieces of
+/// two bodies whose windows meet) are reported in the order found, with what the screen works
+/// out of them four at a time ([`PairScreen::kept_four_avx`]); the ones it clears are only
+/// counted, as [`Reporting`] would have counted them. Per candidate the screen's arithmetic is
+/// about half its scalar form's, the other pieces' loads included.
 #[cfg(target_arch = "x86_64")]
 pub(super) struct Screened<'a, S> {
     reporting: Reporting<'a>,
@@ -77,6 +93,8 @@ pub(super) struct Screened<'a, S> {
     /// The candidates held as pairs of pieces, and three slots for the last group's idle lanes.
     held: [(u32, u32); HELD + 3],
     len: usize,
+    /// The held candidates to report, in the order found, and three slots as `held`'s.
+    kept: [(u32, u32); HELD + 3],
     cleared: u64,
 }
 
@@ -86,7 +104,7 @@ impl<'a, S: PairScreen> Screened<'a, S> {
     /// The processor has AVX, and every piece given to [`Candidates::overlap`] is one of
     /// `reporting`'s owners and motions (as every piece the grid sweeps is).
     pub unsafe fn new(reporting: Reporting<'a>, screen: &'a S) -> Self {
-        Screened { reporting, screen, held: [(0, 0); HELD + 3], len: 0, cleared: 0 }
+        Screened { reporting, screen, held: [(0, 0); HELD + 3], len: 0, kept: [(0, 0); HELD + 3], cleared: 0 }
     }
 
     /// Screens the candidates held, reports the kept ones and counts the cleared. Out of line,
@@ -95,12 +113,13 @@ impl<'a, S: PairScreen> Screened<'a, S> {
     /// # Safety
     /// The processor has AVX, and at least one candidate is held.
     #[target_feature(enable = "avx")]
-    unsafe fn screen_held(&mut self, report: &mut impl FnMut(Reported, Reported, Window)) {
+    unsafe fn screen_held(&mut self, report: &mut impl FnMut(Reported, Reported, Window, S::Kept)) {
         let len = std::mem::take(&mut self.len);
         // The last group's idle lanes repeat its last candidate and are masked off.
         let last = self.held[len - 1];
         self.held[len..len + 3].fill(last);
         let Reporting { owners, motions } = self.reporting;
+        let mut kept = 0;
         for group in (0..len).step_by(4) {
             // Spelt out: nested `map`s here are left as calls (a target-feature function
             // inlines less).
@@ -119,11 +138,33 @@ impl<'a, S: PairScreen> Screened<'a, S> {
             // SAFETY: AVX, the caller's.
             let counted = unsafe { reportable_four(owners_a, owners_b) };
             self.cleared += (cleared & counted).count_ones() as u64;
-            let mut kept = lanes & !cleared;
-            while kept != 0 {
-                let k = kept.trailing_zeros() as usize;
-                self.reporting.overlap(a[k], b[k], report);
-                kept &= kept - 1;
+            let mut reported = lanes & !cleared & counted;
+            while reported != 0 {
+                let k = reported.trailing_zeros() as usize;
+                // SAFETY: fewer kept than held, and `HELD + 3` slots.
+                unsafe { *self.kept.get_unchecked_mut(kept) = (a[k] as u32, b[k] as u32) };
+                kept += 1;
+                reported &= reported - 1;
+            }
+        }
+        if kept == 0 {
+            return;
+        }
+        // The last group's idle lanes repeat its last pair, and their answers are dropped.
+        let last = self.kept[kept - 1];
+        self.kept[kept..kept + 3].fill(last);
+        for group in (0..kept).step_by(4) {
+            let pairs = &self.kept[group..group + 4];
+            let a = [pairs[0].0, pairs[1].0, pairs[2].0, pairs[3].0].map(|i| i as usize);
+            let b = [pairs[0].1, pairs[1].1, pairs[2].1, pairs[3].1].map(|i| i as usize);
+            // SAFETY: every piece held indexes the motions (`new`'s contract).
+            let (states_a, states_b) =
+                unsafe { (a.map(|i| motions.get_unchecked(i)), b.map(|i| motions.get_unchecked(i))) };
+            // SAFETY: AVX, the caller's.
+            let answers = unsafe { self.screen.kept_four_avx(states_a, states_b) };
+            for k in 0..4.min(kept - group) {
+                let (x, y, window) = self.reporting.reports(a[k], b[k]);
+                report(x, y, window, answers[k]);
             }
         }
     }
@@ -131,8 +172,10 @@ impl<'a, S: PairScreen> Screened<'a, S> {
 
 #[cfg(target_arch = "x86_64")]
 impl<S: PairScreen> Candidates for Screened<'_, S> {
+    type Kept = S::Kept;
+
     #[inline(always)]
-    fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window)) {
+    fn overlap(&mut self, a: usize, b: usize, report: &mut impl FnMut(Reported, Reported, Window, S::Kept)) {
         let (owners, motions) = (self.reporting.owners.len(), self.reporting.motions.len());
         debug_assert!(a.max(b) < owners.min(motions));
         let len = self.len;
@@ -148,7 +191,7 @@ impl<S: PairScreen> Candidates for Screened<'_, S> {
     }
 
     #[inline(always)]
-    fn finish(&mut self, report: &mut impl FnMut(Reported, Reported, Window)) {
+    fn finish(&mut self, report: &mut impl FnMut(Reported, Reported, Window, S::Kept)) {
         if self.len > 0 {
             // SAFETY: AVX, by `new`'s contract; a candidate is held.
             unsafe { self.screen_held(report) };

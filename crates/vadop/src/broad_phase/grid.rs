@@ -675,17 +675,17 @@ impl BroadPhase for Grid {
         predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64 {
-        self.sweep(workers, predict, out, |reporting| reporting)
+        self.sweep(workers, |x, y, window, (), found| predict(x, y, window, found), out, |reporting| reporting)
     }
 
     /// Where the processor has AVX (asked once per sweep), each piece's candidates are screened
     /// four at a time (`Screened`, in `candidates`); elsewhere one by one, as any broad phase does.
-    fn find_pairs_screened<T: Send>(
+    fn find_pairs_screened<T: Send, S: PairScreen>(
         &mut self,
         proxies: Proxies,
         workers: &Workers,
-        screen: &impl PairScreen,
-        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        screen: &S,
+        predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]

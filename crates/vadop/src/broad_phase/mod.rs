@@ -57,14 +57,14 @@ pub trait BroadPhase: Sync {
     ) -> u64;
 
     /// [`Self::find_pairs`] with `predict` asked only of the candidates `screen` does not clear
-    /// (the cleared ones counted all the same). A broad phase that can ask it of several
-    /// candidates at once does.
-    fn find_pairs_screened<T: Send>(
+    /// (the cleared ones counted all the same), with what [`PairScreen::kept`] makes of each. A
+    /// broad phase that can ask the screen of several candidates at once does.
+    fn find_pairs_screened<T: Send, S: PairScreen>(
         &mut self,
         proxies: Proxies,
         workers: &Workers,
-        screen: &impl PairScreen,
-        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        screen: &S,
+        predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64 {
         self.find_pairs(proxies, workers, screened_one_by_one(screen, predict), out)
@@ -109,10 +109,18 @@ pub trait BroadPhase: Sync {
 }
 
 /// A test of two reported states alone that clears candidate pairs with no event, for a broad
-/// phase to ask before anything else of a pair (see [`BroadPhase::find_pairs_screened`]).
+/// phase to ask before anything else of a pair (see [`BroadPhase::find_pairs_screened`]), and
+/// works out what the rest of the pair's test needs of the pairs it keeps.
 pub trait PairScreen: Sync {
+    /// What the screen works out of a pair it keeps.
+    type Kept: Copy;
+
     /// True when the pair of `a` and `b` has no event.
     fn clears(&self, a: &BodyState, b: &BodyState) -> bool;
+
+    /// What the screen works out of the pair of `a` and `b`, which it does not clear; the same
+    /// whichever of the two comes first.
+    fn kept(&self, a: &BodyState, b: &BodyState) -> Self::Kept;
 
     /// Bit k (k < 4) set when [`Self::clears`] the pair of `a[k]` and `b[k]`: its very
     /// verdicts, four at once in AVX's lanes.
@@ -121,17 +129,25 @@ pub trait PairScreen: Sync {
     /// The processor has AVX.
     #[cfg(target_arch = "x86_64")]
     unsafe fn clears_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> u32;
+
+    /// [`Self::kept`] of the pairs of `a[k]` and `b[k]`, four at once in AVX's lanes: its very
+    /// answers.
+    ///
+    /// # Safety
+    /// The processor has AVX.
+    #[cfg(target_arch = "x86_64")]
+    unsafe fn kept_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> [Self::Kept; 4];
 }
 
 /// `predict` of the candidates `screen` does not clear, asked one by one.
 #[inline(always)]
-fn screened_one_by_one<'a, T>(
-    screen: &'a impl PairScreen,
-    predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send + 'a,
+fn screened_one_by_one<'a, T, S: PairScreen>(
+    screen: &'a S,
+    predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send + 'a,
 ) -> impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send + 'a {
     move |x, y, window, out| {
         if !screen.clears(x.state, y.state) {
-            predict(x, y, window, out);
+            predict(x, y, window, screen.kept(x.state, y.state), out);
         }
     }
 }

@@ -260,33 +260,16 @@ pub fn straight_paths_clearly_miss(a: &Motion, b: &Motion, radius_sum: f64) -> b
 #[inline]
 pub unsafe fn straight_paths_clearly_miss_four(a: [&BodyState; 4], b: [&BodyState; 4]) -> u32 {
     use std::arch::x86_64::*;
-    let ([ax, ay, az, since_a], [wx, wy, wz, radius_a]) = (state_columns(a, 0), state_columns(a, 1));
-    let ([bx, by, bz, since_b], [vx, vy, vz, radius_b]) = (state_columns(b, 0), state_columns(b, 1));
-    let (position_a, velocity_a) = ([ax, ay, az], [wx, wy, wz]);
-    let (position_b, velocity_b) = ([bx, by, bz], [vx, vy, vz]);
+    let StraightPairsFour { offset, relative_velocity, radius_sum, .. } = straight_pairs_four(a, b);
     let one = |value: f64| _mm256_set1_pd(value);
     let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
-    // glam's order: (x x' + y y') + z z'.
-    let dot = |u: [__m256d; 3], v: [__m256d; 3]| add(add(mul(u[0], v[0]), mul(u[1], v[1])), mul(u[2], v[2]));
-    // `straight_offset`: the later `since`, each centre then by `Motion::at`, b's less a's.
-    let reference = _mm256_max_pd(since_a, since_b);
-    let (elapsed_a, elapsed_b) = (sub(reference, since_a), sub(reference, since_b));
-    let offset: [__m256d; 3] = std::array::from_fn(|k| {
-        let at_a = add(position_a[k], mul(elapsed_a, velocity_a[k]));
-        let at_b = add(position_b[k], mul(elapsed_b, velocity_b[k]));
-        sub(at_b, at_a)
-    });
-    let relative_velocity: [__m256d; 3] = std::array::from_fn(|k| sub(velocity_b[k], velocity_a[k]));
     // `paths_clearly_miss`, line by line.
-    let speed_sq = dot(relative_velocity, relative_velocity);
-    let radius_sum = add(radius_a, radius_b);
-    let (distance_sq, radius_sq) = (dot(offset, offset), mul(radius_sum, radius_sum));
+    let speed_sq = dot_four(relative_velocity, relative_velocity);
+    let (distance_sq, radius_sq) = (dot_four(offset, offset), mul(radius_sum, radius_sum));
     let sweep = mul(speed_sq, radius_sq);
     let bound = add(mul(distance_sq, speed_sq), sweep);
-    // glam's cross product: (y z' - y' z, z x' - z' x, x y' - x' y).
-    let [(ox, oy, oz), (vx, vy, vz)] = [offset, relative_velocity].map(|[x, y, z]| (x, y, z));
-    let cross = [sub(mul(oy, vz), mul(vy, oz)), sub(mul(oz, vx), mul(vz, ox)), sub(mul(ox, vy), mul(vx, oy))];
-    let miss = sub(dot(cross, cross), sweep);
+    let cross = cross_four(offset, relative_velocity);
+    let miss = sub(dot_four(cross, cross), sweep);
     let (greater, less, and) = (
         |x, y| _mm256_cmp_pd::<_CMP_GT_OQ>(x, y),
         |x, y| _mm256_cmp_pd::<_CMP_LT_OQ>(x, y),
@@ -336,6 +319,169 @@ const STATE_ROWS: () = {
     assert!(size_of::<BodyState>() >= 64 && motion == 0 && offset_of!(BodyState, radius) == 56);
     assert!(offset_of!(Motion, position) == 0 && offset_of!(Motion, since) == 24 && offset_of!(Motion, velocity) == 32);
 };
+
+/// Four pairs' straight motions in lanes, from their reference instants (the later `since`):
+/// what [`straight_offset`] and the relative velocity are for one pair, with both velocities and
+/// the radius sum, pair k in lane k.
+#[cfg(target_arch = "x86_64")]
+struct StraightPairsFour {
+    reference: std::arch::x86_64::__m256d,
+    offset: [std::arch::x86_64::__m256d; 3],
+    relative_velocity: [std::arch::x86_64::__m256d; 3],
+    velocities: [[std::arch::x86_64::__m256d; 3]; 2],
+    radius_sum: std::arch::x86_64::__m256d,
+}
+
+/// [`StraightPairsFour`] of `a[k]` and `b[k]`, each lane the scalar's floats: the later `since`
+/// by `vmaxpd` (which differs from `f64::max` only where a `since` is NaN, and then the offset is
+/// NaN in both forms, or in the sign of a zero, which no square or comparison sees), each centre
+/// then by `Motion::at`, b's less a's.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn straight_pairs_four(a: [&BodyState; 4], b: [&BodyState; 4]) -> StraightPairsFour {
+    use std::arch::x86_64::*;
+    let ([ax, ay, az, since_a], [wx, wy, wz, radius_a]) = (state_columns(a, 0), state_columns(a, 1));
+    let ([bx, by, bz, since_b], [vx, vy, vz, radius_b]) = (state_columns(b, 0), state_columns(b, 1));
+    let (position_a, velocity_a) = ([ax, ay, az], [wx, wy, wz]);
+    let (position_b, velocity_b) = ([bx, by, bz], [vx, vy, vz]);
+    let reference = _mm256_max_pd(since_a, since_b);
+    let (elapsed_a, elapsed_b) = (_mm256_sub_pd(reference, since_a), _mm256_sub_pd(reference, since_b));
+    let offset = std::array::from_fn(|k| {
+        let at_a = _mm256_add_pd(position_a[k], _mm256_mul_pd(elapsed_a, velocity_a[k]));
+        let at_b = _mm256_add_pd(position_b[k], _mm256_mul_pd(elapsed_b, velocity_b[k]));
+        _mm256_sub_pd(at_b, at_a)
+    });
+    let relative_velocity = std::array::from_fn(|k| _mm256_sub_pd(velocity_b[k], velocity_a[k]));
+    let radius_sum = _mm256_add_pd(radius_a, radius_b);
+    StraightPairsFour { reference, offset, relative_velocity, velocities: [velocity_a, velocity_b], radius_sum }
+}
+
+/// glam's dot product in lanes, in its order: (x x' + y y') + z z'.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn dot_four(u: [std::arch::x86_64::__m256d; 3], v: [std::arch::x86_64::__m256d; 3]) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(u[0], v[0]), _mm256_mul_pd(u[1], v[1])), _mm256_mul_pd(u[2], v[2]))
+}
+
+/// glam's cross product in lanes: (y z' - y' z, z x' - z' x, x y' - x' y).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn cross_four(
+    [x, y, z]: [std::arch::x86_64::__m256d; 3],
+    [u, v, w]: [std::arch::x86_64::__m256d; 3],
+) -> [std::arch::x86_64::__m256d; 3] {
+    use std::arch::x86_64::*;
+    let (sub, mul) = (|p, q| _mm256_sub_pd(p, q), |p, q| _mm256_mul_pd(p, q));
+    [sub(mul(y, w), mul(v, z)), sub(mul(z, u), mul(w, x)), sub(mul(x, v), mul(u, y))]
+}
+
+/// `2^e` in each lane, e the lane's [`exponent`] (its exponent bits alone, clamped to the normal
+/// range as [`exponent`] clamps: zero and subnormals give 2^-1022, infinity and NaN 2^1022).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn exponent_powers(x: std::arch::x86_64::__m256d) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    let bits = _mm256_and_pd(x, _mm256_set1_pd(f64::INFINITY));
+    _mm256_min_pd(_mm256_max_pd(bits, _mm256_set1_pd(power_of_two(-1022))), _mm256_set1_pd(power_of_two(1022)))
+}
+
+/// The largest of `exponent_powers` over three columns: for numbers (NaN aside) the power of the
+/// largest magnitude's exponent, as the exponent grows with the magnitude.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn largest_exponent_power([x, y, z]: [std::arch::x86_64::__m256d; 3]) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    _mm256_max_pd(_mm256_max_pd(exponent_powers(x), exponent_powers(y)), exponent_powers(z))
+}
+
+/// [`straight_pair_contact_time_past_screen`] of four pairs at once, pair k (`a[k]` and `b[k]`,
+/// their radii summed) in lane k: each answer the scalar's, to the bit. Every lane runs the
+/// scalar's operations in its order, without fused multiply-adds, and its decisions by the same
+/// comparisons (a NaN fails them as it fails the scalar's), so its floats are the scalar's
+/// bits, with three differences of form, each exact where it is used:
+/// - the exponents' powers come from the exponent bits alone ([`exponent_powers`]), and their
+///   reciprocals (powers of two in the normal range) are exact; the largest component's power is
+///   the largest power, NaN aside, and a NaN in a velocity makes the approach NaN, a miss;
+/// - the contact's time is scaled by `2^length / 2^speed` at once, which is the scalar's two
+///   steps exactly when that ratio and the result are normal numbers (or the result zero): the
+///   scalar's middle value lies between the two. A lane with a contact outside that is answered
+///   by the scalar test itself (none in ordinary scenes);
+/// - the later `since` by `vmaxpd` ([`straight_pairs_four`]).
+///
+/// The pairs are those the sweep keeps past [`straight_paths_clearly_miss`]: most of them pass
+/// through each other in detect mode, so this runs the whole test in every lane rather than
+/// leaving it early as the scalar form does.
+///
+/// # Safety
+/// The processor has AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+pub unsafe fn straight_pair_contact_times_four(a: [&BodyState; 4], b: [&BodyState; 4]) -> [Option<f64>; 4] {
+    use std::arch::x86_64::*;
+    let StraightPairsFour { reference, offset, relative_velocity, velocities, radius_sum } = straight_pairs_four(a, b);
+    let one = |value: f64| _mm256_set1_pd(value);
+    let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
+    let (and, and_not) = (|x, y| _mm256_and_pd(x, y), |x, y| _mm256_andnot_pd(x, y));
+    let (less, less_or_equal) = (|x, y| _mm256_cmp_pd::<_CMP_LT_OQ>(x, y), |x, y| _mm256_cmp_pd::<_CMP_LE_OQ>(x, y));
+    let magnitude = |x| _mm256_and_pd(x, one(f64::from_bits(!(1 << 63))));
+    // `exact_sphere_time`'s scaling.
+    let (length_power, speed_power) = (exponent_powers(radius_sum), largest_exponent_power(relative_velocity));
+    let (inverse_length, inverse_speed) = (_mm256_div_pd(one(1.0), length_power), _mm256_div_pd(one(1.0), speed_power));
+    let o = offset.map(|x| mul(x, inverse_length));
+    let v = relative_velocity.map(|x| mul(x, inverse_speed));
+    let r = mul(radius_sum, inverse_length);
+    // `scaled_time`, line by line.
+    let approach = dot_four(o, v);
+    let speed_sq = dot_four(v, v);
+    let radius_sq = mul(r, r);
+    let distance_sq = dot_four(o, o);
+    let gap = sub(distance_sq, radius_sq);
+    let discriminant = sub(mul(speed_sq, radius_sq), dot_four(cross_four(o, v), cross_four(o, v)));
+    let zero = _mm256_setzero_pd();
+    let missing = and(less(zero, gap), less(discriminant, zero));
+    let threshold = mul(one(-APPROACH_TOLERANCE), _mm256_sqrt_pd(mul(distance_sq, speed_sq)));
+    let overlapping = less_or_equal(gap, zero);
+    let touching = less_or_equal(mul(one(-2.0 * CONTACT_TOLERANCE), radius_sq), gap);
+    let found = and_not(missing, and(less(approach, zero), less(approach, threshold)));
+    let found = and_not(and_not(touching, overlapping), found);
+    // -approach + sqrt(discriminant), as sqrt(discriminant) - approach: the same sum.
+    let root = _mm256_div_pd(gap, sub(_mm256_sqrt_pd(discriminant), approach));
+    let scaled = _mm256_blendv_pd(root, zero, overlapping);
+    // `scale_by_power_of_two` by 2^(length - speed) in one step, where that is exact.
+    let ratio = mul(length_power, inverse_speed);
+    let tau = mul(scaled, ratio);
+    let normal = |x| and(less_or_equal(one(f64::MIN_POSITIVE), x), less(x, one(f64::INFINITY)));
+    let exact = and(normal(ratio), _mm256_or_pd(normal(magnitude(tau)), _mm256_cmp_pd::<_CMP_EQ_OQ>(tau, zero)));
+    // `approach_time_by`'s check of the velocities, scaled by the larger's largest component.
+    let [velocity_a, velocity_b] = velocities;
+    let scale =
+        _mm256_div_pd(one(1.0), _mm256_max_pd(largest_exponent_power(velocity_a), largest_exponent_power(velocity_b)));
+    let (va, vb) = (velocity_a.map(|x| mul(x, scale)), velocity_b.map(|x| mul(x, scale)));
+    let difference = std::array::from_fn(|k| sub(vb[k], va[k]));
+    let length = |u| _mm256_sqrt_pd(dot_four(u, u));
+    let noise = less_or_equal(length(difference), mul(one(NOISE_VELOCITY), add(length(va), length(vb))));
+    let time = add(reference, tau);
+    let finite = less(magnitude(time), one(f64::INFINITY));
+    let kept = _mm256_movemask_pd(and(and_not(noise, found), finite)) as u32;
+    let by_scalar = _mm256_movemask_pd(and_not(exact, found)) as u32;
+    let mut times = [0.0; 4];
+    // SAFETY: four floats.
+    unsafe { _mm256_storeu_pd(times.as_mut_ptr(), time) };
+    std::array::from_fn(|k| {
+        if by_scalar >> k & 1 == 1 {
+            straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius)
+        } else {
+            (kept >> k & 1 == 1).then_some(times[k])
+        }
+    })
+}
 
 /// The reference instant of two straight motions (the later `since`) and `b`'s centre less
 /// `a`'s then: what [`straight_pair_contact_time`] and its screen start from.
@@ -581,6 +727,75 @@ mod tests {
         assert!(screened * 6 > missed, "screened {screened} of {missed} misses");
     }
 
+    /// A state against `near` where the pair's answers are hard: a path grazing `near`'s, the
+    /// same velocity, touching or overlapping, anywhere at tiny or huge scales, or a special
+    /// value (signed zeros, NaN, infinities, subnormals) in one coordinate.
+    #[cfg(target_arch = "x86_64")]
+    fn hard_state(rng: &mut rand_chacha::ChaCha8Rng, near: &BodyState) -> BodyState {
+        use rand::Rng;
+        let special = [0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MIN_POSITIVE, 1e-320, f64::MAX];
+
+        let power = |rng: &mut rand_chacha::ChaCha8Rng| {
+            let exponents = if rng.random_bool(0.5) { -1100..1100 } else { -4..4 };
+            2f64.powi(rng.random_range(exponents))
+        };
+        let (scale, speed) = (power(rng), power(rng));
+        let mut unit =
+            || DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+        let (along, across) = (unit(), unit());
+        let radius = scale * rng.random_range(0.25..2.0);
+        let mut s = *near;
+        match rng.random_range(0..8) {
+            // A path grazing `near`'s at its radius sum, or passing at a random distance.
+            0 | 1 => {
+                let unit = direction(along).unwrap_or(DVec3::X);
+                let side = direction(unit.any_orthonormal_vector()).expect("unit");
+                let sum = near.radius + radius;
+                let miss = if rng.random_bool(0.5) {
+                    1.0 + rng.random_range(-1e-11..1e-11)
+                } else {
+                    rng.random_range(0.0..3.0)
+                };
+                s.motion.position = near.motion.at(s.motion.since) + side * (miss * sum) - unit * (scale * 8.0);
+                s.motion.velocity = near.motion.velocity + unit * speed;
+            }
+            // The same velocity (no relative motion), at some distance or touching.
+            2 => {
+                let d =
+                    direction(along).unwrap_or(DVec3::X) * (near.radius + radius) * [1.0, 3.0][rng.random_range(0..2)];
+                s.motion.position = near.motion.at(s.motion.since) + d;
+            }
+            // Touching or overlapping, moving.
+            3 => {
+                let d = direction(along).unwrap_or(DVec3::X) * (near.radius + radius) * rng.random_range(0.5..1.0);
+                s.motion.position = near.motion.at(s.motion.since) + d;
+                s.motion.velocity = across * speed;
+            }
+            // Anywhere, any motion, another start.
+            4 | 5 => {
+                s.motion = Motion {
+                    position: along * scale * 100.0,
+                    since: rng.random_range(-2.0..2.0),
+                    velocity: across * speed,
+                };
+            }
+            // A special value in one coordinate.
+            _ => {
+                let value = special[rng.random_range(0..special.len())];
+                match rng.random_range(0..5) {
+                    0 => s.motion.position[rng.random_range(0..3)] = value,
+                    1 => s.motion.velocity[rng.random_range(0..3)] = value,
+                    2 => s.motion.since = value,
+                    3 => s.radius = value,
+                    _ => s.motion.velocity = near.motion.velocity,
+                }
+                return s;
+            }
+        }
+        s.radius = radius;
+        s
+    }
+
     /// The four-lane screen against the scalar one, lane by lane, where the verdict is hard:
     /// grazing paths (miss distance within a few ulps of R), equal velocities, touching and
     /// overlapping spheres, tiny and huge scales (past the guards), signed zeros, NaN and
@@ -588,79 +803,16 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_screen_in_lanes_clears_what_the_scalar_screen_clears() {
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         if !std::arch::is_x86_feature_detected!("avx") {
             return;
         }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(29);
-        let special = [0.0, -0.0, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MIN_POSITIVE, 1e-320, f64::MAX];
-        let state = |rng: &mut rand_chacha::ChaCha8Rng, near: &BodyState| {
-            let power = |rng: &mut rand_chacha::ChaCha8Rng| {
-                let exponents = if rng.random_bool(0.5) { -1100..1100 } else { -4..4 };
-                2f64.powi(rng.random_range(exponents))
-            };
-            let (scale, speed) = (power(rng), power(rng));
-            let mut unit =
-                || DVec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
-            let (along, across) = (unit(), unit());
-            let radius = scale * rng.random_range(0.25..2.0);
-            let mut s = *near;
-            match rng.random_range(0..8) {
-                // A path grazing `near`'s at its radius sum, or passing at a random distance.
-                0 | 1 => {
-                    let unit = direction(along).unwrap_or(DVec3::X);
-                    let side = direction(unit.any_orthonormal_vector()).expect("unit");
-                    let sum = near.radius + radius;
-                    let miss = if rng.random_bool(0.5) {
-                        1.0 + rng.random_range(-1e-11..1e-11)
-                    } else {
-                        rng.random_range(0.0..3.0)
-                    };
-                    s.motion.position = near.motion.at(s.motion.since) + side * (miss * sum) - unit * (scale * 8.0);
-                    s.motion.velocity = near.motion.velocity + unit * speed;
-                }
-                // The same velocity (no relative motion), at some distance or touching.
-                2 => {
-                    let d = direction(along).unwrap_or(DVec3::X)
-                        * (near.radius + radius)
-                        * [1.0, 3.0][rng.random_range(0..2)];
-                    s.motion.position = near.motion.at(s.motion.since) + d;
-                }
-                // Touching or overlapping, moving.
-                3 => {
-                    let d = direction(along).unwrap_or(DVec3::X) * (near.radius + radius) * rng.random_range(0.5..1.0);
-                    s.motion.position = near.motion.at(s.motion.since) + d;
-                    s.motion.velocity = across * speed;
-                }
-                // Anywhere, any motion, another start.
-                4 | 5 => {
-                    s.motion = Motion {
-                        position: along * scale * 100.0,
-                        since: rng.random_range(-2.0..2.0),
-                        velocity: across * speed,
-                    };
-                }
-                // A special value in one coordinate.
-                _ => {
-                    let value = special[rng.random_range(0..special.len())];
-                    match rng.random_range(0..5) {
-                        0 => s.motion.position[rng.random_range(0..3)] = value,
-                        1 => s.motion.velocity[rng.random_range(0..3)] = value,
-                        2 => s.motion.since = value,
-                        3 => s.radius = value,
-                        _ => s.motion.velocity = near.motion.velocity,
-                    }
-                    return s;
-                }
-            }
-            s.radius = radius;
-            s
-        };
         let origin = BodyState::default();
         let (mut cleared, mut kept) = (0, 0);
         for _ in 0..200_000 {
-            let a: [BodyState; 4] = std::array::from_fn(|_| state(&mut rng, &origin));
-            let b: [BodyState; 4] = std::array::from_fn(|k| state(&mut rng, &a[k]));
+            let a: [BodyState; 4] = std::array::from_fn(|_| hard_state(&mut rng, &origin));
+            let b: [BodyState; 4] = std::array::from_fn(|k| hard_state(&mut rng, &a[k]));
             // SAFETY: AVX was detected above.
             let lanes = unsafe { straight_paths_clearly_miss_four(a.each_ref(), b.each_ref()) };
             for (k, (a, b)) in a.iter().zip(&b).enumerate() {
@@ -671,6 +823,38 @@ mod tests {
         }
         // Both verdicts met often, not one alone.
         assert!(cleared > 50_000 && kept > 50_000, "cleared {cleared} kept {kept}");
+    }
+
+    /// The four-lane exact test against the scalar one, lane by lane and to the bit, on the
+    /// screen's hard pairs (grazing, equal velocities, touching and overlapping, tiny and huge
+    /// scales, special values), and the scalar one the same whichever body comes first.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_exact_test_in_lanes_answers_as_the_scalar_test() {
+        use rand::SeedableRng;
+        if !std::arch::is_x86_feature_detected!("avx") {
+            return;
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(31);
+        let origin = BodyState::default();
+        let bits = |time: Option<f64>| time.map(f64::to_bits);
+        let (mut contacts, mut kept) = (0, 0);
+        for _ in 0..200_000 {
+            let a: [BodyState; 4] = std::array::from_fn(|_| hard_state(&mut rng, &origin));
+            let b: [BodyState; 4] = std::array::from_fn(|k| hard_state(&mut rng, &a[k]));
+            // SAFETY: AVX was detected above.
+            let lanes = unsafe { straight_pair_contact_times_four(a.each_ref(), b.each_ref()) };
+            for (k, (a, b)) in a.iter().zip(&b).enumerate() {
+                let scalar = straight_pair_contact_time_past_screen(&a.motion, &b.motion, a.radius + b.radius);
+                let swapped = straight_pair_contact_time_past_screen(&b.motion, &a.motion, b.radius + a.radius);
+                assert_eq!(bits(lanes[k]), bits(scalar), "a {a:?} b {b:?}");
+                assert_eq!(bits(swapped), bits(scalar), "a {a:?} b {b:?}");
+                contacts += usize::from(scalar.is_some());
+                kept += usize::from(!straight_paths_clearly_miss(&a.motion, &b.motion, a.radius + b.radius));
+            }
+        }
+        // Contacts met often, among pairs the screen keeps.
+        assert!(contacts > 30_000 && kept > 100_000, "contacts {contacts} kept {kept}");
     }
 
     #[test]

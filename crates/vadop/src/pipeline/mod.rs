@@ -52,7 +52,7 @@ use pass_through::Searched;
 use passed::{Ahead, PassedContacts};
 use predict::{
     for_each_static_event, pair_event, predict_crossing, predict_end, predict_into, predict_own_pair,
-    straight_sphere_event_past_screen, StraightSpheres,
+    straight_sphere_event_at, StraightSpheres,
 };
 use predict::{predict_pair, push_found};
 use predict::{predict_wall, renewal, sort_predictions, Prediction};
@@ -368,7 +368,7 @@ impl<B: BroadPhase> Pipeline<B> {
                     view,
                     workers,
                     &StraightSpheres,
-                    |a, b, w, out| push_found(out, straight_sphere_event_past_screen(a, b, w)),
+                    |a, b, w, time, out| push_found(out, straight_sphere_event_at(a, b, w, time)),
                     found,
                 )
             } else {

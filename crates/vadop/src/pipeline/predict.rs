@@ -16,8 +16,8 @@ use crate::motion::Motion;
 use crate::narrow_phase::contacts::{self, Parking};
 use crate::narrow_phase::parked::ParkedSearches;
 use crate::narrow_phase::spheres::{
-    straight_pair_contact_time_past_screen, straight_paths_clearly_miss, straight_paths_clearly_miss_four,
-    wall_contact_time,
+    straight_pair_contact_time_past_screen, straight_pair_contact_times_four, straight_paths_clearly_miss,
+    straight_paths_clearly_miss_four, wall_contact_time,
 };
 use crate::narrow_phase::static_geometry::StaticGeometry;
 use crate::walls::BoxBounds;
@@ -91,9 +91,19 @@ pub(super) fn predict_straight_sphere_pair(bodies: &Bodies, x: Reported, y: Repo
 pub(super) struct StraightSpheres;
 
 impl PairScreen for StraightSpheres {
+    /// The pair's contact time, if any ([`straight_pair_contact_time_past_screen`]), whichever
+    /// body comes first (the offset and relative velocity of `b, a` are those of `a, b` negated,
+    /// exactly, which no square, product of two or comparison with zero sees).
+    type Kept = Option<f64>;
+
     #[inline(always)]
     fn clears(&self, a: &BodyState, b: &BodyState) -> bool {
         straight_paths_clearly_miss(&a.motion, &b.motion, a.radius + b.radius)
+    }
+
+    #[inline(always)]
+    fn kept(&self, a: &BodyState, b: &BodyState) -> Option<f64> {
+        straight_pair_contact_time_past_screen(&a.motion, &b.motion, a.radius + b.radius)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -102,6 +112,23 @@ impl PairScreen for StraightSpheres {
         // SAFETY: the caller's.
         unsafe { straight_paths_clearly_miss_four(a, b) }
     }
+
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    unsafe fn kept_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> [Option<f64>; 4] {
+        // SAFETY: the caller's.
+        unsafe { straight_pair_contact_times_four(a, b) }
+    }
+}
+
+/// The event of two spheres on straight paths whose contact time, if any, is `time` (what
+/// [`StraightSpheres`] keeps of them): the lower id first, the window, the stamps.
+#[inline(always)]
+pub(super) fn straight_sphere_event_at(x: Reported, y: Reported, window: Window, time: Option<f64>) -> Option<Event> {
+    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
+    debug_assert!(a.body != b.body, "a body reported against itself");
+    let time = time?;
+    window.contains(time).then(|| pair_event((a.body, a.stamp), (b.body, b.stamp), (time, false)))
 }
 
 /// [`predict_own_pair`] of two spheres on straight paths that [`straight_paths_clearly_miss`]
@@ -109,11 +136,7 @@ impl PairScreen for StraightSpheres {
 /// without the screen asked again or the world's flags read.
 #[inline(never)]
 pub(super) fn straight_sphere_event_past_screen(x: Reported, y: Reported, window: Window) -> Option<Event> {
-    let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
-    debug_assert!(a.body != b.body, "a body reported against itself");
-    let (sa, sb) = (a.state, b.state);
-    let time = straight_pair_contact_time_past_screen(&sa.motion, &sb.motion, sa.radius + sb.radius)?;
-    window.contains(time).then(|| pair_event((a.body, a.stamp), (b.body, b.stamp), (time, false)))
+    straight_sphere_event_at(x, y, window, StraightSpheres.kept(x.state, y.state))
 }
 
 /// Pushes `event`, if any: not `out.extend(event)`, which reserves room for it even when there is

@@ -15,7 +15,7 @@ impl Grid {
     pub(super) fn sweep<'a, T: Send, C: Candidates>(
         &'a self,
         workers: &Workers,
-        predict: impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send,
+        predict: impl Fn(Reported, Reported, Window, C::Kept, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
         candidates: impl Fn(Reporting<'a>) -> C + Sync,
     ) -> u64 {
@@ -26,9 +26,9 @@ impl Grid {
             let reporting = Reporting { owners: &self.owners, motions: &self.motions };
             let counts = workers.extend_ranges(self.levels[k].dims[0], out, |slabs, found| {
                 let (mut reported, mut candidates) = (0u64, candidates(reporting));
-                let mut report = |x: Reported, y: Reported, window| {
+                let mut report = |x: Reported, y: Reported, window, kept| {
                     reported += 1;
-                    predict(x, y, window, found);
+                    predict(x, y, window, kept, found);
                 };
                 #[cfg(target_arch = "x86_64")]
                 if avx {
@@ -38,7 +38,7 @@ impl Grid {
                     return reported + candidates.cleared();
                 }
                 // SAFETY: no AVX asked for.
-                unsafe { self.slab_pairs::<false>(k, slabs, &mut candidates, &mut report) };
+                unsafe { self.slab_pairs::<false, C>(k, slabs, &mut candidates, &mut report) };
                 candidates.finish(&mut report);
                 reported + candidates.cleared()
             });
@@ -55,15 +55,15 @@ impl Grid {
     /// The processor has AVX.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn slab_pairs_avx(
+    unsafe fn slab_pairs_avx<C: Candidates>(
         &self,
         k: usize,
         slabs: std::ops::Range<usize>,
-        candidates: &mut impl Candidates,
-        report: &mut impl FnMut(Reported, Reported, Window),
+        candidates: &mut C,
+        report: &mut impl FnMut(Reported, Reported, Window, C::Kept),
     ) {
         // SAFETY: the caller's.
-        unsafe { self.slab_pairs::<true>(k, slabs, candidates, report) }
+        unsafe { self.slab_pairs::<true, C>(k, slabs, candidates, report) }
     }
 
     /// Hands `candidates` every candidate pair found from the cells of level `k` with x in
@@ -74,12 +74,12 @@ impl Grid {
     /// # Safety
     /// `AVX` only where the processor has AVX.
     #[inline(always)]
-    unsafe fn slab_pairs<const AVX: bool>(
+    unsafe fn slab_pairs<const AVX: bool, C: Candidates>(
         &self,
         k: usize,
         slabs: std::ops::Range<usize>,
-        candidates: &mut impl Candidates,
-        report: &mut impl FnMut(Reported, Reported, Window),
+        candidates: &mut C,
+        report: &mut impl FnMut(Reported, Reported, Window, C::Kept),
     ) {
         // Half of the 26 neighbours, so each pair of adjacent cells is swept once. Cells along z
         // are adjacent in memory, so the 13 cells are 5 contiguous runs: the next cell of this
