@@ -27,6 +27,9 @@ use crate::shape::ShapeGeometry;
 use crate::walls::{Periodic, Wall};
 use glam::{DQuat, DVec3};
 
+mod stamps;
+pub(crate) use stamps::FORESEEN_STEP;
+
 /// One sphere as users see it.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Sphere {
@@ -437,23 +440,6 @@ impl Bodies {
         self.tags[i].mass
     }
 
-    /// Body `i`'s stamp (see [`BodyTag::stamp`]).
-    #[inline]
-    pub fn stamp(&self, i: usize) -> u32 {
-        self.tags[i].stamp
-    }
-
-    /// True when body `i` is live with `stamp`: a prediction stamped so was made from its
-    /// present motion. The stamp alone tells: predictions are made of live bodies only, and a
-    /// removal renews the stamp, so no prediction holds a removed body's stamp; `alive` (a line
-    /// of its own) is not read on the event loop's every check.
-    #[inline]
-    pub fn has_stamp(&self, i: usize, stamp: u32) -> bool {
-        let current = self.stamp(i) == stamp;
-        debug_assert!(!current || self.alive[i], "a prediction holds removed body {i}'s stamp");
-        current
-    }
-
     /// Of live slot `i`, its body's generation; of a removed one, its next body's.
     #[inline]
     pub(crate) fn generation(&self, i: usize) -> u32 {
@@ -771,31 +757,6 @@ impl Bodies {
     pub(crate) fn tighten_speed_bound(&mut self) -> f64 {
         self.speed_bound = self.alive_ids().map(|i| speed(self.velocity(i as usize))).fold(0.0, f64::max);
         self.speed_bound
-    }
-
-    /// Voids body `i`'s predictions without changing its motion (its proxy is being renewed).
-    /// Every change of a stamp comes through here.
-    #[inline]
-    pub(crate) fn renew(&mut self, i: usize) {
-        self.tags[i].stamp = self.tags[i].stamp.wrapping_add(1);
-        if let Some(word) = self.bumped.get_mut(i / 64) {
-            *word |= 1 << (i % 64);
-        }
-    }
-
-    /// Starts a record of the stamps bumped from now on (see [`Self::bumped_since_mark`]).
-    pub(crate) fn mark_stamps(&mut self) {
-        self.bumped.clear();
-        self.bumped.resize(self.slots().div_ceil(64), 0);
-    }
-
-    /// True when the stamp of body `i` (present at the last [`Self::mark_stamps`]) was bumped
-    /// since: a prediction current at the mark is current now exactly when neither of its bodies'
-    /// stamps was bumped (a stamp comes back to a value only after 2^32 bumps). One bit a body, so the
-    /// record of 10^5 bodies stays in cache where their stamps lie in as many random lines.
-    #[inline]
-    pub(crate) fn bumped_since_mark(&self, i: usize) -> bool {
-        self.bumped[i / 64] >> (i % 64) & 1 == 1
     }
 
     /// The sphere in slot `i` as of time `t`.

@@ -12,8 +12,10 @@
 //! precision relative to the box's low corner (the grid's origin), rounded outwards, so they stay conservative while a
 //! cell's pieces fit a few cache lines, and each piece's motion is copied beside it in cell order:
 //! a candidate pair reaches the narrow phase without a trip to memory. A body that changes velocity mid-window gets fresh pieces
-//! on per-cell linked lists, and its query visits only the cells its new path can reach. It never
-//! reads shapes or computes contact times.
+//! on per-cell linked lists, and its query visits only the cells its new path can reach. A window's
+//! start may bin bodies' foreseen paths (after their first wall bounce) beside the proxies, each a
+//! proxy of its own with its stamp and motion ([`BroadPhase::prepare_foreseen`]). It never reads
+//! shapes or computes contact times.
 
 mod sweep;
 
@@ -23,7 +25,7 @@ use super::candidates::Owner;
 use super::candidates::Screened;
 use super::{screened_one_by_one, BroadPhase, PairScreen, PrepareCounts};
 use crate::bodies::BodyState;
-use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Path, Proxies, Reported};
+use crate::broad_phase::proxy::{sampled_quantile, CompactBox, Foreseen, Path, Proxies, Reported};
 use crate::memory::prefetch;
 use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
@@ -77,9 +79,8 @@ struct Level {
     cell_start: Vec<u32>,
     /// Head of each cell's list of late pieces in `Grid::late`.
     late_head: Vec<u32>,
-    /// Pieces binned into this level at the window's start, and entered since.
+    /// Pieces binned into this level at the window's start.
     count: usize,
-    late: usize,
 }
 
 impl Level {
@@ -101,7 +102,6 @@ impl Level {
         self.late_head.clear();
         self.late_head.resize(cells, NONE);
         self.count = 0;
-        self.late = 0;
     }
 
     #[inline]
@@ -177,9 +177,9 @@ impl PieceSink for CountPieces<'_> {
 }
 
 /// Stores each piece of the cells from `lowest` on in its cell's next slot (`next_slot`, from
-/// `first_slot` on), with its owner and its body's motion.
+/// `first_slot` on), with its owner and its path's motion.
 struct StorePieces<'a, 'p> {
-    proxies: Proxies<'p>,
+    paths: BinnedPaths<'p>,
     next_slot: &'a mut [u32],
     lowest: usize,
     first_slot: usize,
@@ -190,14 +190,70 @@ struct StorePieces<'a, 'p> {
 
 impl PieceSink for StorePieces<'_, '_> {
     #[inline(always)]
-    fn piece(&mut self, body: usize, cell: usize, bbox: CompactBox, window: Window) {
+    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window) {
         let next = &mut self.next_slot[cell - self.lowest];
         let slot = *next as usize;
         *next += 1;
         let k = slot - self.first_slot;
-        self.owners[k] = Owner { body: body as u32, stamp: self.proxies.stamp(body), window };
+        let (body, stamp) = self.paths.owner(path);
+        self.owners[k] = Owner { body, stamp, window };
         self.boxes.set(k, bbox);
-        self.motions[k] = *self.proxies.state(body);
+        self.motions[k] = *self.paths.state(path);
+    }
+}
+
+/// What a window's start bins: every proxy (path `i` of body `i`), then each foreseen path (path
+/// `slots + k` of `foreseen[k]`), each a path of its own with its owner's body, stamp and state.
+#[derive(Clone, Copy)]
+struct BinnedPaths<'a> {
+    proxies: Proxies<'a>,
+    foreseen: &'a [Foreseen],
+}
+
+impl<'a> BinnedPaths<'a> {
+    #[inline(always)]
+    fn len(&self) -> usize {
+        self.proxies.slots() + self.foreseen.len()
+    }
+
+    /// The foreseen path `i` is, if it is one.
+    #[inline(always)]
+    fn foreseen(&self, i: usize) -> Option<&'a Foreseen> {
+        i.checked_sub(self.proxies.slots()).map(|k| &self.foreseen[k])
+    }
+
+    #[inline(always)]
+    fn is_live(&self, i: usize) -> bool {
+        self.proxies.is_live(i) || i >= self.proxies.slots()
+    }
+
+    #[inline(always)]
+    fn path(&self, i: usize) -> Path {
+        match self.foreseen(i) {
+            Some(f) => self.proxies.path_ahead(f.body as usize, &f.state, &f.made.0),
+            None => self.proxies.path(i),
+        }
+    }
+
+    #[inline(always)]
+    fn bbox(&self, i: usize) -> CompactBox {
+        self.foreseen(i).map_or_else(|| self.proxies.bbox(i), |f| f.made.0.bbox)
+    }
+
+    #[inline(always)]
+    fn window(&self, i: usize) -> Window {
+        self.foreseen(i).map_or_else(|| self.proxies.window_of(i), |f| Window::new(f.made.0.start, f.made.0.end))
+    }
+
+    /// The body and stamp path `i`'s pieces are entered with.
+    #[inline(always)]
+    fn owner(&self, i: usize) -> (u32, u32) {
+        self.foreseen(i).map_or_else(|| (i as u32, self.proxies.stamp(i)), |f| (f.body, f.stamp))
+    }
+
+    #[inline(always)]
+    fn state(&self, i: usize) -> &'a BodyState {
+        self.foreseen(i).map_or_else(|| self.proxies.state(i), |f| &f.state)
     }
 }
 
@@ -230,8 +286,9 @@ pub struct Grid {
     hits: Vec<u32>,
     /// Scratch of the binning: each cell's piece count, then the slot of its next piece.
     next_slot: Vec<u32>,
-    /// The binned pieces stay as the window's start left them (see [`BroadPhase::fix_binned`]).
-    binned_fixed: bool,
+    /// The binned pieces include foreseen paths (see [`BroadPhase::prepare_foreseen`]), and stay
+    /// as the window's start left them.
+    foreseen: bool,
 }
 
 impl Grid {
@@ -254,7 +311,7 @@ impl Grid {
             runs: Vec::new(),
             hits: Vec::new(),
             next_slot: Vec::new(),
-            binned_fixed: false,
+            foreseen: false,
         }
     }
 
@@ -301,13 +358,13 @@ impl Grid {
         }
     }
 
-    /// Hands `sink` the body, cell, box and window of every piece, in body order, whose cell
-    /// (numbered across levels) is in `owned`, per the bodies' `plan`.
+    /// Hands `sink` the path, cell, box and window of every piece, in path order, whose cell
+    /// (numbered across levels) is in `owned`, per the paths' `plan`.
     #[inline(always)]
     fn for_each_owned_piece(
         levels: &[Level],
         plan: &[(u32, u32)],
-        proxies: Proxies,
+        paths: BinnedPaths,
         owned: std::ops::Range<usize>,
         sink: &mut impl PieceSink,
     ) {
@@ -318,19 +375,19 @@ impl Grid {
             if count == 1 {
                 let cell = level_or_cell as usize;
                 if owned.contains(&cell) {
-                    sink.piece(i, cell, proxies.bbox(i), proxies.window_of(i));
+                    sink.piece(i, cell, paths.bbox(i), paths.window(i));
                 }
                 continue;
             }
             let level = &levels[level_or_cell as usize];
             // The pieces' low corners lie in the path's box, so their cells lie between the
             // cells of its corners: cells are numbered in x, then y, then z order.
-            let (low, high) = proxies.bbox(i).corners();
+            let (low, high) = paths.bbox(i).corners();
             let (first, last) = (level.index(level.coordinates(low)), level.index(level.coordinates(high)));
             if level.cells_before + last < owned.start || level.cells_before + first >= owned.end {
                 continue;
             }
-            Grid::for_each_piece(proxies, &proxies.path(i), count, |bbox, window| {
+            Grid::for_each_piece(paths.proxies, &paths.path(i), count, |bbox, window| {
                 let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
                 if owned.contains(&cell) {
                     sink.piece(i, cell, bbox, window);
@@ -364,14 +421,14 @@ impl Grid {
         self.levels.len() - 1
     }
 
-    /// [`BroadPhase::query`] (of the late pieces alone unless `binned`), leaving the body's new
-    /// pieces in `self.pieces`; returns the exponent of the level they fit, so an entry need not
-    /// plan them again.
+    /// [`BroadPhase::query`] (reporting the pieces of foreseen paths still to come too when
+    /// `foreseen`), leaving the body's new pieces in `self.pieces`; returns the exponent of the
+    /// level they fit, so an entry need not plan them again.
     fn query_pieces(
         &mut self,
         body: u32,
         proxies: Proxies,
-        (skip, binned): (Option<u32>, bool),
+        (skip, foreseen): (Option<u32>, bool),
         mut report: impl FnMut(Reported, Window),
     ) -> i32 {
         let mut pieces = std::mem::take(&mut self.pieces);
@@ -382,7 +439,7 @@ impl Grid {
         for &(bbox, window) in &pieces {
             let piece = Entry { bbox, body, stamp: 0 };
             for k in 0..self.levels.len() {
-                self.for_each_overlapping(k, &piece, proxies, binned, |other, other_window, motion| {
+                self.for_each_overlapping(k, &piece, proxies, foreseen, |other, other_window, motion| {
                     if other.body != body && Some(other.body) != skip {
                         let common = window.intersect(other_window);
                         if !common.is_empty() {
@@ -396,84 +453,53 @@ impl Grid {
         exponent
     }
 
-    /// Calls `report(other, window)` for every current binned piece (one of the window's start)
-    /// whose box overlaps a piece of `path`, body `body`'s path, and whose window meets the
-    /// piece's: the part of [`BroadPhase::query`] that no later entry changes once
-    /// [`BroadPhase::fix_binned`] is set. Reads the grid alone, so workers may run it side by
-    /// side.
-    fn query_binned_pieces(&self, body: u32, path: &Path, proxies: Proxies, mut report: impl FnMut(Reported, Window)) {
-        let (count, _) = self.plan_pieces(path);
-        Grid::for_each_piece(proxies, path, count, |bbox, window| {
-            let (low, high) = bbox.corners();
-            for level in &self.levels {
-                for (first, last) in level.columns_near(low, high) {
-                    let run = level.first + level.cell_start[first] as usize
-                        ..level.first + level.cell_start[last + 1] as usize;
-                    self.boxes.for_each_overlap(&bbox, run, |e| {
-                        let Owner { body: other, stamp, window: other_window } = self.owners[e];
-                        let common = window.intersect(other_window);
-                        if other != body && !common.is_empty() && proxies.is_current(other as usize, stamp) {
-                            report(Reported { body: other, stamp, state: &self.motions[e] }, common);
-                        }
-                    });
-                }
-            }
-        });
-    }
-
-    /// Calls `visit(entry, window, motion)` for every current piece, binned (unless not
-    /// `binned`) or late, of level `k` whose box overlaps `query`, unlinking the stale late
-    /// pieces it passes, so a busy cell's list stays short.
+    /// Calls `visit(entry, window, motion)` for every current piece, binned or late, of level
+    /// `k` whose box overlaps `query` (and every binned piece of a foreseen path still to come
+    /// when `foreseen`), unlinking the stale late pieces it passes, so a busy cell's list stays
+    /// short.
     #[inline]
     fn for_each_overlapping(
         &mut self,
         k: usize,
         query: &Entry,
         proxies: Proxies,
-        binned: bool,
+        foreseen: bool,
         mut visit: impl FnMut(&Entry, Window, &BodyState),
     ) {
         let Grid { levels, late, late_motions, boxes, owners, motions, runs, hits, .. } = self;
         let level = &mut levels[k];
-        // A query of the late pieces alone skips a level that holds none yet.
-        if !binned && level.late == 0 {
-            return;
-        }
         let (low, high) = query.bbox.corners();
         // In phases, each a loop of independent loads, rather than column by column: a query
         // meets a few memory misses per column (its cell bounds, its boxes, their owners and
         // stamps), and a phase lets the processor wait for all of a kind at once instead of for
         // each in turn. That cut a re-test's cost by about an eighth at n = 10^5 (BENCHMARKS.md).
-        // The late lists alone: one pass over the cells, their heads read as it goes.
-        if binned {
-            runs.clear();
-            for (first, last) in level.columns_near(low, high) {
-                // The binned pieces of cells z = a..=b of a column are one run.
-                runs.push((level.cell_start[first], level.cell_start[last + 1]));
-                for &head in &level.late_head[first..=last] {
-                    if let Some(first) = late.get(head as usize) {
-                        prefetch(first);
-                    }
+        runs.clear();
+        for (first, last) in level.columns_near(low, high) {
+            // The binned pieces of cells z = a..=b of a column are one run.
+            runs.push((level.cell_start[first], level.cell_start[last + 1]));
+            for &head in &level.late_head[first..=last] {
+                if let Some(first) = late.get(head as usize) {
+                    prefetch(first);
                 }
             }
-            hits.clear();
-            for &(start, end) in runs.iter() {
-                let run = level.first + start as usize..level.first + end as usize;
-                boxes.for_each_overlap(&query.bbox, run, |e| hits.push(e as u32));
-            }
-            for &e in hits.iter() {
-                prefetch(&owners[e as usize]);
-                prefetch(&motions[e as usize]);
-            }
-            for &e in hits.iter() {
-                proxies.prefetch_stamp(owners[e as usize].body as usize);
-            }
-            for &e in hits.iter() {
-                let e = e as usize;
-                let Owner { body, stamp, window } = owners[e];
-                if proxies.is_current(body as usize, stamp) {
-                    visit(&Entry { bbox: boxes.get(e), body, stamp }, window, &motions[e]);
-                }
+        }
+        hits.clear();
+        for &(start, end) in runs.iter() {
+            let run = level.first + start as usize..level.first + end as usize;
+            boxes.for_each_overlap(&query.bbox, run, |e| hits.push(e as u32));
+        }
+        for &e in hits.iter() {
+            prefetch(&owners[e as usize]);
+            prefetch(&motions[e as usize]);
+        }
+        for &e in hits.iter() {
+            proxies.prefetch_stamp(owners[e as usize].body as usize);
+        }
+        for &e in hits.iter() {
+            let e = e as usize;
+            let Owner { body, stamp, window } = owners[e];
+            if proxies.is_current(body as usize, stamp) || (foreseen && proxies.is_foreseen(body as usize, stamp)) {
+                visit(&Entry { bbox: boxes.get(e), body, stamp }, window, &motions[e]);
             }
         }
         for (first, last) in level.columns_near(low, high) {
@@ -496,6 +522,7 @@ impl Grid {
             }
         }
     }
+
     /// Enters body `body`'s pieces, just built by [`Self::query_pieces`] into the level of
     /// `exponent`.
     fn enter_pieces(&mut self, body: u32, proxies: Proxies, exponent: i32) {
@@ -509,9 +536,9 @@ impl Grid {
             let entry = Entry { bbox, body, stamp: proxies.stamp(i) };
             // One piece in a cell that holds a binned piece of the body (of a path it left: its
             // stamp has moved on): replace that one where it lies, rather than keep a body's
-            // slot by id (4 bytes a body) to find it. A cell holds a handful of pieces. Not once
-            // the binned pieces are fixed: queries run ahead read them as they were.
-            if self.pieces.len() == 1 && !self.binned_fixed {
+            // slot by id (4 bytes a body) to find it. A cell holds a handful of pieces. Not among
+            // foreseen paths: the piece found could be the body's foreseen one.
+            if self.pieces.len() == 1 && !self.foreseen {
                 if let Some(old) = level.run(cell).find(|&e| owners[e].body == body) {
                     owners[old] = Owner { body, stamp: entry.stamp, window };
                     boxes.set(old, bbox);
@@ -520,15 +547,16 @@ impl Grid {
                 }
             }
             self.late.push((entry, window, level.late_head[cell]));
-            level.late += 1;
             self.late_motions.push(*proxies.state(i));
             level.late_head[cell] = (self.late.len() - 1) as u32;
         }
     }
 }
 
-impl BroadPhase for Grid {
-    fn prepare(&mut self, proxies: Proxies, workers: &Workers) -> PrepareCounts {
+impl Grid {
+    /// [`BroadPhase::prepare`] of `paths`: the proxies, then any foreseen paths.
+    fn bin(&mut self, paths: BinnedPaths, workers: &Workers) -> PrepareCounts {
+        let proxies = paths.proxies;
         // Base cell from the median extent of the swept boxes: robust to a few giant, tiny or
         // fast bodies.
         let sampled = sampled_quantile(
@@ -541,19 +569,19 @@ impl BroadPhase for Grid {
             let extents = if proxies.calm() { CALM_BASE_CELL_EXTENTS } else { BASE_CELL_EXTENTS };
             self.base_cell = (extents * median).max(4.0 * proxies.typical_radius());
         }
-        // Pass 1: each body's piece count and level exponent, and the pieces per exponent.
+        // Pass 1: each path's piece count and level exponent, and the pieces per exponent.
         let mut plan = std::mem::take(&mut self.plan);
         plan.clear();
-        plan.resize(proxies.slots(), (0, 0));
+        plan.resize(paths.len(), (0, 0));
         let this = &*self;
         let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
             let mut per_exponent: Vec<(i32, usize)> = Vec::new();
             for (k, plan) in chunk.iter_mut().enumerate() {
                 let i = offset + k;
-                if !proxies.is_live(i) {
+                if !paths.is_live(i) {
                     continue;
                 }
-                let (count, exponent) = this.plan_pieces(&proxies.path(i));
+                let (count, exponent) = this.plan_pieces(&paths.path(i));
                 *plan = (count, exponent as u32);
                 match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
                     Some((_, n)) => *n += count as usize,
@@ -571,7 +599,7 @@ impl BroadPhase for Grid {
             }
         }
         per_exponent.sort_unstable();
-        // Levels sized to their pieces, storage reused; each body's plan now names its level.
+        // Levels sized to their pieces, storage reused; each path's plan now names its level.
         self.spare.append(&mut self.levels);
         let (mut first, mut cells_before) = (0, 0);
         for &(exponent, count) in &per_exponent {
@@ -583,7 +611,7 @@ impl BroadPhase for Grid {
             cells_before += level.late_head.len();
             self.levels.push(level);
         }
-        // Each body's level, or a single piece's cell, found in parallel.
+        // Each path's level, or a single piece's cell, found in parallel.
         let levels = &self.levels;
         workers.chunks_mut(&mut plan, |offset, chunk| {
             for (k, entry) in chunk.iter_mut().enumerate() {
@@ -592,7 +620,7 @@ impl BroadPhase for Grid {
                 }
                 if entry.0 == 1 {
                     let level = &levels[entry.1 as usize];
-                    let cell = level.index(level.coordinates(proxies.bbox(offset + k).corners().0));
+                    let cell = level.index(level.coordinates(paths.bbox(offset + k).corners().0));
                     entry.1 = (level.cells_before + cell) as u32;
                 }
             }
@@ -614,7 +642,7 @@ impl BroadPhase for Grid {
             .collect();
         workers.for_each_part(parts, |_, (counts, lowest)| {
             let owned = lowest..lowest + counts.len();
-            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, &mut CountPieces { counts, lowest });
+            Grid::for_each_owned_piece(levels, plan_of, paths, owned, &mut CountPieces { counts, lowest });
         });
         // Counts become starts: of each cell in its level, and of the next piece it takes.
         for level in &mut self.levels {
@@ -655,16 +683,30 @@ impl BroadPhase for Grid {
             .collect();
         workers.for_each_part(parts, |_, ((((next_slot, (owners, boxes)), motions), lowest), first_slot)| {
             let owned = lowest..lowest + next_slot.len();
-            let mut store = StorePieces { proxies, next_slot, lowest, first_slot, owners, boxes, motions };
-            Grid::for_each_owned_piece(levels, plan_of, proxies, owned, &mut store);
+            let mut store = StorePieces { paths, next_slot, lowest, first_slot, owners, boxes, motions };
+            Grid::for_each_owned_piece(levels, plan_of, paths, owned, &mut store);
         });
         self.next_slot = next_slot;
-        self.binned_fixed = false;
+        self.foreseen = !paths.foreseen.is_empty();
         self.late.clear();
         self.late_motions.clear();
         self.plan = plan;
         self.per_exponent = per_exponent;
         PrepareCounts { moves: first as u64, entries: first as u64 }
+    }
+}
+
+impl BroadPhase for Grid {
+    fn prepare(&mut self, proxies: Proxies, workers: &Workers) -> PrepareCounts {
+        self.bin(BinnedPaths { proxies, foreseen: &[] }, workers)
+    }
+
+    fn bins_foreseen(&self) -> bool {
+        true
+    }
+
+    fn prepare_foreseen(&mut self, proxies: Proxies, foreseen: &[Foreseen], workers: &Workers) -> PrepareCounts {
+        self.bin(BinnedPaths { proxies, foreseen }, workers)
     }
 
     /// Workers sweep slabs of cells along x; a slab reads the next one, never writes.
@@ -697,25 +739,11 @@ impl BroadPhase for Grid {
     }
 
     fn query(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        self.query_pieces(body, proxies, (skip, true), report);
+        self.query_pieces(body, proxies, (skip, false), report);
     }
 
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        let exponent = self.query_pieces(body, proxies, (skip, true), report);
-        self.enter_pieces(body, proxies, exponent);
-    }
-
-    fn fix_binned(&mut self) -> bool {
-        self.binned_fixed = true;
-        true
-    }
-
-    fn query_binned(&self, body: u32, path: &Path, proxies: Proxies, report: impl FnMut(Reported, Window)) {
-        self.query_binned_pieces(body, path, proxies, report);
-    }
-
-    fn update_late(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window)) {
-        let exponent = self.query_pieces(body, proxies, (skip, false), report);
+        let exponent = self.query_pieces(body, proxies, (skip, self.foreseen), report);
         self.enter_pieces(body, proxies, exponent);
     }
 

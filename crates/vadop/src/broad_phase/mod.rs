@@ -25,7 +25,7 @@ pub mod proxy;
 pub mod sweep_prune;
 
 use crate::bodies::BodyState;
-use crate::broad_phase::proxy::{Path, Proxies, Reported};
+use crate::broad_phase::proxy::{Foreseen, Proxies, Reported};
 use crate::parallel::Workers;
 use crate::window::Window;
 
@@ -78,30 +78,19 @@ pub trait BroadPhase: Sync {
     /// candidate partners other than `skip` as [`Self::query`] does, then enters it.
     fn update(&mut self, body: u32, proxies: Proxies, skip: Option<u32>, report: impl FnMut(Reported, Window));
 
-    /// Keeps the entries made at the window's start as they are until the next
-    /// [`Self::prepare`] (later entries go beside them), so a query of those alone
-    /// ([`Self::query_binned`]) may run ahead of the updates, on any worker; false when this
-    /// broad phase cannot split its queries so.
-    fn fix_binned(&mut self) -> bool {
+    /// True when [`Self::prepare_foreseen`] can bin bodies' foreseen paths beside their proxies.
+    fn bins_foreseen(&self) -> bool {
         false
     }
 
-    /// Calls `report(other, window)` for every candidate partner of body `body` on `path` among
-    /// the window start's entries (see [`Self::fix_binned`]), without entering it.
-    fn query_binned(&self, _body: u32, _path: &Path, _proxies: Proxies, _report: impl FnMut(Reported, Window)) {
-        unreachable!("only asked of a broad phase whose window-start entries are fixed")
-    }
-
-    /// [`Self::update`], reporting only the candidates among the entries made since the window's
-    /// start (the rest were found by [`Self::query_binned`]).
-    fn update_late(
-        &mut self,
-        _body: u32,
-        _proxies: Proxies,
-        _skip: Option<u32>,
-        _report: impl FnMut(Reported, Window),
-    ) {
-        unreachable!("only asked of a broad phase whose window-start entries are fixed")
+    /// [`Self::prepare`], with the paths of `foreseen` binned too, each as a further proxy of its
+    /// body carrying its own stamp and state: [`Self::find_pairs`] then reports their pairs
+    /// (never one of a body with itself), and [`Self::update`] the pieces of a foreseen path
+    /// whose bounce is still to come ([`crate::broad_phase::proxy::ProxyTable::is_foreseen`]) as
+    /// well as the current ones. Later entries go beside the window start's, which stay as they
+    /// are until the next preparation. Asked only where [`Self::bins_foreseen`].
+    fn prepare_foreseen(&mut self, _proxies: Proxies, _foreseen: &[Foreseen], _workers: &Workers) -> PrepareCounts {
+        unreachable!("only asked of a broad phase that bins foreseen paths")
     }
 
     /// Bytes held (capacity, not just length).

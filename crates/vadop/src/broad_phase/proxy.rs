@@ -20,7 +20,7 @@
 //! ghosts, their images across the faces, in slots past the bodies' (`broad_phase::ghosts`), and
 //! no proxy covers more than the ghost width allows: a broad phase reads a ghost as one more proxy.
 
-use crate::bodies::{Bodies, BodyState};
+use crate::bodies::{Bodies, BodyState, FORESEEN_STEP};
 use crate::broad_phase::ghosts::Ghosts;
 use crate::memory::prefetch;
 use crate::motion::Motion;
@@ -53,6 +53,17 @@ pub struct Path {
     pub radius: f64,
     pub window: Window,
     pub bbox: CompactBox,
+}
+
+/// A body's path after its first wall bounce of the window, foreseen at the window's start (see
+/// `pipeline::foreseen`): the stamp it will have if it takes that bounce (its stamp then plus
+/// `bodies::FORESEEN_STEP`), its motion and radius after it, and the proxy and flags it then gets.
+#[derive(Debug, Clone, Copy)]
+pub struct Foreseen {
+    pub body: u32,
+    pub stamp: u32,
+    pub state: BodyState,
+    pub made: (Span, u8),
 }
 
 /// Where and when a proxy bounds its body: over `[start, end)`, inside `bbox`.
@@ -336,6 +347,13 @@ impl ProxyTable {
     #[inline]
     pub fn is_current(&self, i: usize, stamp: u32) -> bool {
         self.stamps.get(i) == Some(&stamp)
+    }
+
+    /// True when a broad-phase entry of body `i` made with `stamp` is of the path it will take
+    /// after a foreseen bounce (see [`Foreseen`]) it has not taken yet, nor missed.
+    #[inline]
+    pub fn is_foreseen(&self, i: usize, stamp: u32) -> bool {
+        self.stamps.get(i).is_some_and(|&now| now.wrapping_add(FORESEEN_STEP) == stamp)
     }
 
     /// Asks for the cache line of body `i`'s stamp ahead of an [`Self::is_current`] check.

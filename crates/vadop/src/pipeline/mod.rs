@@ -21,7 +21,7 @@
 //! method finds it. It never validates input (the world does), never reads a broad phase's
 //! internals and never computes an impulse.
 
-mod bounce_ahead;
+mod foreseen;
 pub(crate) mod jam;
 mod pass_through;
 mod passed;
@@ -46,7 +46,7 @@ use crate::pipeline::touching::Touching;
 use crate::response::impact::{passes_through, Impacts, Resolution};
 use crate::walls::BoxBounds;
 use crate::window::Window;
-use bounce_ahead::BouncesAhead;
+use foreseen::ForeseenBounces;
 use glam::DVec3;
 use pass_through::Searched;
 use passed::{Ahead, PassedContacts};
@@ -156,8 +156,8 @@ pub(crate) struct Pipeline<B: BroadPhase> {
     /// The step's contacts of spheres passing through each other, their geometry still to work
     /// out.
     passed: PassedContacts,
-    /// The window's first wall bounces, their re-tests run ahead (see [`bounce_ahead`]).
-    bounces_ahead: BouncesAhead,
+    /// The window's first wall bounces, foreseen (see [`foreseen`]).
+    foreseen: ForeseenBounces,
 }
 
 impl<B: BroadPhase> Pipeline<B> {
@@ -189,7 +189,7 @@ impl<B: BroadPhase> Pipeline<B> {
             cluster_members: Vec::new(),
             near: Vec::new(),
             passed: PassedContacts::default(),
-            bounces_ahead: BouncesAhead::default(),
+            foreseen: ForeseenBounces::default(),
         }
     }
 
@@ -214,7 +214,7 @@ impl<B: BroadPhase> Pipeline<B> {
             + self.cluster.memory_bytes()
             + (self.cluster_members.capacity() + self.near.capacity()) * 4
             + self.passed.memory_bytes()
-            + self.bounces_ahead.memory_bytes()
+            + self.foreseen.memory_bytes()
     }
 
     /// Body `i` was added or changed velocity between frames at time `t`: it enters the window
@@ -258,7 +258,6 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             let until = t1.min(self.window.end);
             let start = Instant::now();
-            self.retest_bounces_ahead(bodies, physics, until);
             self.passed.work_out_ahead(bodies, physics, self.queue.bulk_before(until), &self.workers);
             self.process_events(bodies, physics, until, out);
             out.stats.response_seconds += start.elapsed().as_secs_f64();
@@ -333,7 +332,13 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.update_seconds += start.elapsed().as_secs_f64();
 
         let start = Instant::now();
-        let counts = self.broad.prepare(self.proxies.view(bodies), &self.workers);
+        self.foresee_bounces(bodies, physics);
+        let (view, foreseen) = (self.proxies.view(bodies), self.foreseen.paths());
+        let counts = if foreseen.is_empty() {
+            self.broad.prepare(view, &self.workers)
+        } else {
+            self.broad.prepare_foreseen(view, foreseen, &self.workers)
+        };
         stats.endpoint_swaps += counts.moves;
         stats.list_entries = counts.entries;
         stats.sort_seconds += start.elapsed().as_secs_f64();
@@ -380,7 +385,6 @@ impl<B: BroadPhase> Pipeline<B> {
         // most worlds no static body.
         let (periodic, level) = (physics.bounds.is_periodic(), !statics.is_empty());
         // Each body's own events (walls, crossings, the level, renewals) follow the pairs'.
-        let own_from = predicted.len();
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
             for i in range.filter(|&i| proxies.is_live(i)) {
                 push_found(found, predict_wall(bodies, &proxies, &physics.bounds, i as u32, window));
@@ -400,7 +404,6 @@ impl<B: BroadPhase> Pipeline<B> {
                 predicted.extend(predict_end(bodies, a, b, since, window));
             }
         }
-        self.plan_bounces_ahead(bodies, physics, &predicted[own_from..]);
         self.queue.set_bulk(predicted, &self.workers);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;
@@ -437,7 +440,9 @@ impl<B: BroadPhase> Pipeline<B> {
                 }
                 Ahead::Unknown => {
                     if !event.is_current(bodies) {
-                        out.stats.invalidations += 1;
+                        if !self.hold_foreseen(&event, bodies) {
+                            out.stats.invalidations += 1;
+                        }
                         continue;
                     }
                     self.handle(bodies, physics, &event, until, out);

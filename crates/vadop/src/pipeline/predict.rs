@@ -71,21 +71,6 @@ pub(super) fn predict_own_pair(bodies: &Bodies, x: Reported, y: Reported, window
     sphere_event(bodies, (a, None), (b, None), window)
 }
 
-/// [`predict_own_pair`] of two spheres on straight paths (no gravity), for the pair sweep of a
-/// world of spheres: most candidate pairs of fast bodies pass clearly apart, and the exact
-/// test's own first screen, asked here of the motions reported, tells them without the rest of
-/// the test (the pair's order, the world's flags, the stamps); the others take the exact test
-/// alone, out of line so the sweep's loop stays small. The bounces run ahead test their
-/// candidates so too.
-#[inline(always)]
-pub(super) fn predict_straight_sphere_pair(bodies: &Bodies, x: Reported, y: Reported, window: Window) -> Option<Event> {
-    debug_assert!(bodies.are_spheres(x.body as usize, y.body as usize) && bodies.straight_paths());
-    if StraightSpheres.clears(x.state, y.state) {
-        return None;
-    }
-    straight_sphere_event_past_screen(x, y, window)
-}
-
 /// The exact test's first screen for spheres on straight paths ([`straight_paths_clearly_miss`]),
 /// for a broad phase's sweep to ask of its candidates, four at a time where it can.
 pub(super) struct StraightSpheres;

@@ -1,6 +1,8 @@
 //! What a velocity change re-tests: the body's fresh proxy enters the broad phase, and its
 //! contacts with its candidate partners, the walls, the static geometry and (with ends
-//! reported) the end of each contact it is in are predicted for the rest of the window.
+//! reported) the end of each contact it is in are predicted for the rest of the window. A wall
+//! bounce foreseen at the window's start (see [`super::foreseen`]) had its pairs predicted then:
+//! its proxy made ahead enters the table, and only its own events are predicted.
 //!
 //! It owns that re-test only. A shape's searches against its partners are independent of one
 //! another, so in a world of shapes with more than one worker they run on every worker, and
@@ -33,17 +35,41 @@ impl<B: BroadPhase> Pipeline<B> {
         self.updates += 1;
         stats.retests += 1;
         let window = self.window.from(t);
-        // A wall bounce's binned partners may have been tested ahead (see [`super::bounce_ahead`]).
-        if skip.is_some() || !self.retest_from_ahead(body, bodies, window, stats) {
-            self.proxies.enter(body as usize, bodies, t);
-            // The body's own proxy, then (in a periodic box) its ghosts: each meets the bodies
-            // near it. `skip` names a body, which a ghost's partners are told apart by.
-            for slot in self.proxies.slots_of(body as usize) {
-                let slot = slot as u32;
-                let (skip_slot, skip_body) = if slot == body { (skip, None) } else { (None, skip) };
-                self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
-            }
+        self.proxies.enter(body as usize, bodies, t);
+        // The body's own proxy, then (in a periodic box) its ghosts: each meets the bodies near
+        // it. `skip` names a body, which a ghost's partners are told apart by.
+        for slot in self.proxies.slots_of(body as usize) {
+            let slot = slot as u32;
+            let (skip_slot, skip_body) = if slot == body { (skip, None) } else { (None, skip) };
+            self.retest_slot(slot, (skip_slot, skip_body), bodies, window, stats);
         }
+        self.predict_own_events(body, bodies, physics, window);
+    }
+
+    /// After `body` bounced off a wall at `t`: [`Self::retest`], but only its own events (the
+    /// walls, the level, its renewal, its contacts' ends) when the bounce is the one foreseen at
+    /// the window's start, whose pairs that start predicted (see [`super::foreseen`]).
+    pub(super) fn retest_bounced(
+        &mut self,
+        body: u32,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        t: f64,
+        stats: &mut FrameStats,
+    ) {
+        if !self.take_foreseen(body, bodies) {
+            self.retest(body, None, bodies, physics, t, stats);
+            return;
+        }
+        self.updates += 1;
+        stats.retests += 1;
+        self.predict_own_events(body, bodies, physics, self.window.from(t));
+    }
+
+    /// Body `body`'s contacts with the walls and the static geometry, its crossing of a periodic
+    /// face, its proxy's renewal and (with ends reported) the end of each contact it is in, in
+    /// `window`, from its proxy just entered.
+    fn predict_own_events(&mut self, body: u32, bodies: &Bodies, physics: &Physics, window: Window) {
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
         if let Some(event) = predict_wall(bodies, &self.proxies, &physics.bounds, body, window) {
             queue.push(event);
