@@ -116,14 +116,6 @@ pub(super) fn straight_sphere_event_at(x: Reported, y: Reported, window: Window,
     window.contains(time).then(|| pair_event((a.body, a.stamp), (b.body, b.stamp), (time, false)))
 }
 
-/// [`predict_own_pair`] of two spheres on straight paths that [`straight_paths_clearly_miss`]
-/// has passed: the same arithmetic (the lower id first, the exact test, the window, the stamps)
-/// without the screen asked again or the world's flags read.
-#[inline(never)]
-pub(super) fn straight_sphere_event_past_screen(x: Reported, y: Reported, window: Window) -> Option<Event> {
-    straight_sphere_event_at(x, y, window, StraightSpheres.kept(x.state, y.state))
-}
-
 /// Pushes `event`, if any: not `out.extend(event)`, which reserves room for it even when there is
 /// none, as for most candidate pairs and most bodies' wall contacts, at a dozen instructions each.
 #[inline(always)]
