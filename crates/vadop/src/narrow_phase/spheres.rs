@@ -405,14 +405,14 @@ fn largest_exponent_power([x, y, z]: [std::arch::x86_64::__m256d; 3]) -> std::ar
 /// scalar's operations in its order, without fused multiply-adds, and its decisions by the same
 /// comparisons (a NaN fails them as it fails the scalar's), so its floats are the scalar's
 /// bits, with three differences of form, each exact where it is used:
-/// - the exponents' powers come from the exponent bits alone ([`exponent_powers`]), and their
+/// - the exponents' powers come from the exponent bits alone (`exponent_powers`), and their
 ///   reciprocals (powers of two in the normal range) are exact; the largest component's power is
 ///   the largest power, NaN aside, and a NaN in a velocity makes the approach NaN, a miss;
 /// - the contact's time is scaled by `2^length / 2^speed` at once, which is the scalar's two
 ///   steps exactly when that ratio and the result are normal numbers (or the result zero): the
 ///   scalar's middle value lies between the two. A lane with a contact outside that is answered
 ///   by the scalar test itself (none in ordinary scenes);
-/// - the later `since` by `vmaxpd` ([`straight_pairs_four`]).
+/// - the later `since` by `vmaxpd` (`straight_pairs_four`).
 ///
 /// The pairs are those the sweep keeps past [`straight_paths_clearly_miss`]: most of them pass
 /// through each other in detect mode, so this runs the whole test in every lane rather than
