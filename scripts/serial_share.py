@@ -8,19 +8,19 @@ Usage (from /tmp, so callgrind_annotate keeps whole paths):
 
 The instructions of `Pipeline<B>::step` (inclusive) are split in two: those inside the calls
 that share their work among the workers (the pair sweep, the binning, the proxies' refresh, the
-bulk events' sort, the window start's wall predictions, the passing pairs' geometry, the wall
-bounces' re-tests run ahead), and the rest, which one thread runs whatever the thread count
+bulk events' sort, the window start's wall predictions and foreseen bounces, the passing pairs'
+geometry), and the rest, which one thread runs whatever the thread count
 (the event loop, inlined into `step`). The binning's count and scatter run inline in
-`Grid::prepare` on one thread but are shared on two; the second figure counts them serial too
+`Grid::bin` on one thread but are shared on two; the second figure counts them serial too
 (as the twelfth session gave it). Amdahl's bound for two cores follows from each.
 """
 import os
 import subprocess
 import sys
 
-PARALLEL = ["BroadPhase>::find_pairs", "BroadPhase>::prepare", "ProxyTable::refresh_all",
+PARALLEL = ["BroadPhase>::find_pairs", "BroadPhase>::prepare", "Grid::bin", "ProxyTable::refresh_all",
             "PassedContacts::resolve", "EventQueue::set_bulk", "Workers::extend_ranges",
-            "retest_bounces_ahead", "PassedContacts::work_out_ahead"]
+            "PassedContacts::work_out_ahead"]
 
 
 def tree(profile):
@@ -45,7 +45,10 @@ def main():
     lines = tree(os.path.abspath(sys.argv[1]))
     step, callees = block(lines, "Pipeline<B>::step [")
     parallel = sum(n for n, text in callees if any(p in text for p in PARALLEL))
-    prepare, inside = block(lines, "BroadPhase>::prepare [")
+    # The grid's `prepare` and `prepare_foreseen` (see pipeline::foreseen) both bin through
+    # `Grid::bin`, which holds the count and scatter when it is not inlined into them.
+    grid = any("*  " in line and "Grid::bin [" in line for line in lines)
+    prepare, inside = block(lines, "Grid::bin [" if grid else "BroadPhase>::prepare [")
     binning = prepare - sum(n for n, _ in inside)
     for n, text in callees:
         print(f"{n / 1e6:10.1f} M  {text.split(':', 1)[-1].split(' [')[0].strip()}")
