@@ -443,7 +443,8 @@ pub unsafe fn straight_pair_contact_times_four(a: [&BodyState; 4], b: [&BodyStat
     let radius_sq = mul(r, r);
     let distance_sq = dot_four(o, o);
     let gap = sub(distance_sq, radius_sq);
-    let discriminant = sub(mul(speed_sq, radius_sq), dot_four(cross_four(o, v), cross_four(o, v)));
+    let cross = cross_four(o, v);
+    let discriminant = sub(mul(speed_sq, radius_sq), dot_four(cross, cross));
     let zero = _mm256_setzero_pd();
     let missing = and(less(zero, gap), less(discriminant, zero));
     let threshold = mul(one(-APPROACH_TOLERANCE), _mm256_sqrt_pd(mul(distance_sq, speed_sq)));

@@ -92,8 +92,8 @@ impl<B: BroadPhase> Pipeline<B> {
 
     /// Body `body` just bounced off a wall: when the bounce is the one foreseen (its stamp moved
     /// once since the window's start, its motion the foreseen one to the bit), its stamp moves on
-    /// to the foreseen path's, its proxy made ahead enters the table, the foreseen path's held
-    /// predictions are queued again, and true; otherwise false, nothing done.
+    /// to the foreseen path's, its proxy made ahead enters the table, its held predictions are
+    /// queued again, and true; otherwise false, nothing done.
     pub(super) fn take_foreseen(&mut self, body: u32, bodies: &mut Bodies) -> bool {
         let paths = &self.foreseen.paths;
         let Ok(k) = paths.binary_search_by_key(&body, |f| f.body) else { return false };
@@ -105,9 +105,15 @@ impl<B: BroadPhase> Pipeline<B> {
         }
         bodies.take_foreseen(i);
         self.proxies.enter_made(i, bodies, foreseen.made);
-        for event in self.foreseen.held.drain(..) {
-            self.queue.push(event);
-        }
+        // This body's held predictions only: another's wait for its own bounce.
+        let queue = &mut self.queue;
+        self.foreseen.held.retain(|event| {
+            let of_body = event.body == body || event.partner == Partner::Body(body);
+            if of_body {
+                queue.push(*event);
+            }
+            !of_body
+        });
         true
     }
 
