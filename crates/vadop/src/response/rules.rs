@@ -55,6 +55,10 @@ pub(crate) enum Rule {
 pub(crate) struct ContactRules {
     /// Per body: its history (see [`History`]).
     history: Vec<History>,
+    /// Per body: the instant at which it was last frozen into a jammed cluster (`-inf` if never).
+    /// Apart from the history and empty until the first freeze: jams are rare, and every body's
+    /// record is 8 bytes smaller without it (at 10^7 bodies, 80 MB of a world's peak).
+    frozen: Vec<f64>,
     /// The bodies whose `in_step` is not zero: the next step clears only those, so no body needs
     /// a step number of its own.
     counted: Vec<u32>,
@@ -67,8 +71,6 @@ pub(crate) struct ContactRules {
 struct History {
     /// Time of the body's last contact (`-inf` before the first).
     last_contact: f64,
-    /// The instant at which the body was last frozen into a jammed cluster.
-    frozen: f64,
     /// Its contacts within the current step.
     in_step: u32,
     /// Its contacts at the instant `last_contact`, saturating: only "more than [`JAM_LIMIT`]"
@@ -76,9 +78,11 @@ struct History {
     at_instant: u8,
 }
 
+// Two records to a cache line; the freeze instants live apart (see `ContactRules::frozen`).
+const _: () = assert!(std::mem::size_of::<History>() == 16);
+
 impl History {
-    const NONE: History =
-        History { last_contact: f64::NEG_INFINITY, frozen: f64::NEG_INFINITY, in_step: 0, at_instant: 0 };
+    const NONE: History = History { last_contact: f64::NEG_INFINITY, in_step: 0, at_instant: 0 };
 }
 
 impl ContactRules {
@@ -99,6 +103,24 @@ impl ContactRules {
     /// Body `i`'s history copied from `other`'s.
     pub(crate) fn copy_history(&mut self, other: &ContactRules, i: usize) {
         self.history[i] = other.history[i];
+        let frozen = other.frozen_at(i);
+        if frozen != self.frozen_at(i) {
+            self.frozen_mut()[i] = frozen;
+        }
+    }
+
+    /// The instant at which body `i` was last frozen (`-inf` if never).
+    #[inline]
+    fn frozen_at(&self, i: usize) -> f64 {
+        self.frozen.get(i).copied().unwrap_or(f64::NEG_INFINITY)
+    }
+
+    /// Every body's freeze instant, made on the first freeze.
+    fn frozen_mut(&mut self) -> &mut [f64] {
+        if self.frozen.len() < self.history.len() {
+            self.frozen.resize(self.history.len(), f64::NEG_INFINITY);
+        }
+        &mut self.frozen
     }
 
     /// The time of body `i`'s last contact (`-inf` before the first, or for a body not held).
@@ -122,9 +144,9 @@ impl ContactRules {
 
     /// Marks body `i` frozen into a jammed cluster at `t`; false when it already was.
     pub(crate) fn freeze(&mut self, i: u32, t: f64) -> bool {
-        let history = &mut self.history[i as usize];
-        let was = history.frozen == t;
-        history.frozen = t;
+        let frozen = &mut self.frozen_mut()[i as usize];
+        let was = *frozen == t;
+        *frozen = t;
         !was
     }
 
@@ -146,7 +168,7 @@ impl ContactRules {
         let history = &self.history[i];
         let at_instant = if history.last_contact == t { history.at_instant.saturating_add(1) } else { 1 };
         let in_step = history.in_step + 1;
-        (at_instant, in_step, at_instant as u32 > JAM_LIMIT || in_step > BURST_LIMIT || history.frozen == t)
+        (at_instant, in_step, at_instant as u32 > JAM_LIMIT || in_step > BURST_LIMIT || self.frozen_at(i) == t)
     }
 
     /// True when a contact of bodies `a` and `b` at `t` would jam them, found without counting it.
@@ -200,7 +222,9 @@ impl ContactRules {
 
     /// Bytes held.
     pub(crate) fn memory_bytes(&self) -> usize {
-        self.history.capacity() * std::mem::size_of::<History>() + self.counted.capacity() * 4
+        self.history.capacity() * std::mem::size_of::<History>()
+            + self.frozen.capacity() * 8
+            + self.counted.capacity() * 4
     }
 }
 
