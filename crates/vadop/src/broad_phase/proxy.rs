@@ -625,10 +625,23 @@ impl<'a> Proxies<'a> {
     /// a path into pieces needs for every proxy at a window's start.
     #[inline(always)]
     pub fn origin_and_velocity(&self, i: usize) -> (DVec3, DVec3) {
+        self.origin_and_velocity_known(i, self.pull_free())
+    }
+
+    /// True when the table's bodies move under no pull: every proxy's path is its motion's own.
+    #[inline(always)]
+    pub fn pull_free(&self) -> bool {
+        self.table.gravity == DVec3::ZERO
+    }
+
+    /// [`Self::origin_and_velocity`] where `pull_free` is [`Self::pull_free`], asked once by a
+    /// pass over every proxy rather than once a proxy (three loads and comparisons each time).
+    #[inline(always)]
+    fn origin_and_velocity_known(&self, i: usize, pull_free: bool) -> (DVec3, DVec3) {
         let (motion, start) = (&self.state(i).motion, self.table.spans[i].start);
         // Without gravity, the straight path's own arithmetic (`at_under`'s, to the bit), the
         // pull not tested again.
-        if self.table.gravity == DVec3::ZERO {
+        if pull_free {
             return (motion.at(start), motion.velocity);
         }
         let gravity = self.gravity_on(i);
@@ -638,7 +651,14 @@ impl<'a> Proxies<'a> {
     /// Proxy `i`'s path.
     #[inline(always)]
     pub fn path(&self, i: usize) -> Path {
-        let (origin, velocity) = self.origin_and_velocity(i);
+        self.path_known(i, self.pull_free())
+    }
+
+    /// [`Self::path`] where `pull_free` is [`Self::pull_free`] (see
+    /// [`Self::origin_and_velocity_known`]).
+    #[inline(always)]
+    pub fn path_known(&self, i: usize, pull_free: bool) -> Path {
+        let (origin, velocity) = self.origin_and_velocity_known(i, pull_free);
         Path { origin, velocity, radius: self.radius(i), window: self.window_of(i), bbox: self.bbox(i) }
     }
 
