@@ -599,7 +599,8 @@ impl Grid {
         // look-up for each path below rather than a search of the list.
         let mut level_of = std::mem::take(&mut self.level_of);
         level_of.clear();
-        if let (Some(&(lowest, _)), Some(&(highest, _))) = (per_exponent.first(), per_exponent.last()) {
+        let (first_exponent, last_exponent) = (per_exponent.first(), per_exponent.last());
+        if let (Some(&(lowest, _)), Some(&(highest, _))) = (first_exponent, last_exponent) {
             level_of.resize((highest - lowest) as usize + 1, 0);
             for (k, &(exponent, _)) in per_exponent.iter().enumerate() {
                 level_of[(exponent - lowest) as usize] = k as u32;

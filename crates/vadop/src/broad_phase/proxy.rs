@@ -405,7 +405,8 @@ impl ProxyTable {
                 // `x.max(x)`, which the compiler folds to `x` (its bits, NaN included): the same
                 // start without the NaN-faithful `max` (8 instructions a body).
                 rule.fill(offset, spans, flags, live, |i| {
-                    rule.span_under(i, bodies, &bodies.state[i].motion, rule.window.start, DVec3::ZERO)
+                    let motion = &bodies.state[i].motion;
+                    rule.span_under(i, bodies, motion, rule.window.start, DVec3::ZERO)
                 });
             } else {
                 rule.fill(offset, spans, flags, live, |i| rule.span(i, bodies, window.start));
@@ -792,6 +793,25 @@ impl ProxyRule {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Without a pull, `span_under` takes the reach's end as it is where it once took its `min`
+    /// with `start + inf`: the same flag and end for every start, reach end and end, NaN and
+    /// infinities included (a NaN reach end is 0 / 0: a body at rest with no reach).
+    #[test]
+    fn an_infinite_longest_changes_no_expiry() {
+        let values = [0.0, -0.0, 1.0, -1.0, 0.5, 1e300, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+        fn expiry(reached: f64, start: f64, end: f64) -> Option<f64> {
+            (reached < end && reached > start).then_some(reached)
+        }
+        for (start, ahead, end) in
+            values.iter().flat_map(|&s| values.iter().flat_map(move |&a| values.map(|e| (s, a, e))))
+        {
+            let with_min = expiry(ahead.min(start + f64::INFINITY), start, end);
+            let without = expiry(ahead, start, end);
+            let (with_min, without) = (with_min.map(f64::to_bits), without.map(f64::to_bits));
+            assert_eq!(with_min, without, "{start} {ahead} {end}");
+        }
+    }
 
     /// The branch-free steps give the bits of `next_down` and `next_up` on every kind of value.
     #[test]

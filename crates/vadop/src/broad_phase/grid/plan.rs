@@ -1,7 +1,7 @@
 //! How the grid plans a window's paths before it bins them: how many pieces each path is cut into
 //! and which level they fit ([`PieceRule`]), and the pieces per level exponent.
 
-use crate::broad_phase::proxy::Path;
+use crate::broad_phase::proxy::{Path, RELATIVE_PADDING};
 
 /// What cutting a path into pieces reads of the grid: its base cell and the largest side of the
 /// box. Copied out of it, so a pass over every path keeps them in registers rather than reading
@@ -24,8 +24,8 @@ impl PieceRule {
     pub(super) fn plan(&self, path: &Path) -> (u32, i32) {
         let Path { origin, velocity, radius, window, .. } = *path;
         let length = velocity.length() * window.duration();
-        let scale = 1.0 + 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING;
-        let widening = 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING * origin.abs().max_element()
+        let scale = 1.0 + 4.0 * RELATIVE_PADDING;
+        let widening = 4.0 * RELATIVE_PADDING * origin.abs().max_element()
             + 4.0 * f32::EPSILON as f64 * (self.largest_side + 2.0 * radius + length);
         // A hair shorter than the room left in a base cell, so rounding never pushes a piece up.
         let room = ((self.base_cell - widening) / scale - 2.0 * radius) * (1.0 - 1e-6);
