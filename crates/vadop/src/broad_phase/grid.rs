@@ -17,6 +17,7 @@
 //! proxy of its own with its stamp and motion ([`BroadPhase::prepare_foreseen`]). It never reads
 //! shapes or computes contact times.
 
+mod plan;
 mod sweep;
 
 use super::box_columns::{BoxColumns, BoxColumnsMut};
@@ -30,6 +31,7 @@ use crate::memory::prefetch;
 use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
 use glam::DVec3;
+use plan::{add_pieces, PieceRule};
 
 /// Base cells are this many times the median swept-box extent of the window's proxies (and at
 /// least two typical diameters): small enough that a query in a dense gas meets few bodies, large
@@ -229,9 +231,15 @@ impl<'a> BinnedPaths<'a> {
 
     #[inline(always)]
     fn path(&self, i: usize) -> Path {
+        self.path_known(i, self.proxies.pull_free())
+    }
+
+    /// [`Self::path`] where `pull_free` is the proxies' [`Proxies::pull_free`].
+    #[inline(always)]
+    fn path_known(&self, i: usize, pull_free: bool) -> Path {
         match self.foreseen(i) {
             Some(f) => self.proxies.path_ahead(f.body as usize, &f.state, &f.made.0),
-            None => self.proxies.path(i),
+            None => self.proxies.path_known(i, pull_free),
         }
     }
 
@@ -278,6 +286,7 @@ pub struct Grid {
     /// across levels); pieces per level exponent; one body's pieces.
     plan: Vec<(u32, u32)>,
     per_exponent: Vec<(i32, usize)>,
+    level_of: Vec<u32>,
     extents: Vec<f64>,
     pieces: Vec<(CompactBox, Window)>,
     /// Scratch of a query: the runs of binned slots it reaches, then the slots whose boxes
@@ -306,6 +315,7 @@ impl Grid {
             late_motions: Vec::new(),
             plan: Vec::new(),
             per_exponent: Vec::new(),
+            level_of: Vec::new(),
             extents: Vec::new(),
             pieces: Vec::new(),
             runs: Vec::new(),
@@ -315,29 +325,10 @@ impl Grid {
         }
     }
 
-    /// How many pieces proxy `i` is cut into, and the exponent of the level they all fit.
-    ///
-    /// A piece's box is its diameter plus its stretch of path, widened by the padding of the
-    /// swept box and by the single-precision rounding of the compact box (a few ulps of its
-    /// coordinates, which reach across the whole box). The stretch is chosen so this widened box
-    /// still fits a base cell: were the widening left out, every cut piece would land one level
-    /// up, in cells of eight times the volume.
+    /// What cutting paths into pieces reads of the grid.
     #[inline]
-    fn plan_pieces(&self, path: &Path) -> (u32, i32) {
-        let Path { origin, velocity, radius, window, .. } = *path;
-        let length = velocity.length() * window.duration();
-        let scale = 1.0 + 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING;
-        let widening = 4.0 * crate::broad_phase::proxy::RELATIVE_PADDING * origin.abs().max_element()
-            + 4.0 * f32::EPSILON as f64 * (self.extent.max_element() + 2.0 * radius + length);
-        // A hair shorter than the room left in a base cell, so rounding never pushes a piece up.
-        let limit = (((self.base_cell - widening) / scale - 2.0 * radius) * (1.0 - 1e-6)).max(2.0 * radius);
-        // Most paths fit one piece: then the quotient is at most 1 (division rounds monotonically)
-        // and its ceiling clamps to 1, so the division and the ceiling (a library call on the
-        // baseline target) are skipped.
-        let count =
-            if length <= limit && limit > 0.0 { 1 } else { (length / limit).ceil().clamp(1.0, u32::MAX as f64) as u32 };
-        let extent = (2.0 * radius + length.min(limit)) * scale + widening;
-        (count, self.exponent_for(extent))
+    fn piece_rule(&self) -> PieceRule {
+        PieceRule { base_cell: self.base_cell, largest_side: self.extent.max_element() }
     }
 
     /// Calls `f` with the box and window of every piece of `path`, cut into `count` pieces.
@@ -396,18 +387,6 @@ impl Grid {
         }
     }
 
-    /// The exponent of the level whose nominal cells hold a box of `extent`.
-    #[inline]
-    fn exponent_for(&self, extent: f64) -> i32 {
-        let mut exponent = 0;
-        let mut cell = self.base_cell;
-        while cell < extent && exponent < 1100 {
-            cell *= 2.0;
-            exponent += 1;
-        }
-        exponent
-    }
-
     /// The level for pieces of `exponent`: the one of that exponent or the next coarser (cells
     /// are never smaller than nominal), created when the pieces are larger than all.
     fn level_for(&mut self, exponent: i32) -> usize {
@@ -434,7 +413,7 @@ impl Grid {
         let mut pieces = std::mem::take(&mut self.pieces);
         pieces.clear();
         let path = proxies.path(body as usize);
-        let (count, exponent) = self.plan_pieces(&path);
+        let (count, exponent) = self.piece_rule().plan(&path);
         Grid::for_each_piece(proxies, &path, count, |bbox, window| pieces.push((bbox, window)));
         for &(bbox, window) in &pieces {
             let piece = Entry { bbox, body, stamp: 0 };
@@ -573,32 +552,61 @@ impl Grid {
         let mut plan = std::mem::take(&mut self.plan);
         plan.clear();
         plan.resize(paths.len(), (0, 0));
-        let this = &*self;
+        let rule = self.piece_rule();
+        // Whether the paths bend, asked once: the plan's loop is compiled for either answer.
+        let pull_free = proxies.pull_free();
         let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
             let mut per_exponent: Vec<(i32, usize)> = Vec::new();
-            for (k, plan) in chunk.iter_mut().enumerate() {
-                let i = offset + k;
-                if !paths.is_live(i) {
-                    continue;
+            // The pieces of the paths since the exponent last changed (most paths share one),
+            // added to the list when it changes: the list is searched once a run, not once a path.
+            let mut run: Option<(i32, usize)> = None;
+            let mut plan_chunk = |pull_free: bool| {
+                for (k, plan) in chunk.iter_mut().enumerate() {
+                    let i = offset + k;
+                    if !paths.is_live(i) {
+                        continue;
+                    }
+                    let (count, exponent) = rule.plan(&paths.path_known(i, pull_free));
+                    *plan = (count, exponent as u32);
+                    match &mut run {
+                        Some((e, n)) if *e == exponent => *n += count as usize,
+                        _ => {
+                            if let Some(ended) = run {
+                                add_pieces(&mut per_exponent, ended);
+                            }
+                            run = Some((exponent, count as usize));
+                        }
+                    }
                 }
-                let (count, exponent) = this.plan_pieces(&paths.path(i));
-                *plan = (count, exponent as u32);
-                match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
-                    Some((_, n)) => *n += count as usize,
-                    None => per_exponent.push((exponent, count as usize)),
-                }
+            };
+            if pull_free {
+                plan_chunk(true);
+            } else {
+                plan_chunk(false);
+            }
+            if let Some(ended) = run {
+                add_pieces(&mut per_exponent, ended);
             }
             per_exponent
         });
         let mut per_exponent = std::mem::take(&mut self.per_exponent);
         per_exponent.clear();
-        for (exponent, count) in counted.into_iter().flatten() {
-            match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
-                Some((_, n)) => *n += count,
-                None => per_exponent.push((exponent, count)),
-            }
+        for pieces in counted.into_iter().flatten() {
+            add_pieces(&mut per_exponent, pieces);
         }
         per_exponent.sort_unstable();
+        // Each exponent's level (its index in the sorted list), by exponent from the lowest: a
+        // look-up for each path below rather than a search of the list.
+        let mut level_of = std::mem::take(&mut self.level_of);
+        level_of.clear();
+        let (first_exponent, last_exponent) = (per_exponent.first(), per_exponent.last());
+        if let (Some(&(lowest, _)), Some(&(highest, _))) = (first_exponent, last_exponent) {
+            level_of.resize((highest - lowest) as usize + 1, 0);
+            for (k, &(exponent, _)) in per_exponent.iter().enumerate() {
+                level_of[(exponent - lowest) as usize] = k as u32;
+            }
+        }
+        let lowest = per_exponent.first().map_or(0, |&(e, _)| e);
         // Levels sized to their pieces, storage reused; each path's plan now names its level.
         self.spare.append(&mut self.levels);
         let (mut first, mut cells_before) = (0, 0);
@@ -612,11 +620,12 @@ impl Grid {
             self.levels.push(level);
         }
         // Each path's level, or a single piece's cell, found in parallel.
-        let levels = &self.levels;
+        let (levels, level_of_exponent) = (&self.levels, &level_of);
         workers.chunks_mut(&mut plan, |offset, chunk| {
             for (k, entry) in chunk.iter_mut().enumerate() {
                 if entry.0 > 0 {
-                    entry.1 = per_exponent.partition_point(|&(e, _)| e < entry.1 as i32) as u32;
+                    // Every counted path's exponent is in the list, so it is its own level's.
+                    entry.1 = level_of_exponent[(entry.1 as i32 - lowest) as usize];
                 }
                 if entry.0 == 1 {
                     let level = &levels[entry.1 as usize];
@@ -692,6 +701,7 @@ impl Grid {
         self.late_motions.clear();
         self.plan = plan;
         self.per_exponent = per_exponent;
+        self.level_of = level_of;
         PrepareCounts { moves: first as u64, entries: first as u64 }
     }
 }
@@ -757,6 +767,7 @@ impl BroadPhase for Grid {
             + self.late_motions.capacity() * std::mem::size_of::<BodyState>()
             + self.plan.capacity() * 8
             + self.extents.capacity() * 8
+            + self.level_of.capacity() * 4
             + self.next_slot.capacity() * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels

@@ -401,8 +401,12 @@ impl ProxyTable {
         let straight = bodies.straight_paths();
         workers.zip_chunks(&mut self.spans, &mut self.flags, |offset, spans, flags| {
             if straight {
+                // From the rule's own window start, so `span_under`'s `t.max(window.start)` is
+                // `x.max(x)`, which the compiler folds to `x` (its bits, NaN included): the same
+                // start without the NaN-faithful `max` (8 instructions a body).
                 rule.fill(offset, spans, flags, live, |i| {
-                    rule.span_under(i, bodies, &bodies.state[i].motion, window.start, DVec3::ZERO)
+                    let motion = &bodies.state[i].motion;
+                    rule.span_under(i, bodies, motion, rule.window.start, DVec3::ZERO)
                 });
             } else {
                 rule.fill(offset, spans, flags, live, |i| rule.span(i, bodies, window.start));
@@ -622,10 +626,23 @@ impl<'a> Proxies<'a> {
     /// a path into pieces needs for every proxy at a window's start.
     #[inline(always)]
     pub fn origin_and_velocity(&self, i: usize) -> (DVec3, DVec3) {
+        self.origin_and_velocity_known(i, self.pull_free())
+    }
+
+    /// True when the table's bodies move under no pull: every proxy's path is its motion's own.
+    #[inline(always)]
+    pub fn pull_free(&self) -> bool {
+        self.table.gravity == DVec3::ZERO
+    }
+
+    /// [`Self::origin_and_velocity`] where `pull_free` is [`Self::pull_free`], asked once by a
+    /// pass over every proxy rather than once a proxy (three loads and comparisons each time).
+    #[inline(always)]
+    fn origin_and_velocity_known(&self, i: usize, pull_free: bool) -> (DVec3, DVec3) {
         let (motion, start) = (&self.state(i).motion, self.table.spans[i].start);
         // Without gravity, the straight path's own arithmetic (`at_under`'s, to the bit), the
         // pull not tested again.
-        if self.table.gravity == DVec3::ZERO {
+        if pull_free {
             return (motion.at(start), motion.velocity);
         }
         let gravity = self.gravity_on(i);
@@ -635,7 +652,14 @@ impl<'a> Proxies<'a> {
     /// Proxy `i`'s path.
     #[inline(always)]
     pub fn path(&self, i: usize) -> Path {
-        let (origin, velocity) = self.origin_and_velocity(i);
+        self.path_known(i, self.pull_free())
+    }
+
+    /// [`Self::path`] where `pull_free` is [`Self::pull_free`] (see
+    /// [`Self::origin_and_velocity_known`]).
+    #[inline(always)]
+    pub fn path_known(&self, i: usize, pull_free: bool) -> Path {
+        let (origin, velocity) = self.origin_and_velocity_known(i, pull_free);
         Path { origin, velocity, radius: self.radius(i), window: self.window_of(i), bbox: self.bbox(i) }
     }
 
@@ -745,7 +769,12 @@ impl ProxyRule {
             Some(time) if time < self.window.end => time.max(start).next_up().min(self.window.end),
             _ => self.window.end,
         };
-        let reached = (start + self.reach / velocity.length()).min(start + longest);
+        let ahead = start + self.reach / velocity.length();
+        // Without a pull `longest` is infinite, and `min(start + inf)` would only turn a NaN
+        // `ahead` into infinity (or, from a start at -inf, leave it): values the comparisons below
+        // read alike (never before `end`, never past `start`), so the NaN-faithful `min` is left
+        // out where the pull is known to be zero.
+        let reached = if gravity == DVec3::ZERO { ahead } else { ahead.min(start + longest) };
         let expires = reached < end && reached > start;
         if expires {
             end = reached;
@@ -764,6 +793,25 @@ impl ProxyRule {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Without a pull, `span_under` takes the reach's end as it is where it once took its `min`
+    /// with `start + inf`: the same flag and end for every start, reach end and end, NaN and
+    /// infinities included (a NaN reach end is 0 / 0: a body at rest with no reach).
+    #[test]
+    fn an_infinite_longest_changes_no_expiry() {
+        let values = [0.0, -0.0, 1.0, -1.0, 0.5, 1e300, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+        fn expiry(reached: f64, start: f64, end: f64) -> Option<f64> {
+            (reached < end && reached > start).then_some(reached)
+        }
+        for (start, ahead, end) in
+            values.iter().flat_map(|&s| values.iter().flat_map(move |&a| values.map(|e| (s, a, e))))
+        {
+            let with_min = expiry(ahead.min(start + f64::INFINITY), start, end);
+            let without = expiry(ahead, start, end);
+            let (with_min, without) = (with_min.map(f64::to_bits), without.map(f64::to_bits));
+            assert_eq!(with_min, without, "{start} {ahead} {end}");
+        }
+    }
 
     /// The branch-free steps give the bits of `next_down` and `next_up` on every kind of value.
     #[test]

@@ -245,8 +245,10 @@ impl SpherePath {
 }
 
 /// [`pair_geometry`] of spheres `i` and `j` on the paths given (theirs at `t`, whatever their
-/// motions are now): the same bits.
-#[inline]
+/// motions are now): the same bits. Always inline: the passing pairs' pass calls it for each
+/// pair, and where the compiler's partition of the crate left it a call (after a change in the
+/// grid), that pass cost 8.8 M instructions more over 6 frames at 10^5 x 5 d/f (BENCHMARKS.md).
+#[inline(always)]
 pub(crate) fn sphere_pair_geometry(
     bodies: &Bodies,
     (i, path_i): (usize, &SpherePath),

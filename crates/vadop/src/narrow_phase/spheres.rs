@@ -643,21 +643,21 @@ fn any_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3, gravity: 
 /// mispredicted about three times a call.
 #[inline]
 fn straight_wall_time(motion: &Motion, radius: f64, min: DVec3, max: DVec3) -> Option<(f64, Wall)> {
+    // A body already at (or a rounding error past) the wall and moving out touches it now. The
+    // time is +0 or more, or NaN (at rest along the axis: 0 / 0; a NaN input), never -0: `max`
+    // takes a NaN or -0 distance to +0, and the divisor is non-negative.
     let tau = |axis: usize| {
         let (x, speed) = (motion.position[axis], motion.velocity[axis]);
         let (to_max, to_min) = (max[axis] - radius - x, x - (min[axis] + radius));
-        // A body already at (or a rounding error past) the wall and moving out touches it now.
-        let tau = if speed > 0.0 { to_max } else { to_min }.max(0.0) / speed.abs();
-        // At rest along the axis (x / 0, 0 / 0), NaN, or a wall at infinity (a periodic axis):
-        // no contact.
-        if tau.is_finite() {
-            tau
-        } else {
-            f64::INFINITY
-        }
+        if speed > 0.0 { to_max } else { to_min }.max(0.0) / speed.abs()
     };
     let (x, y, z) = (tau(0), tau(1), tau(2));
-    let best = x.min(y).min(z);
+    // The earliest by plain comparisons from infinity (one `minsd` each, no NaN fix-ups): a NaN
+    // axis is never earlier, as an infinite one (x / 0, a wall at infinity on a periodic axis):
+    // neither is a contact. Times never -0, so a tie leaves the same bits whichever wins.
+    let earlier = |tau: f64, best: f64| if tau < best { tau } else { best };
+    let best = earlier(z, earlier(y, earlier(x, f64::INFINITY)));
+    // A NaN axis is past a finite best, as an infinite one; with no finite best there is no wall.
     let (past_x, past_y) = (x != best, y != best);
     let axis = usize::from(past_x) + usize::from(past_x & past_y);
     let wall = Wall::new(axis, motion.velocity[axis] > 0.0);
