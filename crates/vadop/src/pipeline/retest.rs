@@ -1,8 +1,8 @@
 //! What a velocity change re-tests: the body's fresh proxy enters the broad phase, and its
 //! contacts with its candidate partners, the walls, the static geometry and (with ends
 //! reported) the end of each contact it is in are predicted for the rest of the window. A wall
-//! bounce foreseen at the window's start (see [`super::foreseen`]) had its pairs predicted then:
-//! its proxy made ahead enters the table, and only its own events are predicted (here).
+//! bounce foreseen at the window's start (see [`super::foreseen`]) is not re-tested: its pairs
+//! were predicted then, and only its own events are predicted here.
 //!
 //! It owns that re-test only. A shape's searches against its partners are independent of one
 //! another, so in a world of shapes with more than one worker they run on every worker, and
