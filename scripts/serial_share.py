@@ -66,11 +66,13 @@ def threads(profiles, frames):
     serial = total = 0
     for profile in profiles:
         lines = tree(os.path.abspath(profile))
-        total += next(int(line.split()[0].replace(",", "")) for line in lines if "PROGRAM TOTALS" in line)
+        totals = [line for line in lines if "PROGRAM TOTALS" in line]
+        total += int(totals[0].split()[0].replace(",", ""))
         if list(blocks(lines, "Pipeline<B>::step")):
             step, callees = block(lines, "Pipeline<B>::step")
             serial += step - sum(n for n, text in callees if any(p in text for p in PARALLEL))
-    print(f"serial {serial / frames / 1e6:.2f} M a frame, both threads {total / frames / 1e6:.1f} M a frame")
+    print(f"serial {serial / frames / 1e6:.2f} M a frame, "
+          f"both threads {total / frames / 1e6:.1f} M a frame")
 
 
 def main():

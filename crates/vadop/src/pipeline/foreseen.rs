@@ -19,12 +19,12 @@
 //! rest), and only when the body reaches it unchanged since the window's start, at the contact
 //! foreseen, and is not jammed there: its motion after the bounce and its contact are then the
 //! foreseen ones to the bit, the same functions of the same motion, whichever thread worked them
-//! out. A jam is handled as any contact. Any other change moves the stamp one step, which never meets
-//! a foreseen one within a window: the foreseen path's predictions stay void, and the body is
-//! re-tested as before. A prediction of a foreseen path can pop at the very instant of the body's
-//! bounce, before the bounce (the queue orders a pair before a wall at one instant): it is held,
-//! and queued again once the bounce is taken. Second and later bounces in a window are re-tested
-//! as any change is. It handles no event but the foreseen bounce itself.
+//! out. A jam is handled as any contact. Any other change moves the stamp one step, which never
+//! meets a foreseen one within a window: the foreseen path's predictions stay void, and the body
+//! is re-tested as before. A prediction of a foreseen path can pop at the very instant of the
+//! body's bounce, before the bounce (the queue orders a pair before a wall at one instant): it is
+//! held, and queued again once the bounce is taken. Second and later bounces in a window are
+//! re-tested as any change is. It handles no event but the foreseen bounce itself.
 
 use super::predict::predict_wall;
 use super::Pipeline;
@@ -123,9 +123,8 @@ impl<B: BroadPhase> Pipeline<B> {
         let (walls, restitution) = (&foreseen.walls, physics.restitution);
         self.workers.extend_ranges(walls.len(), &mut foreseen.bounces, |range, found| {
             for event in &walls[range] {
-                let (Partner::Wall(wall), i, time) = (event.partner, event.body as usize, event.time) else {
-                    continue;
-                };
+                let (i, time) = (event.body as usize, event.time);
+                let Partner::Wall(wall) = event.partner else { continue };
                 if table.expires(i) {
                     continue;
                 }
@@ -175,7 +174,7 @@ impl<B: BroadPhase> Pipeline<B> {
         let rule = self.impacts.rules.wall(body, t, physics.restitution, 0.0);
         debug_assert_eq!(rule, Rule::Impulse { restitution: physics.restitution, changed: false });
         bodies.set_velocity_at(i, t, path.state.motion.velocity);
-        debug_assert_eq!(bits(&bodies.motion(i)), bits(&path.state.motion), "a bounce not as foreseen");
+        debug_assert_eq!(bits(&bodies.motion(i)), bits(&path.state.motion), "not as foreseen");
         bodies.take_foreseen(i);
         self.proxies.enter_made(i, bodies, path.made);
         // This body's held predictions only: another's wait for its own bounce.
