@@ -4,19 +4,27 @@
 //! beside every proxy, as a further proxy of the body carrying the stamp the body will have after
 //! that bounce: the window start's pair sweep, on every worker, predicts its pairs with the other
 //! bodies' paths, before and after their own bounces, and a re-test mid-window meets it too while
-//! the bounce is still to come. At the bounce the event loop, on one thread, then only moves the
-//! body's stamp on and enters its proxy made ahead: no query, no pair test.
+//! the bounce is still to come. The bounce's wall contact (where, the normal, the impulse) is a
+//! function of the body's motion at the window's start too, and is worked out then as well. At
+//! the bounce the event loop, on one thread, then only checks that it is the one foreseen, counts
+//! it, moves the body on to its foreseen motion and stamp, enters its proxy made ahead and
+//! reports the contact worked out: no query, no pair test, no geometry.
+//!
+//! The window's start asks each body's wall contact once ([`Pipeline::predict_walls`]): the
+//! foresight and the window's own events both read it.
 //!
 //! It owns that foresight and the rule that keeps it exact. A foreseen path's stamp is the
 //! body's stamp at the window's start plus [`FORESEEN_STEP`]; only the foreseen bounce gives the
 //! body that stamp (it moves one step, as every change does, and [`Bodies::take_foreseen`] the
-//! rest), and only when the body reaches it unchanged since the window's start and leaves it on
-//! the foreseen motion, to the bit. Any other change moves the stamp one step, which never meets
-//! a foreseen one within a window: the foreseen path's predictions stay void, and the body is
-//! re-tested as before. A prediction of a foreseen path can pop at the very instant of the body's
-//! bounce, before the bounce (the queue orders a pair before a wall at one instant): it is held,
-//! and queued again once the bounce is taken. Second and later bounces in a window are re-tested
-//! as any change is. It never handles an event.
+//! rest), and only when the body reaches it unchanged since the window's start, at the contact
+//! foreseen, and is not jammed there: its motion after the bounce and its contact are then the
+//! foreseen ones to the bit, the same functions of the same motion, whichever thread worked them
+//! out. A jam is handled as any contact. Any other change moves the stamp one step, which never
+//! meets a foreseen one within a window: the foreseen path's predictions stay void, and the body
+//! is re-tested as before. A prediction of a foreseen path can pop at the very instant of the
+//! body's bounce, before the bounce (the queue orders a pair before a wall at one instant): it is
+//! held, and queued again once the bounce is taken. Second and later bounces in a window are
+//! re-tested as any change is. It handles no event but the foreseen bounce itself.
 
 use super::predict::predict_wall;
 use super::Pipeline;
@@ -24,17 +32,38 @@ use crate::bodies::{Bodies, BodyState, FORESEEN_STEP};
 use crate::broad_phase::proxy::Foreseen;
 use crate::broad_phase::BroadPhase;
 use crate::event_queue::{Event, Partner};
-use crate::frame::{Mode, Physics};
+use crate::frame::{Contact, Mode, Output, Physics, Touched};
 use crate::motion::Motion;
+use crate::narrow_phase::contacts::wall_geometry;
 use crate::response::impact::motion_off_wall;
+use crate::response::rules::Rule;
+use crate::walls::Wall;
+use glam::DVec3;
 
-/// The window's foreseen bounces, and the predictions of their paths held until they happen.
+/// The window's wall contacts, its foreseen bounces, and the predictions of their paths held
+/// until they happen.
 #[derive(Debug, Default)]
 pub(super) struct ForeseenBounces {
-    /// Each body's first wall bounce of the window and its path after it, by body.
+    /// Every live body's wall contact in the window, as its start predicted it, by body.
+    walls: Vec<Event>,
+    /// Each body's first wall bounce of the window, by body: its contact...
+    bounces: Vec<Bounce>,
+    /// ... and its path after it, in the same order.
     paths: Vec<Foreseen>,
     /// Predictions of foreseen paths that popped at their body's bounce, before it.
     held: Vec<Event>,
+}
+
+/// A foreseen bounce's wall contact, worked out at the window's start: what the event loop
+/// would compute at the bounce from the body's motion then, to the bit.
+#[derive(Debug, Clone, Copy)]
+struct Bounce {
+    body: u32,
+    wall: Wall,
+    time: f64,
+    point: DVec3,
+    normal: DVec3,
+    impulse: f64,
 }
 
 impl ForeseenBounces {
@@ -43,8 +72,15 @@ impl ForeseenBounces {
         &self.paths
     }
 
+    /// Every live body's wall contact in the window under way, as its start predicted it, by body.
+    pub(super) fn walls(&self) -> &[Event] {
+        &self.walls
+    }
+
     pub(super) fn memory_bytes(&self) -> usize {
-        self.paths.capacity() * std::mem::size_of::<Foreseen>() + self.held.capacity() * std::mem::size_of::<Event>()
+        (self.walls.capacity() + self.held.capacity()) * std::mem::size_of::<Event>()
+            + self.bounces.capacity() * std::mem::size_of::<Bounce>()
+            + self.paths.capacity() * std::mem::size_of::<Foreseen>()
     }
 }
 
@@ -55,16 +91,26 @@ fn bits(m: &Motion) -> [u64; 7] {
 }
 
 impl<B: BroadPhase> Pipeline<B> {
-    /// Window start, after the proxies' refresh and before the broad phase's preparation: each
-    /// body's first wall bounce of the window, from its fresh proxy, and its path after it, on
-    /// every worker. Only where a bounce is all a wall contact does to a sphere and nothing else
-    /// turns one: detect mode, plain spheres on straight paths without friction, in a box
-    /// without periodic faces, with a broad phase that bins such paths. A body whose proxy ends
-    /// at its reach first is renewed before it bounces: it has none.
-    pub(super) fn foresee_bounces(&mut self, bodies: &Bodies, physics: &Physics) {
+    /// Window start, after the proxies' refresh and before the broad phase's preparation: every
+    /// live body's wall contact in the window, once (the window's own events take them from
+    /// [`ForeseenBounces::walls`]), then each body's first wall bounce, its contact and its path
+    /// after it, on every worker. Only where a bounce is all a wall contact does to a sphere and
+    /// nothing else turns one: detect mode, plain spheres on straight paths without friction, in
+    /// a box without periodic faces, with a broad phase that bins such paths. A body whose proxy
+    /// ends at its reach first is renewed before it bounces: it has none.
+    pub(super) fn predict_walls(&mut self, bodies: &Bodies, physics: &Physics) {
         let foreseen = &mut self.foreseen;
+        foreseen.walls.clear();
+        foreseen.bounces.clear();
         foreseen.paths.clear();
         foreseen.held.clear();
+        let (table, window, bounds) = (&self.proxies, self.window, &physics.bounds);
+        // A proxy just made that meets no wall in the window: its body has no wall contact in it.
+        self.workers.extend_ranges(bodies.slots(), &mut foreseen.walls, |range, found| {
+            for i in range.filter(|&i| table.is_live(i) && !table.meets_no_wall(i)) {
+                found.extend(predict_wall(bodies, table, bounds, i as u32, window));
+            }
+        });
         let applies = physics.mode == Mode::Detect
             && !bodies.has_rigid()
             && bodies.straight_paths()
@@ -74,37 +120,63 @@ impl<B: BroadPhase> Pipeline<B> {
         if !applies {
             return;
         }
-        let (table, window) = (&self.proxies, self.window);
-        self.workers.extend_ranges(bodies.slots(), &mut foreseen.paths, |range, found| {
-            for i in range.filter(|&i| table.is_live(i) && !table.meets_no_wall(i) && !table.expires(i)) {
-                let Some(Event { time, partner: Partner::Wall(wall), body_stamp, .. }) =
-                    predict_wall(bodies, table, &physics.bounds, i as u32, window)
-                else {
+        let (walls, restitution) = (&foreseen.walls, physics.restitution);
+        self.workers.extend_ranges(walls.len(), &mut foreseen.bounces, |range, found| {
+            for event in &walls[range] {
+                let (i, time) = (event.body as usize, event.time);
+                let Partner::Wall(wall) = event.partner else { continue };
+                if table.expires(i) {
                     continue;
-                };
-                let motion = motion_off_wall(bodies, i, wall, time, physics.restitution);
+                }
+                let (point, normal) = wall_geometry(bodies, i, wall, bounds, time);
+                let (_, impulse) = motion_off_wall(bodies, i, wall, time, restitution);
+                found.push(Bounce { body: event.body, wall, time, point, normal, impulse });
+            }
+        });
+        let bounces = &foreseen.bounces;
+        self.workers.extend_ranges(bounces.len(), &mut foreseen.paths, |range, found| {
+            for &Bounce { body, wall, time, .. } in &bounces[range] {
+                let i = body as usize;
+                let (motion, _) = motion_off_wall(bodies, i, wall, time, restitution);
                 let state = BodyState { motion, radius: bodies.state[i].radius };
-                let (body, stamp) = (i as u32, body_stamp.wrapping_add(FORESEEN_STEP));
+                let stamp = bodies.stamp(i).wrapping_add(FORESEEN_STEP);
                 found.push(Foreseen { body, stamp, state, made: table.made_ahead(i, bodies, &motion, time) });
             }
         });
     }
 
-    /// Body `body` just bounced off a wall: when the bounce is the one foreseen (its stamp moved
-    /// once since the window's start, its motion the foreseen one to the bit), its stamp moves on
-    /// to the foreseen path's, its proxy made ahead enters the table, its held predictions are
-    /// queued again, and true; otherwise false, nothing done.
-    pub(super) fn take_foreseen(&mut self, body: u32, bodies: &mut Bodies) -> bool {
-        let paths = &self.foreseen.paths;
-        let Ok(k) = paths.binary_search_by_key(&body, |f| f.body) else { return false };
-        let (i, foreseen) = (body as usize, &paths[k]);
-        if bodies.stamp(i).wrapping_add(FORESEEN_STEP - 1) != foreseen.stamp
-            || bits(&foreseen.state.motion) != bits(&bodies.motion(i))
+    /// `event`, body `event.body` touching `wall`, popped current: when it is the bounce foreseen
+    /// at the window's start (the body unchanged since, the same contact) and does not jam the
+    /// body, the bounce as the event loop makes it, from what was worked out then: the contact
+    /// counted, the body on its foreseen motion and stamp, its proxy made ahead entered, its held
+    /// predictions queued again, its own events predicted, the contact reported; and true.
+    /// Otherwise false, nothing done: the contact is handled as any.
+    pub(super) fn take_foreseen(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        event: &Event,
+        out: &mut Output,
+    ) -> bool {
+        let (body, t, i) = (event.body, event.time, event.body as usize);
+        let bounces = &self.foreseen.bounces;
+        let Ok(k) = bounces.binary_search_by_key(&body, |b| b.body) else { return false };
+        let (bounce, path) = (bounces[k], &self.foreseen.paths[k]);
+        if bodies.stamp(i).wrapping_add(FORESEEN_STEP) != path.stamp
+            || bounce.time != t
+            || event.partner != Partner::Wall(bounce.wall)
+            || self.impacts.rules.would_jam_alone(body, t)
         {
             return false;
         }
+        // Detect mode (see `predict_walls`): no TC model (its contact duration is 0 there) and
+        // no resting, so the rule is the world's restitution, the one the foresight took.
+        let rule = self.impacts.rules.wall(body, t, physics.restitution, 0.0);
+        debug_assert_eq!(rule, Rule::Impulse { restitution: physics.restitution, changed: false });
+        bodies.set_velocity_at(i, t, path.state.motion.velocity);
+        debug_assert_eq!(bits(&bodies.motion(i)), bits(&path.state.motion), "not as foreseen");
         bodies.take_foreseen(i);
-        self.proxies.enter_made(i, bodies, foreseen.made);
+        self.proxies.enter_made(i, bodies, path.made);
         // This body's held predictions only: another's wait for its own bounce.
         let queue = &mut self.queue;
         self.foreseen.held.retain(|event| {
@@ -113,6 +185,17 @@ impl<B: BroadPhase> Pipeline<B> {
                 queue.push(*event);
             }
             !of_body
+        });
+        self.updates += 1;
+        out.stats.retests += 1;
+        self.predict_own_events(body, bodies, physics, self.window.from(t));
+        out.contacts.push(Contact {
+            time: t,
+            body: bodies.handle(i),
+            touched: Touched::Wall(bounce.wall),
+            point: bounce.point,
+            normal: bounce.normal,
+            impulse: bounce.impulse,
         });
         true
     }

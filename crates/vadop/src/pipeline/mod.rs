@@ -332,7 +332,7 @@ impl<B: BroadPhase> Pipeline<B> {
         stats.update_seconds += start.elapsed().as_secs_f64();
 
         let start = Instant::now();
-        self.foresee_bounces(bodies, physics);
+        self.predict_walls(bodies, physics);
         let (view, foreseen) = (self.proxies.view(bodies), self.foreseen.paths());
         let counts = if foreseen.is_empty() {
             self.broad.prepare(view, &self.workers)
@@ -384,10 +384,14 @@ impl<B: BroadPhase> Pipeline<B> {
         // Asked once per window rather than of every body: most boxes have no periodic face and
         // most worlds no static body.
         let (periodic, level) = (physics.bounds.is_periodic(), !statics.is_empty());
-        // Each body's own events (walls, crossings, the level, renewals) follow the pairs'.
+        let walls = self.foreseen.walls();
+        // Each body's own events (walls, crossings, the level, renewals) follow the pairs'; the
+        // walls' were predicted with the foresight, in the bodies' order.
         self.workers.extend_ranges(bodies.slots(), &mut predicted, |range, found| {
+            let first = walls.partition_point(|wall| (wall.body as usize) < range.start);
+            let mut walls = walls[first..].iter().peekable();
             for i in range.filter(|&i| proxies.is_live(i)) {
-                push_found(found, predict_wall(bodies, &proxies, &physics.bounds, i as u32, window));
+                found.extend(walls.next_if(|wall| wall.body as usize == i));
                 if periodic {
                     push_found(found, predict_crossing(bodies, &physics.bounds, i as u32, window));
                 }
@@ -475,7 +479,11 @@ impl<B: BroadPhase> Pipeline<B> {
             },
             Partner::End(j) => self.contact_end(bodies, event.body, j, event.time, out),
             Partner::Stalled(j) => self.stalled(bodies, physics, &[event.body, j], event.time, out),
-            Partner::Wall(wall) => respond::wall_contact(self, bodies, physics, event.body, wall, event.time, out),
+            Partner::Wall(wall) => {
+                if !self.take_foreseen(bodies, physics, event, out) {
+                    respond::wall_contact(self, bodies, physics, event.body, wall, event.time, out);
+                }
+            }
             Partner::WallStalled => self.stalled(bodies, physics, &[event.body], event.time, out),
             Partner::Cross(face) => {
                 bodies.wrap(i, face, event.time);

@@ -33,11 +33,6 @@ pub(crate) trait Responder {
     /// Body `a` (and, given, body `b > a`) changed motion at `t`: test it again (them, the pair
     /// once).
     fn moved(&mut self, bodies: &Bodies, physics: &Physics, a: u32, b: Option<u32>, t: f64, stats: &mut FrameStats);
-    /// Body `a` bounced off a wall at `t`: test it again (as [`Self::moved`] unless the engine
-    /// foresaw the bounce).
-    fn bounced(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, t: f64, stats: &mut FrameStats) {
-        self.moved(bodies, physics, a, None, t, stats);
-    }
     /// Body `woken`, which lay still (see [`crate::response::rest`]), moves at `t`: the bodies
     /// it held up fall again.
     fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats);
@@ -118,7 +113,7 @@ pub(crate) fn wall_contact(
             0.0
         }
         Resolution::Pushed(total) => {
-            engine.bounced(bodies, physics, a, t, out.stats);
+            engine.moved(bodies, physics, a, None, t, out.stats);
             total
         }
         Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => {
@@ -156,11 +151,6 @@ impl<B: BroadPhase> Responder for Pipeline<B> {
             Some(b) => self.retest_pair(a, b, bodies, physics, t, stats),
             None => self.retest(a, None, bodies, physics, t, stats),
         }
-    }
-    /// A foreseen bounce's pairs were predicted at the window's start (see
-    /// [`super::foreseen`]).
-    fn bounced(&mut self, bodies: &mut Bodies, physics: &Physics, a: u32, t: f64, stats: &mut FrameStats) {
-        self.retest_bounced(a, bodies, physics, t, stats);
     }
     fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats) {
         self.wake_held(bodies, physics, woken, t, stats);

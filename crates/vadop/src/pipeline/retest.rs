@@ -1,8 +1,8 @@
 //! What a velocity change re-tests: the body's fresh proxy enters the broad phase, and its
 //! contacts with its candidate partners, the walls, the static geometry and (with ends
 //! reported) the end of each contact it is in are predicted for the rest of the window. A wall
-//! bounce foreseen at the window's start (see [`super::foreseen`]) had its pairs predicted then:
-//! its proxy made ahead enters the table, and only its own events are predicted.
+//! bounce foreseen at the window's start (see [`super::foreseen`]) is not re-tested: its pairs
+//! were predicted then, and only its own events are predicted here.
 //!
 //! It owns that re-test only. A shape's searches against its partners are independent of one
 //! another, so in a world of shapes with more than one worker they run on every worker, and
@@ -46,30 +46,10 @@ impl<B: BroadPhase> Pipeline<B> {
         self.predict_own_events(body, bodies, physics, window);
     }
 
-    /// After `body` bounced off a wall at `t`: [`Self::retest`], but only its own events (the
-    /// walls, the level, its renewal, its contacts' ends) when the bounce is the one foreseen at
-    /// the window's start, whose pairs that start predicted (see [`super::foreseen`]).
-    pub(super) fn retest_bounced(
-        &mut self,
-        body: u32,
-        bodies: &mut Bodies,
-        physics: &Physics,
-        t: f64,
-        stats: &mut FrameStats,
-    ) {
-        if !self.take_foreseen(body, bodies) {
-            self.retest(body, None, bodies, physics, t, stats);
-            return;
-        }
-        self.updates += 1;
-        stats.retests += 1;
-        self.predict_own_events(body, bodies, physics, self.window.from(t));
-    }
-
     /// Body `body`'s contacts with the walls and the static geometry, its crossing of a periodic
     /// face, its proxy's renewal and (with ends reported) the end of each contact it is in, in
     /// `window`, from its proxy just entered.
-    fn predict_own_events(&mut self, body: u32, bodies: &Bodies, physics: &Physics, window: Window) {
+    pub(super) fn predict_own_events(&mut self, body: u32, bodies: &Bodies, physics: &Physics, window: Window) {
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
         if let Some(event) = predict_wall(bodies, &self.proxies, &physics.bounds, body, window) {
             queue.push(event);

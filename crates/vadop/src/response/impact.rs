@@ -112,17 +112,25 @@ pub(crate) fn virial_of(bodies: &Bodies, (i, j): (usize, usize), t: f64, (before
 
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
 pub(crate) fn bounce_off_wall(bodies: &mut Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> f64 {
-    let v = bodies.velocity_at(i, t);
-    let bounced = wall_bounce(v, wall.axis(), restitution);
+    let (bounced, impulse) = velocity_off_wall(bodies, i, wall, t, restitution);
     bodies.set_velocity_at(i, t, bounced);
-    bodies.mass(i) * (v - bounced).length()
+    impulse
 }
 
-/// The motion [`bounce_off_wall`] gives sphere `i` of a world without spins (nothing changed).
+/// The velocity [`bounce_off_wall`] gives sphere `i`, and the impulse (nothing changed).
 #[inline]
-pub(crate) fn motion_off_wall(bodies: &Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> Motion {
-    let bounced = wall_bounce(bodies.velocity_at(i, t), wall.axis(), restitution);
-    bodies.motion(i).moved_on(t, bounced, bodies.gravity_on(i))
+fn velocity_off_wall(bodies: &Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> (DVec3, f64) {
+    let v = bodies.velocity_at(i, t);
+    let bounced = wall_bounce(v, wall.axis(), restitution);
+    (bounced, bodies.mass(i) * (v - bounced).length())
+}
+
+/// The motion [`bounce_off_wall`] gives sphere `i` of a world without spins, and the impulse
+/// (nothing changed).
+#[inline]
+pub(crate) fn motion_off_wall(bodies: &Bodies, i: usize, wall: Wall, t: f64, restitution: f64) -> (Motion, f64) {
+    let (bounced, impulse) = velocity_off_wall(bodies, i, wall, t, restitution);
+    (bodies.motion(i).moved_on(t, bounced, bodies.gravity_on(i)), impulse)
 }
 
 /// The scratch an engine keeps for its impacts: the contact rules' history and the contact

@@ -173,7 +173,13 @@ impl ContactRules {
 
     /// True when a contact of bodies `a` and `b` at `t` would jam them, found without counting it.
     pub(crate) fn would_jam(&self, a: u32, b: u32, t: f64) -> bool {
-        self.after_count(a as usize, t).2 || self.after_count(b as usize, t).2
+        self.would_jam_alone(a, t) || self.would_jam_alone(b, t)
+    }
+
+    /// True when a contact of body `a` with a wall at `t` would jam it, found without counting it.
+    #[inline]
+    pub(crate) fn would_jam_alone(&self, a: u32, t: f64) -> bool {
+        self.after_count(a as usize, t).2
     }
 
     /// The restitution of a contact at `t` of bodies whose previous contacts were at
