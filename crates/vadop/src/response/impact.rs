@@ -11,7 +11,7 @@ use super::rules::{ContactRules, Rule};
 use crate::bodies::Bodies;
 use crate::frame::{FrameStats, Mode, Physics};
 use crate::motion::Motion;
-use crate::narrow_phase::contacts::{self, ManifoldScratch};
+use crate::narrow_phase::contacts::{self, ManifoldScratch, SphereTouch};
 use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
 use crate::walls::Wall;
 use glam::{DMat3, DVec3};
@@ -99,15 +99,15 @@ pub(crate) fn spheres_pushed(
 /// centres (`j`'s minus `i`'s) dotted with the momentum `j` gained, `before` being `j`'s velocity
 /// at `t` before the impact (the impact has just set its motion at `t`). An impact conserves momentum, so taking `i` as the second body gives the same.
 pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, before: DVec3) -> f64 {
-    virial_of(bodies, (i, j), t, (before, bodies.velocity(j)))
+    virial(bodies.offset_at(i, j, t), bodies.mass(j), (before, bodies.velocity(j)))
 }
 
-/// [`exchange_virial`] of an impact that changes `j`'s velocity at `t` from `before` to `after`
-/// (which the store may not hold yet).
+/// [`exchange_virial`] from the separation of the centres at the impact (`j`'s minus `i`'s,
+/// [`Bodies::offset_at`]), `j`'s mass `mass_j` and its velocity `before` and `after` (which
+/// the store may not hold yet): for a caller that has the separation at hand.
 #[inline]
-pub(crate) fn virial_of(bodies: &Bodies, (i, j): (usize, usize), t: f64, (before, after): (DVec3, DVec3)) -> f64 {
-    let separation = bodies.offset_at(i, j, t);
-    separation.dot(bodies.mass(j) * (after - before))
+pub(crate) fn virial(separation: DVec3, mass_j: f64, (before, after): (DVec3, DVec3)) -> f64 {
+    separation.dot(mass_j * (after - before))
 }
 
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
@@ -133,6 +133,40 @@ pub(crate) struct Impacts {
     pub manifold: ManifoldScratch,
 }
 
+/// Whether bodies `i` and `j` are two moving spheres without friction: their impact is the
+/// closed-form impulse along the line of centres ([`push_spheres`]).
+#[inline]
+fn plain_spheres(bodies: &Bodies, physics: &Physics, i: usize, j: usize) -> bool {
+    bodies.are_spheres(i, j) && physics.friction == 0.0 && !bodies.is_fixed(i) && !bodies.is_fixed(j)
+}
+
+/// Whether an impact of bodies `i` and `j` is [`Impacts::plain_pair`]'s: two moving spheres
+/// without friction in simulate mode, without the rest rule (every impact of a gas).
+#[inline]
+pub(crate) fn is_plain_pair(bodies: &Bodies, physics: &Physics, i: usize, j: usize) -> bool {
+    physics.mode == Mode::Simulate && !rest::applies(bodies, physics) && plain_spheres(bodies, physics, i, j)
+}
+
+/// Two moving frictionless spheres pushed apart along `normal` at `t` with the contact rules'
+/// `restitution` (`changed` when the TC model set it): pushed, or parting with nothing changed.
+fn pushed_apart(
+    bodies: &mut Bodies,
+    (i, j): (usize, usize),
+    t: f64,
+    normal: DVec3,
+    (restitution, changed): (f64, bool),
+    stats: &mut FrameStats,
+) -> Resolution {
+    let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
+    // Zero impulse changes nothing; re-testing would find the same touch again.
+    if impulse > 0.0 {
+        stats.tc_contacts += changed as u64;
+        Resolution::Pushed(impulse)
+    } else {
+        Resolution::Parting
+    }
+}
+
 /// Whether bodies `i` and `j` pass through each other at a contact, neither changed: two moving
 /// bodies in detect mode (see [`crate::frame::Mode::turns_back`]).
 #[inline]
@@ -141,6 +175,35 @@ pub(crate) fn passes_through(bodies: &Bodies, physics: &Physics, i: usize, j: us
 }
 
 impl Impacts {
+    /// Spheres `a < b`, an [`is_plain_pair`] pair, touch at `t`: where (read once from their
+    /// paths), the rule recorded in their history, the push, and the push's virial (0 unless
+    /// pushed). The lean case of every impact of a gas, and what [`Self::pair`] with the
+    /// geometry of [`contacts::pair_geometry`] and [`exchange_virial`] make of such a pair, to
+    /// the bit: for it `pair` records the same rule and pushes through the same
+    /// [`pushed_apart`], and the offset of the geometry is the virial's separation (the centres
+    /// at `t` do not move when a velocity is set at `t`).
+    pub(crate) fn plain_pair(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        (a, b): (u32, u32),
+        t: f64,
+        stats: &mut FrameStats,
+    ) -> (SphereTouch, Resolution, f64) {
+        let (i, j) = (a as usize, b as usize);
+        let touch = contacts::spheres_touch(bodies, i, j, t);
+        let before_j = bodies.velocity_at(j, t);
+        let resolution = match self.rules.pair(a, b, t, physics.restitution, tc_duration(physics)) {
+            Rule::Jam => return (touch, Resolution::Jammed { by_rule: true }, 0.0),
+            Rule::Impulse { restitution, changed } => {
+                pushed_apart(bodies, (i, j), t, touch.normal, (restitution, changed), stats)
+            }
+        };
+        let pushed = matches!(resolution, Resolution::Pushed(_));
+        let virial = if pushed { virial(touch.offset, bodies.mass(j), (before_j, bodies.velocity(j))) } else { 0.0 };
+        (touch, resolution, virial)
+    }
+
     /// Bodies `a` and `b` touch at `t` at `point` with `normal` (from `a` to `b`).
     pub(crate) fn pair(
         &mut self,
@@ -168,7 +231,7 @@ impl Impacts {
             _ => self.rules.pair(a, b, t, physics.restitution, duration),
         };
         // Two moving spheres without friction: the closed-form impulse along the line of centres.
-        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
+        let plain = plain_spheres(bodies, physics, i, j);
         let resting = rest::applies(bodies, physics);
         let before = [bodies.rest_of(i), bodies.rest_of(j)];
         // Gravity presses one onto the other whatever their velocities: they must part (see
@@ -190,14 +253,7 @@ impl Impacts {
         let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
-                let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
-                // Zero impulse changes nothing; re-testing would find the same touch again.
-                if impulse > 0.0 {
-                    stats.tc_contacts += changed as u64;
-                    Resolution::Pushed(impulse)
-                } else {
-                    Resolution::Parting
-                }
+                pushed_apart(bodies, (i, j), t, normal, (restitution, changed), stats)
             }
             Rule::Impulse { restitution, changed } => {
                 contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
