@@ -62,6 +62,7 @@ pub(crate) fn impacted(bodies: &Bodies, i: usize, t: f64) -> Impacted {
 
 /// Two moving spheres pushed apart along `normal` (from `i` to `j`) at `t` with `restitution`;
 /// the impulse, 0 (and nothing changed) when they already part.
+#[inline(always)]
 pub(crate) fn push_spheres(
     bodies: &mut Bodies,
     (i, j): (usize, usize),
@@ -81,7 +82,7 @@ pub(crate) fn push_spheres(
 
 /// What [`push_spheres`] does to spheres `i` and `j`, without doing it: the impulse and their
 /// velocities after it; none when they already part.
-#[inline]
+#[inline(always)]
 pub(crate) fn spheres_pushed(
     bodies: &Bodies,
     (i, j): (usize, usize),
