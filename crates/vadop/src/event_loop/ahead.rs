@@ -162,12 +162,12 @@ impl Seen<'_> {
         }
         let restitution = self.rules.pair_restitution(a, b, t, physics.restitution, physics.contact_duration);
         // What the serial loop's impact finds (`Impacts::plain_pair`), from the same functions.
-        let touch = contacts::spheres_touch(self.bodies, i, j, t);
+        let (touch, before) = contacts::spheres_touch(self.bodies, i, j, t);
         let (point, normal) = (touch.point, touch.normal);
-        let Some((impulse, vi, vj)) = spheres_pushed(self.bodies, (i, j), t, normal, restitution) else {
+        let Some((impulse, vi, vj)) = spheres_pushed(self.bodies, (i, j), before, normal, restitution) else {
             return Worked::Nothing;
         };
-        let virial = virial(touch.offset, self.bodies.mass(j), (self.bodies.velocity_at(j, t), vj));
+        let virial = virial(touch.offset, self.bodies.mass(j), (before[1], vj));
         let moved = |k: usize, velocity| Motion { position: self.bodies.position_at(k, t), since: t, velocity };
         let motions = [moved(i, vi), moved(j, vj)];
         let stamps = [self.bodies.stamp(i).wrapping_add(1), self.bodies.stamp(j).wrapping_add(1)];

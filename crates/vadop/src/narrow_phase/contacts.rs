@@ -223,8 +223,7 @@ pub(crate) fn pair_geometry(bodies: &Bodies, i: usize, j: usize, t: f64) -> (DVe
             }
         }
     }
-    let touch = spheres_touch(bodies, i, j, t);
-    (touch.point, touch.normal)
+    sphere_pair_geometry(bodies, (i, &SpherePath::of(bodies, i)), (j, &SpherePath::of(bodies, j)), t)
 }
 
 /// A sphere's path as its contact geometry reads it: its straight motion since its last velocity
@@ -295,10 +294,13 @@ pub(crate) fn sphere_pair_touch(
     SphereTouch { point, normal, offset }
 }
 
-/// [`sphere_pair_touch`] of spheres `i` and `j` on their paths now.
+/// [`sphere_pair_touch`] of spheres `i` and `j` on their paths now, with their velocities at `t`
+/// ([`Bodies::velocity_at`]'s bits) from the same read of their paths.
 #[inline]
-pub(crate) fn spheres_touch(bodies: &Bodies, i: usize, j: usize, t: f64) -> SphereTouch {
-    sphere_pair_touch(bodies, (i, &SpherePath::of(bodies, i)), (j, &SpherePath::of(bodies, j)), t)
+pub(crate) fn spheres_touch(bodies: &Bodies, i: usize, j: usize, t: f64) -> (SphereTouch, [DVec3; 2]) {
+    let paths = [SpherePath::of(bodies, i), SpherePath::of(bodies, j)];
+    let touch = sphere_pair_touch(bodies, (i, &paths[0]), (j, &paths[1]), t);
+    (touch, paths.map(|path| path.motion.velocity_under(t, path.gravity)))
 }
 
 /// Where body `i` touches `wall` at `t`, and the wall's outward normal.

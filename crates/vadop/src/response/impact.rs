@@ -62,7 +62,7 @@ pub(crate) fn impacted(bodies: &Bodies, i: usize, t: f64) -> Impacted {
 
 /// Two moving spheres pushed apart along `normal` (from `i` to `j`) at `t` with `restitution`;
 /// the impulse, 0 (and nothing changed) when they already part.
-#[inline(always)]
+#[inline]
 pub(crate) fn push_spheres(
     bodies: &mut Bodies,
     (i, j): (usize, usize),
@@ -70,7 +70,21 @@ pub(crate) fn push_spheres(
     normal: DVec3,
     restitution: f64,
 ) -> f64 {
-    match spheres_pushed(bodies, (i, j), t, normal, restitution) {
+    let velocities = [bodies.velocity_at(i, t), bodies.velocity_at(j, t)];
+    push_spheres_moving(bodies, (i, j), t, velocities, normal, restitution)
+}
+
+/// [`push_spheres`] of spheres moving at `velocities` at `t` (read by the caller).
+#[inline(always)]
+fn push_spheres_moving(
+    bodies: &mut Bodies,
+    (i, j): (usize, usize),
+    t: f64,
+    velocities: [DVec3; 2],
+    normal: DVec3,
+    restitution: f64,
+) -> f64 {
+    match spheres_pushed(bodies, (i, j), velocities, normal, restitution) {
         Some((impulse, vi, vj)) => {
             bodies.set_velocity_at(i, t, vi);
             bodies.set_velocity_at(j, t, vj);
@@ -80,17 +94,16 @@ pub(crate) fn push_spheres(
     }
 }
 
-/// What [`push_spheres`] does to spheres `i` and `j`, without doing it: the impulse and their
-/// velocities after it; none when they already part.
+/// What [`push_spheres`] does to spheres `i` and `j` moving at `[vi, vj]` at the impact, without
+/// doing it: the impulse and their velocities after it; none when they already part.
 #[inline(always)]
 pub(crate) fn spheres_pushed(
     bodies: &Bodies,
     (i, j): (usize, usize),
-    t: f64,
+    [vi, vj]: [DVec3; 2],
     normal: DVec3,
     restitution: f64,
 ) -> Option<(f64, DVec3, DVec3)> {
-    let (vi, vj) = (bodies.velocity_at(i, t), bodies.velocity_at(j, t));
     let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
     let impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
     (impulse > 0.0).then(|| (impulse, vi - impulse * wi * normal, vj + impulse * wj * normal))
@@ -148,17 +161,18 @@ pub(crate) fn is_plain_pair(bodies: &Bodies, physics: &Physics, i: usize, j: usi
     physics.mode == Mode::Simulate && !rest::applies(bodies, physics) && plain_spheres(bodies, physics, i, j)
 }
 
-/// Two moving frictionless spheres pushed apart along `normal` at `t` with the contact rules'
-/// `restitution` (`changed` when the TC model set it): pushed, or parting with nothing changed.
+/// Two moving frictionless spheres, moving at `velocities` at `t`, pushed apart along `normal`
+/// with the contact rules' `restitution` (`changed` when the TC model set it): pushed, or
+/// parting with nothing changed.
 fn pushed_apart(
     bodies: &mut Bodies,
     (i, j): (usize, usize),
-    t: f64,
+    (t, velocities): (f64, [DVec3; 2]),
     normal: DVec3,
     (restitution, changed): (f64, bool),
     stats: &mut FrameStats,
 ) -> Resolution {
-    let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
+    let impulse = push_spheres_moving(bodies, (i, j), t, velocities, normal, restitution);
     // Zero impulse changes nothing; re-testing would find the same touch again.
     if impulse > 0.0 {
         stats.tc_contacts += changed as u64;
@@ -192,16 +206,15 @@ impl Impacts {
         stats: &mut FrameStats,
     ) -> (SphereTouch, Resolution, f64) {
         let (i, j) = (a as usize, b as usize);
-        let touch = contacts::spheres_touch(bodies, i, j, t);
-        let before_j = bodies.velocity_at(j, t);
+        let (touch, before) = contacts::spheres_touch(bodies, i, j, t);
         let resolution = match self.rules.pair(a, b, t, physics.restitution, tc_duration(physics)) {
             Rule::Jam => return (touch, Resolution::Jammed { by_rule: true }, 0.0),
             Rule::Impulse { restitution, changed } => {
-                pushed_apart(bodies, (i, j), t, touch.normal, (restitution, changed), stats)
+                pushed_apart(bodies, (i, j), (t, before), touch.normal, (restitution, changed), stats)
             }
         };
         let pushed = matches!(resolution, Resolution::Pushed(_));
-        let virial = if pushed { virial(touch.offset, bodies.mass(j), (before_j, bodies.velocity(j))) } else { 0.0 };
+        let virial = if pushed { virial(touch.offset, bodies.mass(j), (before[1], bodies.velocity(j))) } else { 0.0 };
         (touch, resolution, virial)
     }
 
@@ -254,7 +267,8 @@ impl Impacts {
         let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
-                pushed_apart(bodies, (i, j), t, normal, (restitution, changed), stats)
+                let velocities = [bodies.velocity_at(i, t), bodies.velocity_at(j, t)];
+                pushed_apart(bodies, (i, j), (t, velocities), normal, (restitution, changed), stats)
             }
             Rule::Impulse { restitution, changed } => {
                 contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
