@@ -26,7 +26,7 @@ use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
 use crate::motion::Motion;
 use crate::narrow_phase::contacts;
-use crate::response::impact::{spheres_pushed, virial_of};
+use crate::response::impact::{spheres_pushed, virial};
 use crate::response::rules::ContactRules;
 use crate::walls::BoxBounds;
 use glam::DVec3;
@@ -161,11 +161,13 @@ impl Seen<'_> {
             return Worked::Nothing;
         }
         let restitution = self.rules.pair_restitution(a, b, t, physics.restitution, physics.contact_duration);
-        let (point, normal) = contacts::pair_geometry(self.bodies, i, j, t);
-        let Some((impulse, vi, vj)) = spheres_pushed(self.bodies, (i, j), t, normal, restitution) else {
+        // What the serial loop's impact finds (`Impacts::plain_pair`), from the same functions.
+        let (touch, before) = contacts::spheres_touch(self.bodies, i, j, t);
+        let (point, normal) = (touch.point, touch.normal);
+        let Some((impulse, vi, vj)) = spheres_pushed(self.bodies, (i, j), before, normal, restitution) else {
             return Worked::Nothing;
         };
-        let virial = virial_of(self.bodies, (i, j), t, (self.bodies.velocity_at(j, t), vj));
+        let virial = virial(touch.offset, self.bodies.mass(j), (before[1], vj));
         let moved = |k: usize, velocity| Motion { position: self.bodies.position_at(k, t), since: t, velocity };
         let motions = [moved(i, vi), moved(j, vj)];
         let stamps = [self.bodies.stamp(i).wrapping_add(1), self.bodies.stamp(j).wrapping_add(1)];

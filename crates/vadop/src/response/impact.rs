@@ -11,7 +11,7 @@ use super::rules::{ContactRules, Rule};
 use crate::bodies::Bodies;
 use crate::frame::{FrameStats, Mode, Physics};
 use crate::motion::Motion;
-use crate::narrow_phase::contacts::{self, ManifoldScratch};
+use crate::narrow_phase::contacts::{self, ManifoldScratch, SphereTouch};
 use crate::narrow_phase::shapes::SHAPE_CONTACT_TOLERANCE;
 use crate::walls::Wall;
 use glam::{DMat3, DVec3};
@@ -62,6 +62,7 @@ pub(crate) fn impacted(bodies: &Bodies, i: usize, t: f64) -> Impacted {
 
 /// Two moving spheres pushed apart along `normal` (from `i` to `j`) at `t` with `restitution`;
 /// the impulse, 0 (and nothing changed) when they already part.
+#[inline]
 pub(crate) fn push_spheres(
     bodies: &mut Bodies,
     (i, j): (usize, usize),
@@ -69,7 +70,21 @@ pub(crate) fn push_spheres(
     normal: DVec3,
     restitution: f64,
 ) -> f64 {
-    match spheres_pushed(bodies, (i, j), t, normal, restitution) {
+    let velocities = [bodies.velocity_at(i, t), bodies.velocity_at(j, t)];
+    push_spheres_moving(bodies, (i, j), t, velocities, normal, restitution)
+}
+
+/// [`push_spheres`] of spheres moving at `velocities` at `t` (read by the caller).
+#[inline(always)]
+fn push_spheres_moving(
+    bodies: &mut Bodies,
+    (i, j): (usize, usize),
+    t: f64,
+    velocities: [DVec3; 2],
+    normal: DVec3,
+    restitution: f64,
+) -> f64 {
+    match spheres_pushed(bodies, (i, j), velocities, normal, restitution) {
         Some((impulse, vi, vj)) => {
             bodies.set_velocity_at(i, t, vi);
             bodies.set_velocity_at(j, t, vj);
@@ -79,17 +94,16 @@ pub(crate) fn push_spheres(
     }
 }
 
-/// What [`push_spheres`] does to spheres `i` and `j`, without doing it: the impulse and their
-/// velocities after it; none when they already part.
-#[inline]
+/// What [`push_spheres`] does to spheres `i` and `j` moving at `[vi, vj]` at the impact, without
+/// doing it: the impulse and their velocities after it; none when they already part.
+#[inline(always)]
 pub(crate) fn spheres_pushed(
     bodies: &Bodies,
     (i, j): (usize, usize),
-    t: f64,
+    [vi, vj]: [DVec3; 2],
     normal: DVec3,
     restitution: f64,
 ) -> Option<(f64, DVec3, DVec3)> {
-    let (vi, vj) = (bodies.velocity_at(i, t), bodies.velocity_at(j, t));
     let (wi, wj) = (bodies.inverse_mass(i), bodies.inverse_mass(j));
     let impulse = pair_impulse(normal, vi, vj, wi, wj, restitution);
     (impulse > 0.0).then(|| (impulse, vi - impulse * wi * normal, vj + impulse * wj * normal))
@@ -99,15 +113,15 @@ pub(crate) fn spheres_pushed(
 /// centres (`j`'s minus `i`'s) dotted with the momentum `j` gained, `before` being `j`'s velocity
 /// at `t` before the impact (the impact has just set its motion at `t`). An impact conserves momentum, so taking `i` as the second body gives the same.
 pub(crate) fn exchange_virial(bodies: &Bodies, (i, j): (usize, usize), t: f64, before: DVec3) -> f64 {
-    virial_of(bodies, (i, j), t, (before, bodies.velocity(j)))
+    virial(bodies.offset_at(i, j, t), bodies.mass(j), (before, bodies.velocity(j)))
 }
 
-/// [`exchange_virial`] of an impact that changes `j`'s velocity at `t` from `before` to `after`
-/// (which the store may not hold yet).
+/// [`exchange_virial`] from the separation of the centres at the impact (`j`'s minus `i`'s,
+/// [`Bodies::offset_at`]), `j`'s mass `mass_j` and its velocity `before` and `after` (which
+/// the store may not hold yet): for a caller that has the separation at hand.
 #[inline]
-pub(crate) fn virial_of(bodies: &Bodies, (i, j): (usize, usize), t: f64, (before, after): (DVec3, DVec3)) -> f64 {
-    let separation = bodies.offset_at(i, j, t);
-    separation.dot(bodies.mass(j) * (after - before))
+pub(crate) fn virial(separation: DVec3, mass_j: f64, (before, after): (DVec3, DVec3)) -> f64 {
+    separation.dot(mass_j * (after - before))
 }
 
 /// A sphere bounced off `wall` at `t` with `restitution`; the impulse.
@@ -141,6 +155,41 @@ pub(crate) struct Impacts {
     pub manifold: ManifoldScratch,
 }
 
+/// Whether bodies `i` and `j` are two moving spheres without friction: their impact is the
+/// closed-form impulse along the line of centres ([`push_spheres`]).
+#[inline]
+fn plain_spheres(bodies: &Bodies, physics: &Physics, i: usize, j: usize) -> bool {
+    bodies.are_spheres(i, j) && physics.friction == 0.0 && !bodies.is_fixed(i) && !bodies.is_fixed(j)
+}
+
+/// Whether an impact of bodies `i` and `j` is [`Impacts::plain_pair`]'s: two moving spheres
+/// without friction in simulate mode, without the rest rule (every impact of a gas).
+#[inline]
+pub(crate) fn is_plain_pair(bodies: &Bodies, physics: &Physics, i: usize, j: usize) -> bool {
+    physics.mode == Mode::Simulate && !rest::applies(bodies, physics) && plain_spheres(bodies, physics, i, j)
+}
+
+/// Two moving frictionless spheres, moving at `velocities` at `t`, pushed apart along `normal`
+/// with the contact rules' `restitution` (`changed` when the TC model set it): pushed, or
+/// parting with nothing changed.
+fn pushed_apart(
+    bodies: &mut Bodies,
+    (i, j): (usize, usize),
+    (t, velocities): (f64, [DVec3; 2]),
+    normal: DVec3,
+    (restitution, changed): (f64, bool),
+    stats: &mut FrameStats,
+) -> Resolution {
+    let impulse = push_spheres_moving(bodies, (i, j), t, velocities, normal, restitution);
+    // Zero impulse changes nothing; re-testing would find the same touch again.
+    if impulse > 0.0 {
+        stats.tc_contacts += changed as u64;
+        Resolution::Pushed(impulse)
+    } else {
+        Resolution::Parting
+    }
+}
+
 /// Whether bodies `i` and `j` pass through each other at a contact, neither changed: two moving
 /// bodies in detect mode (see [`crate::frame::Mode::turns_back`]).
 #[inline]
@@ -149,6 +198,34 @@ pub(crate) fn passes_through(bodies: &Bodies, physics: &Physics, i: usize, j: us
 }
 
 impl Impacts {
+    /// Spheres `a < b`, an [`is_plain_pair`] pair, touch at `t`: where (read once from their
+    /// paths), the rule recorded in their history, the push, and the push's virial (0 unless
+    /// pushed). The lean case of every impact of a gas, and what [`Self::pair`] with the
+    /// geometry of [`contacts::pair_geometry`] and [`exchange_virial`] make of such a pair, to
+    /// the bit: for it `pair` records the same rule and pushes through the same
+    /// [`pushed_apart`], and the offset of the geometry is the virial's separation (the centres
+    /// at `t` do not move when a velocity is set at `t`).
+    pub(crate) fn plain_pair(
+        &mut self,
+        bodies: &mut Bodies,
+        physics: &Physics,
+        (a, b): (u32, u32),
+        t: f64,
+        stats: &mut FrameStats,
+    ) -> (SphereTouch, Resolution, f64) {
+        let (i, j) = (a as usize, b as usize);
+        let (touch, before) = contacts::spheres_touch(bodies, i, j, t);
+        let resolution = match self.rules.pair(a, b, t, physics.restitution, tc_duration(physics)) {
+            Rule::Jam => return (touch, Resolution::Jammed { by_rule: true }, 0.0),
+            Rule::Impulse { restitution, changed } => {
+                pushed_apart(bodies, (i, j), (t, before), touch.normal, (restitution, changed), stats)
+            }
+        };
+        let pushed = matches!(resolution, Resolution::Pushed(_));
+        let virial = if pushed { virial(touch.offset, bodies.mass(j), (before[1], bodies.velocity(j))) } else { 0.0 };
+        (touch, resolution, virial)
+    }
+
     /// Bodies `a` and `b` touch at `t` at `point` with `normal` (from `a` to `b`).
     pub(crate) fn pair(
         &mut self,
@@ -176,7 +253,7 @@ impl Impacts {
             _ => self.rules.pair(a, b, t, physics.restitution, duration),
         };
         // Two moving spheres without friction: the closed-form impulse along the line of centres.
-        let plain = bodies.are_spheres(i, j) && physics.friction == 0.0 && fixed == (false, false);
+        let plain = plain_spheres(bodies, physics, i, j);
         let resting = rest::applies(bodies, physics);
         let before = [bodies.rest_of(i), bodies.rest_of(j)];
         // Gravity presses one onto the other whatever their velocities: they must part (see
@@ -198,14 +275,8 @@ impl Impacts {
         let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
-                let impulse = push_spheres(bodies, (i, j), t, normal, restitution);
-                // Zero impulse changes nothing; re-testing would find the same touch again.
-                if impulse > 0.0 {
-                    stats.tc_contacts += changed as u64;
-                    Resolution::Pushed(impulse)
-                } else {
-                    Resolution::Parting
-                }
+                let velocities = [bodies.velocity_at(i, t), bodies.velocity_at(j, t)];
+                pushed_apart(bodies, (i, j), (t, velocities), normal, (restitution, changed), stats)
             }
             Rule::Impulse { restitution, changed } => {
                 contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
