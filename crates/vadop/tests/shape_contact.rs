@@ -13,8 +13,10 @@
 //! rotation, which only needs to bound its angular speed the same way.
 
 use glam::{DQuat, DVec3};
+use parry3d_f64::bounding_volume::BoundingVolume;
 use parry3d_f64::math::Pose;
 use parry3d_f64::shape::Shape as ParryShape;
+use parry3d_f64::shape::TriMesh;
 use proptest::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -122,25 +124,53 @@ fn pair<S>(b: &Body<S>) -> (&ShapeGeometry, &RigidMotion<S>) {
 /// separation along any axis bounds the distance from below, so an answer under it is a query's
 /// error (a cuboid edge a hair from a cylinder's rim once read 3.56e-6 and 0 where a normal
 /// separated them by 4.35e-6). parry's distance to a half-space is a closed form and is taken as
-/// is (its contact query mistakes the frames when the half-space comes second).
+/// is (its contact query mistakes the frames when the half-space comes second). A mesh has no
+/// support function, so near it the distance is the least of its triangles', each read as above:
+/// a cone's tip a hair from a bumpy floor once read 0 in both of the whole mesh's distance
+/// queries where both contact queries read 1.70e-6, a nanosecond either side 1.695e-6 and
+/// 1.699e-6.
 fn distance<S: Spin, T: Spin>(a: &Body<S>, b: &Body<T>, t: f64) -> f64 {
     let (pa, pb) = (
         a.0.pose_of_shape(a.1.position_at(t), a.1.orientation_at(t)),
         b.0.pose_of_shape(b.1.position_at(t), b.1.orientation_at(t)),
     );
-    let (sa, sb) = (a.0.parry_shape().as_ref(), b.0.parry_shape().as_ref());
-    let d = parry3d_f64::query::distance(&pa, sa, &pb, sb).unwrap().distance;
+    shapes_distance(&pa, a.0.parry_shape().as_ref(), &pb, b.0.parry_shape().as_ref())
+}
+
+/// [`distance`] of two parry shapes at their poses.
+fn shapes_distance(pa: &Pose, sa: &dyn ParryShape, pb: &Pose, sb: &dyn ParryShape) -> f64 {
+    // Beyond this the whole mesh's query is trusted (its failures are a hair from contact).
+    const NEAR_MESH: f64 = 1e-3;
+    let d = parry3d_f64::query::distance(pa, sa, pb, sb).unwrap().distance;
     if sa.as_halfspace().is_some() || sb.as_halfspace().is_some() {
         return d;
+    }
+    if d <= NEAR_MESH {
+        // The least of the distances of the mesh's triangles within reach of the other's box.
+        let least = |mesh: &TriMesh, pose: &Pose, other: &dyn ParryShape, other_pose: &Pose, mesh_first: bool| {
+            let reach = other.compute_aabb(other_pose).loosened(NEAR_MESH);
+            let near = mesh.triangles().filter(|t| t.compute_aabb(pose).intersects(&reach));
+            near.map(|t| match mesh_first {
+                true => shapes_distance(pose, &t, other_pose, other),
+                false => shapes_distance(other_pose, other, pose, &t),
+            })
+            .fold(f64::INFINITY, f64::min)
+        };
+        if let Some(mesh) = sa.as_trimesh() {
+            return least(mesh, pa, sb, pb, true);
+        }
+        if let Some(mesh) = sb.as_trimesh() {
+            return least(mesh, pb, sa, pa, false);
+        }
     }
     // Within a prediction of 1 (beyond it the distance query alone is trusted).
     let contact =
         |pa, sa, pb, sb| parry3d_f64::query::contact(pa, sa, pb, sb, 1.0).unwrap().map_or(f64::INFINITY, |c| c.dist);
     let readings = [
         d,
-        parry3d_f64::query::distance(&pb, sb, &pa, sa).unwrap().distance,
-        contact(&pa, sa, &pb, sb),
-        contact(&pb, sb, &pa, sa),
+        parry3d_f64::query::distance(pb, sb, pa, sa).unwrap().distance,
+        contact(pa, sa, pb, sb),
+        contact(pb, sb, pa, sa),
     ];
     let separation = |pa: &Pose, sa: &dyn ParryShape, pb: &Pose, sb: &dyn ParryShape| {
         let (Some(ma), Some(mb)) = (sa.as_support_map(), sb.as_support_map()) else { return f64::NEG_INFINITY };
@@ -151,7 +181,7 @@ fn distance<S: Spin, T: Spin>(a: &Body<S>, b: &Body<T>, t: f64) -> f64 {
             .into_iter()
             .fold(f64::NEG_INFINITY, f64::max)
     };
-    let lower = separation(&pa, sa, &pb, sb).max(separation(&pb, sb, &pa, sa));
+    let lower = separation(pa, sa, pb, sb).max(separation(pb, sb, pa, sa));
     if readings.iter().filter(|d| **d <= 0.0).count() >= 2 {
         return lower.max(0.0);
     }
