@@ -655,8 +655,8 @@ impl<'a> Proxies<'a> {
         self.path_known(i, self.pull_free())
     }
 
-    /// [`Self::path`] where `pull_free` is [`Self::pull_free`] (see
-    /// [`Self::origin_and_velocity_known`]).
+    /// [`Self::path`] where `pull_free` is [`Self::pull_free`], asked once by a pass over every
+    /// proxy.
     #[inline(always)]
     pub fn path_known(&self, i: usize, pull_free: bool) -> Path {
         let (origin, velocity) = self.origin_and_velocity_known(i, pull_free);
