@@ -553,7 +553,9 @@ impl Grid {
         plan.clear();
         plan.resize(paths.len(), (0, 0));
         let rule = self.piece_rule();
-        // Whether the paths bend, asked once: the plan's loop is compiled for either answer.
+        // Whether the paths bend, asked once a pass rather than once a path. The loop is written
+        // once for each answer, a constant within it: one loop over `pull_free` itself read 1.8 %
+        // more instructions a detect frame (BENCHMARKS.md, twenty-first session's review).
         let pull_free = proxies.pull_free();
         let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
             let mut per_exponent: Vec<(i32, usize)> = Vec::new();
@@ -599,14 +601,13 @@ impl Grid {
         // look-up for each path below rather than a search of the list.
         let mut level_of = std::mem::take(&mut self.level_of);
         level_of.clear();
-        let (first_exponent, last_exponent) = (per_exponent.first(), per_exponent.last());
-        if let (Some(&(lowest, _)), Some(&(highest, _))) = (first_exponent, last_exponent) {
+        let lowest = per_exponent.first().map_or(0, |&(e, _)| e);
+        if let Some(&(highest, _)) = per_exponent.last() {
             level_of.resize((highest - lowest) as usize + 1, 0);
             for (k, &(exponent, _)) in per_exponent.iter().enumerate() {
                 level_of[(exponent - lowest) as usize] = k as u32;
             }
         }
-        let lowest = per_exponent.first().map_or(0, |&(e, _)| e);
         // Levels sized to their pieces, storage reused; each path's plan now names its level.
         self.spare.append(&mut self.levels);
         let (mut first, mut cells_before) = (0, 0);
