@@ -471,6 +471,35 @@ fn an_interrupted_step_is_undone() {
     }
 }
 
+/// Watched steps (an interrupt flag given, so undoable) started from a thread of another rayon
+/// pool, as the Python package's calls are, all finish: showing the flag to the world's own
+/// threads once sent them a broadcast, which from another pool's thread now and then waited
+/// forever (one pytest run in five hung).
+#[test]
+fn watched_steps_started_from_another_pool_finish() {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::{mpsc, Arc};
+    use std::time::Duration;
+    let scene =
+        PaperScene { bodies: 200, packing_fraction: 0.05, max_speed: 1.0, radius: 0.5, seed: 8 }.build().unwrap();
+    let (done, finished) = mpsc::channel();
+    std::thread::spawn(move || {
+        for mode in [Mode::Detect, Mode::Simulate].into_iter().cycle().take(400) {
+            let mut world = scene.world(WorldConfig { mode, threads: Some(2), ..WorldConfig::default() }).unwrap();
+            world.set_interrupt(Some(Arc::new(AtomicBool::new(false))));
+            rayon::scope(|s| {
+                s.spawn(|_| {
+                    for _ in 0..5 {
+                        world.step(DT).unwrap();
+                    }
+                })
+            });
+        }
+        done.send(()).unwrap();
+    });
+    assert!(finished.recv_timeout(Duration::from_secs(240)).is_ok(), "a watched step hung");
+}
+
 /// Simulate mode of spheres (the event loop) and its oracle step through their events whatever the
 /// caller's frames: one frame of a second, frames of an eighth, or frames of a 64th to half a
 /// second (all powers of two, so every run ends at the same instant) give the same contacts, in

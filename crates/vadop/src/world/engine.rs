@@ -354,7 +354,7 @@ mod tests {
             bounds: world.bounds,
             workers: threads,
         }));
-        world.threads = rayon::ThreadPoolBuilder::new().num_threads(2).build().ok();
+        world.threads = crate::interrupt::pool(2, &world.watched);
         world
     }
 

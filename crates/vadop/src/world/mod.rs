@@ -90,6 +90,8 @@ pub struct World {
     stats: FrameStats,
     /// Raised by the caller to stop the step in progress (see [`World::set_interrupt`]).
     interrupt: Option<Arc<AtomicBool>>,
+    /// Where the threads working on a step find `interrupt` while the step may be interrupted.
+    watched: Arc<crate::interrupt::Slot>,
     /// Last contacts of bodies added with their history before the engine (which keeps the
     /// history) was built: given to it when it is.
     history: Vec<(u32, f64)>,
@@ -146,6 +148,7 @@ impl World {
             ends: Vec::new(),
             stats: FrameStats::default(),
             interrupt: None,
+            watched: Arc::default(),
             history: Vec::new(),
         })
     }
@@ -481,7 +484,7 @@ impl World {
         self.wake_released();
         let before = self.keep_undo(waiting);
         let physics = self.physics();
-        let World { engine, bodies, contacts, ends, stats, threads, interrupt, .. } = self;
+        let World { engine, bodies, contacts, ends, stats, threads, interrupt, watched, .. } = self;
         let threads = &*threads;
         let mut out = Output { contacts, ends, stats };
         let engine = engine.as_mut().expect("built by place_new_bodies");
@@ -491,7 +494,7 @@ impl World {
             None => run(),
         };
         match (&before, interrupt) {
-            (Some(_), Some(flag)) => crate::interrupt::watching(flag, threads.as_ref(), on_threads),
+            (Some(_), Some(flag)) => crate::interrupt::watching(watched, flag, on_threads),
             _ => on_threads(),
         }
         if let Some(before) = before {
@@ -755,8 +758,7 @@ impl World {
         if self.engine.is_none() {
             let threads = self.config.thread_count();
             // A pool only when there is something to share; a failed pool leaves one thread.
-            self.threads =
-                (threads > 1).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
+            self.threads = (threads > 1).then(|| crate::interrupt::pool(threads, &self.watched)).flatten();
             let workers = Workers::new(if self.threads.is_some() { self.config.thread_count() } else { 1 });
             self.engine =
                 Some(engine::build(self.config.method.resolve(), &self.config, &self.pool, &self.bounds, workers));
