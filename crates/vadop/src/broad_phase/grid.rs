@@ -31,7 +31,7 @@ use crate::memory::prefetch;
 use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
 use glam::DVec3;
-use plan::{add_pieces, PieceRule};
+use plan::{add_pieces, BinnedPaths, PieceRule, PlanPass};
 
 /// Base cells are this many times the median swept-box extent of the window's proxies (and at
 /// least two typical diameters): small enough that a query in a dense gas meets few bodies, large
@@ -112,8 +112,9 @@ impl Level {
         // value, needs none of the checks a saturating `as` makes: binning and every query pay
         // for this conversion, three times per box.
         let clamped = (value * self.inverse).max(0.0).min(self.last[axis]);
-        // SAFETY: `clamped` is finite and within [0, 2^20], so it fits a u32.
-        unsafe { clamped.to_int_unchecked::<u32>() as usize }
+        // SAFETY: `clamped` is finite and within [0, 2^20], so it fits an i32: a signed
+        // conversion, one instruction where an unsigned one takes six for two lanes.
+        unsafe { clamped.to_int_unchecked::<i32>() as usize }
     }
 
     /// Cell coordinates of a point given relative to the grid origin.
@@ -160,9 +161,14 @@ impl Level {
 /// What the binning does with each piece a worker owns: count it in its cell, or store it in
 /// the cell's next slot. A trait with always-inline methods rather than a closure: the store,
 /// a closure called from the single-piece and the cut paths' loops, stayed a call (about 80
-/// instructions a piece, its captures read back from memory each time).
+/// instructions a piece, its captures read back from memory each time). `ahead` says whether the
+/// path is a foreseen one, a constant in each of the binning's loops, so no read asks.
 trait PieceSink {
-    fn piece(&mut self, body: usize, cell: usize, bbox: CompactBox, window: Window);
+    /// The one piece of path `path`: its box and window are the path's, read only if needed (the
+    /// count needs neither).
+    fn whole(&mut self, path: usize, cell: usize, ahead: bool);
+    /// One of the pieces path `path` is cut into.
+    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window, ahead: bool);
 }
 
 /// Counts the pieces of the cells from `lowest` on.
@@ -173,7 +179,12 @@ struct CountPieces<'a> {
 
 impl PieceSink for CountPieces<'_> {
     #[inline(always)]
-    fn piece(&mut self, _: usize, cell: usize, _: CompactBox, _: Window) {
+    fn whole(&mut self, _: usize, cell: usize, _: bool) {
+        self.counts[cell - self.lowest] += 1;
+    }
+
+    #[inline(always)]
+    fn piece(&mut self, _: usize, cell: usize, _: CompactBox, _: Window, _: bool) {
         self.counts[cell - self.lowest] += 1;
     }
 }
@@ -192,76 +203,25 @@ struct StorePieces<'a, 'p> {
 
 impl PieceSink for StorePieces<'_, '_> {
     #[inline(always)]
-    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window) {
+    fn whole(&mut self, path: usize, cell: usize, ahead: bool) {
+        let (bbox, window) = (self.paths.bbox(path, ahead), self.paths.window(path, ahead));
+        self.piece(path, cell, bbox, window, ahead);
+    }
+
+    #[inline(always)]
+    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window, ahead: bool) {
+        // Every read of the path before the first store: a store could be to the table the
+        // reads go through, as far as the compiler knows, and it read the proxies' length and
+        // checked the index again after each.
+        let (body, stamp) = self.paths.owner(path, ahead);
+        let state = self.paths.state(path, ahead);
         let next = &mut self.next_slot[cell - self.lowest];
         let slot = *next as usize;
         *next += 1;
         let k = slot - self.first_slot;
-        let (body, stamp) = self.paths.owner(path);
         self.owners[k] = Owner { body, stamp, window };
         self.boxes.set(k, bbox);
-        self.motions[k] = *self.paths.state(path);
-    }
-}
-
-/// What a window's start bins: every proxy (path `i` of body `i`), then each foreseen path (path
-/// `slots + k` of `foreseen[k]`), each a path of its own with its owner's body, stamp and state.
-#[derive(Clone, Copy)]
-struct BinnedPaths<'a> {
-    proxies: Proxies<'a>,
-    foreseen: &'a [Foreseen],
-}
-
-impl<'a> BinnedPaths<'a> {
-    #[inline(always)]
-    fn len(&self) -> usize {
-        self.proxies.slots() + self.foreseen.len()
-    }
-
-    /// The foreseen path `i` is, if it is one.
-    #[inline(always)]
-    fn foreseen(&self, i: usize) -> Option<&'a Foreseen> {
-        i.checked_sub(self.proxies.slots()).map(|k| &self.foreseen[k])
-    }
-
-    #[inline(always)]
-    fn is_live(&self, i: usize) -> bool {
-        self.proxies.is_live(i) || i >= self.proxies.slots()
-    }
-
-    #[inline(always)]
-    fn path(&self, i: usize) -> Path {
-        self.path_known(i, self.proxies.pull_free())
-    }
-
-    /// [`Self::path`] where `pull_free` is the proxies' [`Proxies::pull_free`].
-    #[inline(always)]
-    fn path_known(&self, i: usize, pull_free: bool) -> Path {
-        match self.foreseen(i) {
-            Some(f) => self.proxies.path_ahead(f.body as usize, &f.state, &f.made.0),
-            None => self.proxies.path_known(i, pull_free),
-        }
-    }
-
-    #[inline(always)]
-    fn bbox(&self, i: usize) -> CompactBox {
-        self.foreseen(i).map_or_else(|| self.proxies.bbox(i), |f| f.made.0.bbox)
-    }
-
-    #[inline(always)]
-    fn window(&self, i: usize) -> Window {
-        self.foreseen(i).map_or_else(|| self.proxies.window_of(i), |f| Window::new(f.made.0.start, f.made.0.end))
-    }
-
-    /// The body and stamp path `i`'s pieces are entered with.
-    #[inline(always)]
-    fn owner(&self, i: usize) -> (u32, u32) {
-        self.foreseen(i).map_or_else(|| (i as u32, self.proxies.stamp(i)), |f| (f.body, f.stamp))
-    }
-
-    #[inline(always)]
-    fn state(&self, i: usize) -> &'a BodyState {
-        self.foreseen(i).map_or_else(|| self.proxies.state(i), |f| &f.state)
+        self.motions[k] = *state;
     }
 }
 
@@ -350,7 +310,8 @@ impl Grid {
     }
 
     /// Hands `sink` the path, cell, box and window of every piece, in path order, whose cell
-    /// (numbered across levels) is in `owned`, per the paths' `plan`.
+    /// (numbered across levels) is in `owned`, per the paths' `plan`: the proxies' first, then
+    /// the foreseen paths', each in a loop of its own that knows which it reads.
     #[inline(always)]
     fn for_each_owned_piece(
         levels: &[Level],
@@ -359,29 +320,47 @@ impl Grid {
         owned: std::ops::Range<usize>,
         sink: &mut impl PieceSink,
     ) {
-        for (i, &(count, level_or_cell)) in plan.iter().enumerate() {
+        let slots = paths.proxies.slots();
+        Grid::for_each_owned_piece_of::<false>(levels, &plan[..slots], 0, paths, owned.clone(), sink);
+        Grid::for_each_owned_piece_of::<true>(levels, &plan[slots..], slots, paths, owned, sink);
+    }
+
+    /// [`Self::for_each_owned_piece`] of the paths from `first` on, the `plan` of each, all
+    /// foreseen ones when `AHEAD` and all proxies when not. A constant of the type rather than an
+    /// argument: the compiler made one loop of the two calls, the flag read back for each piece.
+    #[inline(always)]
+    fn for_each_owned_piece_of<const AHEAD: bool>(
+        levels: &[Level],
+        plan: &[(u32, u32)],
+        first: usize,
+        paths: BinnedPaths,
+        owned: std::ops::Range<usize>,
+        sink: &mut impl PieceSink,
+    ) {
+        for (k, &(count, level_or_cell)) in plan.iter().enumerate() {
+            let i = first + k;
             if count == 0 {
                 continue;
             }
             if count == 1 {
                 let cell = level_or_cell as usize;
                 if owned.contains(&cell) {
-                    sink.piece(i, cell, paths.bbox(i), paths.window(i));
+                    sink.whole(i, cell, AHEAD);
                 }
                 continue;
             }
             let level = &levels[level_or_cell as usize];
             // The pieces' low corners lie in the path's box, so their cells lie between the
             // cells of its corners: cells are numbered in x, then y, then z order.
-            let (low, high) = paths.bbox(i).corners();
+            let (low, high) = paths.bbox(i, AHEAD).corners();
             let (first, last) = (level.index(level.coordinates(low)), level.index(level.coordinates(high)));
             if level.cells_before + last < owned.start || level.cells_before + first >= owned.end {
                 continue;
             }
-            Grid::for_each_piece(paths.proxies, &paths.path(i), count, |bbox, window| {
+            Grid::for_each_piece(paths.proxies, &paths.path(i, AHEAD), count, |bbox, window| {
                 let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
                 if owned.contains(&cell) {
-                    sink.piece(i, cell, bbox, window);
+                    sink.piece(i, cell, bbox, window, AHEAD);
                 }
             });
         }
@@ -555,41 +534,23 @@ impl Grid {
         let rule = self.piece_rule();
         // Whether the paths bend, asked once a pass rather than once a path. The loop is written
         // once for each answer, a constant within it: one loop over `pull_free` itself read 1.8 %
-        // more instructions a detect frame (BENCHMARKS.md, twenty-first session's review).
+        // more instructions a detect frame (BENCHMARKS.md, twenty-first session's review). Each
+        // answer a constant of the loop's type, as is whether it goes through proxies or foreseen
+        // paths: two calls of one closure, each with a constant, were compiled as one loop that
+        // read the flag back for every path (BENCHMARKS.md, twenty-second session).
         let pull_free = proxies.pull_free();
         let counted = workers.chunks_mut(&mut plan, |offset, chunk| {
-            let mut per_exponent: Vec<(i32, usize)> = Vec::new();
-            // The pieces of the paths since the exponent last changed (most paths share one),
-            // added to the list when it changes: the list is searched once a run, not once a path.
-            let mut run: Option<(i32, usize)> = None;
-            let mut plan_chunk = |pull_free: bool| {
-                for (k, plan) in chunk.iter_mut().enumerate() {
-                    let i = offset + k;
-                    if !paths.is_live(i) {
-                        continue;
-                    }
-                    let (count, exponent) = rule.plan(&paths.path_known(i, pull_free));
-                    *plan = (count, exponent as u32);
-                    match &mut run {
-                        Some((e, n)) if *e == exponent => *n += count as usize,
-                        _ => {
-                            if let Some(ended) = run {
-                                add_pieces(&mut per_exponent, ended);
-                            }
-                            run = Some((exponent, count as usize));
-                        }
-                    }
-                }
-            };
+            let mut pass = PlanPass::new(rule, paths);
+            // The chunk's proxies, then its foreseen paths.
+            let (own, ahead) = chunk.split_at_mut(paths.proxies.slots().saturating_sub(offset).min(chunk.len()));
             if pull_free {
-                plan_chunk(true);
+                pass.plan::<true, false>(offset, own);
+                pass.plan::<true, true>(offset + own.len(), ahead);
             } else {
-                plan_chunk(false);
+                pass.plan::<false, false>(offset, own);
+                pass.plan::<false, true>(offset + own.len(), ahead);
             }
-            if let Some(ended) = run {
-                add_pieces(&mut per_exponent, ended);
-            }
-            per_exponent
+            pass.per_exponent()
         });
         let mut per_exponent = std::mem::take(&mut self.per_exponent);
         per_exponent.clear();
@@ -630,7 +591,8 @@ impl Grid {
                 }
                 if entry.0 == 1 {
                     let level = &levels[entry.1 as usize];
-                    let cell = level.index(level.coordinates(paths.bbox(offset + k).corners().0));
+                    let i = offset + k;
+                    let cell = level.index(level.coordinates(paths.bbox(i, paths.is_ahead(i)).corners().0));
                     entry.1 = (level.cells_before + cell) as u32;
                 }
             }

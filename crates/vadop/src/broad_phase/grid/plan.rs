@@ -1,7 +1,10 @@
-//! How the grid plans a window's paths before it bins them: how many pieces each path is cut into
-//! and which level they fit ([`PieceRule`]), and the pieces per level exponent.
+//! How the grid plans a window's paths before it bins them: the paths it bins ([`BinnedPaths`]),
+//! how many pieces each path is cut into and which level they fit ([`PieceRule`]), and the pieces
+//! per level exponent ([`PlanPass`]).
 
-use crate::broad_phase::proxy::{Path, RELATIVE_PADDING};
+use crate::bodies::BodyState;
+use crate::broad_phase::proxy::{CompactBox, Foreseen, Path, Proxies, RELATIVE_PADDING};
+use crate::window::Window;
 
 /// What cutting a path into pieces reads of the grid: its base cell and the largest side of the
 /// box. Copied out of it, so a pass over every path keeps them in registers rather than reading
@@ -54,6 +57,120 @@ impl PieceRule {
             exponent += 1;
         }
         exponent
+    }
+}
+
+/// What a window's start bins: every proxy (path `i` of body `i`), then each foreseen path (path
+/// `slots + k` of `foreseen[k]`), each a path of its own with its owner's body, stamp and state.
+#[derive(Clone, Copy)]
+pub(super) struct BinnedPaths<'a> {
+    pub(super) proxies: Proxies<'a>,
+    pub(super) foreseen: &'a [Foreseen],
+}
+
+impl<'a> BinnedPaths<'a> {
+    #[inline(always)]
+    pub(super) fn len(&self) -> usize {
+        self.proxies.slots() + self.foreseen.len()
+    }
+
+    /// True when path `i` is a foreseen one: what each read below takes as `ahead`. A loop over
+    /// the proxies alone or the foreseen paths alone passes a constant instead, and its reads
+    /// then ask nothing.
+    #[inline(always)]
+    pub(super) fn is_ahead(&self, i: usize) -> bool {
+        i >= self.proxies.slots()
+    }
+
+    /// The foreseen path `i` is, if it is one (`ahead`).
+    #[inline(always)]
+    pub(super) fn foreseen(&self, i: usize, ahead: bool) -> Option<&'a Foreseen> {
+        ahead.then(|| &self.foreseen[i - self.proxies.slots()])
+    }
+
+    #[inline(always)]
+    pub(super) fn path(&self, i: usize, ahead: bool) -> Path {
+        self.path_known(i, self.proxies.pull_free(), ahead)
+    }
+
+    /// [`Self::path`] where `pull_free` is the proxies' [`Proxies::pull_free`].
+    #[inline(always)]
+    pub(super) fn path_known(&self, i: usize, pull_free: bool, ahead: bool) -> Path {
+        match self.foreseen(i, ahead) {
+            Some(f) => self.proxies.path_ahead(f.body as usize, &f.state, &f.made.0),
+            None => self.proxies.path_known(i, pull_free),
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn bbox(&self, i: usize, ahead: bool) -> CompactBox {
+        self.foreseen(i, ahead).map_or_else(|| self.proxies.bbox(i), |f| f.made.0.bbox)
+    }
+
+    #[inline(always)]
+    pub(super) fn window(&self, i: usize, ahead: bool) -> Window {
+        self.foreseen(i, ahead).map_or_else(|| self.proxies.window_of(i), |f| Window::new(f.made.0.start, f.made.0.end))
+    }
+
+    /// The body and stamp path `i`'s pieces are entered with.
+    #[inline(always)]
+    pub(super) fn owner(&self, i: usize, ahead: bool) -> (u32, u32) {
+        self.foreseen(i, ahead).map_or_else(|| (i as u32, self.proxies.stamp(i)), |f| (f.body, f.stamp))
+    }
+
+    #[inline(always)]
+    pub(super) fn state(&self, i: usize, ahead: bool) -> &'a BodyState {
+        self.foreseen(i, ahead).map_or_else(|| self.proxies.state(i), |f| &f.state)
+    }
+}
+
+/// Pass 1 of the binning over a chunk of the paths: each path's piece count and level exponent,
+/// and the pieces per exponent.
+pub(super) struct PlanPass<'a> {
+    rule: PieceRule,
+    paths: BinnedPaths<'a>,
+    per_exponent: Vec<(i32, usize)>,
+    /// The pieces of the paths since the exponent last changed (most paths share one), added to
+    /// the list when it changes: the list is searched once a run, not once a path.
+    run: Option<(i32, usize)>,
+}
+
+impl<'a> PlanPass<'a> {
+    /// A pass over `paths` cut by `rule`, no path planned yet.
+    pub(super) fn new(rule: PieceRule, paths: BinnedPaths<'a>) -> PlanPass<'a> {
+        PlanPass { rule, paths, per_exponent: Vec::new(), run: None }
+    }
+
+    /// Plans the paths `offset..offset + chunk.len()` into `chunk`: all foreseen ones when
+    /// `AHEAD`, all proxies when not, under no pull when `PULL_FREE` (the proxies' own answer).
+    #[inline(always)]
+    pub(super) fn plan<const PULL_FREE: bool, const AHEAD: bool>(&mut self, offset: usize, chunk: &mut [(u32, u32)]) {
+        let (rule, paths) = (self.rule, self.paths);
+        for (k, plan) in chunk.iter_mut().enumerate() {
+            let i = offset + k;
+            if !AHEAD && !paths.proxies.is_live(i) {
+                continue;
+            }
+            let (count, exponent) = rule.plan(&paths.path_known(i, PULL_FREE, AHEAD));
+            *plan = (count, exponent as u32);
+            match &mut self.run {
+                Some((e, n)) if *e == exponent => *n += count as usize,
+                _ => {
+                    if let Some(ended) = self.run {
+                        add_pieces(&mut self.per_exponent, ended);
+                    }
+                    self.run = Some((exponent, count as usize));
+                }
+            }
+        }
+    }
+
+    /// The pieces per exponent of the paths planned.
+    pub(super) fn per_exponent(mut self) -> Vec<(i32, usize)> {
+        if let Some(ended) = self.run {
+            add_pieces(&mut self.per_exponent, ended);
+        }
+        self.per_exponent
     }
 }
 
