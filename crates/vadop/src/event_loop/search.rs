@@ -406,15 +406,14 @@ impl<'a> Search<'a> {
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
-            let group: [(usize, usize); 4] = std::array::from_fn(|lane| lists::split(members[k + lane]));
-            let origins = group.map(|(_, image)| own.position - lists.images[image]);
-            let four = screen_four(own, group.map(|(q, _)| &states[q]), origins, bound);
+            let group = members[k..k + 4].try_into().expect("four members");
+            let four = screen_listed(own, states, group, &lists.images, bound);
             let mut left = four.left;
             while left != 0 {
                 let lane = left.trailing_zeros() as usize;
                 left &= left - 1;
                 if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    let (q, image) = group[lane];
+                    let (q, image) = lists::split(group[lane]);
                     candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
                 }
             }
@@ -451,23 +450,19 @@ impl<'a> Search<'a> {
         // Through a slice: its length stays in a register, where the `Vec`'s is read again
         // after every write into it.
         let candidates = &mut self.candidates[..];
-        // Four at a time in lanes (see `screen_four`), the steps that depend on the bound then
+        // Four at a time in lanes (see `screen_group`), the steps that depend on the bound then
         // for the lanes left, in order: every bound and result is the scalar screen's.
         let grouped = if lanes() { candidates.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
-            let group = [candidates[k], candidates[k + 1], candidates[k + 2], candidates[k + 3]];
-            let four = screen_four(
-                own,
-                group.map(|c| &states[c.q as usize]),
-                group.map(|c| origins[c.cell as usize & 31]),
-                bound,
-            );
+            let group = candidates[k..k + 4].try_into().expect("four candidates");
+            let four = screen_group(own, states, group, origins, bound);
             let mut left = four.left;
             while left != 0 {
                 let lane = left.trailing_zeros() as usize;
                 left &= left - 1;
                 if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    candidates[kept] = Candidate { earliest, ..group[lane] };
+                    // `kept` is at most `k + lane`: the entry is read before it is written over.
+                    candidates[kept] = Candidate { earliest, ..candidates[k + lane] };
                     kept += 1;
                 }
             }
@@ -613,7 +608,7 @@ fn bounded(
     Some(earliest)
 }
 
-/// True when [`screen`] can run four partners at a time (see [`screen_four`]).
+/// True when [`screen`] can run four partners at a time (see [`screen_lanes`]).
 #[inline]
 fn lanes() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -622,7 +617,7 @@ fn lanes() -> bool {
     return false;
 }
 
-/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
+/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_lanes`]).
 #[derive(Debug, Default, Clone, Copy)]
 struct Four {
     /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
@@ -653,31 +648,92 @@ impl Four {
     }
 }
 
+/// [`screen`] of four gathered partners of `own` (`group`, four candidates in a row) up to its
+/// steps that depend on the bound, `bound` as it stands before the first (see [`screen_lanes`]).
+/// Each is read from `states`, and its origin from `origins` by its cell, inside the lanes'
+/// function: copied into arrays to be handed over, the records and origins cost a group about a
+/// third as many instructions again as the screen. Asked only where [`lanes`] holds.
+#[inline]
+fn screen_group(own: &Own, states: &[BodyState], group: &[Candidate; 4], origins: &[DVec3; 32], bound: f64) -> Four {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_group_avx(own, states, group, origins, bound) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, group, origins, bound);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_group`] of four members of a list in a row (`group`, see [`lists::split`]), read from
+/// `states` and their origins worked out from `images` inside the lanes' function, as in
+/// [`screen_group`]. Asked only where [`lanes`] holds.
+#[inline]
+fn screen_listed(own: &Own, states: &[BodyState], group: &[u32; 4], images: &[DVec3; 27], bound: f64) -> Four {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_listed_avx(own, states, group, images, bound) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, group, images, bound);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_listed`] in AVX's four-wide registers (to be called only where the processor has AVX).
+/// A lane's origin is `own`'s centre less its image's sides, component by component, as the
+/// scalar screen's `DVec3` subtraction: the same floats.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn screen_listed_avx(own: &Own, states: &[BodyState], group: &[u32; 4], images: &[DVec3; 27], bound: f64) -> Four {
+    use std::arch::x86_64::{_mm256_set1_pd, _mm256_set_pd, _mm256_sub_pd};
+    let split = group.map(lists::split);
+    let image = |lane: usize| &images[split[lane].1];
+    let columns = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(image(3)), f(image(2)), f(image(1)), f(image(0)));
+    let origins = [
+        _mm256_sub_pd(_mm256_set1_pd(own.position.x), columns(|o| o.x)),
+        _mm256_sub_pd(_mm256_set1_pd(own.position.y), columns(|o| o.y)),
+        _mm256_sub_pd(_mm256_set1_pd(own.position.z), columns(|o| o.z)),
+    ];
+    screen_lanes(own, split.map(|(q, _)| &states[q]), origins, bound)
+}
+
+/// [`screen_group`] in AVX's four-wide registers (to be called only where the processor has AVX).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn screen_group_avx(
+    own: &Own,
+    states: &[BodyState],
+    group: &[Candidate; 4],
+    origins: &[DVec3; 32],
+    bound: f64,
+) -> Four {
+    let origin = |lane: usize| &origins[group[lane].cell as usize & 31];
+    let columns =
+        |f: fn(&DVec3) -> f64| std::arch::x86_64::_mm256_set_pd(f(origin(3)), f(origin(2)), f(origin(1)), f(origin(0)));
+    let origins = [columns(|o| o.x), columns(|o| o.y), columns(|o| o.z)];
+    screen_lanes(own, std::array::from_fn(|lane| &states[group[lane].q as usize]), origins, bound)
+}
+
 /// [`screen`] of four partners of `own` (their states, and the origins their offsets are taken
-/// from) up to its steps that depend on the bound, `bound` as it stands before the first.
-/// Asked only where [`lanes`] holds.
+/// from, x, y and z each in one register, lane `k` the `k`-th partner's) up to its steps that
+/// depend on the bound, `bound` as it stands before the first: [`screen_group_avx`]'s and
+/// [`screen_listed_avx`]'s lanes.
 ///
 /// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
 /// (AVX alone; division and square root are correctly rounded in both), so its floats are the
 /// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
 /// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
 /// would meet later in the search.
-#[inline]
-fn screen_four(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f64) -> Four {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: asked only where `lanes` found AVX.
-    return unsafe { screen_four_avx(own, states, origins, bound) };
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (own, states, origins, bound);
-        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
-    }
-}
-
-/// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-fn screen_four_avx(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f64) -> Four {
+#[inline]
+fn screen_lanes(
+    own: &Own,
+    states: [&BodyState; 4],
+    [origin_x, origin_y, origin_z]: [std::arch::x86_64::__m256d; 3],
+    bound: f64,
+) -> Four {
     use crate::narrow_phase::spheres::state_columns;
     use std::arch::x86_64::*;
     let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
@@ -692,12 +748,11 @@ fn screen_four_avx(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], boun
     let mask = |x| _mm256_movemask_pd(x) as u32;
     // A negation flips the sign bit alone, as the scalar `-x` does.
     let negated = |x| _mm256_xor_pd(x, one(-0.0));
-    let lane = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(&origins[3]), f(&origins[2]), f(&origins[1]), f(&origins[0]));
     // `screen`, line by line.
     let dt = sub(one(own.now), since);
-    let ox = sub(add(px, mul(dt, vx)), lane(|o| o.x));
-    let oy = sub(add(py, mul(dt, vy)), lane(|o| o.y));
-    let oz = sub(add(pz, mul(dt, vz)), lane(|o| o.z));
+    let ox = sub(add(px, mul(dt, vx)), origin_x);
+    let oy = sub(add(py, mul(dt, vy)), origin_y);
+    let oz = sub(add(pz, mul(dt, vz)), origin_z);
     let (rx, ry, rz) = (sub(vx, one(own.velocity.x)), sub(vy, one(own.velocity.y)), sub(vz, one(own.velocity.z)));
     let approach = add(add(mul(ox, rx), mul(oy, ry)), mul(oz, rz));
     let d2 = add(add(mul(ox, ox), mul(oy, oy)), mul(oz, oz));
@@ -770,8 +825,8 @@ mod tests {
         }
     }
 
-    /// The lanes' answers, taken in order with the bound as the scalar screen leaves it, are the
-    /// scalar screen's to the bit: every answer and every bound, for random partners near and
+    /// The lanes' answers (for gathered partners and for a list's members), taken in order with
+    /// the bound as the scalar screen leaves it, are the scalar screen's to the bit: every answer and every bound, for random partners near and
     /// far, approaching and parting, touching, grazing (their paths' closest approach within a
     /// hair of the reach), and with NaN, infinities, zeros of either sign and tiny numbers.
     #[test]
@@ -806,14 +861,27 @@ mod tests {
                 BodyState { motion: Motion { position, since, velocity }, radius: 0.5 }
             };
             let states: [BodyState; 4] = std::array::from_fn(|_| partner(&mut rng));
-            let origins: [DVec3; 4] =
-                std::array::from_fn(|_| own.position - DVec3::X * rng.random_range(-1..=1) as f64);
+            // Each lane through an image of its own (as a list's members are met), its origin
+            // `own`'s centre less that image's sides (as both searches take it).
+            let images: [DVec3; 27] = std::array::from_fn(|_| DVec3::X * rng.random_range(-1..=1) as f64);
+            let image_of: [u32; 4] = std::array::from_fn(|_| rng.random_range(0..27));
+            let mut origins = [DVec3::ZERO; 32];
+            for (origin, &image) in origins.iter_mut().zip(&image_of) {
+                *origin = own.position - images[image as usize];
+            }
+            let group: [Candidate; 4] =
+                std::array::from_fn(|k| Candidate { earliest: 0.0, q: k as u32, cell: k as u8 });
+            let members: [u32; 4] = std::array::from_fn(|k| k as u32 | image_of[k] << lists::IMAGE_BITS);
             let start = match round % 4 {
                 0 => f64::INFINITY,
                 _ => rng.random_range(0.0..3.0),
             };
-            let (mut scalar_bound, mut lanes_bound) = (start, start);
-            let four = screen_four(&own, states.each_ref(), origins, start);
+            let mut scalar_bound = start;
+            let fours = [
+                screen_group(&own, &states, &group, &origins, start),
+                screen_listed(&own, &states, &members, &images, start),
+            ];
+            let mut lanes_bounds = [start; 2];
             for lane in 0..4 {
                 let before = scalar_bound;
                 let scalar = screen(&own, &states[lane], origins[lane], &mut scalar_bound);
@@ -823,13 +891,14 @@ mod tests {
                     Some(_) if scalar_bound == before => 2,
                     Some(_) => 3,
                 }] += 1;
-                let in_lanes =
-                    if four.left & (1 << lane) != 0 { four.lane(lane, &own, &mut lanes_bound) } else { None };
-                assert_eq!(
-                    (scalar.map(f64::to_bits), scalar_bound.to_bits()),
-                    (in_lanes.map(f64::to_bits), lanes_bound.to_bits()),
-                    "round {round}, lane {lane}"
-                );
+                for (four, lanes_bound) in fours.iter().zip(&mut lanes_bounds) {
+                    let in_lanes = if four.left & (1 << lane) != 0 { four.lane(lane, &own, lanes_bound) } else { None };
+                    assert_eq!(
+                        (scalar.map(f64::to_bits), scalar_bound.to_bits()),
+                        (in_lanes.map(f64::to_bits), lanes_bound.to_bits()),
+                        "round {round}, lane {lane}"
+                    );
+                }
             }
         }
         assert!(met.iter().all(|&n| n > 100), "every outcome met: {met:?}");
