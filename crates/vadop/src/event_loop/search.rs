@@ -407,7 +407,7 @@ impl<'a> Search<'a> {
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
             let group = members[k..k + 4].try_into().expect("four members");
-            let four = screen_listed(own, states, group, &lists.images, bound);
+            let four = screen_four(own, states, &Listed { group, images: &lists.images, centre: own.position }, bound);
             let mut left = four.left;
             while left != 0 {
                 let lane = left.trailing_zeros() as usize;
@@ -450,12 +450,12 @@ impl<'a> Search<'a> {
         // Through a slice: its length stays in a register, where the `Vec`'s is read again
         // after every write into it.
         let candidates = &mut self.candidates[..];
-        // Four at a time in lanes (see `screen_group`), the steps that depend on the bound then
+        // Four at a time in lanes (see `screen_four`), the steps that depend on the bound then
         // for the lanes left, in order: every bound and result is the scalar screen's.
         let grouped = if lanes() { candidates.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
             let group = candidates[k..k + 4].try_into().expect("four candidates");
-            let four = screen_group(own, states, group, origins, bound);
+            let four = screen_four(own, states, &Gathered { group, origins }, bound);
             let mut left = four.left;
             while left != 0 {
                 let lane = left.trailing_zeros() as usize;
@@ -608,7 +608,7 @@ fn bounded(
     Some(earliest)
 }
 
-/// True when [`screen`] can run four partners at a time (see [`screen_lanes`]).
+/// True when [`screen`] can run four partners at a time (see [`screen_four`]).
 #[inline]
 fn lanes() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -617,7 +617,7 @@ fn lanes() -> bool {
     return false;
 }
 
-/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_lanes`]).
+/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
 #[derive(Debug, Default, Clone, Copy)]
 struct Four {
     /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
@@ -648,94 +648,74 @@ impl Four {
     }
 }
 
-/// [`screen`] of four gathered partners of `own` (`group`, four candidates in a row) up to its
-/// steps that depend on the bound, `bound` as it stands before the first (see [`screen_lanes`]).
-/// Each is read from `states`, and its origin from `origins` by its cell, inside the lanes'
-/// function: copied into arrays to be handed over, the records and origins cost a group about a
-/// third as many instructions again as the screen. Asked only where [`lanes`] holds.
-#[inline]
-fn screen_group(own: &Own, states: &[BodyState], group: &[Candidate; 4], origins: &[DVec3; 32], bound: f64) -> Four {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: asked only where `lanes` found AVX.
-    return unsafe { screen_group_avx(own, states, group, origins, bound) };
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (own, states, group, origins, bound);
-        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+/// Four partners of a search in a row, as the lanes read them: each one's body and the origin
+/// its offset is taken from.
+trait Partners {
+    fn partner(&self, lane: usize) -> (usize, DVec3);
+}
+
+/// Four gathered partners (candidates in a row), each with the origin of its cell.
+struct Gathered<'a> {
+    group: &'a [Candidate; 4],
+    origins: &'a [DVec3; 32],
+}
+
+impl Partners for Gathered<'_> {
+    #[inline(always)]
+    fn partner(&self, lane: usize) -> (usize, DVec3) {
+        let c = self.group[lane];
+        (c.q as usize, self.origins[c.cell as usize & 31])
     }
 }
 
-/// [`screen_group`] of four members of a list in a row (`group`, see [`lists::split`]), read from
-/// `states` and their origins worked out from `images` inside the lanes' function, as in
-/// [`screen_group`]. Asked only where [`lanes`] holds.
-#[inline]
-fn screen_listed(own: &Own, states: &[BodyState], group: &[u32; 4], images: &[DVec3; 27], bound: f64) -> Four {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: asked only where `lanes` found AVX.
-    return unsafe { screen_listed_avx(own, states, group, images, bound) };
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (own, states, group, images, bound);
-        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+/// Four members of a list in a row (see [`lists::split`]), each with the origin of its image:
+/// `centre`, the searching body's, less the image's sides (as the scalar screen takes it).
+struct Listed<'a> {
+    group: &'a [u32; 4],
+    images: &'a [DVec3; 27],
+    centre: DVec3,
+}
+
+impl Partners for Listed<'_> {
+    #[inline(always)]
+    fn partner(&self, lane: usize) -> (usize, DVec3) {
+        let (q, image) = lists::split(self.group[lane]);
+        (q, self.centre - self.images[image])
     }
 }
 
-/// [`screen_listed`] in AVX's four-wide registers (to be called only where the processor has AVX).
-/// A lane's origin is `own`'s centre less its image's sides, component by component, as the
-/// scalar screen's `DVec3` subtraction: the same floats.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn screen_listed_avx(own: &Own, states: &[BodyState], group: &[u32; 4], images: &[DVec3; 27], bound: f64) -> Four {
-    use std::arch::x86_64::{_mm256_set1_pd, _mm256_set_pd, _mm256_sub_pd};
-    let split = group.map(lists::split);
-    let image = |lane: usize| &images[split[lane].1];
-    let columns = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(image(3)), f(image(2)), f(image(1)), f(image(0)));
-    let origins = [
-        _mm256_sub_pd(_mm256_set1_pd(own.position.x), columns(|o| o.x)),
-        _mm256_sub_pd(_mm256_set1_pd(own.position.y), columns(|o| o.y)),
-        _mm256_sub_pd(_mm256_set1_pd(own.position.z), columns(|o| o.z)),
-    ];
-    screen_lanes(own, split.map(|(q, _)| &states[q]), origins, bound)
-}
-
-/// [`screen_group`] in AVX's four-wide registers (to be called only where the processor has AVX).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn screen_group_avx(
-    own: &Own,
-    states: &[BodyState],
-    group: &[Candidate; 4],
-    origins: &[DVec3; 32],
-    bound: f64,
-) -> Four {
-    let origin = |lane: usize| &origins[group[lane].cell as usize & 31];
-    let columns =
-        |f: fn(&DVec3) -> f64| std::arch::x86_64::_mm256_set_pd(f(origin(3)), f(origin(2)), f(origin(1)), f(origin(0)));
-    let origins = [columns(|o| o.x), columns(|o| o.y), columns(|o| o.z)];
-    screen_lanes(own, std::array::from_fn(|lane| &states[group[lane].q as usize]), origins, bound)
-}
-
-/// [`screen`] of four partners of `own` (their states, and the origins their offsets are taken
-/// from, x, y and z each in one register, lane `k` the `k`-th partner's) up to its steps that
-/// depend on the bound, `bound` as it stands before the first: [`screen_group_avx`]'s and
-/// [`screen_listed_avx`]'s lanes.
+/// [`screen`] of four partners of `own` up to its steps that depend on the bound, `bound` as it
+/// stands before the first. Asked only where [`lanes`] holds.
+///
+/// The partners' records (from `states`) and origins are read inside the lanes' function, one
+/// function for every kind of partners: copied into arrays to be handed over, they cost a group
+/// about a third as many instructions again as the screen.
 ///
 /// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
 /// (AVX alone; division and square root are correctly rounded in both), so its floats are the
 /// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
 /// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
 /// would meet later in the search.
+#[inline]
+fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_four_avx(own, states, partners, bound) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, partners, bound);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-#[inline]
-fn screen_lanes(
-    own: &Own,
-    states: [&BodyState; 4],
-    [origin_x, origin_y, origin_z]: [std::arch::x86_64::__m256d; 3],
-    bound: f64,
-) -> Four {
+fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     use crate::narrow_phase::spheres::state_columns;
     use std::arch::x86_64::*;
+    let picked: [(usize, DVec3); 4] = std::array::from_fn(|lane| partners.partner(lane));
+    let states = picked.map(|(q, _)| &states[q]);
     let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
     let one = |value: f64| _mm256_set1_pd(value);
     let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
@@ -748,11 +728,12 @@ fn screen_lanes(
     let mask = |x| _mm256_movemask_pd(x) as u32;
     // A negation flips the sign bit alone, as the scalar `-x` does.
     let negated = |x| _mm256_xor_pd(x, one(-0.0));
+    let lane = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(&picked[3].1), f(&picked[2].1), f(&picked[1].1), f(&picked[0].1));
     // `screen`, line by line.
     let dt = sub(one(own.now), since);
-    let ox = sub(add(px, mul(dt, vx)), origin_x);
-    let oy = sub(add(py, mul(dt, vy)), origin_y);
-    let oz = sub(add(pz, mul(dt, vz)), origin_z);
+    let ox = sub(add(px, mul(dt, vx)), lane(|o| o.x));
+    let oy = sub(add(py, mul(dt, vy)), lane(|o| o.y));
+    let oz = sub(add(pz, mul(dt, vz)), lane(|o| o.z));
     let (rx, ry, rz) = (sub(vx, one(own.velocity.x)), sub(vy, one(own.velocity.y)), sub(vz, one(own.velocity.z)));
     let approach = add(add(mul(ox, rx), mul(oy, ry)), mul(oz, rz));
     let d2 = add(add(mul(ox, ox), mul(oy, oy)), mul(oz, oz));
@@ -878,8 +859,8 @@ mod tests {
             };
             let mut scalar_bound = start;
             let fours = [
-                screen_group(&own, &states, &group, &origins, start),
-                screen_listed(&own, &states, &members, &images, start),
+                screen_four(&own, &states, &Gathered { group: &group, origins: &origins }, start),
+                screen_four(&own, &states, &Listed { group: &members, images: &images, centre: own.position }, start),
             ];
             let mut lanes_bounds = [start; 2];
             for lane in 0..4 {
