@@ -52,7 +52,7 @@ use ahead::{Marks, Mirror, Worked, Worker};
 use calendar::{Calendar, Entry, Events};
 use cells::{Cells, Crossing, NONE};
 use lists::Lists;
-use search::{Candidate, Eligible, Near, Overlay, Search};
+use search::{Candidates, Eligible, Near, Overlay, Search};
 use std::time::Instant;
 
 /// The parallel loop runs from this many threads on. Its thread that handles the events in order
@@ -95,7 +95,7 @@ pub(crate) struct EventLoop {
     cluster: Cluster,
     /// Scratch: the members of the cluster last frozen; a search's candidates.
     members: Vec<u32>,
-    candidates: Vec<Candidate>,
+    candidates: Candidates,
     near: Box<Near>,
     /// Per slot: the body was entered and not removed since.
     held: Vec<bool>,
@@ -151,7 +151,7 @@ impl EventLoop {
             impacts: Impacts::default(),
             cluster: Cluster::default(),
             members: Vec::new(),
-            candidates: Vec::new(),
+            candidates: Candidates::default(),
             near: Box::default(),
             held: Vec::new(),
             listed: 0,
@@ -203,7 +203,7 @@ impl EventLoop {
             + (self.worked.capacity() + self.worked_ahead.capacity()) * std::mem::size_of::<Worked>()
             + self.owners.capacity() * 4
             + self.mirror.memory_bytes()
-            + self.candidates.capacity() * std::mem::size_of::<Candidate>()
+            + self.candidates.memory_bytes()
             + self.lists.as_ref().map_or(0, Lists::memory_bytes)
     }
 

@@ -96,7 +96,7 @@ pub(super) struct Search<'a> {
     pub screen: bool,
     /// The partners that passed the screen, waiting for their exact tests, and the cells they
     /// came from.
-    pub candidates: &'a mut Vec<Candidate>,
+    pub candidates: &'a mut Candidates,
     pub near: &'a mut Near,
     /// Motions not yet written to the store (see [`Overlay`]).
     pub overlay: Overlay,
@@ -137,6 +137,56 @@ pub(super) struct Candidate {
     /// Its cell among the neighbourhood's (see [`Near`]), or with lists its image (see
     /// [`Lists::images`]).
     cell: u8,
+}
+
+/// The partners a search gathered, then those that passed the screen: the first `len` of a buffer
+/// that only grows. A body gathered is written into its slot with the count kept in a register
+/// along a cell's list, where a `Vec`'s push reads and writes its length through the search at
+/// every body (a tenth of a search's own instructions).
+#[derive(Debug, Default)]
+pub(super) struct Candidates {
+    slots: Vec<Candidate>,
+    len: usize,
+}
+
+impl Candidates {
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.slots.capacity() * std::mem::size_of::<Candidate>()
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// The candidates.
+    #[inline(always)]
+    fn as_mut_slice(&mut self) -> &mut [Candidate] {
+        &mut self.slots[..self.len]
+    }
+
+    /// Writes `candidate` into slot `len`, the buffer grown first when it holds no such slot.
+    #[inline(always)]
+    fn put(&mut self, len: usize, candidate: Candidate) {
+        if len == self.slots.len() {
+            self.grow();
+        }
+        self.slots[len] = candidate;
+    }
+
+    #[inline(always)]
+    fn push(&mut self, candidate: Candidate) {
+        self.put(self.len, candidate);
+        self.len += 1;
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn grow(&mut self) {
+        let none = Candidate { earliest: 0.0, q: NONE, cell: 0 };
+        self.slots.resize((2 * self.slots.len()).max(64), none);
+    }
 }
 
 /// The neighbour cells a search gathered bodies from, each with the whole sides that bring its
@@ -356,17 +406,20 @@ impl<'a> Search<'a> {
         // The candidates' `Vec` reached once, not through the search at every push; and a
         // prefetch, which never faults, without a bounds check.
         let candidates = &mut *self.candidates;
+        let mut len = candidates.len;
         while q != NONE {
             if q as usize != p {
                 if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
                     self.overlay.met = Some((q, k));
                 } else {
                     prefetch_item(states, q as usize);
-                    candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                    candidates.put(len, Candidate { earliest: 0.0, q, cell: k });
+                    len += 1;
                 }
             }
             q = if crowded { cells.after(q) } else { NONE };
         }
+        candidates.len = len;
     }
 
     /// Lists the members new to `own`'s list (see [`Lists::fresh`]) in `self.candidates`, to be
@@ -441,7 +494,7 @@ impl<'a> Search<'a> {
             if let Some((q, cell)) = self.overlay.met.take() {
                 self.candidates.push(Candidate { earliest: 0.0, q, cell });
             }
-            self.candidates.iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
+            self.candidates.as_mut_slice().iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
             return;
         }
         let (states, origins) = (&self.bodies.state[..], &self.near.origins);
@@ -449,7 +502,7 @@ impl<'a> Search<'a> {
         let mut kept = 0;
         // Through a slice: its length stays in a register, where the `Vec`'s is read again
         // after every write into it.
-        let candidates = &mut self.candidates[..];
+        let candidates = self.candidates.as_mut_slice();
         // Four at a time in lanes (see `screen_four`), the steps that depend on the bound then
         // for the lanes left, in order: every bound and result is the scalar screen's.
         let grouped = if lanes() { candidates.len() & !3 } else { 0 };
@@ -474,7 +527,7 @@ impl<'a> Search<'a> {
                 kept += 1;
             }
         }
-        self.candidates.truncate(kept);
+        self.candidates.len = kept;
         // The overlay's body met among the neighbours, by its own motion.
         if let Some((q, k)) = self.overlay.met.take() {
             let state = self.state_of(q as usize);
@@ -489,10 +542,11 @@ impl<'a> Search<'a> {
     #[inline]
     fn test_candidates(&mut self, own: &Own, eligible: Eligible, best: &mut Best) {
         let mut candidates = std::mem::take(self.candidates);
-        if candidates.len() > 1 {
-            candidates.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
+        let tested = candidates.as_mut_slice();
+        if tested.len() > 1 {
+            tested.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
         }
-        for c in &candidates {
+        for c in &*tested {
             if c.earliest > best.horizon {
                 break;
             }
