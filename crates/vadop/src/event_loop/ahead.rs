@@ -20,7 +20,7 @@
 
 use super::calendar::{Calendar, Entry, Events};
 use super::cells::{Cells, Crossing, NONE};
-use super::search::{Candidate, Eligible, Near, Overlay, Search};
+use super::search::{Candidates, Eligible, Near, Overlay, Search};
 use crate::bodies::{Bodies, BodyState, BodyTag};
 use crate::event_queue::{Event, Partner};
 use crate::frame::Physics;
@@ -82,7 +82,7 @@ pub(super) struct Pushed {
 /// A worker's scratch, and what it counts.
 #[derive(Debug, Default)]
 pub(super) struct Worker {
-    candidates: Vec<Candidate>,
+    candidates: Candidates,
     near: Box<Near>,
     /// Exact pair tests made.
     pub tests: u64,

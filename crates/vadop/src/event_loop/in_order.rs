@@ -14,7 +14,7 @@
 
 use super::ahead::{self, Pushed, Worked, CELLS_PER_EVENT, MIN_PER_THREAD, PER_THREAD};
 use super::calendar::{Entry, Events};
-use super::search;
+use super::screen;
 use super::EventLoop;
 use crate::bodies::Bodies;
 use crate::event_queue::Event;
@@ -38,7 +38,7 @@ impl EventLoop {
             (std::mem::take(&mut self.batch), std::mem::take(&mut self.ahead), std::mem::take(&mut self.later));
         let (mut worked, mut worked_ahead) = (std::mem::take(&mut self.worked), std::mem::take(&mut self.worked_ahead));
         let mut workers = std::mem::take(&mut self.workers);
-        let (bounds, screen) = (self.bounds, search::screen_trusted(self.scale, self.min_radius));
+        let (bounds, screen) = (self.bounds, screen::screen_trusted(self.scale, self.min_radius));
         // The events of `batch` from `start` on are still to be committed.
         let (mut start, mut interrupted) = (0, false);
         batch.clear();

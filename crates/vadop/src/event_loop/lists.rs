@@ -37,7 +37,7 @@ use glam::{DVec3, DVec4};
 const REACH_SLACK: f64 = 1e-7;
 const ROUNDINGS: f64 = 16.0;
 /// A list entry holds the body in its low bits and its image (see [`Lists::images`]) above them.
-const IMAGE_BITS: u32 = 27;
+pub(super) const IMAGE_BITS: u32 = 27;
 const BODY_MASK: u32 = (1 << IMAGE_BITS) - 1;
 /// Entries per block a first sizing gives (the count takes one more, so a block is two cache
 /// lines): no list outgrew it in the gas at n = 2e4 and packing 0.4 or 0.45 (see [`SHELL`]);

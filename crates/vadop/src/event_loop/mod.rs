@@ -7,8 +7,8 @@
 //! without gravity: each body's earliest event alone (a contact, a wall contact, a crossing of a
 //! periodic face, or the crossing of its centre into another cell: [`cells`]) is kept in the
 //! calendar ([`calendar`]); a body whose motion changed is tested against the bodies of the 27
-//! cells around it ([`search`]), and a body crossing into a cell against the 9 that came within
-//! reach. In a dense world the serial loop keeps neighbour lists instead ([`lists`], see
+//! cells around it ([`search`], each partner screened first: [`screen`]), and a body crossing
+//! into a cell against the 9 that came within reach. In a dense world the serial loop keeps neighbour lists instead ([`lists`], see
 //! [`Lists::paying`]): a body whose motion changed is tested against its list, and the
 //! crossing of its centre out of its shell replaces the cell crossings: its list is built anew,
 //! and it is tested against the bodies new to it. A body whose scheduled contact was voided by
@@ -38,6 +38,7 @@ mod calendar;
 mod cells;
 mod in_order;
 mod lists;
+mod screen;
 mod search;
 
 use crate::bodies::Bodies;
@@ -52,7 +53,7 @@ use ahead::{Marks, Mirror, Worked, Worker};
 use calendar::{Calendar, Entry, Events};
 use cells::{Cells, Crossing, NONE};
 use lists::Lists;
-use search::{Candidate, Eligible, Near, Overlay, Search};
+use search::{Candidates, Eligible, Near, Overlay, Search};
 use std::time::Instant;
 
 /// The parallel loop runs from this many threads on. Its thread that handles the events in order
@@ -95,7 +96,7 @@ pub(crate) struct EventLoop {
     cluster: Cluster,
     /// Scratch: the members of the cluster last frozen; a search's candidates.
     members: Vec<u32>,
-    candidates: Vec<Candidate>,
+    candidates: Candidates,
     near: Box<Near>,
     /// Per slot: the body was entered and not removed since.
     held: Vec<bool>,
@@ -103,7 +104,7 @@ pub(crate) struct EventLoop {
     listed: usize,
     sized_for: usize,
     /// The largest coordinate of the box, and the smallest radius entered: whether the search's
-    /// screen is trusted (see [`search::screen_trusted`]).
+    /// screen is trusted (see [`screen::screen_trusted`]).
     scale: f64,
     min_radius: f64,
     /// With more than one thread (`threads`), the parallel loop (see [`in_order`]): its workers
@@ -151,7 +152,7 @@ impl EventLoop {
             impacts: Impacts::default(),
             cluster: Cluster::default(),
             members: Vec::new(),
-            candidates: Vec::new(),
+            candidates: Candidates::default(),
             near: Box::default(),
             held: Vec::new(),
             listed: 0,
@@ -203,7 +204,7 @@ impl EventLoop {
             + (self.worked.capacity() + self.worked_ahead.capacity()) * std::mem::size_of::<Worked>()
             + self.owners.capacity() * 4
             + self.mirror.memory_bytes()
-            + self.candidates.capacity() * std::mem::size_of::<Candidate>()
+            + self.candidates.memory_bytes()
             + self.lists.as_ref().map_or(0, Lists::memory_bytes)
     }
 
@@ -318,7 +319,7 @@ impl EventLoop {
 
     /// A search of the cells, its screen on when trusted for the bodies entered so far.
     fn search<'a>(&'a mut self, bodies: &'a Bodies) -> Search<'a> {
-        let screen = search::screen_trusted(self.scale, self.min_radius);
+        let screen = screen::screen_trusted(self.scale, self.min_radius);
         let (candidates, near) = (&mut self.candidates, &mut self.near);
         Search {
             bodies,

@@ -5,17 +5,15 @@
 //! It owns two things. Which events a body may still be given ([`Eligible`]): every one from
 //! now on when its motion is new, or those after the one just handled when it is unchanged (a
 //! contact that pushed nothing), which is how the event queue of the frame pipeline drops a
-//! contact it has handled. And a cheap screen before the exact test: from the two centres at
-//! the current instant, a pair moving apart, missing each other or unable to touch before the
-//! best event found so far is skipped, with margins far wider than the rounding of the screen
-//! (and the screen off in a world whose coordinates are too large for its smallest bodies to
-//! trust them), so the screen never skips a pair the exact test would schedule. The exact test
-//! is the frame pipeline's own: [`contacts::pair_start`] on the lower id's motion and the higher
-//! id's, shifted by whole sides across periodic faces, so every time is canonical and the same
-//! bits as every method's. It never schedules, handles an event or changes a body.
+//! contact it has handled. And the partners it gathers, each screened ([`super::screen`]) before
+//! the exact test, which is the frame pipeline's own: [`contacts::pair_start`] on the lower id's
+//! motion and the higher id's, shifted by whole sides across periodic faces, so every time is
+//! canonical and the same bits as every method's. It never schedules, handles an event or
+//! changes a body.
 
 use super::cells::{Cells, Crossing, Neighbour, NONE};
 use super::lists::{self, Lists};
+use super::screen::{lanes, screen, screen_four, Own, Partners, ROUNDINGS};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::memory::prefetch_item;
@@ -24,30 +22,6 @@ use crate::pipeline::predict::{crossing_event, sphere_wall_event};
 use crate::walls::BoxBounds;
 use crate::window::Window;
 use glam::DVec3;
-
-/// A pair whose approach rate is below this fraction of |offset| |relative velocity| counts as
-/// moving apart (the exact test's own threshold is 1e-12, on the negative side).
-const RECEDING: f64 = 1e-6;
-/// The screen's slack on a gap (relative to the radius sum squared, and to the offset squared)
-/// and on a time bound (relative): all far above its rounding (see [`screen_trusted`]).
-const GAP_SLACK: f64 = 1e-6;
-const OFFSET_SLACK: f64 = 1e-12;
-const TIME_SLACK: f64 = 1e-4;
-/// A pair whose relative speed squared is below this fraction of the sum of the two speeds
-/// squared may be rounding noise to the exact test (its own rule is 10^-12 of the sum of the
-/// speeds): it never bounds the screen.
-const NOISE: f64 = 1e-16;
-/// The screen is trusted when this many roundings of the largest coordinate are within
-/// `1e-11` of the smallest radius.
-const ROUNDINGS: f64 = 16.0;
-const TRUSTED: f64 = 1e-11;
-
-/// True when centres computed at the current instant are accurate enough, in a box whose
-/// coordinates reach `scale`, for the screen's margins to hold for radii of at least `radius`:
-/// their rounding is then below 10^-11 of the smallest radius, the margins at least 10^-6 of it.
-pub(super) fn screen_trusted(scale: f64, radius: f64) -> bool {
-    ROUNDINGS * f64::EPSILON * scale <= TRUSTED * radius
-}
 
 /// Which of a body's events may be scheduled.
 #[derive(Debug, Clone, Copy)]
@@ -96,7 +70,7 @@ pub(super) struct Search<'a> {
     pub screen: bool,
     /// The partners that passed the screen, waiting for their exact tests, and the cells they
     /// came from.
-    pub candidates: &'a mut Vec<Candidate>,
+    pub candidates: &'a mut Candidates,
     pub near: &'a mut Near,
     /// Motions not yet written to the store (see [`Overlay`]).
     pub overlay: Overlay,
@@ -139,6 +113,56 @@ pub(super) struct Candidate {
     cell: u8,
 }
 
+/// The partners a search gathered, then those that passed the screen: the first `len` of a buffer
+/// that only grows. A body gathered is written into its slot with the count kept in a register
+/// along a cell's list, where a `Vec`'s push reads and writes its length through the search at
+/// every body (a tenth of a search's own instructions).
+#[derive(Debug, Default)]
+pub(super) struct Candidates {
+    slots: Vec<Candidate>,
+    len: usize,
+}
+
+impl Candidates {
+    /// Bytes held.
+    pub(super) fn memory_bytes(&self) -> usize {
+        self.slots.capacity() * std::mem::size_of::<Candidate>()
+    }
+
+    #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+    }
+
+    /// The candidates.
+    #[inline(always)]
+    fn as_mut_slice(&mut self) -> &mut [Candidate] {
+        &mut self.slots[..self.len]
+    }
+
+    /// Writes `candidate` into slot `len`, the buffer grown first when it holds no such slot.
+    #[inline(always)]
+    fn put(&mut self, len: usize, candidate: Candidate) {
+        if len == self.slots.len() {
+            self.grow();
+        }
+        self.slots[len] = candidate;
+    }
+
+    #[inline(always)]
+    fn push(&mut self, candidate: Candidate) {
+        self.put(self.len, candidate);
+        self.len += 1;
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn grow(&mut self) {
+        let none = Candidate { earliest: 0.0, q: NONE, cell: 0 };
+        self.slots.resize((2 * self.slots.len()).max(64), none);
+    }
+}
+
 /// The neighbour cells a search gathered bodies from, each with the whole sides that bring its
 /// bodies next to the searching body, and the searching body's centre less those. (After a list
 /// is built anew, the origins are indexed by image instead: see [`Search::gather_fresh`].)
@@ -153,19 +177,6 @@ impl Default for Near {
     fn default() -> Near {
         Near { cells: 0, shifts: [DVec3::ZERO; 32], origins: [DVec3::ZERO; 32] }
     }
-}
-
-/// Body `p` as its partners are screened against it, at `now`.
-#[derive(Clone, Copy)]
-struct Own {
-    p: usize,
-    position: DVec3,
-    velocity: DVec3,
-    radius: f64,
-    now: f64,
-    /// Rounding of a time near `now`, relative to it: times compared as offsets from `now`
-    /// allow for it.
-    rounding: f64,
 }
 
 /// The earliest eligible event found so far, and how long after `now` it comes (infinite when
@@ -356,17 +367,20 @@ impl<'a> Search<'a> {
         // The candidates' `Vec` reached once, not through the search at every push; and a
         // prefetch, which never faults, without a bounds check.
         let candidates = &mut *self.candidates;
+        let mut len = candidates.len;
         while q != NONE {
             if q as usize != p {
                 if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
                     self.overlay.met = Some((q, k));
                 } else {
                     prefetch_item(states, q as usize);
-                    candidates.push(Candidate { earliest: 0.0, q, cell: k });
+                    candidates.put(len, Candidate { earliest: 0.0, q, cell: k });
+                    len += 1;
                 }
             }
             q = if crowded { cells.after(q) } else { NONE };
         }
+        candidates.len = len;
     }
 
     /// Lists the members new to `own`'s list (see [`Lists::fresh`]) in `self.candidates`, to be
@@ -406,15 +420,14 @@ impl<'a> Search<'a> {
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
-            let group: [(usize, usize); 4] = std::array::from_fn(|lane| lists::split(members[k + lane]));
-            let origins = group.map(|(_, image)| own.position - lists.images[image]);
-            let four = screen_four(own, group.map(|(q, _)| &states[q]), origins, bound);
+            let group = members[k..k + 4].try_into().expect("four members");
+            let four = screen_four(own, states, &Listed { group, images: &lists.images, centre: own.position }, bound);
             let mut left = four.left;
             while left != 0 {
                 let lane = left.trailing_zeros() as usize;
                 left &= left - 1;
                 if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    let (q, image) = group[lane];
+                    let (q, image) = lists::split(group[lane]);
                     candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
                 }
             }
@@ -442,7 +455,7 @@ impl<'a> Search<'a> {
             if let Some((q, cell)) = self.overlay.met.take() {
                 self.candidates.push(Candidate { earliest: 0.0, q, cell });
             }
-            self.candidates.iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
+            self.candidates.as_mut_slice().iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
             return;
         }
         let (states, origins) = (&self.bodies.state[..], &self.near.origins);
@@ -450,24 +463,20 @@ impl<'a> Search<'a> {
         let mut kept = 0;
         // Through a slice: its length stays in a register, where the `Vec`'s is read again
         // after every write into it.
-        let candidates = &mut self.candidates[..];
+        let candidates = self.candidates.as_mut_slice();
         // Four at a time in lanes (see `screen_four`), the steps that depend on the bound then
         // for the lanes left, in order: every bound and result is the scalar screen's.
         let grouped = if lanes() { candidates.len() & !3 } else { 0 };
         for k in (0..grouped).step_by(4) {
-            let group = [candidates[k], candidates[k + 1], candidates[k + 2], candidates[k + 3]];
-            let four = screen_four(
-                own,
-                group.map(|c| &states[c.q as usize]),
-                group.map(|c| origins[c.cell as usize & 31]),
-                bound,
-            );
+            let group = candidates[k..k + 4].try_into().expect("four candidates");
+            let four = screen_four(own, states, &Gathered { group, origins }, bound);
             let mut left = four.left;
             while left != 0 {
                 let lane = left.trailing_zeros() as usize;
                 left &= left - 1;
                 if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    candidates[kept] = Candidate { earliest, ..group[lane] };
+                    // `kept` is at most `k + lane`: the entry is read before it is written over.
+                    candidates[kept] = Candidate { earliest, ..candidates[k + lane] };
                     kept += 1;
                 }
             }
@@ -479,7 +488,7 @@ impl<'a> Search<'a> {
                 kept += 1;
             }
         }
-        self.candidates.truncate(kept);
+        self.candidates.len = kept;
         // The overlay's body met among the neighbours, by its own motion.
         if let Some((q, k)) = self.overlay.met.take() {
             let state = self.state_of(q as usize);
@@ -494,10 +503,11 @@ impl<'a> Search<'a> {
     #[inline]
     fn test_candidates(&mut self, own: &Own, eligible: Eligible, best: &mut Best) {
         let mut candidates = std::mem::take(self.candidates);
-        if candidates.len() > 1 {
-            candidates.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
+        let tested = candidates.as_mut_slice();
+        if tested.len() > 1 {
+            tested.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
         }
-        for c in &candidates {
+        for c in &*tested {
             if c.earliest > best.horizon {
                 break;
             }
@@ -539,216 +549,34 @@ impl<'a> Search<'a> {
     }
 }
 
-/// The screen of the body of `state` as `own`'s partner, its centre less `origin` (`own`'s,
-/// shifted to its image) as its offset: `None` when it can be skipped (moving apart from `own`,
-/// passing wide of it, or unable to touch it within `bound` of `own.now`), else a lower bound on
-/// when it can touch, after `own.now` (minus infinity when there is none to trust, as for a pair
-/// touching now). A pair sure to touch lowers `bound` to an upper bound on when it does. Every
-/// bound allows for the rounding of the offsets (see [`screen_trusted`]): |offset|^2 falls no
-/// faster than 2 |approach| per unit time at first, and the paths' closest approach is where the
-/// discriminant says, to its slack.
-#[inline(always)]
-fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Option<f64> {
-    let motion = &state.motion;
-    // Written per component: the vector types' shuffles cost more than the arithmetic here.
-    let (p, v, dt) = (motion.position, motion.velocity, own.now - motion.since);
-    let (ox, oy, oz) = (p.x + dt * v.x - origin.x, p.y + dt * v.y - origin.y, p.z + dt * v.z - origin.z);
-    let (vx, vy, vz) = (v.x - own.velocity.x, v.y - own.velocity.y, v.z - own.velocity.z);
-    let approach = ox * vx + oy * vy + oz * vz;
-    let (d2, v2) = (ox * ox + oy * oy + oz * oz, vx * vx + vy * vy + vz * vz);
-    // |approach| clear of 10^-6 |offset| |velocity|: its sign is sure.
-    let clear = approach * approach > RECEDING * RECEDING * d2 * v2;
-    if approach > 0.0 {
-        return if clear { None } else { Some(f64::NEG_INFINITY) };
-    }
-    let reach = own.radius + state.radius;
-    let gap = d2 - reach * reach;
-    let slack = GAP_SLACK * reach * reach + OFFSET_SLACK * d2;
-    if !(clear && gap > slack) {
-        return Some(f64::NEG_INFINITY);
-    }
-    let closing = -approach;
-    bounded(own, (gap - slack, 2.0 * closing), bound, || {
-        let discriminant = approach * approach - v2 * gap;
-        let spread = slack * v2;
-        if discriminant < -spread {
-            return None;
-        }
-        let earliest = (gap - slack) / (closing * (1.0 + TIME_SLACK) + (discriminant + spread).sqrt())
-            * (1.0 - TIME_SLACK)
-            - own.rounding;
-        // Sure to touch (the exact test's noise rule aside: far faster than rounding noise), and
-        // after now: the contact comes by `latest` at the latest.
-        let sure = discriminant > spread
-            && earliest > 0.0
-            && v2 > NOISE * (own.velocity.length_squared() + motion.velocity.length_squared());
-        let latest = || {
-            (gap + slack) / (closing * (1.0 - TIME_SLACK) + (discriminant - spread).sqrt()) * (1.0 + TIME_SLACK)
-                + own.rounding
-        };
-        Some((earliest, sure.then(latest)))
-    })
+/// Four gathered partners (candidates in a row), each with the origin of its cell.
+struct Gathered<'a> {
+    group: &'a [Candidate; 4],
+    origins: &'a [DVec3; 32],
 }
 
-/// The steps of [`screen`] that depend on `bound`, for a pair approaching with its gap clear of
-/// the slack: `late` the gap less the slack, `rate` twice the closing rate; `rest` the earliest
-/// it can touch (none when the paths pass wide) and the latest when it is sure to.
-#[inline(always)]
-fn bounded(
-    own: &Own,
-    (late, rate): (f64, f64),
-    bound: &mut f64,
-    rest: impl FnOnce() -> Option<(f64, Option<f64>)>,
-) -> Option<f64> {
-    if late > rate * (*bound + own.rounding) * (1.0 + TIME_SLACK) {
-        return None;
-    }
-    let (earliest, latest) = rest()?;
-    if earliest > *bound {
-        return None;
-    }
-    if let Some(latest) = latest {
-        *bound = bound.min(latest);
-    }
-    Some(earliest)
-}
-
-/// True when [`screen`] can run four partners at a time (see [`screen_four`]).
-#[inline]
-fn lanes() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::arch::is_x86_feature_detected!("avx");
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
-}
-
-/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
-#[derive(Debug, Default, Clone, Copy)]
-struct Four {
-    /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
-    /// the bound (moving apart, passing wide, or unable to touch within the bound given, which
-    /// only falls along a search).
-    left: u32,
-    /// Of those, the lanes bounded by it (approaching, the gap clear of the slack: [`bounded`]'s
-    /// values follow); the others have no bound to trust.
-    bounded: u32,
-    /// Of those, the lanes sure to touch, by `latest`.
-    sure: u32,
-    late: [f64; 4],
-    rate: [f64; 4],
-    earliest: [f64; 4],
-    latest: [f64; 4],
-}
-
-impl Four {
-    /// [`screen`]'s answer for lane `lane`, one of those left, with the bound as it stands.
+impl Partners for Gathered<'_> {
     #[inline(always)]
-    fn lane(&self, lane: usize, own: &Own, bound: &mut f64) -> Option<f64> {
-        let bit = 1 << lane;
-        if self.bounded & bit == 0 {
-            return Some(f64::NEG_INFINITY);
-        }
-        let latest = (self.sure & bit != 0).then_some(self.latest[lane]);
-        bounded(own, (self.late[lane], self.rate[lane]), bound, || Some((self.earliest[lane], latest)))
+    fn partner(&self, lane: usize) -> (usize, DVec3) {
+        let c = self.group[lane];
+        (c.q as usize, self.origins[c.cell as usize & 31])
     }
 }
 
-/// [`screen`] of four partners of `own` (their states, and the origins their offsets are taken
-/// from) up to its steps that depend on the bound, `bound` as it stands before the first.
-/// Asked only where [`lanes`] holds.
-///
-/// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
-/// (AVX alone; division and square root are correctly rounded in both), so its floats are the
-/// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
-/// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
-/// would meet later in the search.
-#[inline]
-fn screen_four(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f64) -> Four {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: asked only where `lanes` found AVX.
-    return unsafe { screen_four_avx(own, states, origins, bound) };
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = (own, states, origins, bound);
-        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
-    }
+/// Four members of a list in a row (see [`lists::split`]), each with the origin of its image:
+/// `centre`, the searching body's, less the image's sides (as the scalar screen takes it).
+struct Listed<'a> {
+    group: &'a [u32; 4],
+    images: &'a [DVec3; 27],
+    centre: DVec3,
 }
 
-/// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx")]
-fn screen_four_avx(own: &Own, states: [&BodyState; 4], origins: [DVec3; 4], bound: f64) -> Four {
-    use crate::narrow_phase::spheres::state_columns;
-    use std::arch::x86_64::*;
-    let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
-    let one = |value: f64| _mm256_set1_pd(value);
-    let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
-    let (greater, less, and, or) = (
-        |x, y| _mm256_cmp_pd::<_CMP_GT_OQ>(x, y),
-        |x, y| _mm256_cmp_pd::<_CMP_LT_OQ>(x, y),
-        |x, y| _mm256_and_pd(x, y),
-        |x, y| _mm256_or_pd(x, y),
-    );
-    let mask = |x| _mm256_movemask_pd(x) as u32;
-    // A negation flips the sign bit alone, as the scalar `-x` does.
-    let negated = |x| _mm256_xor_pd(x, one(-0.0));
-    let lane = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(&origins[3]), f(&origins[2]), f(&origins[1]), f(&origins[0]));
-    // `screen`, line by line.
-    let dt = sub(one(own.now), since);
-    let ox = sub(add(px, mul(dt, vx)), lane(|o| o.x));
-    let oy = sub(add(py, mul(dt, vy)), lane(|o| o.y));
-    let oz = sub(add(pz, mul(dt, vz)), lane(|o| o.z));
-    let (rx, ry, rz) = (sub(vx, one(own.velocity.x)), sub(vy, one(own.velocity.y)), sub(vz, one(own.velocity.z)));
-    let approach = add(add(mul(ox, rx), mul(oy, ry)), mul(oz, rz));
-    let d2 = add(add(mul(ox, ox), mul(oy, oy)), mul(oz, oz));
-    let v2 = add(add(mul(rx, rx), mul(ry, ry)), mul(rz, rz));
-    let clear = greater(mul(approach, approach), mul(mul(one(RECEDING * RECEDING), d2), v2));
-    let apart = greater(approach, one(0.0));
-    let reach = add(one(own.radius), radius);
-    let gap = sub(d2, mul(reach, reach));
-    let slack = add(mul(mul(one(GAP_SLACK), reach), reach), mul(one(OFFSET_SLACK), d2));
-    // Not apart (a NaN approach is not clear), clear, and the gap past the slack.
-    let screened = and(_mm256_andnot_pd(apart, clear), greater(gap, slack));
-    let closing = negated(approach);
-    let (late, rate) = (sub(gap, slack), mul(one(2.0), closing));
-    let too_late = greater(late, mul(mul(rate, one(bound + own.rounding)), one(1.0 + TIME_SLACK)));
-    let discriminant = sub(mul(approach, approach), mul(v2, gap));
-    let spread = mul(slack, v2);
-    let wide = less(discriminant, negated(spread));
-    let rejected = or(and(apart, clear), and(screened, or(too_late, wide)));
-    let mut four =
-        Four { left: mask(rejected) ^ 0b1111, bounded: mask(_mm256_andnot_pd(rejected, screened)), ..Four::default() };
-    if four.bounded == 0 {
-        return four;
+impl Partners for Listed<'_> {
+    #[inline(always)]
+    fn partner(&self, lane: usize) -> (usize, DVec3) {
+        let (q, image) = lists::split(self.group[lane]);
+        (q, self.centre - self.images[image])
     }
-    let earliest = sub(
-        mul(
-            _mm256_div_pd(late, add(mul(closing, one(1.0 + TIME_SLACK)), _mm256_sqrt_pd(add(discriminant, spread)))),
-            one(1.0 - TIME_SLACK),
-        ),
-        one(own.rounding),
-    );
-    let latest = add(
-        mul(
-            _mm256_div_pd(
-                add(gap, slack),
-                add(mul(closing, one(1.0 - TIME_SLACK)), _mm256_sqrt_pd(sub(discriminant, spread))),
-            ),
-            one(1.0 + TIME_SLACK),
-        ),
-        one(own.rounding),
-    );
-    let speed_squared = add(add(mul(vx, vx), mul(vy, vy)), mul(vz, vz));
-    let noise = mul(one(NOISE), add(one(own.velocity.length_squared()), speed_squared));
-    four.sure = mask(and(and(greater(discriminant, spread), greater(earliest, one(0.0))), greater(v2, noise)));
-    // SAFETY (each store): four floats into four.
-    unsafe {
-        _mm256_storeu_pd(four.late.as_mut_ptr(), late);
-        _mm256_storeu_pd(four.rate.as_mut_ptr(), rate);
-        _mm256_storeu_pd(four.earliest.as_mut_ptr(), earliest);
-        _mm256_storeu_pd(four.latest.as_mut_ptr(), latest);
-    }
-    four
 }
 
 #[cfg(test)]
@@ -770,8 +598,8 @@ mod tests {
         }
     }
 
-    /// The lanes' answers, taken in order with the bound as the scalar screen leaves it, are the
-    /// scalar screen's to the bit: every answer and every bound, for random partners near and
+    /// The lanes' answers (for gathered partners and for a list's members), taken in order with
+    /// the bound as the scalar screen leaves it, are the scalar screen's to the bit: every answer and every bound, for random partners near and
     /// far, approaching and parting, touching, grazing (their paths' closest approach within a
     /// hair of the reach), and with NaN, infinities, zeros of either sign and tiny numbers.
     #[test]
@@ -806,14 +634,27 @@ mod tests {
                 BodyState { motion: Motion { position, since, velocity }, radius: 0.5 }
             };
             let states: [BodyState; 4] = std::array::from_fn(|_| partner(&mut rng));
-            let origins: [DVec3; 4] =
-                std::array::from_fn(|_| own.position - DVec3::X * rng.random_range(-1..=1) as f64);
+            // Each lane through an image of its own (as a list's members are met), its origin
+            // `own`'s centre less that image's sides (as both searches take it).
+            let images: [DVec3; 27] = std::array::from_fn(|_| DVec3::X * rng.random_range(-1..=1) as f64);
+            let image_of: [u32; 4] = std::array::from_fn(|_| rng.random_range(0..27));
+            let mut origins = [DVec3::ZERO; 32];
+            for (origin, &image) in origins.iter_mut().zip(&image_of) {
+                *origin = own.position - images[image as usize];
+            }
+            let group: [Candidate; 4] =
+                std::array::from_fn(|k| Candidate { earliest: 0.0, q: k as u32, cell: k as u8 });
+            let members: [u32; 4] = std::array::from_fn(|k| k as u32 | image_of[k] << lists::IMAGE_BITS);
             let start = match round % 4 {
                 0 => f64::INFINITY,
                 _ => rng.random_range(0.0..3.0),
             };
-            let (mut scalar_bound, mut lanes_bound) = (start, start);
-            let four = screen_four(&own, states.each_ref(), origins, start);
+            let mut scalar_bound = start;
+            let fours = [
+                screen_four(&own, &states, &Gathered { group: &group, origins: &origins }, start),
+                screen_four(&own, &states, &Listed { group: &members, images: &images, centre: own.position }, start),
+            ];
+            let mut lanes_bounds = [start; 2];
             for lane in 0..4 {
                 let before = scalar_bound;
                 let scalar = screen(&own, &states[lane], origins[lane], &mut scalar_bound);
@@ -823,13 +664,14 @@ mod tests {
                     Some(_) if scalar_bound == before => 2,
                     Some(_) => 3,
                 }] += 1;
-                let in_lanes =
-                    if four.left & (1 << lane) != 0 { four.lane(lane, &own, &mut lanes_bound) } else { None };
-                assert_eq!(
-                    (scalar.map(f64::to_bits), scalar_bound.to_bits()),
-                    (in_lanes.map(f64::to_bits), lanes_bound.to_bits()),
-                    "round {round}, lane {lane}"
-                );
+                for (four, lanes_bound) in fours.iter().zip(&mut lanes_bounds) {
+                    let in_lanes = if four.left & (1 << lane) != 0 { four.lane(lane, &own, lanes_bound) } else { None };
+                    assert_eq!(
+                        (scalar.map(f64::to_bits), scalar_bound.to_bits()),
+                        (in_lanes.map(f64::to_bits), lanes_bound.to_bits()),
+                        "round {round}, lane {lane}"
+                    );
+                }
             }
         }
         assert!(met.iter().all(|&n| n > 100), "every outcome met: {met:?}");

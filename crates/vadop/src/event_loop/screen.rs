@@ -1,0 +1,272 @@
+//! The search's cheap screen before the exact test (see [`super::search`]): from the two centres
+//! at the current instant, a pair moving apart, missing each other or unable to touch before the
+//! best event found so far is skipped, with margins far wider than the rounding of the screen
+//! (and the screen off in a world whose coordinates are too large for its smallest bodies to
+//! trust them), so the screen never skips a pair the exact test would schedule.
+//!
+//! It owns the screen's margins and when they are trusted, the searching body as the screen sees
+//! it ([`Own`]), and the screen itself: of one partner, and of four at a time in AVX lanes, the
+//! same bits. It never computes a contact time nor changes a body.
+
+use crate::bodies::BodyState;
+use glam::DVec3;
+
+/// A pair whose approach rate is below this fraction of |offset| |relative velocity| counts as
+/// moving apart (the exact test's own threshold is 1e-12, on the negative side).
+const RECEDING: f64 = 1e-6;
+/// The screen's slack on a gap (relative to the radius sum squared, and to the offset squared)
+/// and on a time bound (relative): all far above its rounding (see [`screen_trusted`]).
+const GAP_SLACK: f64 = 1e-6;
+const OFFSET_SLACK: f64 = 1e-12;
+const TIME_SLACK: f64 = 1e-4;
+/// A pair whose relative speed squared is below this fraction of the sum of the two speeds
+/// squared may be rounding noise to the exact test (its own rule is 10^-12 of the sum of the
+/// speeds): it never bounds the screen.
+const NOISE: f64 = 1e-16;
+/// The screen is trusted when this many roundings of the largest coordinate are within
+/// `1e-11` of the smallest radius.
+pub(super) const ROUNDINGS: f64 = 16.0;
+const TRUSTED: f64 = 1e-11;
+
+/// True when centres computed at the current instant are accurate enough, in a box whose
+/// coordinates reach `scale`, for the screen's margins to hold for radii of at least `radius`:
+/// their rounding is then below 10^-11 of the smallest radius, the margins at least 10^-6 of it.
+pub(super) fn screen_trusted(scale: f64, radius: f64) -> bool {
+    ROUNDINGS * f64::EPSILON * scale <= TRUSTED * radius
+}
+
+/// Body `p` as its partners are screened against it, at `now`.
+#[derive(Clone, Copy)]
+pub(super) struct Own {
+    pub p: usize,
+    pub position: DVec3,
+    pub velocity: DVec3,
+    pub radius: f64,
+    pub now: f64,
+    /// Rounding of a time near `now`, relative to it: times compared as offsets from `now`
+    /// allow for it.
+    pub rounding: f64,
+}
+
+/// The screen of the body of `state` as `own`'s partner, its centre less `origin` (`own`'s,
+/// shifted to its image) as its offset: `None` when it can be skipped (moving apart from `own`,
+/// passing wide of it, or unable to touch it within `bound` of `own.now`), else a lower bound on
+/// when it can touch, after `own.now` (minus infinity when there is none to trust, as for a pair
+/// touching now). A pair sure to touch lowers `bound` to an upper bound on when it does. Every
+/// bound allows for the rounding of the offsets (see [`screen_trusted`]): |offset|^2 falls no
+/// faster than 2 |approach| per unit time at first, and the paths' closest approach is where the
+/// discriminant says, to its slack.
+#[inline(always)]
+pub(super) fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Option<f64> {
+    let motion = &state.motion;
+    // Written per component: the vector types' shuffles cost more than the arithmetic here.
+    let (p, v, dt) = (motion.position, motion.velocity, own.now - motion.since);
+    let (ox, oy, oz) = (p.x + dt * v.x - origin.x, p.y + dt * v.y - origin.y, p.z + dt * v.z - origin.z);
+    let (vx, vy, vz) = (v.x - own.velocity.x, v.y - own.velocity.y, v.z - own.velocity.z);
+    let approach = ox * vx + oy * vy + oz * vz;
+    let (d2, v2) = (ox * ox + oy * oy + oz * oz, vx * vx + vy * vy + vz * vz);
+    // |approach| clear of 10^-6 |offset| |velocity|: its sign is sure.
+    let clear = approach * approach > RECEDING * RECEDING * d2 * v2;
+    if approach > 0.0 {
+        return if clear { None } else { Some(f64::NEG_INFINITY) };
+    }
+    let reach = own.radius + state.radius;
+    let gap = d2 - reach * reach;
+    let slack = GAP_SLACK * reach * reach + OFFSET_SLACK * d2;
+    if !(clear && gap > slack) {
+        return Some(f64::NEG_INFINITY);
+    }
+    let closing = -approach;
+    bounded(own, (gap - slack, 2.0 * closing), bound, || {
+        let discriminant = approach * approach - v2 * gap;
+        let spread = slack * v2;
+        if discriminant < -spread {
+            return None;
+        }
+        let earliest = (gap - slack) / (closing * (1.0 + TIME_SLACK) + (discriminant + spread).sqrt())
+            * (1.0 - TIME_SLACK)
+            - own.rounding;
+        // Sure to touch (the exact test's noise rule aside: far faster than rounding noise), and
+        // after now: the contact comes by `latest` at the latest.
+        let sure = discriminant > spread
+            && earliest > 0.0
+            && v2 > NOISE * (own.velocity.length_squared() + motion.velocity.length_squared());
+        let latest = || {
+            (gap + slack) / (closing * (1.0 - TIME_SLACK) + (discriminant - spread).sqrt()) * (1.0 + TIME_SLACK)
+                + own.rounding
+        };
+        Some((earliest, sure.then(latest)))
+    })
+}
+
+/// The steps of [`screen`] that depend on `bound`, for a pair approaching with its gap clear of
+/// the slack: `late` the gap less the slack, `rate` twice the closing rate; `rest` the earliest
+/// it can touch (none when the paths pass wide) and the latest when it is sure to.
+#[inline(always)]
+fn bounded(
+    own: &Own,
+    (late, rate): (f64, f64),
+    bound: &mut f64,
+    rest: impl FnOnce() -> Option<(f64, Option<f64>)>,
+) -> Option<f64> {
+    if late > rate * (*bound + own.rounding) * (1.0 + TIME_SLACK) {
+        return None;
+    }
+    let (earliest, latest) = rest()?;
+    if earliest > *bound {
+        return None;
+    }
+    if let Some(latest) = latest {
+        *bound = bound.min(latest);
+    }
+    Some(earliest)
+}
+
+/// True when [`screen`] can run four partners at a time (see [`screen_four`]).
+#[inline]
+pub(super) fn lanes() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::arch::is_x86_feature_detected!("avx");
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
+}
+
+/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
+#[derive(Debug, Default, Clone, Copy)]
+pub(super) struct Four {
+    /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
+    /// the bound (moving apart, passing wide, or unable to touch within the bound given, which
+    /// only falls along a search).
+    pub left: u32,
+    /// Of those, the lanes bounded by it (approaching, the gap clear of the slack: [`bounded`]'s
+    /// values follow); the others have no bound to trust.
+    bounded: u32,
+    /// Of those, the lanes sure to touch, by `latest`.
+    sure: u32,
+    late: [f64; 4],
+    rate: [f64; 4],
+    earliest: [f64; 4],
+    latest: [f64; 4],
+}
+
+impl Four {
+    /// [`screen`]'s answer for lane `lane`, one of those left, with the bound as it stands.
+    #[inline(always)]
+    pub(super) fn lane(&self, lane: usize, own: &Own, bound: &mut f64) -> Option<f64> {
+        let bit = 1 << lane;
+        if self.bounded & bit == 0 {
+            return Some(f64::NEG_INFINITY);
+        }
+        let latest = (self.sure & bit != 0).then_some(self.latest[lane]);
+        bounded(own, (self.late[lane], self.rate[lane]), bound, || Some((self.earliest[lane], latest)))
+    }
+}
+
+/// Four partners of a search in a row, as the lanes read them: each one's body and the origin
+/// its offset is taken from.
+pub(super) trait Partners {
+    fn partner(&self, lane: usize) -> (usize, DVec3);
+}
+
+/// [`screen`] of four partners of `own` up to its steps that depend on the bound, `bound` as it
+/// stands before the first. Asked only where [`lanes`] holds.
+///
+/// The partners' records (from `states`) and origins are read inside the lanes' function, one
+/// function for every kind of partners: copied into arrays to be handed over, they cost a group
+/// about a third as many instructions again as the screen.
+///
+/// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
+/// (AVX alone; division and square root are correctly rounded in both), so its floats are the
+/// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
+/// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
+/// would meet later in the search.
+#[inline]
+pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_four_avx(own, states, partners, bound) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, partners, bound);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
+    use crate::narrow_phase::spheres::state_columns;
+    use std::arch::x86_64::*;
+    let picked: [(usize, DVec3); 4] = std::array::from_fn(|lane| partners.partner(lane));
+    let states = picked.map(|(q, _)| &states[q]);
+    let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
+    let one = |value: f64| _mm256_set1_pd(value);
+    let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
+    let (greater, less, and, or) = (
+        |x, y| _mm256_cmp_pd::<_CMP_GT_OQ>(x, y),
+        |x, y| _mm256_cmp_pd::<_CMP_LT_OQ>(x, y),
+        |x, y| _mm256_and_pd(x, y),
+        |x, y| _mm256_or_pd(x, y),
+    );
+    let mask = |x| _mm256_movemask_pd(x) as u32;
+    // A negation flips the sign bit alone, as the scalar `-x` does.
+    let negated = |x| _mm256_xor_pd(x, one(-0.0));
+    let lane = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(&picked[3].1), f(&picked[2].1), f(&picked[1].1), f(&picked[0].1));
+    // `screen`, line by line.
+    let dt = sub(one(own.now), since);
+    let ox = sub(add(px, mul(dt, vx)), lane(|o| o.x));
+    let oy = sub(add(py, mul(dt, vy)), lane(|o| o.y));
+    let oz = sub(add(pz, mul(dt, vz)), lane(|o| o.z));
+    let (rx, ry, rz) = (sub(vx, one(own.velocity.x)), sub(vy, one(own.velocity.y)), sub(vz, one(own.velocity.z)));
+    let approach = add(add(mul(ox, rx), mul(oy, ry)), mul(oz, rz));
+    let d2 = add(add(mul(ox, ox), mul(oy, oy)), mul(oz, oz));
+    let v2 = add(add(mul(rx, rx), mul(ry, ry)), mul(rz, rz));
+    let clear = greater(mul(approach, approach), mul(mul(one(RECEDING * RECEDING), d2), v2));
+    let apart = greater(approach, one(0.0));
+    let reach = add(one(own.radius), radius);
+    let gap = sub(d2, mul(reach, reach));
+    let slack = add(mul(mul(one(GAP_SLACK), reach), reach), mul(one(OFFSET_SLACK), d2));
+    // Not apart (a NaN approach is not clear), clear, and the gap past the slack.
+    let screened = and(_mm256_andnot_pd(apart, clear), greater(gap, slack));
+    let closing = negated(approach);
+    let (late, rate) = (sub(gap, slack), mul(one(2.0), closing));
+    let too_late = greater(late, mul(mul(rate, one(bound + own.rounding)), one(1.0 + TIME_SLACK)));
+    let discriminant = sub(mul(approach, approach), mul(v2, gap));
+    let spread = mul(slack, v2);
+    let wide = less(discriminant, negated(spread));
+    let rejected = or(and(apart, clear), and(screened, or(too_late, wide)));
+    let mut four =
+        Four { left: mask(rejected) ^ 0b1111, bounded: mask(_mm256_andnot_pd(rejected, screened)), ..Four::default() };
+    if four.bounded == 0 {
+        return four;
+    }
+    let earliest = sub(
+        mul(
+            _mm256_div_pd(late, add(mul(closing, one(1.0 + TIME_SLACK)), _mm256_sqrt_pd(add(discriminant, spread)))),
+            one(1.0 - TIME_SLACK),
+        ),
+        one(own.rounding),
+    );
+    let latest = add(
+        mul(
+            _mm256_div_pd(
+                add(gap, slack),
+                add(mul(closing, one(1.0 - TIME_SLACK)), _mm256_sqrt_pd(sub(discriminant, spread))),
+            ),
+            one(1.0 + TIME_SLACK),
+        ),
+        one(own.rounding),
+    );
+    let speed_squared = add(add(mul(vx, vx), mul(vy, vy)), mul(vz, vz));
+    let noise = mul(one(NOISE), add(one(own.velocity.length_squared()), speed_squared));
+    four.sure = mask(and(and(greater(discriminant, spread), greater(earliest, one(0.0))), greater(v2, noise)));
+    // SAFETY (each store): four floats into four.
+    unsafe {
+        _mm256_storeu_pd(four.late.as_mut_ptr(), late);
+        _mm256_storeu_pd(four.rate.as_mut_ptr(), rate);
+        _mm256_storeu_pd(four.earliest.as_mut_ptr(), earliest);
+        _mm256_storeu_pd(four.latest.as_mut_ptr(), latest);
+    }
+    four
+}
