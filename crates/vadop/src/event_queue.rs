@@ -12,7 +12,6 @@
 //! changes bodies.
 
 use crate::bodies::Bodies;
-use crate::parallel::Workers;
 use crate::walls::Wall;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -245,15 +244,18 @@ impl EventQueue {
         std::mem::take(&mut self.bulk)
     }
     /// Replaces the bulk part by `events`, to be popped in order with everything pushed.
-    pub fn set_bulk(&mut self, events: Vec<Event>, workers: &Workers) {
+    pub fn set_bulk(&mut self, events: Vec<Event>) {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
-        // fine, and every way of sorting gives the same order.
-        if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
+        // fine, and every way of sorting gives the same order. On one thread whatever the
+        // workers: rayon's parallel sort of the comparisons took 2.1 times the radix sort's
+        // instructions, its thread running the pipeline 1.35 times (27.3 M and 17.5 M against
+        // 12.9 M a frame at n = 10^5, 5 d/f; BENCHMARKS.md, twenty-second session).
+        if self.bulk.len() >= RADIX_MIN {
             self.radix.sort(&mut self.bulk);
         } else {
-            workers.sort_unstable(&mut self.bulk);
+            self.bulk.sort_unstable();
         }
     }
     /// The earliest event (valid or not), and whether the heap holds it (else the bulk part).
@@ -323,6 +325,39 @@ impl EventQueue {
             }
         }
         self.pop_earliest_before(until)
+    }
+    /// Pops the bulk part's events in order, each with its place, while `take` takes them: as
+    /// [`Self::pop_before`] would pop them one by one, as long as each is strictly before the
+    /// heap's earliest time and `until` and repeats no event before it (the first one the run
+    /// meets that is not so, or that `take` declines, stays queued). The heap is looked at once:
+    /// `take` pushes nothing. Most of a detect-mode step's events are such a run between two
+    /// events of the heap, and one look at the heap and one record of the last event popped
+    /// for the whole run spare the event loop a pop's bookkeeping for each.
+    #[inline]
+    pub fn pop_bulk_run(&mut self, until: f64, mut take: impl FnMut(usize, &Event) -> bool) {
+        let heap_earliest = self.heap.peek().map_or(f64::INFINITY, |first| first.time);
+        let start = self.bulk.len();
+        if self.bulk.last().is_some_and(|first| self.is_repeat(first)) {
+            // `pop_before` drops it.
+            return;
+        }
+        let mut place = start;
+        while place > 0 {
+            let event = &self.bulk[place - 1];
+            // A repeat of the event taken before it, which lies next to it (see `is_repeat`).
+            let repeat = place < start && {
+                let before = &self.bulk[place];
+                before.time.to_bits() == event.time.to_bits() && before == event
+            };
+            if !(event.time < heap_earliest && event.time < until) || repeat || !take(place - 1, event) {
+                break;
+            }
+            place -= 1;
+        }
+        if place < start {
+            self.last = Some(self.bulk[place]);
+            self.bulk.truncate(place);
+        }
     }
     /// [`Self::pop_before`] in general: from either part, repeats dropped, ties broken by the
     /// whole order.
@@ -464,7 +499,7 @@ mod tests {
         let mut q = EventQueue::default();
         let bulk =
             vec![event(3.0, 1, Partner::Body(2)), event(1.0, 2, Partner::Body(3)), event(2.0, 4, Partner::Body(5))];
-        q.set_bulk(bulk, &Workers::new(1));
+        q.set_bulk(bulk);
         q.push(event(1.5, 6, Partner::Body(7)));
         let (first, before) = q.bulk_before(2.5);
         let times: Vec<f64> = before.iter().map(|e| e.time).collect();
@@ -477,6 +512,46 @@ mod tests {
         assert_eq!(q.len(), 1);
     }
 
+    /// A run pops what `pop_before` would, in its order and with its places, up to the heap's
+    /// earliest time, a repeat (dropped by the next `pop_before`) or the event declined, which
+    /// stay queued; the event popped last is the run's, so a repeat of it is dropped after.
+    #[test]
+    fn a_bulk_run_pops_as_pop_before_does() {
+        let bulk = vec![
+            event(6.0, 1, Partner::Body(2)),
+            event(5.0, 1, Partner::Body(2)),
+            event(4.0, 3, Partner::Body(4)),
+            event(3.0, 2, Partner::Body(5)),
+            event(2.0, 1, Partner::Body(3)),
+            event(2.0, 1, Partner::Body(3)),
+            event(1.0, 1, Partner::Body(2)),
+        ];
+        let mut q = EventQueue::default();
+        q.set_bulk(bulk);
+        q.push(event(3.0, 1, Partner::Body(9)));
+        let mut taken = Vec::new();
+        q.pop_bulk_run(10.0, |place, e| {
+            taken.push((place, e.time));
+            true
+        });
+        assert_eq!(taken, [(6, 1.0), (5, 2.0)], "the repeat at 2.0 stays for pop_before to drop");
+        assert_eq!(q.pop_before(10.0).map(|(e, place)| (e.time, e.body, place)), Some((3.0, 1, None)));
+        taken.clear();
+        q.pop_bulk_run(10.0, |place, e| {
+            taken.push((place, e.time));
+            e.body != 3
+        });
+        assert_eq!(taken, [(3, 3.0), (2, 4.0)], "the event declined stays queued");
+        assert_eq!(q.pop_before(10.0).map(|(e, place)| (e.time, place)), Some((4.0, Some(2))));
+        taken.clear();
+        q.pop_bulk_run(5.5, |place, e| {
+            taken.push((place, e.time));
+            true
+        });
+        assert_eq!(taken, [(1, 5.0)], "nothing at or after the step's end");
+        assert_eq!(q.len(), 1);
+    }
+
     /// Events pushed between the bulk part's pops come out in their place: before a bulk event
     /// they precede, by the rest of the order on a tie, and after the heap's earliest is popped
     /// the bulk part's next is taken from the heap's next earliest again.
@@ -485,7 +560,7 @@ mod tests {
         let mut q = EventQueue::default();
         let bulk =
             vec![event(3.0, 5, Partner::Body(6)), event(2.0, 5, Partner::Body(6)), event(1.0, 5, Partner::Body(6))];
-        q.set_bulk(bulk, &Workers::new(1));
+        q.set_bulk(bulk);
         let mut order = vec![q.pop_before(10.0).map(|(e, _)| (e.time, e.body))];
         q.push(event(1.5, 7, Partner::Body(8)));
         q.push(event(2.0, 1, Partner::Body(8)));

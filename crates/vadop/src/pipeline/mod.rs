@@ -408,7 +408,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 predicted.extend(predict_end(bodies, a, b, since, window));
             }
         }
-        self.queue.set_bulk(predicted, &self.workers);
+        self.queue.set_bulk(predicted);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;
         stats.test_seconds += start.elapsed().as_secs_f64();
@@ -419,13 +419,40 @@ impl<B: BroadPhase> Pipeline<B> {
         let interrupt = crate::interrupt::Watch::current();
         // No body is added within the loop: its refresh limit is known now.
         let most_updates = UPDATES_PER_BODY * self.proxies.body_slots().max(64);
+        // Runs of pass-throughs worked out ahead (see below): only where the step's start worked
+        // some out, and not with contact ends reported (each pass-through then pushes its end
+        // into the queue).
+        let runs = !physics.report_ends && self.passed.worked_ahead().holds_any();
         while !interrupt.raised() {
+            // Most events of a step in detect mode: spheres passing through each other, their
+            // record made ahead, in runs between the heap's events. A run is reported as the loop
+            // below would report each, without its look at the heap, its prefetch and its check of
+            // the window's refreshes (a pass-through refreshes nothing); not once the window is to
+            // end early at the next event (the loop below ends it).
+            if runs && self.updates <= most_updates {
+                let (worked, stats, contacts) = (self.passed.worked_ahead(), &mut *out.stats, &mut *out.contacts);
+                self.queue.pop_bulk_run(until, |place, event| {
+                    !interrupt.raised()
+                        && match worked.ahead_of(bodies, place, event) {
+                            Ahead::Current(contact, _) => {
+                                stats.pair_contacts += 1;
+                                contacts.push(contact);
+                                true
+                            }
+                            Ahead::Void => {
+                                stats.invalidations += 1;
+                                true
+                            }
+                            Ahead::Unknown => false,
+                        }
+                });
+            }
             let Some((event, bulk_place)) = self.queue.pop_before(until) else { break };
             // The bodies of an event a few ahead, unless it was worked out ahead: their records
             // are random memory accesses, and asking early lets them arrive while this one is
             // handled.
             if let Some((place, next)) = self.queue.upcoming(EVENTS_AHEAD) {
-                if !self.passed.is_worked_out(place) {
+                if !self.passed.worked_ahead().is_worked_out(place) {
                     bodies.prefetch(next.body as usize);
                     if let Partner::Body(j) | Partner::End(j) | Partner::Stalled(j) = next.partner {
                         bodies.prefetch(j as usize);
@@ -434,7 +461,8 @@ impl<B: BroadPhase> Pipeline<B> {
             }
             // Most events of a step in detect mode: spheres passing through each other, their
             // record made ahead.
-            match bulk_place.map_or(Ahead::Unknown, |place| self.passed.ahead_of(bodies, place, &event)) {
+            match bulk_place.map_or(Ahead::Unknown, |place| self.passed.worked_ahead().ahead_of(bodies, place, &event))
+            {
                 Ahead::Current(contact, j) => {
                     self.report_pair_contact(bodies, physics, (event.body, j), contact, Resolution::Passed, out);
                 }
