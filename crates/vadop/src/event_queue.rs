@@ -12,6 +12,7 @@
 //! changes bodies.
 
 use crate::bodies::Bodies;
+use crate::parallel::Workers;
 use crate::walls::Wall;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
@@ -244,18 +245,18 @@ impl EventQueue {
         std::mem::take(&mut self.bulk)
     }
     /// Replaces the bulk part by `events`, to be popped in order with everything pushed.
-    pub fn set_bulk(&mut self, events: Vec<Event>) {
+    pub fn set_bulk(&mut self, events: Vec<Event>, workers: &Workers) {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
-        // fine, and every way of sorting gives the same order. On one thread whatever the
-        // workers: rayon's parallel sort of the comparisons took 2.1 times the radix sort's
-        // instructions, its thread running the pipeline 1.35 times (27.3 M and 17.5 M against
-        // 12.9 M a frame at n = 10^5, 5 d/f; BENCHMARKS.md, twenty-second session).
-        if self.bulk.len() >= RADIX_MIN {
+        // fine, and every way of sorting gives the same order. With more than one worker
+        // rayon's sort, which reads 2.1 times the radix sort's instructions (27.3 M against
+        // 12.9 M a frame at n = 10^5, 5 d/f) but shares them: the radix sort on one of two
+        // threads made a two-thread frame 4-10 % slower (BENCHMARKS.md, twenty-second session).
+        if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
             self.radix.sort(&mut self.bulk);
         } else {
-            self.bulk.sort_unstable();
+            workers.sort_unstable(&mut self.bulk);
         }
     }
     /// The earliest event (valid or not), and whether the heap holds it (else the bulk part).
@@ -499,7 +500,7 @@ mod tests {
         let mut q = EventQueue::default();
         let bulk =
             vec![event(3.0, 1, Partner::Body(2)), event(1.0, 2, Partner::Body(3)), event(2.0, 4, Partner::Body(5))];
-        q.set_bulk(bulk);
+        q.set_bulk(bulk, &Workers::new(1));
         q.push(event(1.5, 6, Partner::Body(7)));
         let (first, before) = q.bulk_before(2.5);
         let times: Vec<f64> = before.iter().map(|e| e.time).collect();
@@ -527,7 +528,7 @@ mod tests {
             event(1.0, 1, Partner::Body(2)),
         ];
         let mut q = EventQueue::default();
-        q.set_bulk(bulk);
+        q.set_bulk(bulk, &Workers::new(1));
         q.push(event(3.0, 1, Partner::Body(9)));
         let mut taken = Vec::new();
         q.pop_bulk_run(10.0, |place, e| {
@@ -560,7 +561,7 @@ mod tests {
         let mut q = EventQueue::default();
         let bulk =
             vec![event(3.0, 5, Partner::Body(6)), event(2.0, 5, Partner::Body(6)), event(1.0, 5, Partner::Body(6))];
-        q.set_bulk(bulk);
+        q.set_bulk(bulk, &Workers::new(1));
         let mut order = vec![q.pop_before(10.0).map(|(e, _)| (e.time, e.body))];
         q.push(event(1.5, 7, Partner::Body(8)));
         q.push(event(2.0, 1, Partner::Body(8)));

@@ -150,6 +150,15 @@ impl Workers {
             })
             .collect()
     }
+
+    /// Sorts `v` (unstable: equal elements must be indistinguishable).
+    pub fn sort_unstable<T: Ord + Send>(&self, v: &mut [T]) {
+        if self.threads == 1 {
+            v.sort_unstable();
+        } else {
+            v.par_sort_unstable();
+        }
+    }
 }
 
 /// `slice` cut at the ascending `points` into `points.len() + 1` disjoint parts.

@@ -408,7 +408,7 @@ impl<B: BroadPhase> Pipeline<B> {
                 predicted.extend(predict_end(bodies, a, b, since, window));
             }
         }
-        self.queue.set_bulk(predicted);
+        self.queue.set_bulk(predicted, &self.workers);
         stats.candidate_pairs += candidates;
         stats.narrow_tests += candidates;
         stats.test_seconds += start.elapsed().as_secs_f64();
