@@ -206,8 +206,8 @@ impl EventLoop {
     }
 
     /// The contact of bodies `pushed.pair` at `t`, handled with what a worker found: what
-    /// [`respond::pair_impact`] and [`Self::pair_contact`] do for two frictionless spheres pushed
-    /// apart, from the same arithmetic on the same motions.
+    /// [`crate::pipeline::respond::pair_impact`] and [`Self::pair_contact`] do for two
+    /// frictionless spheres pushed apart, from the same arithmetic on the same motions.
     fn commit_pushed(&mut self, bodies: &mut Bodies, physics: &Physics, pushed: &Pushed, t: f64, out: &mut Output) {
         let [a, b] = pushed.pair;
         let (i, j) = (a as usize, b as usize);
