@@ -251,8 +251,9 @@ impl EventQueue {
         // total, so no two events are equal unless they are the same prediction: unstable is
         // fine, and every way of sorting gives the same order. With more than one worker
         // rayon's sort, which reads 2.1 times the radix sort's instructions (27.3 M against
-        // 12.9 M a frame at n = 10^5, 5 d/f) but shares them: the radix sort on one of two
-        // threads made a two-thread frame 4-10 % slower (BENCHMARKS.md, twenty-second session).
+        // 12.9 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
+        // 0.86-1.02 of the time they took with the radix sort on one of the two threads
+        // (BENCHMARKS.md, twenty-second session).
         if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
             self.radix.sort(&mut self.bulk);
         } else {

@@ -770,15 +770,13 @@ impl ProxyRule {
             _ => self.window.end,
         };
         let ahead = start + self.reach / velocity.length();
-        // Without a pull `longest` is infinite, and `min(start + inf)` would only turn a NaN
-        // `ahead` into infinity (or, from a start at -inf, leave it): values the comparisons below
-        // read alike (never before `end`, never past `start`), so the NaN-faithful `min` is left
-        // out where the pull is known to be zero.
-        let reached = if gravity == DVec3::ZERO { ahead } else { ahead.min(start + longest) };
-        let expires = reached < end && reached > start;
-        if expires {
+        let longest = (gravity != DVec3::ZERO).then_some(longest);
+        let expires = if let Some(reached) = reach_expiry(ahead, start, end, longest) {
             end = reached;
-        }
+            true
+        } else {
+            false
+        };
         let origin = motion.at_under(start, gravity);
         let (low, high) = swept_box(origin, origin + velocity * (end - start), radius);
         let bbox = CompactBox::new(low, high, self.box_min);
@@ -790,24 +788,36 @@ impl ProxyRule {
     }
 }
 
+/// When a proxy from `start` to `end` expires by its reach, strictly between the two: at the
+/// reach's end `ahead`, or under a pull at `start + longest` if that comes first (`longest`
+/// `None` without a pull). Without a pull `longest` would be infinite, and `min(start + inf)`
+/// would only turn a NaN `ahead` into infinity (or, from a start at -inf, leave it): values the
+/// comparisons read alike (never before `end`, never past `start`), so the NaN-faithful `min` is
+/// left out there (8 instructions a body).
+#[inline(always)]
+fn reach_expiry(ahead: f64, start: f64, end: f64, longest: Option<f64>) -> Option<f64> {
+    let reached = match longest {
+        Some(longest) => ahead.min(start + longest),
+        None => ahead,
+    };
+    (reached < end && reached > start).then_some(reached)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Without a pull, `span_under` takes the reach's end as it is where it once took its `min`
-    /// with `start + inf`: the same flag and end for every start, reach end and end, NaN and
+    /// Without a pull, `reach_expiry` (`span_under`'s) takes the reach's end as it is where it
+    /// would take its `min` with `start + inf`: the same flag and end for every start, reach end and end, NaN and
     /// infinities included (a NaN reach end is 0 / 0: a body at rest with no reach).
     #[test]
     fn an_infinite_longest_changes_no_expiry() {
         let values = [0.0, -0.0, 1.0, -1.0, 0.5, 1e300, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
-        fn expiry(reached: f64, start: f64, end: f64) -> Option<f64> {
-            (reached < end && reached > start).then_some(reached)
-        }
         for (start, ahead, end) in
             values.iter().flat_map(|&s| values.iter().flat_map(move |&a| values.map(|e| (s, a, e))))
         {
-            let with_min = expiry(ahead.min(start + f64::INFINITY), start, end);
-            let without = expiry(ahead, start, end);
+            let with_min = reach_expiry(ahead, start, end, Some(f64::INFINITY));
+            let without = reach_expiry(ahead, start, end, None);
             let (with_min, without) = (with_min.map(f64::to_bits), without.map(f64::to_bits));
             assert_eq!(with_min, without, "{start} {ahead} {end}");
         }
