@@ -65,12 +65,17 @@ impl BoxColumns {
         }
     }
 
-    /// Box `i`. Always inline: the sweep compiled for AVX left it a call, once per piece.
+    /// Box `i`. Always inline: the sweep compiled for AVX left it a call, once per piece. One
+    /// bounds check for the six columns rather than one each.
     #[inline(always)]
     pub fn get(&self, i: usize) -> CompactBox {
-        CompactBox {
-            low: [self.low[0][i], self.low[1][i], self.low[2][i]],
-            high: [self.high[0][i], self.high[1][i], self.high[2][i]],
+        assert!(i < self.low[0].len(), "box {i} beyond {}", self.low[0].len());
+        // SAFETY: the six columns have one length (`resize`), above `i`.
+        unsafe {
+            CompactBox {
+                low: [0, 1, 2].map(|axis| *self.low[axis].get_unchecked(i)),
+                high: [0, 1, 2].map(|axis| *self.high[axis].get_unchecked(i)),
+            }
         }
     }
 
@@ -128,11 +133,20 @@ impl BoxColumns {
     #[inline]
     pub fn for_each_overlap(&self, query: &CompactBox, range: Range<usize>, hit: impl FnMut(usize)) {
         assert!(range.end <= self.len(), "range {range:?} beyond {} boxes", self.len());
-        // SAFETY: the range lies within the boxes, and AVX is asked for only where it is.
         #[cfg(target_arch = "x86_64")]
-        unsafe {
-            self.scan(query, range, std::arch::is_x86_feature_detected!("avx"), hit)
-        };
+        {
+            let avx = std::arch::is_x86_feature_detected!("avx");
+            // SAFETY: the range lies within the boxes, and AVX is asked for only where it is.
+            let bits = |first, last| unsafe {
+                if avx {
+                    self.overlaps_avx(query, first, last)
+                } else {
+                    self.overlaps_sse2(query, first, last)
+                }
+            };
+            // SAFETY: as above.
+            unsafe { self.scan(range, bits, hit) };
+        }
         #[cfg(not(target_arch = "x86_64"))]
         let mut hit = hit;
         #[cfg(not(target_arch = "x86_64"))]
@@ -145,49 +159,45 @@ impl BoxColumns {
         }
     }
 
-    /// [`Self::for_each_overlap`] for a caller that has asked for AVX once (`AVX`: the processor
-    /// has it) rather than at every scan: called from a function compiled for AVX, the vector
-    /// scan inlines there.
+    /// [`Self::for_each_overlap`] of a query made by [`Query::new`] with the same `AVX`, for a
+    /// caller that has asked for AVX once (`AVX`: the processor has it) rather than at every
+    /// scan: called from a function compiled for AVX, the vector scan inlines there, and the
+    /// query's lanes are set up once for all the runs it scans.
     ///
     /// # Safety
     /// `AVX` only where the processor has AVX.
     #[inline(always)]
-    pub unsafe fn for_each_overlap_known<const AVX: bool>(
+    pub unsafe fn for_each_overlap_of<const AVX: bool>(
         &self,
-        query: &CompactBox,
+        query: &Query,
         range: Range<usize>,
         hit: impl FnMut(usize),
     ) {
         #[cfg(target_arch = "x86_64")]
         if AVX {
             assert!(range.end <= self.len(), "range {range:?} beyond {} boxes", self.len());
-            // SAFETY: the range lies within the boxes, and the processor has AVX (the caller's).
-            return unsafe { self.scan(query, range, true, hit) };
+            // SAFETY: the range lies within the boxes, and the processor has AVX (the caller's),
+            // so the query's lanes were set (`Query::new`).
+            return unsafe { self.scan(range, |first, last| self.overlaps_lanes(&query.lanes, first, last), hit) };
         }
-        self.for_each_overlap(query, range, hit)
+        self.for_each_overlap(&query.bbox, range, hit)
     }
 
-    /// [`Self::for_each_overlap`] by vector code, eight boxes at a time with `avx`, four
-    /// otherwise: up to 64 boxes' overlaps gathered as bits by a loop with no call inside, then
-    /// reported. `hit` is a call, which clobbers every vector register: were it made inside the
-    /// scan, the query and the columns would be saved and reloaded around it.
+    /// [`Self::for_each_overlap`] by vector code, `bits(first, last)` the overlaps of boxes
+    /// `first..last` (eight at a time with AVX, four otherwise): up to 64 boxes' overlaps
+    /// gathered as bits by a loop with no call inside, then reported. `hit` is a call, which
+    /// clobbers every vector register: were it made inside the scan, the query and the columns
+    /// would be saved and reloaded around it.
     ///
     /// # Safety
-    /// `range.end <= self.len()`, and `avx` only where the processor has AVX.
+    /// `range.end <= self.len()`, and `bits` safe for every `last <= range.end`.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn scan(&self, query: &CompactBox, range: Range<usize>, avx: bool, mut hit: impl FnMut(usize)) {
+    unsafe fn scan(&self, range: Range<usize>, bits: impl Fn(usize, usize) -> u64, mut hit: impl FnMut(usize)) {
         let (mut first, end) = (range.start, range.end);
         while first < end {
             let last = end.min(first + 64);
-            // SAFETY: the caller's.
-            let mut found = unsafe {
-                if avx {
-                    self.overlaps_avx(query, first, last)
-                } else {
-                    self.overlaps_sse2(query, first, last)
-                }
-            };
+            let mut found = bits(first, last);
             while found != 0 {
                 hit(first + found.trailing_zeros() as usize);
                 found &= found - 1;
@@ -233,9 +243,20 @@ impl BoxColumns {
     #[target_feature(enable = "avx")]
     #[inline]
     unsafe fn overlaps_avx(&self, query: &CompactBox, first: usize, last: usize) -> u64 {
+        // SAFETY: the caller's.
+        unsafe { self.overlaps_lanes(&lanes_of(query), first, last) }
+    }
+
+    /// [`Self::overlaps_avx`] of a query already in lanes ([`lanes_of`]).
+    ///
+    /// # Safety
+    /// The processor has AVX, and `last <= self.len()`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    unsafe fn overlaps_lanes(&self, query: &[std::arch::x86_64::__m256; 6], first: usize, last: usize) -> u64 {
         use std::arch::x86_64::*;
-        let q_low = query.low.map(|v| _mm256_set1_ps(v));
-        let q_high = query.high.map(|v| _mm256_set1_ps(v));
+        let (q_low, q_high) = ([query[0], query[1], query[2]], [query[3], query[4], query[5]]);
         let (low, high) = (self.low.each_ref().map(|c| c.as_ptr()), self.high.each_ref().map(|c| c.as_ptr()));
         // SAFETY: every load reads eight floats at j..j + 8 <= last + PADDING <= len + PADDING,
         // the length of a column.
@@ -244,10 +265,12 @@ impl BoxColumns {
             for axis in 0..3 {
                 let box_low = _mm256_loadu_ps(low[axis].add(j));
                 let box_high = _mm256_loadu_ps(high[axis].add(j));
-                // Ordered, non-signalling comparisons: a NaN fails them, as it fails `<=`.
+                // Ordered, non-signalling comparisons: a NaN fails them, as it fails `<=`. The
+                // stored box second in both (`q_high >= box_low` is `box_low <= q_high`), so each
+                // load is the comparison's memory operand rather than an instruction of its own.
                 let overlap = _mm256_and_ps(
                     _mm256_cmp_ps::<_CMP_LE_OQ>(q_low[axis], box_high),
-                    _mm256_cmp_ps::<_CMP_LE_OQ>(box_low, q_high[axis]),
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(q_high[axis], box_low),
                 );
                 all = _mm256_and_ps(all, overlap);
             }
@@ -257,17 +280,68 @@ impl BoxColumns {
     }
 }
 
+/// A query box made ready for the scans of many runs ([`BoxColumns::for_each_overlap_of`]): on
+/// x86_64 with AVX, its bounds broadcast into lanes once rather than at every run.
+#[derive(Clone, Copy)]
+pub struct Query {
+    bbox: CompactBox,
+    #[cfg(target_arch = "x86_64")]
+    lanes: [std::arch::x86_64::__m256; 6],
+}
+
+impl Query {
+    /// `bbox` ready for scans with AVX when `AVX`.
+    ///
+    /// # Safety
+    /// `AVX` only where the processor has AVX.
+    #[inline(always)]
+    pub unsafe fn new<const AVX: bool>(bbox: CompactBox) -> Query {
+        #[cfg(target_arch = "x86_64")]
+        {
+            // SAFETY: the processor has AVX when `AVX` (the caller's); zeros are lanes too, and
+            // never read without AVX.
+            let lanes = unsafe {
+                if AVX {
+                    lanes_of(&bbox)
+                } else {
+                    std::mem::zeroed()
+                }
+            };
+            Query { bbox, lanes }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        Query { bbox }
+    }
+}
+
+/// `query`'s low then high bounds, each broadcast into the eight lanes of a register.
+///
+/// # Safety
+/// The processor has AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+unsafe fn lanes_of(query: &CompactBox) -> [std::arch::x86_64::__m256; 6] {
+    use std::arch::x86_64::_mm256_set1_ps;
+    let ([lx, ly, lz], [hx, hy, hz]) = (query.low, query.high);
+    [lx, ly, lz, hx, hy, hz].map(|v| _mm256_set1_ps(v))
+}
+
 /// The bits of boxes `first..last` (at most 64), `group(j)` giving those of boxes
 /// `j..j + LANES`; the boxes past `last` (the padding, or boxes not asked for) masked off.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn chunk_bits<const LANES: usize>(first: usize, last: usize, group: impl Fn(usize) -> u64) -> u64 {
-    let (mut found, mut j) = (0u64, first);
-    while j < last {
-        found |= group(j) << (j - first);
-        j += LANES;
+    // Each group's bits enter at the top and the earlier ones move down a group: two shifts by
+    // constants, where shifting each group up to its place took a variable count (moved to `cl`
+    // and masked).
+    let (mut found, mut k, count) = (0u64, 0, last - first);
+    while k < count {
+        found = (found >> LANES) | (group(first + k) << (64 - LANES));
+        k += LANES;
     }
-    found & (u64::MAX >> (64 - (last - first)))
+    // The boxes past `last` (the last group's top bits) shifted out, then the first to bit 0.
+    (found << (k - count)) >> (64 - count)
 }
 
 #[cfg(test)]
@@ -302,7 +376,7 @@ mod tests {
             {
                 found.clear();
                 // SAFETY: `to` is at most the boxes' count; no AVX asked for.
-                unsafe { boxes.scan(&query, from..to, false, |j| found.push(j)) };
+                unsafe { boxes.scan(from..to, |f, l| boxes.overlaps_sse2(&query, f, l), |j| found.push(j)) };
                 assert_eq!(found, expected);
             }
         }

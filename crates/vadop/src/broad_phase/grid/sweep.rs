@@ -5,6 +5,7 @@
 //! the grid, so workers sweep slabs of cells side by side.
 
 use super::Grid;
+use crate::broad_phase::box_columns::Query;
 use crate::broad_phase::candidates::{Candidates, Reporting};
 use crate::broad_phase::proxy::Reported;
 use crate::parallel::Workers;
@@ -120,6 +121,8 @@ impl Grid {
                     }
                     for a in from..to {
                         let bbox = boxes.get(a);
+                        // SAFETY (here and below): `AVX` only with AVX, the caller's.
+                        let query = unsafe { Query::new::<AVX>(bbox) };
                         // A box in a neighbour lies past this cell's upper face on each axis that
                         // leads there (its low corner does, and cells are never smaller than a
                         // box): only a box reaching across those faces can overlap it, and the
@@ -130,10 +133,9 @@ impl Grid {
                         let reach = level.coordinates(bbox.corners().1);
                         let beyond = usize::from(reach[0] > x) | usize::from(reach[1] > y) << 1;
                         let across_z = reach[2] > z;
-                        // SAFETY (here and below): `AVX` only with AVX, the caller's.
                         unsafe {
-                            boxes.for_each_overlap_known::<AVX>(
-                                &bbox,
+                            boxes.for_each_overlap_of::<AVX>(
+                                &query,
                                 a + 1..if across_z { next_z_end } else { to },
                                 |b| candidates.overlap(a, b, report),
                             )
@@ -142,7 +144,7 @@ impl Grid {
                             if beyond & faces == faces {
                                 let other_to = if across_z { across } else { within };
                                 unsafe {
-                                    boxes.for_each_overlap_known::<AVX>(&bbox, other_from..other_to, |b| {
+                                    boxes.for_each_overlap_of::<AVX>(&query, other_from..other_to, |b| {
                                         candidates.overlap(a, b, report)
                                     })
                                 };
@@ -153,7 +155,7 @@ impl Grid {
                         for coarser in &self.levels[k + 1..] {
                             for c2 in coarser.cells_near(low, high) {
                                 unsafe {
-                                    boxes.for_each_overlap_known::<AVX>(&bbox, coarser.run(c2), |b| {
+                                    boxes.for_each_overlap_of::<AVX>(&query, coarser.run(c2), |b| {
                                         candidates.overlap(a, b, report)
                                     })
                                 };
