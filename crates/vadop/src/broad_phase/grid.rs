@@ -247,6 +247,8 @@ pub struct Grid {
     plan: Vec<(u32, u32)>,
     per_exponent: Vec<(i32, usize)>,
     level_of: Vec<u32>,
+    /// Scratch of the binning on one worker: the paths cut into more than one piece.
+    cut: Vec<u32>,
     extents: Vec<f64>,
     pieces: Vec<(CompactBox, Window)>,
     /// Scratch of a query: the runs of binned slots it reaches, then the slots whose boxes
@@ -276,6 +278,7 @@ impl Grid {
             plan: Vec::new(),
             per_exponent: Vec::new(),
             level_of: Vec::new(),
+            cut: Vec::new(),
             extents: Vec::new(),
             pieces: Vec::new(),
             runs: Vec::new(),
@@ -349,20 +352,60 @@ impl Grid {
                 }
                 continue;
             }
-            let level = &levels[level_or_cell as usize];
-            // The pieces' low corners lie in the path's box, so their cells lie between the
-            // cells of its corners: cells are numbered in x, then y, then z order.
-            let (low, high) = paths.bbox(i, AHEAD).corners();
-            let (first, last) = (level.index(level.coordinates(low)), level.index(level.coordinates(high)));
-            if level.cells_before + last < owned.start || level.cells_before + first >= owned.end {
+            Grid::for_each_owned_piece_cut::<AHEAD>(&levels[level_or_cell as usize], i, count, paths, &owned, sink);
+        }
+    }
+
+    /// Hands `sink` the pieces, in order, whose cell is in `owned` of path `i` (a foreseen one
+    /// when `AHEAD`), cut into `count` pieces of `level`.
+    #[inline(always)]
+    fn for_each_owned_piece_cut<const AHEAD: bool>(
+        level: &Level,
+        i: usize,
+        count: u32,
+        paths: BinnedPaths,
+        owned: &std::ops::Range<usize>,
+        sink: &mut impl PieceSink,
+    ) {
+        // The pieces' low corners lie in the path's box, so their cells lie between the cells of
+        // its corners: cells are numbered in x, then y, then z order.
+        let (low, high) = paths.bbox(i, AHEAD).corners();
+        let (first, last) = (level.index(level.coordinates(low)), level.index(level.coordinates(high)));
+        if level.cells_before + last < owned.start || level.cells_before + first >= owned.end {
+            return;
+        }
+        Grid::for_each_piece(paths.proxies, &paths.path(i, AHEAD), count, |bbox, window| {
+            let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
+            if owned.contains(&cell) {
+                sink.piece(i, cell, bbox, window, AHEAD);
+            }
+        });
+    }
+
+    /// Names in each path's `plan` (paths `offset..`) its level, by `level_of` its exponent less
+    /// `lowest`, or for a single piece its cell (numbered across levels), then calls
+    /// `placed(path, plan)` for each path with pieces.
+    #[inline(always)]
+    fn place_paths(
+        (levels, level_of, lowest): (&[Level], &[u32], i32),
+        paths: BinnedPaths,
+        offset: usize,
+        plan: &mut [(u32, u32)],
+        mut placed: impl FnMut(usize, (u32, u32)),
+    ) {
+        for (k, entry) in plan.iter_mut().enumerate() {
+            if entry.0 == 0 {
                 continue;
             }
-            Grid::for_each_piece(paths.proxies, &paths.path(i, AHEAD), count, |bbox, window| {
-                let cell = level.cells_before + level.index(level.coordinates(bbox.corners().0));
-                if owned.contains(&cell) {
-                    sink.piece(i, cell, bbox, window, AHEAD);
-                }
-            });
+            // Every counted path's exponent is in the list, so it is its own level's.
+            entry.1 = level_of[(entry.1 as i32 - lowest) as usize];
+            let i = offset + k;
+            if entry.0 == 1 {
+                let level = &levels[entry.1 as usize];
+                let cell = level.index(level.coordinates(paths.bbox(i, paths.is_ahead(i)).corners().0));
+                entry.1 = (level.cells_before + cell) as u32;
+            }
+            placed(i, *entry);
         }
     }
 
@@ -581,41 +624,58 @@ impl Grid {
             cells_before += level.late_head.len();
             self.levels.push(level);
         }
-        // Each path's level, or a single piece's cell, found in parallel.
-        let (levels, level_of_exponent) = (&self.levels, &level_of);
-        workers.chunks_mut(&mut plan, |offset, chunk| {
-            for (k, entry) in chunk.iter_mut().enumerate() {
-                if entry.0 > 0 {
-                    // Every counted path's exponent is in the list, so it is its own level's.
-                    entry.1 = level_of_exponent[(entry.1 as i32 - lowest) as usize];
-                }
-                if entry.0 == 1 {
-                    let level = &levels[entry.1 as usize];
-                    let i = offset + k;
-                    let cell = level.index(level.coordinates(paths.bbox(i, paths.is_ahead(i)).corners().0));
-                    entry.1 = (level.cells_before + cell) as u32;
-                }
-            }
-        });
-        // Pass 2: count the pieces of each cell; pass 3: scatter them (a counting sort, no
-        // hashing). Each worker owns a range of cells (cells are numbered level by level, so
-        // their slots are a range too) and goes through all bodies in order, taking the pieces
-        // that fall in its cells: a cell holds its pieces in body order whatever the number of
-        // workers, and no two workers write near each other. Longer paths are cut again.
+        // Each path's level, or a single piece's cell, found in parallel; then pass 2: count
+        // the pieces of each cell, and pass 3: scatter them (a counting sort, no hashing). In
+        // passes 2 and 3 each worker owns a range of cells (cells are numbered level by level,
+        // so their slots are a range too) and goes through all bodies in order, taking the
+        // pieces that fall in its cells: a cell holds its pieces in body order whatever the
+        // number of workers, and no two workers write near each other. Longer paths are cut
+        // again.
         let cells = self.levels.last().map_or(0, |l| l.cells_before + l.late_head.len());
         let mut next_slot = std::mem::take(&mut self.next_slot);
         next_slot.clear();
         next_slot.resize(cells, 0);
-        let equal_cells: Vec<usize> = (1..workers.threads()).map(|k| k * cells / workers.threads()).collect();
-        let (levels, plan_of) = (&self.levels, &plan);
-        let parts: Vec<_> = split_at_points(&mut next_slot, &equal_cells)
-            .into_iter()
-            .zip(std::iter::once(0).chain(equal_cells.iter().copied()))
-            .collect();
-        workers.for_each_part(parts, |_, (counts, lowest)| {
-            let owned = lowest..lowest + counts.len();
-            Grid::for_each_owned_piece(levels, plan_of, paths, owned, &mut CountPieces { counts, lowest });
-        });
+        let levels = &self.levels;
+        let by_exponent = (&self.levels[..], &level_of[..], lowest);
+        if workers.threads() == 1 {
+            // One worker owns every cell: a single piece is counted where its cell is found, and
+            // pass 2 goes through the cut paths alone, listed here, rather than through every
+            // path again (about 20 instructions a single piece).
+            let mut cut = std::mem::take(&mut self.cut);
+            cut.clear();
+            Grid::place_paths(by_exponent, paths, 0, &mut plan, |i, (count, cell)| {
+                if count == 1 {
+                    next_slot[cell as usize] += 1;
+                } else {
+                    cut.push(i as u32);
+                }
+            });
+            let (owned, slots) = (0..cells, paths.proxies.slots());
+            let sink = &mut CountPieces { counts: &mut next_slot, lowest: 0 };
+            for &i in &cut {
+                let (i, (count, level)) = (i as usize, plan[i as usize]);
+                let level = &levels[level as usize];
+                if i < slots {
+                    Grid::for_each_owned_piece_cut::<false>(level, i, count, paths, &owned, sink);
+                } else {
+                    Grid::for_each_owned_piece_cut::<true>(level, i, count, paths, &owned, sink);
+                }
+            }
+            self.cut = cut;
+        } else {
+            workers
+                .chunks_mut(&mut plan, |offset, chunk| Grid::place_paths(by_exponent, paths, offset, chunk, |_, _| {}));
+            let equal_cells: Vec<usize> = (1..workers.threads()).map(|k| k * cells / workers.threads()).collect();
+            let parts: Vec<_> = split_at_points(&mut next_slot, &equal_cells)
+                .into_iter()
+                .zip(std::iter::once(0).chain(equal_cells.iter().copied()))
+                .collect();
+            let plan = &plan;
+            workers.for_each_part(parts, |_, (counts, lowest)| {
+                let owned = lowest..lowest + counts.len();
+                Grid::for_each_owned_piece(levels, plan, paths, owned, &mut CountPieces { counts, lowest });
+            });
+        }
         // Counts become starts: of each cell in its level, and of the next piece it takes.
         for level in &mut self.levels {
             let mut filled = 0u32;
@@ -656,7 +716,7 @@ impl Grid {
         workers.for_each_part(parts, |_, ((((next_slot, (owners, boxes)), motions), lowest), first_slot)| {
             let owned = lowest..lowest + next_slot.len();
             let mut store = StorePieces { paths, next_slot, lowest, first_slot, owners, boxes, motions };
-            Grid::for_each_owned_piece(levels, plan_of, paths, owned, &mut store);
+            Grid::for_each_owned_piece(levels, &plan, paths, owned, &mut store);
         });
         self.next_slot = next_slot;
         self.foreseen = !paths.foreseen.is_empty();
@@ -731,6 +791,7 @@ impl BroadPhase for Grid {
             + self.plan.capacity() * 8
             + self.extents.capacity() * 8
             + self.level_of.capacity() * 4
+            + self.cut.capacity() * 4
             + self.next_slot.capacity() * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels
