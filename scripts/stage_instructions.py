@@ -34,14 +34,18 @@ import sys
 MARKED = ["*ProxyTable::refresh_all", "*Workers::extend_ranges*", "*Grid::bin", "*find_pairs_screened",
           "*EventQueue::set_bulk", "*PassedContacts::work_out_ahead", "*PassedContacts::resolve",
           "*Pipeline<B>::step", "*Job>::execute"]
+# Marked at their start only: the stage runs on from there to the next mark.
+STARTS = ["*foreseen::foresee_bounces"]
 SHORT = [("Job>::execute", "execute"), ("refresh_all", "refresh"), ("extend_ranges", "ext"), ("Grid::bin", "bin"),
          ("find_pairs_screened", "pairs"), ("set_bulk", "sort"), ("work_out_ahead", "ahead"),
-         ("resolve", "resolve"), ("Pipeline<B>::step", "step")]
+         ("resolve", "resolve"), ("Pipeline<B>::step", "step"), ("foresee_bounces", "foresee")]
 # A stage by the marks that begin and end it on the thread running the pipeline (callgrind misses
 # the entry or the exit of some of these functions: the marks it gives are the ones listed).
 NAMES = {
     ("before refresh", "after refresh"): "refresh",
     ("before ext", "before bin"): "foreseen paths",
+    ("before ext", "before foresee"): "wall contacts",
+    ("before foresee", "before bin"): "foreseen bounces and paths",
     ("before bin", "after bin"): "binning",
     ("before pairs", "before ext"): "pair sweep",
     ("before ext", "after pairs"): "pair sweep",
@@ -55,12 +59,13 @@ NAMES = {
     ("after ahead", "after resolve"): "serial loop and resolve",
     ("after ahead", "before refresh"): "serial loop and the window rule",
 }
-STAGES = ["refresh", "wall contacts", "foreseen bounces", "foreseen paths", "binning", "pair sweep",
+STAGES = ["refresh", "wall contacts", "foreseen bounces", "foreseen paths", "foreseen bounces and paths", "binning", "pair sweep",
           "own events", "sort", "work out ahead", "serial loop and resolve", "serial loop and the window rule"]
 
 
 def run(vadop, speed, frames, threads, bodies):
     marks = [f"--dump-{when}={name}" for name in MARKED for when in ("before", "after")]
+    marks += [f"--dump-before={name}" for name in STARTS]
     command = ["valgrind", "--tool=callgrind", "--separate-threads=yes", "--fair-sched=yes",
                "--callgrind-out-file=stages.cg", *marks, vadop, "simulate", "--bodies", str(bodies),
                "--max-speed", str(speed), "--mode", "detect", "--frames", str(frames), "--reference", "none",
