@@ -7,8 +7,9 @@
 //! the bounce is still to come. The bounce's wall contact (where, the normal, the impulse) is a
 //! function of the body's motion at the window's start too, and is worked out then as well. At
 //! the bounce the event loop, on one thread, then only checks that it is the one foreseen, counts
-//! it, moves the body on to its foreseen motion and stamp, enters its proxy made ahead and
-//! reports the contact worked out: no query, no pair test, no geometry.
+//! it, moves the body on to its foreseen motion and stamp, enters its proxy made ahead, queues
+//! its own events (its next wall contact was found at the window's start too, from the motion
+//! after the bounce) and reports the contact worked out: no query, no pair test, no geometry.
 //!
 //! The window's start asks each body's wall contact once ([`Pipeline::predict_walls`]): the
 //! foresight and the window's own events both read it.
@@ -26,7 +27,7 @@
 //! held, and queued again once the bounce is taken. Second and later bounces in a window are
 //! re-tested as any change is. It handles no event but the foreseen bounce itself.
 
-use super::predict::predict_wall;
+use super::predict::{predict_wall, wall_event};
 use super::Pipeline;
 use crate::bodies::{Bodies, BodyState, FORESEEN_STEP};
 use crate::broad_phase::proxy::{Foreseen, ProxyTable, Span};
@@ -35,6 +36,7 @@ use crate::event_queue::{Event, Partner};
 use crate::frame::{Contact, Mode, Output, Physics, Touched};
 use crate::motion::Motion;
 use crate::narrow_phase::contacts::wall_geometry;
+use crate::narrow_phase::spheres::wall_contact_time;
 use crate::parallel::{split_at_points, Workers};
 use crate::response::impact::motion_off_wall;
 use crate::response::rules::Rule;
@@ -51,6 +53,11 @@ pub(super) struct ForeseenBounces {
     bounces: Vec<Bounce>,
     /// ... and its path after it, in the same order.
     paths: Vec<Foreseen>,
+    /// Where the bounces of bodies `b << shift` on start: a look-up reads about one bounce, where
+    /// a binary search of them all cost the event loop 120 instructions a bounce. About one
+    /// entry a bounce (an index by body would take 4 bytes a body).
+    starts: Vec<u32>,
+    shift: u32,
     /// Predictions of foreseen paths that popped at their body's bounce, before it.
     held: Vec<Event>,
 }
@@ -65,6 +72,10 @@ struct Bounce {
     point: DVec3,
     normal: DVec3,
     impulse: f64,
+    /// The body's next wall contact on its foreseen path, found as the event loop's would be
+    /// (whether it lies in the window is told at the bounce: the window may end early).
+    next_wall: Option<Wall>,
+    next_time: f64,
 }
 
 impl ForeseenBounces {
@@ -78,8 +89,18 @@ impl ForeseenBounces {
         &self.walls
     }
 
+    /// Where body `body`'s bounce lies in [`Self::bounces`] and [`Self::paths`], if it has one.
+    #[inline]
+    fn find(&self, body: u32) -> Option<usize> {
+        let bucket = (body >> self.shift) as usize;
+        let (&from, &to) = (self.starts.get(bucket)?, self.starts.get(bucket + 1)?);
+        let (from, to) = (from as usize, to as usize);
+        self.bounces[from..to].binary_search_by_key(&body, |b| b.body).ok().map(|k| from + k)
+    }
+
     pub(super) fn memory_bytes(&self) -> usize {
-        (self.walls.capacity() + self.held.capacity()) * std::mem::size_of::<Event>()
+        self.starts.capacity() * std::mem::size_of::<u32>()
+            + (self.walls.capacity() + self.held.capacity()) * std::mem::size_of::<Event>()
             + self.bounces.capacity() * std::mem::size_of::<Bounce>()
             + self.paths.capacity() * std::mem::size_of::<Foreseen>()
     }
@@ -110,7 +131,16 @@ fn foresee_bounces(
 ) {
     let total = chunks.iter().map(|&(_, bounces)| bounces).sum();
     // Every place is written below (only the places past the last window's filled first).
-    let unset = Bounce { body: 0, wall: Wall::MinX, time: 0.0, point: DVec3::ZERO, normal: DVec3::ZERO, impulse: 0.0 };
+    let unset = Bounce {
+        body: 0,
+        wall: Wall::MinX,
+        time: 0.0,
+        point: DVec3::ZERO,
+        normal: DVec3::ZERO,
+        impulse: 0.0,
+        next_wall: None,
+        next_time: 0.0,
+    };
     foreseen.bounces.resize(total, unset);
     let unset = Foreseen { body: 0, stamp: 0, state: BodyState::default(), made: (Span::default(), 0) };
     foreseen.paths.resize(total, unset);
@@ -130,16 +160,36 @@ fn foresee_bounces(
         })
         .collect();
     let (bounds, restitution) = (&physics.bounds, physics.restitution);
+    let (min, max) = bounds.walls();
     workers.for_each_part(parts, |_, (walls, (bounces, paths))| {
         let found = walls.iter().filter_map(|event| Some((event, bounce_wall(table, event)?)));
         for ((bounce, path), (event, wall)) in bounces.iter_mut().zip(paths).zip(found) {
             let (body, i, time) = (event.body, event.body as usize, event.time);
             let (point, normal) = wall_geometry(bodies, i, wall, bounds, time);
             let (motion, impulse) = motion_off_wall(bodies, i, wall, time, restitution);
-            *bounce = Bounce { body, wall, time, point, normal, impulse };
-            let state = BodyState { motion, radius: bodies.state[i].radius };
+            let radius = bodies.state[i].radius;
+            // As `contacts::wall_start` finds a sphere's, from the motion the bounce gives it.
+            let next = wall_contact_time(&motion, radius, min, max, bodies.gravity_on(i));
+            let (next_wall, next_time) = (next.map(|(_, wall)| wall), next.map_or(0.0, |(time, _)| time));
+            *bounce = Bounce { body, wall, time, point, normal, impulse, next_wall, next_time };
+            let state = BodyState { motion, radius };
             let stamp = bodies.stamp(i).wrapping_add(FORESEEN_STEP);
             *path = Foreseen { body, stamp, state, made: table.made_ahead(i, bodies, &motion, time) };
+        }
+    });
+    // Runs of 2^shift bodies, about as many as bounces (a power of two, so a body's is a shift).
+    let shift = bodies.slots().div_ceil(total.max(1)).next_power_of_two().trailing_zeros();
+    foreseen.shift = shift;
+    foreseen.starts.resize((bodies.slots() >> shift) + 2, 0);
+    let bounces = &foreseen.bounces;
+    let run = |k: usize| bounces.get(k).map_or(usize::MAX, |b| (b.body >> shift) as usize);
+    workers.chunks_mut(&mut foreseen.starts, |offset, starts| {
+        let mut k = bounces.partition_point(|b| ((b.body >> shift) as usize) < offset);
+        for (bucket, start) in (offset..).zip(starts) {
+            while run(k) < bucket {
+                k += 1;
+            }
+            *start = k as u32;
         }
     });
 }
@@ -186,6 +236,7 @@ impl<B: BroadPhase> Pipeline<B> {
         } else {
             foreseen.bounces.clear();
             foreseen.paths.clear();
+            foreseen.starts.clear();
         }
     }
 
@@ -203,9 +254,8 @@ impl<B: BroadPhase> Pipeline<B> {
         out: &mut Output,
     ) -> bool {
         let (body, t, i) = (event.body, event.time, event.body as usize);
-        let bounces = &self.foreseen.bounces;
-        let Ok(k) = bounces.binary_search_by_key(&body, |b| b.body) else { return false };
-        let (bounce, path) = (bounces[k], &self.foreseen.paths[k]);
+        let Some(k) = self.foreseen.find(body) else { return false };
+        let (bounce, path) = (self.foreseen.bounces[k], &self.foreseen.paths[k]);
         if bodies.stamp(i).wrapping_add(FORESEEN_STEP) != path.stamp
             || bounce.time != t
             || event.partner != Partner::Wall(bounce.wall)
@@ -232,7 +282,13 @@ impl<B: BroadPhase> Pipeline<B> {
         });
         self.updates += 1;
         out.stats.retests += 1;
-        self.predict_own_events(body, bodies, physics, self.window.from(t));
+        // Its own events, its next wall contact worked out at the window's start.
+        let window = self.window.from(t);
+        let next = bounce.next_wall.map(|wall| (bounce.next_time, wall));
+        let found = || next.filter(|&(time, _)| window.contains(time)).map(Ok);
+        let wall = wall_event(&self.proxies, (body, bodies.stamp(i)), window, found);
+        debug_assert_eq!(wall, predict_wall(bodies, &self.proxies, &physics.bounds, body, window));
+        self.push_own_events(body, wall, bodies, physics, window);
         out.contacts.push(Contact {
             time: t,
             body: bodies.handle(i),
