@@ -10,8 +10,10 @@ against two threads'.
 callgrind dumps the counts of the thread that enters or leaves a function named by
 `--dump-before`/`--dump-after`, and only that thread's: the stages' functions
 (`ProxyTable::refresh_all`, `Grid::bin`, `find_pairs_screened`, `EventQueue::set_bulk`,
-`PassedContacts::work_out_ahead` and `resolve`, `Workers::extend_ranges` for the foresight's and
-the bodies' own passes, which are inlined into `Pipeline::step`) mark the stages on the thread that
+`PassedContacts::work_out_ahead` and `resolve`, `Workers::extend_ranges` for the foresight's wall
+contacts and the bodies' own passes, which are inlined into `Pipeline::step`, and the foresight's
+`foresee_bounces`, marked at its start only: its stage runs on to the binning, as its two passes'
+did before it) mark the stages on the thread that
 runs the pipeline, and rayon's `Job::execute` marks each job the other thread steals. The parts
 are numbered in the order they were dumped, whichever thread's: a part belongs to the stage whose
 end is the next stage mark. Per stage: the instructions of the thread that runs the pipeline

@@ -271,15 +271,18 @@ impl<B: BroadPhase> Pipeline<B> {
         debug_assert_eq!(bits(&bodies.motion(i)), bits(&path.state.motion), "not as foreseen");
         bodies.take_foreseen(i);
         self.proxies.enter_made(i, bodies, path.made);
-        // This body's held predictions only: another's wait for its own bounce.
-        let queue = &mut self.queue;
-        self.foreseen.held.retain(|event| {
-            let of_body = event.body == body || event.partner == Partner::Body(body);
-            if of_body {
-                queue.push(*event);
-            }
-            !of_body
-        });
+        // This body's held predictions only: another's wait for its own bounce. Mostly none
+        // are held, and a look costs less than `retain`'s set-up (16 instructions a bounce).
+        if !self.foreseen.held.is_empty() {
+            let queue = &mut self.queue;
+            self.foreseen.held.retain(|event| {
+                let of_body = event.body == body || event.partner == Partner::Body(body);
+                if of_body {
+                    queue.push(*event);
+                }
+                !of_body
+            });
+        }
         self.updates += 1;
         out.stats.retests += 1;
         // Its own events, its next wall contact worked out at the window's start.
