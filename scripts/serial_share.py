@@ -30,7 +30,7 @@ import sys
 
 PARALLEL = ["BroadPhase>::find_pairs", "BroadPhase>::prepare", "Grid::bin", "ProxyTable::refresh_all",
             "PassedContacts::resolve", "EventQueue::set_bulk", "Workers::extend_ranges",
-            "PassedContacts::work_out_ahead"]
+            "PassedContacts::work_out_ahead", "foreseen::foresee_bounces"]
 
 
 def tree(profile):

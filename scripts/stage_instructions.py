@@ -10,8 +10,10 @@ against two threads'.
 callgrind dumps the counts of the thread that enters or leaves a function named by
 `--dump-before`/`--dump-after`, and only that thread's: the stages' functions
 (`ProxyTable::refresh_all`, `Grid::bin`, `find_pairs_screened`, `EventQueue::set_bulk`,
-`PassedContacts::work_out_ahead` and `resolve`, `Workers::extend_ranges` for the foresight's and
-the bodies' own passes, which are inlined into `Pipeline::step`) mark the stages on the thread that
+`PassedContacts::work_out_ahead` and `resolve`, `Workers::extend_ranges` for the foresight's wall
+contacts and the bodies' own passes, which are inlined into `Pipeline::step`, and the foresight's
+`foresee_bounces`, marked at its start only: its stage runs on to the binning, as its two passes'
+did before it) mark the stages on the thread that
 runs the pipeline, and rayon's `Job::execute` marks each job the other thread steals. The parts
 are numbered in the order they were dumped, whichever thread's: a part belongs to the stage whose
 end is the next stage mark. Per stage: the instructions of the thread that runs the pipeline
@@ -34,14 +36,18 @@ import sys
 MARKED = ["*ProxyTable::refresh_all", "*Workers::extend_ranges*", "*Grid::bin", "*find_pairs_screened",
           "*EventQueue::set_bulk", "*PassedContacts::work_out_ahead", "*PassedContacts::resolve",
           "*Pipeline<B>::step", "*Job>::execute"]
+# Marked at their start only: the stage runs on from there to the next mark.
+STARTS = ["*foreseen::foresee_bounces"]
 SHORT = [("Job>::execute", "execute"), ("refresh_all", "refresh"), ("extend_ranges", "ext"), ("Grid::bin", "bin"),
          ("find_pairs_screened", "pairs"), ("set_bulk", "sort"), ("work_out_ahead", "ahead"),
-         ("resolve", "resolve"), ("Pipeline<B>::step", "step")]
+         ("resolve", "resolve"), ("Pipeline<B>::step", "step"), ("foresee_bounces", "foresee")]
 # A stage by the marks that begin and end it on the thread running the pipeline (callgrind misses
 # the entry or the exit of some of these functions: the marks it gives are the ones listed).
 NAMES = {
     ("before refresh", "after refresh"): "refresh",
     ("before ext", "before bin"): "foreseen paths",
+    ("before ext", "before foresee"): "wall contacts",
+    ("before foresee", "before bin"): "foreseen bounces and paths",
     ("before bin", "after bin"): "binning",
     ("before pairs", "before ext"): "pair sweep",
     ("before ext", "after pairs"): "pair sweep",
@@ -55,12 +61,13 @@ NAMES = {
     ("after ahead", "after resolve"): "serial loop and resolve",
     ("after ahead", "before refresh"): "serial loop and the window rule",
 }
-STAGES = ["refresh", "wall contacts", "foreseen bounces", "foreseen paths", "binning", "pair sweep",
+STAGES = ["refresh", "wall contacts", "foreseen bounces", "foreseen paths", "foreseen bounces and paths", "binning", "pair sweep",
           "own events", "sort", "work out ahead", "serial loop and resolve", "serial loop and the window rule"]
 
 
 def run(vadop, speed, frames, threads, bodies):
     marks = [f"--dump-{when}={name}" for name in MARKED for when in ("before", "after")]
+    marks += [f"--dump-before={name}" for name in STARTS]
     command = ["valgrind", "--tool=callgrind", "--separate-threads=yes", "--fair-sched=yes",
                "--callgrind-out-file=stages.cg", *marks, vadop, "simulate", "--bodies", str(bodies),
                "--max-speed", str(speed), "--mode", "detect", "--frames", str(frames), "--reference", "none",

@@ -20,7 +20,7 @@ use crate::narrow_phase::spheres::{
     straight_paths_clearly_miss_four, wall_contact_time,
 };
 use crate::narrow_phase::static_geometry::StaticGeometry;
-use crate::walls::BoxBounds;
+use crate::walls::{BoxBounds, Wall};
 use crate::window::Window;
 use glam::DVec3;
 
@@ -290,15 +290,27 @@ pub(super) fn predict_wall(
     window: Window,
 ) -> Option<Event> {
     let i = body as usize;
+    wall_event(proxies, (body, bodies.stamp(i)), window, || contacts::wall_start(bodies, i, bounds, window))
+}
+
+/// [`predict_wall`] of body `body` (stamped as given) whose first wall contact in `window`, as
+/// [`contacts::wall_start`] finds it, is `start`'s: asked only when the proxy does not tell.
+#[inline]
+pub(super) fn wall_event(
+    proxies: &ProxyTable,
+    (body, stamp): (u32, u32),
+    window: Window,
+    start: impl FnOnce() -> Option<Result<(f64, Wall), f64>>,
+) -> Option<Event> {
     // Its proxy, just made from this motion, found the wall contact past the window's end.
-    if proxies.meets_no_wall(i) && !(window.end > proxies.window().end) {
+    if proxies.meets_no_wall(body as usize) && !(window.end > proxies.window().end) {
         return None;
     }
-    let (time, partner) = match contacts::wall_start(bodies, i, bounds, window)? {
+    let (time, partner) = match start()? {
         Ok((time, wall)) => (time, Partner::Wall(wall)),
         Err(time) => (time, Partner::WallStalled),
     };
-    Some(Event { time, body, partner, body_stamp: bodies.stamp(i), partner_stamp: 0 })
+    Some(Event { time, body, partner, body_stamp: stamp, partner_stamp: 0 })
 }
 
 /// Body `body`'s crossing of a periodic face of `bounds` if its canonical time lies in `window`:

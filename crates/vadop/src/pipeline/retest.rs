@@ -2,7 +2,7 @@
 //! contacts with its candidate partners, the walls, the static geometry and (with ends
 //! reported) the end of each contact it is in are predicted for the rest of the window. A wall
 //! bounce foreseen at the window's start (see [`super::foreseen`]) is not re-tested: its pairs
-//! were predicted then, and only its own events are predicted here.
+//! and its next wall contact were predicted then, and only its own events are queued here.
 //!
 //! It owns that re-test only. A shape's searches against its partners are independent of one
 //! another, so in a world of shapes with more than one worker they run on every worker, and
@@ -14,6 +14,7 @@ use super::{sort_predictions, Pipeline, Prediction};
 use crate::bodies::Bodies;
 use crate::broad_phase::proxy::Reported;
 use crate::broad_phase::BroadPhase;
+use crate::event_queue::Event;
 use crate::frame::{FrameStats, Physics};
 use crate::window::Window;
 
@@ -50,8 +51,21 @@ impl<B: BroadPhase> Pipeline<B> {
     /// face, its proxy's renewal and (with ends reported) the end of each contact it is in, in
     /// `window`, from its proxy just entered.
     pub(super) fn predict_own_events(&mut self, body: u32, bodies: &Bodies, physics: &Physics, window: Window) {
+        let wall = predict_wall(bodies, &self.proxies, &physics.bounds, body, window);
+        self.push_own_events(body, wall, bodies, physics, window);
+    }
+
+    /// [`Self::predict_own_events`] with the wall contact, `wall`, predicted already.
+    pub(super) fn push_own_events(
+        &mut self,
+        body: u32,
+        wall: Option<Event>,
+        bodies: &Bodies,
+        physics: &Physics,
+        window: Window,
+    ) {
         let (queue, proxies) = (&mut self.queue, self.proxies.view(bodies));
-        if let Some(event) = predict_wall(bodies, &self.proxies, &physics.bounds, body, window) {
+        if let Some(event) = wall {
             queue.push(event);
         }
         if let Some(event) = predict_crossing(bodies, &physics.bounds, body, window) {
