@@ -534,7 +534,10 @@ impl<'a> Search<'a> {
             image.motion.position += image_shift;
         }
         let window = Window::new(eligible.start(), f64::INFINITY);
-        let Some((time, _)) = contacts::pair_start(self.bodies, (low, low_state), (high, &image), window) else {
+        // Moving spheres without gravity (the loop takes no other world), screened: the lean
+        // form of `contacts::pair_start`, the same bits.
+        debug_assert!(self.bodies.are_spheres(low, high) && self.bodies.straight_paths());
+        let Some((time, _)) = contacts::screened_spheres_start(low_state, &image, window) else {
             return;
         };
         let stamps = (self.stamp_of(low), self.stamp_of(high));

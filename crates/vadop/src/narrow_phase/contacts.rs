@@ -20,6 +20,7 @@ use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAP
 use crate::narrow_phase::shapes::{
     pair_first_start, shape_contact_after_measured, shape_wall_time, walls_in_reach, Resume,
 };
+use crate::narrow_phase::spheres::straight_pair_contact_time_past_screen;
 use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, straight_pair_contact_time};
 use crate::narrow_phase::spheres::{wall_contact_time, CONTACT_TOLERANCE};
 use crate::numeric::{direction, unit_scale};
@@ -86,6 +87,17 @@ pub(crate) fn pair_start(
         return window.contains(time).then_some((time, false));
     }
     shape_pair_start(bodies, a, b, window)
+}
+
+/// [`pair_start`] of two spheres on straight paths (a world without gravity) that a screen of
+/// the caller's own has passed, the same time to the bit: the clear-miss screen that
+/// [`straight_pair_contact_time`] asks first only rejects pairs its exact test rejects too (see
+/// [`straight_pair_contact_time_past_screen`]), and most pairs screened already pass it.
+#[inline(always)]
+pub(crate) fn screened_spheres_start(state_a: &BodyState, state_b: &BodyState, window: Window) -> Found {
+    let time =
+        straight_pair_contact_time_past_screen(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
+    window.contains(time).then_some((time, false))
 }
 
 /// [`pair_start`] of a pair that is not two spheres (shapes across periodic faces come through
