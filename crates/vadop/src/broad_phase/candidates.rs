@@ -80,6 +80,10 @@ impl Candidates for Reporting<'_> {
 #[cfg(target_arch = "x86_64")]
 const HELD: usize = 64;
 
+/// `screen_held` counts the cleared candidates as four bits a group in one `u64`.
+#[cfg(target_arch = "x86_64")]
+const _: () = assert!(HELD <= 64);
+
 /// The sweep's candidates held, then asked of `screen` four at a time
 /// ([`PairScreen::clears_four_avx`]): the ones it keeps and [`Reporting`] would report (pieces of
 /// two bodies whose windows meet) are reported in the order found, with what the screen works
@@ -115,18 +119,18 @@ impl<'a, S: PairScreen> Screened<'a, S> {
     #[target_feature(enable = "avx")]
     unsafe fn screen_held(&mut self, report: &mut impl FnMut(Reported, Reported, Window, S::Kept)) {
         let len = std::mem::take(&mut self.len);
-        // The last group's idle lanes repeat its last candidate and are masked off.
-        let last = self.held[len - 1];
-        self.held[len..len + 3].fill(last);
+        // The last group's idle lanes hold its last candidate's first piece against itself: a
+        // piece's own body, which `reportable_four` never counts, so no mask of lanes is needed.
+        let last = self.held[len - 1].0;
+        self.held[len..len + 3].fill((last, last));
         let Reporting { owners, motions } = self.reporting;
-        let mut kept = 0;
+        let (mut kept, mut cleared_bits) = (0, 0u64);
         for group in (0..len).step_by(4) {
             // Spelt out: nested `map`s here are left as calls (a target-feature function
             // inlines less).
             let held = &self.held[group..group + 4];
             let a = [held[0].0, held[1].0, held[2].0, held[3].0].map(|i| i as usize);
             let b = [held[0].1, held[1].1, held[2].1, held[3].1].map(|i| i as usize);
-            let lanes = if len - group >= 4 { 0b1111 } else { (1 << (len - group)) - 1 };
             // SAFETY: every piece held indexes both (`new`'s contract).
             let (states_a, states_b) =
                 unsafe { (a.map(|i| motions.get_unchecked(i)), b.map(|i| motions.get_unchecked(i))) };
@@ -134,19 +138,22 @@ impl<'a, S: PairScreen> Screened<'a, S> {
             let (owners_a, owners_b) =
                 unsafe { (a.map(|i| owners.get_unchecked(i)), b.map(|i| owners.get_unchecked(i))) };
             // SAFETY: AVX, the caller's.
-            let cleared = unsafe { self.screen.clears_four_avx(states_a, states_b) } & lanes;
+            let cleared = unsafe { self.screen.clears_four_avx(states_a, states_b) };
             // SAFETY: AVX, the caller's.
             let counted = unsafe { reportable_four(owners_a, owners_b) };
-            self.cleared += (cleared & counted).count_ones() as u64;
-            let mut reported = lanes & !cleared & counted;
+            // Four bits a group, at most `HELD / 4` groups: counted once per call (`count_ones`
+            // is a dozen instructions without `popcnt`).
+            cleared_bits = cleared_bits << 4 | u64::from(cleared & counted);
+            let mut reported = !cleared & counted;
             while reported != 0 {
                 let k = reported.trailing_zeros() as usize;
-                // SAFETY: fewer kept than held, and `HELD + 3` slots.
-                unsafe { *self.kept.get_unchecked_mut(kept) = (a[k] as u32, b[k] as u32) };
+                // SAFETY: fewer kept than held, and `HELD + 3` slots; `group + k < len`.
+                unsafe { *self.kept.get_unchecked_mut(kept) = *self.held.get_unchecked(group + k) };
                 kept += 1;
                 reported &= reported - 1;
             }
         }
+        self.cleared += u64::from(cleared_bits.count_ones());
         if kept == 0 {
             return;
         }

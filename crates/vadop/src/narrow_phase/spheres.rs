@@ -475,13 +475,24 @@ pub unsafe fn straight_pair_contact_times_four(a: [&BodyState; 4], b: [&BodyStat
     let mut times = [0.0; 4];
     // SAFETY: four floats.
     unsafe { _mm256_storeu_pd(times.as_mut_ptr(), time) };
-    std::array::from_fn(|k| {
-        if by_scalar >> k & 1 == 1 {
-            straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius)
-        } else {
-            (kept >> k & 1 == 1).then_some(times[k])
-        }
-    })
+    // Spelt out, and the scalar test apart: `from_fn` here is left as a call.
+    let lane = |k: usize| (kept >> k & 1 == 1).then_some(times[k]);
+    let mut answers = [lane(0), lane(1), lane(2), lane(3)];
+    if by_scalar != 0 {
+        answer_by_scalar(&mut answers, by_scalar, a, b);
+    }
+    answers
+}
+
+/// The lanes of [`straight_pair_contact_times_four`] set in `lanes`, answered by the scalar
+/// test itself. Out of line: no lane of an ordinary scene comes here.
+#[cfg(target_arch = "x86_64")]
+#[cold]
+#[inline(never)]
+fn answer_by_scalar(answers: &mut [Option<f64>; 4], lanes: u32, a: [&BodyState; 4], b: [&BodyState; 4]) {
+    for k in (0..4).filter(|k| lanes >> k & 1 == 1) {
+        answers[k] = straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius);
+    }
 }
 
 /// The reference instant of two straight motions (the later `since`) and `b`'s centre less
