@@ -165,7 +165,14 @@ impl Four {
 /// Four partners of a search in a row, as the lanes read them: each one's body and the origin
 /// its offset is taken from.
 pub(super) trait Partners {
-    fn partner(&self, lane: usize) -> (usize, DVec3);
+    /// Lane `lane`'s body.
+    fn body(&self, lane: usize) -> usize;
+    /// The origin of lane `lane`'s offset.
+    fn origin(&self, lane: usize) -> DVec3;
+    /// The origin of all four lanes when they share it (met through one cell or one image, as
+    /// most groups away from the faces are): one value read once, where four are built and
+    /// gathered into lanes.
+    fn shared_origin(&self) -> Option<DVec3>;
 }
 
 /// [`screen`] of four partners of `own` up to its steps that depend on the bound, `bound` as it
@@ -198,8 +205,7 @@ pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partn
 fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     use crate::narrow_phase::spheres::state_columns;
     use std::arch::x86_64::*;
-    let picked: [(usize, DVec3); 4] = std::array::from_fn(|lane| partners.partner(lane));
-    let states = picked.map(|(q, _)| &states[q]);
+    let states: [&BodyState; 4] = std::array::from_fn(|lane| &states[partners.body(lane)]);
     let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
     let one = |value: f64| _mm256_set1_pd(value);
     let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));
@@ -212,12 +218,19 @@ fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bo
     let mask = |x| _mm256_movemask_pd(x) as u32;
     // A negation flips the sign bit alone, as the scalar `-x` does.
     let negated = |x| _mm256_xor_pd(x, one(-0.0));
-    let lane = |f: fn(&DVec3) -> f64| _mm256_set_pd(f(&picked[3].1), f(&picked[2].1), f(&picked[1].1), f(&picked[0].1));
+    // The origins' columns: the same floats either way.
+    let [origin_x, origin_y, origin_z] = match partners.shared_origin() {
+        Some(origin) => [one(origin.x), one(origin.y), one(origin.z)],
+        None => {
+            let origins: [DVec3; 4] = std::array::from_fn(|lane| partners.origin(lane));
+            [0, 1, 2].map(|axis| _mm256_set_pd(origins[3][axis], origins[2][axis], origins[1][axis], origins[0][axis]))
+        }
+    };
     // `screen`, line by line.
     let dt = sub(one(own.now), since);
-    let ox = sub(add(px, mul(dt, vx)), lane(|o| o.x));
-    let oy = sub(add(py, mul(dt, vy)), lane(|o| o.y));
-    let oz = sub(add(pz, mul(dt, vz)), lane(|o| o.z));
+    let ox = sub(add(px, mul(dt, vx)), origin_x);
+    let oy = sub(add(py, mul(dt, vy)), origin_y);
+    let oz = sub(add(pz, mul(dt, vz)), origin_z);
     let (rx, ry, rz) = (sub(vx, one(own.velocity.x)), sub(vy, one(own.velocity.y)), sub(vz, one(own.velocity.z)));
     let approach = add(add(mul(ox, rx), mul(oy, ry)), mul(oz, rz));
     let d2 = add(add(mul(ox, ox), mul(oy, oy)), mul(oz, oz));

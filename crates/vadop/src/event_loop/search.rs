@@ -560,9 +560,19 @@ struct Gathered<'a> {
 
 impl Partners for Gathered<'_> {
     #[inline(always)]
-    fn partner(&self, lane: usize) -> (usize, DVec3) {
-        let c = self.group[lane];
-        (c.q as usize, self.origins[c.cell as usize & 31])
+    fn body(&self, lane: usize) -> usize {
+        self.group[lane].q as usize
+    }
+
+    #[inline(always)]
+    fn origin(&self, lane: usize) -> DVec3 {
+        self.origins[self.group[lane].cell as usize & 31]
+    }
+
+    #[inline(always)]
+    fn shared_origin(&self) -> Option<DVec3> {
+        let cell = self.group[0].cell;
+        self.group[1..].iter().all(|c| c.cell == cell).then(|| self.origins[cell as usize & 31])
     }
 }
 
@@ -576,9 +586,21 @@ struct Listed<'a> {
 
 impl Partners for Listed<'_> {
     #[inline(always)]
-    fn partner(&self, lane: usize) -> (usize, DVec3) {
-        let (q, image) = lists::split(self.group[lane]);
-        (q, self.centre - self.images[image])
+    fn body(&self, lane: usize) -> usize {
+        lists::split(self.group[lane]).0
+    }
+
+    #[inline(always)]
+    fn origin(&self, lane: usize) -> DVec3 {
+        self.centre - self.images[lists::split(self.group[lane]).1]
+    }
+
+    #[inline(always)]
+    fn shared_origin(&self) -> Option<DVec3> {
+        // The entries' image bits alike: one image, one origin.
+        let [first, second, third, fourth] = *self.group;
+        let differ = (first ^ second) | (first ^ third) | (first ^ fourth);
+        (differ >> lists::IMAGE_BITS == 0).then(|| self.origin(0))
     }
 }
 
@@ -640,13 +662,21 @@ mod tests {
             // Each lane through an image of its own (as a list's members are met), its origin
             // `own`'s centre less that image's sides (as both searches take it).
             let images: [DVec3; 27] = std::array::from_fn(|_| DVec3::X * rng.random_range(-1..=1) as f64);
-            let image_of: [u32; 4] = std::array::from_fn(|_| rng.random_range(0..27));
+            // Every third round the four through one image (one cell), as most groups are.
+            let shared = round % 3 == 0;
+            let image_of: [u32; 4] = match shared {
+                true => [rng.random_range(0..27); 4],
+                false => std::array::from_fn(|_| rng.random_range(0..27)),
+            };
             let mut origins = [DVec3::ZERO; 32];
             for (origin, &image) in origins.iter_mut().zip(&image_of) {
                 *origin = own.position - images[image as usize];
             }
-            let group: [Candidate; 4] =
-                std::array::from_fn(|k| Candidate { earliest: 0.0, q: k as u32, cell: k as u8 });
+            let group: [Candidate; 4] = std::array::from_fn(|k| Candidate {
+                earliest: 0.0,
+                q: k as u32,
+                cell: if shared { 0 } else { k as u8 },
+            });
             let members: [u32; 4] = std::array::from_fn(|k| k as u32 | image_of[k] << lists::IMAGE_BITS);
             let start = match round % 4 {
                 0 => f64::INFINITY,
