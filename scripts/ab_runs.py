@@ -4,7 +4,8 @@
 Usage: python3 scripts/ab_runs.py BASE NEW OUT.json [detect] [gas] [shapes]
 
 BASE and NEW are two `vadop` binaries (e.g. one built at an older commit in a git worktree, and
-this one). Every case runs BASE then NEW, REPS times (3 unless the environment says otherwise),
+this one). Every case runs BASE then NEW, REPS times (3 unless the environment says otherwise;
+ONLY=TEXT keeps the cases whose name, as printed, contains TEXT, e.g. ONLY='packing=0.4'),
 each run a child pinned to core 1 with taskset, so that a drift of the machine's speed hits
 both builds alike; read the ratios of each pair, not one absolute time. The figures come from
 the per-frame CSV (`--csv`): c_total per frame (the `ms` column) and pair collisions per second
@@ -76,7 +77,10 @@ def main():
     results = []
     with tempfile.TemporaryDirectory() as scratch:
         table = os.path.join(scratch, "frames.csv")
+        only = os.environ.get("ONLY", "")
         for name, args, warm in cases(kinds):
+            if only not in name:
+                continue
             for rep in range(reps):
                 pair = {}
                 for build, binary in (("base", base), ("new", new)):

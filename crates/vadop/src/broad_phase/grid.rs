@@ -650,15 +650,15 @@ impl Grid {
                     cut.push(i as u32);
                 }
             });
-            let (owned, slots) = (0..cells, paths.proxies.slots());
+            let owned = 0..cells;
             let sink = &mut CountPieces { counts: &mut next_slot, lowest: 0 };
             for &i in &cut {
                 let (i, (count, level)) = (i as usize, plan[i as usize]);
                 let level = &levels[level as usize];
-                if i < slots {
-                    Grid::for_each_owned_piece_cut::<false>(level, i, count, paths, &owned, sink);
-                } else {
+                if paths.is_ahead(i) {
                     Grid::for_each_owned_piece_cut::<true>(level, i, count, paths, &owned, sink);
+                } else {
+                    Grid::for_each_owned_piece_cut::<false>(level, i, count, paths, &owned, sink);
                 }
             }
             self.cut = cut;

@@ -74,8 +74,7 @@ struct Bounce {
     impulse: f64,
     /// The body's next wall contact on its foreseen path, found as the event loop's would be
     /// (whether it lies in the window is told at the bounce: the window may end early).
-    next_wall: Option<Wall>,
-    next_time: f64,
+    next_wall: Option<(f64, Wall)>,
 }
 
 impl ForeseenBounces {
@@ -139,7 +138,6 @@ fn foresee_bounces(
         normal: DVec3::ZERO,
         impulse: 0.0,
         next_wall: None,
-        next_time: 0.0,
     };
     foreseen.bounces.resize(total, unset);
     let unset = Foreseen { body: 0, stamp: 0, state: BodyState::default(), made: (Span::default(), 0) };
@@ -169,9 +167,8 @@ fn foresee_bounces(
             let (motion, impulse) = motion_off_wall(bodies, i, wall, time, restitution);
             let radius = bodies.state[i].radius;
             // As `contacts::wall_start` finds a sphere's, from the motion the bounce gives it.
-            let next = wall_contact_time(&motion, radius, min, max, bodies.gravity_on(i));
-            let (next_wall, next_time) = (next.map(|(_, wall)| wall), next.map_or(0.0, |(time, _)| time));
-            *bounce = Bounce { body, wall, time, point, normal, impulse, next_wall, next_time };
+            let next_wall = wall_contact_time(&motion, radius, min, max, bodies.gravity_on(i));
+            *bounce = Bounce { body, wall, time, point, normal, impulse, next_wall };
             let state = BodyState { motion, radius };
             let stamp = bodies.stamp(i).wrapping_add(FORESEEN_STEP);
             *path = Foreseen { body, stamp, state, made: table.made_ahead(i, bodies, &motion, time) };
@@ -287,8 +284,7 @@ impl<B: BroadPhase> Pipeline<B> {
         out.stats.retests += 1;
         // Its own events, its next wall contact worked out at the window's start.
         let window = self.window.from(t);
-        let next = bounce.next_wall.map(|wall| (bounce.next_time, wall));
-        let found = || next.filter(|&(time, _)| window.contains(time)).map(Ok);
+        let found = || bounce.next_wall.filter(|&(time, _)| window.contains(time)).map(Ok);
         let wall = wall_event(&self.proxies, (body, bodies.stamp(i)), window, found);
         debug_assert_eq!(wall, predict_wall(bodies, &self.proxies, &physics.bounds, body, window));
         self.push_own_events(body, wall, bodies, physics, window);
