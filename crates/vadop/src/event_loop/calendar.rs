@@ -71,19 +71,26 @@ impl Entry {
     }
 
     /// `Less` when `self` comes first.
-    #[inline]
+    #[inline(always)]
     fn order(&self, other: &Entry) -> Ordering {
-        let (a, b) = (&self.scheduled, &other.scheduled);
-        // Two plain comparisons settle times that differ, most pairs a bucket's sort compares;
-        // `total_cmp` (its order, which they agree with) decides the rest: equal times, signed
-        // zeros and NaN.
-        let (s, t) = (a.event.time, b.event.time);
+        // Two plain comparisons settle times that differ, most pairs a bucket's sort compares,
+        // inline in the sort's loop; `total_cmp` (its order, which they agree with) decides the
+        // rest out of line: equal times, signed zeros and NaN.
+        let (s, t) = (self.scheduled.event.time, other.scheduled.event.time);
         if s < t {
             return Ordering::Less;
         }
         if s > t {
             return Ordering::Greater;
         }
+        self.order_at_tie(other)
+    }
+
+    /// [`Self::order`] of two entries whose times compare neither less nor greater.
+    #[inline(never)]
+    fn order_at_tie(&self, other: &Entry) -> Ordering {
+        let (a, b) = (&self.scheduled, &other.scheduled);
+        let (s, t) = (a.event.time, b.event.time);
         s.total_cmp(&t).then_with(|| {
             // Cell crossings first, then the event queue's order (its `Ord` puts the earlier
             // event last), then the owner: two owners may hold one contact.
