@@ -500,24 +500,34 @@ impl<'a> Search<'a> {
     }
 
     /// The candidates' exact tests, earliest first, until the next cannot come before the best.
+    /// Each is the earliest of those left, found by a pass over them and then taken out of the
+    /// buffer: a search keeps a few candidates and tests one or two, for which a pass each costs
+    /// less than a sort of them all. (Among candidates equally early, which is tested first
+    /// changes nothing: each bounds its contact from below, so once one is tested the others
+    /// still come no later than the best, and are tested too.)
     #[inline]
     fn test_candidates(&mut self, own: &Own, eligible: Eligible, best: &mut Best) {
-        let mut candidates = std::mem::take(self.candidates);
-        let tested = candidates.as_mut_slice();
-        if tested.len() > 1 {
-            tested.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
-        }
-        for c in &*tested {
+        let mut left = self.candidates.len;
+        while left > 0 {
+            let slots = &mut self.candidates.slots[..left];
+            let mut first = 0;
+            for k in 1..left {
+                if slots[k].earliest.total_cmp(&slots[first].earliest).is_lt() {
+                    first = k;
+                }
+            }
+            let c = slots[first];
             if c.earliest > best.horizon {
                 break;
             }
+            left -= 1;
+            slots[first] = slots[left];
             let shift = match self.lists {
                 Some(lists) => lists.images[c.cell as usize],
                 None => self.near.shifts[c.cell as usize],
             };
             self.exact(own, c.q as usize, shift, eligible, best);
         }
-        *self.candidates = candidates;
     }
 
     /// The exact test of `own.p` and `q` (through `q`'s image shifted by `shift`), as the frame
