@@ -201,6 +201,56 @@ pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partn
     }
 }
 
+/// [`screen_four`] of `groups` groups of four partners in a row, `group(g)` the `g`-th: the
+/// lanes each group leaves, taken in order with `bound` as it stands (as [`Four::lane`] answers
+/// them), `keep(g, lane, earliest)` for each that passes. Asked only where [`lanes`] holds.
+///
+/// One call for all the groups of a search, inside which the lanes' screen is inlined: called
+/// once a group from code without AVX, which cannot inline it, it cost the call's saving and
+/// restoring of registers, about twenty instructions a group.
+#[inline]
+pub(super) fn screen_fours<P: Partners>(
+    own: &Own,
+    states: &[BodyState],
+    groups: usize,
+    group: impl Fn(usize) -> P,
+    bound: &mut f64,
+    keep: impl FnMut(usize, usize, f64),
+) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_fours_avx(own, states, groups, group, bound, keep) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, groups, group, bound, keep);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_fours`] in AVX's registers (to be called only where the processor has AVX).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn screen_fours_avx<P: Partners>(
+    own: &Own,
+    states: &[BodyState],
+    groups: usize,
+    group: impl Fn(usize) -> P,
+    bound: &mut f64,
+    mut keep: impl FnMut(usize, usize, f64),
+) {
+    for g in 0..groups {
+        let four = screen_four_avx(own, states, &group(g), *bound);
+        let mut left = four.left;
+        while left != 0 {
+            let lane = left.trailing_zeros() as usize;
+            left &= left - 1;
+            if let Some(earliest) = four.lane(lane, own, bound) {
+                keep(g, lane, earliest);
+            }
+        }
+    }
+}
+
 /// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]

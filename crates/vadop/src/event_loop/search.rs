@@ -13,7 +13,7 @@
 
 use super::cells::{Cells, Crossing, Neighbour, NONE};
 use super::lists::{self, Lists};
-use super::screen::{lanes, screen, screen_four, Own, Partners, ROUNDINGS};
+use super::screen::{lanes, screen, screen_four, screen_fours, Own, Partners, ROUNDINGS};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::memory::prefetch_item;
@@ -419,18 +419,16 @@ impl<'a> Search<'a> {
         let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
-        for k in (0..grouped).step_by(4) {
-            let group = members[k..k + 4].try_into().expect("four members");
-            let four = screen_four(own, states, &Listed { group, images: &lists.images, centre: own.position }, bound);
-            let mut left = four.left;
-            while left != 0 {
-                let lane = left.trailing_zeros() as usize;
-                left &= left - 1;
-                if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    let (q, image) = lists::split(group[lane]);
-                    candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
-                }
-            }
+        if grouped > 0 {
+            let group = |g: usize| Listed {
+                group: members[4 * g..4 * g + 4].try_into().expect("four members"),
+                images: &lists.images,
+                centre: own.position,
+            };
+            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, earliest| {
+                let (q, image) = lists::split(members[4 * g + lane]);
+                candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+            });
         }
         for &entry in &members[grouped..] {
             let (q, image) = lists::split(entry);
