@@ -188,8 +188,9 @@ pub(super) trait Partners {
 /// (AVX alone; division and square root are correctly rounded in both), so its floats are the
 /// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
 /// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
-/// would meet later in the search.
-#[inline]
+/// would meet later in the search. (The searches screen their groups through [`screen_fours`];
+/// this one group alone is the lanes' unit test's.)
+#[cfg(test)]
 pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: asked only where `lanes` found AVX.
