@@ -10,6 +10,7 @@
 
 use crate::bodies::BodyState;
 use glam::DVec3;
+use std::mem::MaybeUninit;
 
 /// A pair whose approach rate is below this fraction of |offset| |relative velocity| counts as
 /// moving apart (the exact test's own threshold is 1e-12, on the negative side).
@@ -132,7 +133,7 @@ pub(super) fn lanes() -> bool {
 }
 
 /// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
-#[derive(Debug, Default, Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct Four {
     /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
     /// the bound (moving apart, passing wide, or unable to touch within the bound given, which
@@ -143,10 +144,9 @@ pub(super) struct Four {
     bounded: u32,
     /// Of those, the lanes sure to touch, by `latest`.
     sure: u32,
-    late: [f64; 4],
-    rate: [f64; 4],
-    earliest: [f64; 4],
-    latest: [f64; 4],
+    /// Per lane: `late`, `rate`, `earliest` and `latest`, written only when a lane is bounded:
+    /// most groups have none, and return without the four arrays' stores (or a zero fill).
+    values: MaybeUninit<[[f64; 4]; 4]>,
 }
 
 impl Four {
@@ -157,8 +157,10 @@ impl Four {
         if self.bounded & bit == 0 {
             return Some(f64::NEG_INFINITY);
         }
-        let latest = (self.sure & bit != 0).then_some(self.latest[lane]);
-        bounded(own, (self.late[lane], self.rate[lane]), bound, || Some((self.earliest[lane], latest)))
+        // SAFETY: a lane is bounded only once the values are written.
+        let [late, rate, earliest, latest] = unsafe { self.values.assume_init_ref() };
+        let latest = (self.sure & bit != 0).then_some(latest[lane]);
+        bounded(own, (late[lane], rate[lane]), bound, || Some((earliest[lane], latest)))
     }
 }
 
@@ -186,8 +188,9 @@ pub(super) trait Partners {
 /// (AVX alone; division and square root are correctly rounded in both), so its floats are the
 /// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
 /// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
-/// would meet later in the search.
-#[inline]
+/// would meet later in the search. (The searches screen their groups through [`screen_fours`];
+/// this one group alone is the lanes' unit test's.)
+#[cfg(test)]
 pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: asked only where `lanes` found AVX.
@@ -196,6 +199,56 @@ pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partn
     {
         let _ = (own, states, partners, bound);
         unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_four`] of `groups` groups of four partners in a row, `group(g)` the `g`-th: the
+/// lanes each group leaves, taken in order with `bound` as it stands (as [`Four::lane`] answers
+/// them), `keep(g, lane, earliest)` for each that passes. Asked only where [`lanes`] holds.
+///
+/// One call for all the groups of a search, inside which the lanes' screen is inlined: called
+/// once a group from code without AVX, which cannot inline it, it cost the call's saving and
+/// restoring of registers, about twenty instructions a group.
+#[inline]
+pub(super) fn screen_fours<P: Partners>(
+    own: &Own,
+    states: &[BodyState],
+    groups: usize,
+    group: impl Fn(usize) -> P,
+    bound: &mut f64,
+    keep: impl FnMut(usize, usize, f64),
+) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: asked only where `lanes` found AVX.
+    return unsafe { screen_fours_avx(own, states, groups, group, bound, keep) };
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (own, states, groups, group, bound, keep);
+        unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
+    }
+}
+
+/// [`screen_fours`] in AVX's registers (to be called only where the processor has AVX).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+fn screen_fours_avx<P: Partners>(
+    own: &Own,
+    states: &[BodyState],
+    groups: usize,
+    group: impl Fn(usize) -> P,
+    bound: &mut f64,
+    mut keep: impl FnMut(usize, usize, f64),
+) {
+    for g in 0..groups {
+        let four = screen_four_avx(own, states, &group(g), *bound);
+        let mut left = four.left;
+        while left != 0 {
+            let lane = left.trailing_zeros() as usize;
+            left &= left - 1;
+            if let Some(earliest) = four.lane(lane, own, bound) {
+                keep(g, lane, earliest);
+            }
+        }
     }
 }
 
@@ -249,8 +302,12 @@ fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bo
     let spread = mul(slack, v2);
     let wide = less(discriminant, negated(spread));
     let rejected = or(and(apart, clear), and(screened, or(too_late, wide)));
-    let mut four =
-        Four { left: mask(rejected) ^ 0b1111, bounded: mask(_mm256_andnot_pd(rejected, screened)), ..Four::default() };
+    let mut four = Four {
+        left: mask(rejected) ^ 0b1111,
+        bounded: mask(_mm256_andnot_pd(rejected, screened)),
+        sure: 0,
+        values: MaybeUninit::uninit(),
+    };
     if four.bounded == 0 {
         return four;
     }
@@ -274,12 +331,12 @@ fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bo
     let speed_squared = add(add(mul(vx, vx), mul(vy, vy)), mul(vz, vz));
     let noise = mul(one(NOISE), add(one(own.velocity.length_squared()), speed_squared));
     four.sure = mask(and(and(greater(discriminant, spread), greater(earliest, one(0.0))), greater(v2, noise)));
-    // SAFETY (each store): four floats into four.
+    // SAFETY (each store): four floats into four; then every value is written.
     unsafe {
-        _mm256_storeu_pd(four.late.as_mut_ptr(), late);
-        _mm256_storeu_pd(four.rate.as_mut_ptr(), rate);
-        _mm256_storeu_pd(four.earliest.as_mut_ptr(), earliest);
-        _mm256_storeu_pd(four.latest.as_mut_ptr(), latest);
+        let values = four.values.as_mut_ptr().cast::<[f64; 4]>();
+        for (k, column) in [late, rate, earliest, latest].into_iter().enumerate() {
+            _mm256_storeu_pd(values.add(k).cast::<f64>(), column);
+        }
     }
     four
 }

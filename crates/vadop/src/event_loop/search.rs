@@ -13,7 +13,7 @@
 
 use super::cells::{Cells, Crossing, Neighbour, NONE};
 use super::lists::{self, Lists};
-use super::screen::{lanes, screen, screen_four, Own, Partners, ROUNDINGS};
+use super::screen::{lanes, screen, screen_fours, Own, Partners, ROUNDINGS};
 use crate::bodies::{Bodies, BodyState};
 use crate::event_queue::{Event, Partner};
 use crate::memory::prefetch_item;
@@ -22,6 +22,7 @@ use crate::pipeline::predict::{crossing_event, sphere_wall_event};
 use crate::walls::BoxBounds;
 use crate::window::Window;
 use glam::DVec3;
+use std::cell::Cell;
 use std::mem::MaybeUninit;
 
 /// Which of a body's events may be scheduled.
@@ -436,18 +437,16 @@ impl<'a> Search<'a> {
         let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
-        for k in (0..grouped).step_by(4) {
-            let group = members[k..k + 4].try_into().expect("four members");
-            let four = screen_four(own, states, &Listed { group, images: &lists.images, centre: own.position }, bound);
-            let mut left = four.left;
-            while left != 0 {
-                let lane = left.trailing_zeros() as usize;
-                left &= left - 1;
-                if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    let (q, image) = lists::split(group[lane]);
-                    candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
-                }
-            }
+        if grouped > 0 {
+            let group = |g: usize| Listed {
+                group: members[4 * g..4 * g + 4].try_into().expect("four members"),
+                images: &lists.images,
+                centre: own.position,
+            };
+            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, earliest| {
+                let (q, image) = lists::split(members[4 * g + lane]);
+                candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+            });
         }
         for &entry in &members[grouped..] {
             let (q, image) = lists::split(entry);
@@ -481,22 +480,19 @@ impl<'a> Search<'a> {
         // Through a slice: its length stays in a register, where the `Vec`'s is read again
         // after every write into it.
         let candidates = self.candidates.as_mut_slice();
-        // Four at a time in lanes (see `screen_four`), the steps that depend on the bound then
+        // Four at a time in lanes (see `screen_fours`), the steps that depend on the bound then
         // for the lanes left, in order: every bound and result is the scalar screen's.
         let grouped = if lanes() { candidates.len() & !3 } else { 0 };
-        for k in (0..grouped).step_by(4) {
-            let group = candidates[k..k + 4].try_into().expect("four candidates");
-            let four = screen_four(own, states, &Gathered { group, origins }, bound);
-            let mut left = four.left;
-            while left != 0 {
-                let lane = left.trailing_zeros() as usize;
-                left &= left - 1;
-                if let Some(earliest) = four.lane(lane, own, &mut bound) {
-                    // `kept` is at most `k + lane`: the entry is read before it is written over.
-                    candidates[kept] = Candidate { earliest, ..candidates[k + lane] };
-                    kept += 1;
-                }
-            }
+        if grouped > 0 {
+            // Read and written over through cells: `kept` is at most `4 g + lane`, so an entry
+            // is read before it is written over.
+            let slots = Cell::from_mut(&mut *candidates).as_slice_of_cells();
+            let group =
+                |g: usize| Gathered { group: slots[4 * g..4 * g + 4].try_into().expect("four candidates"), origins };
+            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, earliest| {
+                slots[kept].set(Candidate { earliest, ..slots[4 * g + lane].get() });
+                kept += 1;
+            });
         }
         for k in grouped..candidates.len() {
             let c = candidates[k];
@@ -517,24 +513,34 @@ impl<'a> Search<'a> {
     }
 
     /// The candidates' exact tests, earliest first, until the next cannot come before the best.
+    /// Each is the earliest of those left, found by a pass over them and then taken out of the
+    /// buffer: a search keeps a few candidates and tests one or two, for which a pass each costs
+    /// less than a sort of them all. (Among candidates equally early, which is tested first
+    /// changes nothing: each bounds its contact from below, so once one is tested the others
+    /// still come no later than the best, and are tested too.)
     #[inline]
     fn test_candidates(&mut self, own: &Own, eligible: Eligible, best: &mut Best) {
-        let mut candidates = std::mem::take(self.candidates);
-        let tested = candidates.as_mut_slice();
-        if tested.len() > 1 {
-            tested.sort_unstable_by(|a, b| a.earliest.total_cmp(&b.earliest));
-        }
-        for c in &*tested {
+        let mut left = self.candidates.len;
+        while left > 0 {
+            let slots = &mut self.candidates.slots[..left];
+            let mut first = 0;
+            for k in 1..left {
+                if slots[k].earliest.total_cmp(&slots[first].earliest).is_lt() {
+                    first = k;
+                }
+            }
+            let c = slots[first];
             if c.earliest > best.horizon {
                 break;
             }
+            left -= 1;
+            slots[first] = slots[left];
             let shift = match self.lists {
                 Some(lists) => lists.images[c.cell as usize],
                 None => self.near.shifts[c.cell as usize],
             };
             self.exact(own, c.q as usize, shift, eligible, best);
         }
-        *self.candidates = candidates;
     }
 
     /// The exact test of `own.p` and `q` (through `q`'s image shifted by `shift`), as the frame
@@ -571,25 +577,25 @@ impl<'a> Search<'a> {
 
 /// Four gathered partners (candidates in a row), each with the origin of its cell.
 struct Gathered<'a> {
-    group: &'a [Candidate; 4],
+    group: &'a [Cell<Candidate>; 4],
     origins: &'a [DVec3; 32],
 }
 
 impl Partners for Gathered<'_> {
     #[inline(always)]
     fn body(&self, lane: usize) -> usize {
-        self.group[lane].q as usize
+        self.group[lane].get().q as usize
     }
 
     #[inline(always)]
     fn origin(&self, lane: usize) -> DVec3 {
-        self.origins[self.group[lane].cell as usize & 31]
+        self.origins[self.group[lane].get().cell as usize & 31]
     }
 
     #[inline(always)]
     fn shared_origin(&self) -> Option<DVec3> {
-        let cell = self.group[0].cell;
-        self.group[1..].iter().all(|c| c.cell == cell).then(|| self.origins[cell as usize & 31])
+        let cell = self.group[0].get().cell;
+        self.group[1..].iter().all(|c| c.get().cell == cell).then(|| self.origins[cell as usize & 31])
     }
 }
 
@@ -624,6 +630,7 @@ impl Partners for Listed<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::event_loop::screen::screen_four;
     use crate::motion::Motion;
     use rand::{Rng, SeedableRng};
 
@@ -701,7 +708,7 @@ mod tests {
             };
             let mut scalar_bound = start;
             let fours = [
-                screen_four(&own, &states, &Gathered { group: &group, origins: &origins }, start),
+                screen_four(&own, &states, &Gathered { group: &group.map(Cell::new), origins: &origins }, start),
                 screen_four(&own, &states, &Listed { group: &members, images: &images, centre: own.position }, start),
             ];
             let mut lanes_bounds = [start; 2];
