@@ -32,6 +32,10 @@ step "debug assertions (the periodic, oracle and determinism tests in a debug bu
 step "doctests, the README's Rust examples included" cargo test --release --workspace --doc
 step "API documentation (cargo doc, warnings are errors)" \
   env RUSTDOCFLAGS="-D warnings" cargo doc --release --workspace --no-deps
+# The private items' doc comments too, so their links cannot rot (vadop-py's are Python
+# docstrings, whose `x[0]` rustdoc would read as links: its public docs are checked above).
+step "internal documentation (cargo doc --document-private-items, warnings are errors)" \
+  env RUSTDOCFLAGS="-D warnings" cargo doc --release --workspace --exclude vadop-py --no-deps --document-private-items
 
 # Python package: build and install it into a local virtual environment the way users do
 # (`pip install ./`), with the test tools, then run its tests. The viewer test drives a real

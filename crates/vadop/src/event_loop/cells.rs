@@ -82,7 +82,7 @@ pub(super) struct Cells {
     width: DVec3,
     inverse_width: DVec3,
     counts: [i64; 3],
-    /// Cell index = x + y * strides[1] + z * strides[2].
+    /// Cell index = `x + y * strides[1] + z * strides[2]`.
     strides: [i64; 3],
     /// The index offsets of the 9 rows of cells (their middle cells) around a cell away from
     /// every face.

@@ -97,7 +97,7 @@ pub(super) struct Lists {
     seen: Vec<u32>,
     built: u32,
     /// Scratch: the old list of the body whose list is built anew in place (see
-    /// [`Lists::rebuild_in_place`]).
+    /// [`Lists::rebuild`] with `in_place`).
     old: Vec<u32>,
 }
 
@@ -228,7 +228,7 @@ impl Lists {
     /// Lists the pairs of body `i` and the bodies of the cell whose first body is `first`, seen
     /// through `image` (see [`Self::images`]), that are within reach: those of higher id only
     /// when `higher`. With `in_place`, a body of `i`'s old list keeps its entry for `i` (see
-    /// [`Self::rebuild_in_place`]). False when a block overflowed.
+    /// [`Self::rebuild`]). False when a block overflowed.
     #[inline(always)]
     fn pair_with_cell(
         &mut self,

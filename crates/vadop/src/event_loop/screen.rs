@@ -123,7 +123,7 @@ fn bounded(
     Some(earliest)
 }
 
-/// True when [`screen`] can run four partners at a time (see [`screen_four`]).
+/// True when [`screen`] can run four partners at a time (see [`screen_four_avx`]).
 #[inline]
 pub(super) fn lanes() -> bool {
     #[cfg(target_arch = "x86_64")]
@@ -132,7 +132,7 @@ pub(super) fn lanes() -> bool {
     return false;
 }
 
-/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four`]).
+/// [`screen`] of four partners up to its steps that depend on the bound (see [`screen_four_avx`]).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Four {
     /// The lanes left, one a bit (lane `k` the `k`-th partner's): those not rejected whatever
@@ -177,19 +177,8 @@ pub(super) trait Partners {
     fn shared_origin(&self) -> Option<DVec3>;
 }
 
-/// [`screen`] of four partners of `own` up to its steps that depend on the bound, `bound` as it
-/// stands before the first. Asked only where [`lanes`] holds.
-///
-/// The partners' records (from `states`) and origins are read inside the lanes' function, one
-/// function for every kind of partners: copied into arrays to be handed over, they cost a group
-/// about a third as many instructions again as the screen.
-///
-/// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
-/// (AVX alone; division and square root are correctly rounded in both), so its floats are the
-/// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
-/// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
-/// would meet later in the search. (The searches screen their groups through [`screen_fours`];
-/// this one group alone is the lanes' unit test's.)
+/// [`screen_four_avx`] behind the check for AVX: one group alone, the lanes' unit test's (the
+/// searches screen their groups through [`screen_fours`]).
 #[cfg(test)]
 pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     #[cfg(target_arch = "x86_64")]
@@ -202,7 +191,7 @@ pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partn
     }
 }
 
-/// [`screen_four`] of `groups` groups of four partners in a row, `group(g)` the `g`-th: the
+/// [`screen_four_avx`] of `groups` groups of four partners in a row, `group(g)` the `g`-th: the
 /// lanes each group leaves, taken in order with `bound` as it stands (as [`Four::lane`] answers
 /// them), `keep(g, lane, earliest)` for each that passes. Asked only where [`lanes`] holds.
 ///
@@ -252,7 +241,20 @@ fn screen_fours_avx<P: Partners>(
     }
 }
 
-/// [`screen_four`] in AVX's four-wide registers (to be called only where the processor has AVX).
+/// [`screen`] of four partners of `own` up to its steps that depend on the bound, `bound` as it
+/// stands before the first. Asked only where [`lanes`] holds.
+///
+/// The partners' records (from `states`) and origins are read inside the lanes' function, one
+/// function for every kind of partners: copied into arrays to be handed over, they cost a group
+/// about a third as many instructions again as the screen.
+///
+/// Each lane makes the scalar screen's operations in its order on the same floats, without FMA
+/// (AVX alone; division and square root are correctly rounded in both), so its floats are the
+/// scalar's bits; every comparison is ordered, as the scalar's, so a NaN falls the same way. A
+/// lane rejected by the bound as it stands is rejected by any lower one, which the scalar screen
+/// would meet later in the search.
+///
+/// In AVX's four-wide registers: to be called only where the processor has AVX.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {

@@ -55,7 +55,7 @@ struct Worked {
     generations: [u32; 2],
 }
 
-/// What [`PassedContacts::ahead_of`] knows of a bulk event as it pops.
+/// What [`WorkedAhead::ahead_of`] knows of a bulk event as it pops.
 pub(super) enum Ahead {
     /// Nothing: the event loop handles it as any event.
     Unknown,

@@ -12,7 +12,7 @@ use crate::parallel::Workers;
 use crate::window::Window;
 
 impl Grid {
-    /// [`BroadPhase::find_pairs`] with each worker's candidates given to `candidates(reporting)`.
+    /// [`crate::broad_phase::BroadPhase::find_pairs`] with each worker's candidates given to `candidates(reporting)`.
     pub(super) fn sweep<'a, T: Send, C: Candidates>(
         &'a self,
         workers: &Workers,

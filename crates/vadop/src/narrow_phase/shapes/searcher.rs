@@ -28,7 +28,7 @@ pub(super) struct Searcher<G> {
     pub(super) carried: u32,
     pub(super) reach: Option<Reach>,
     /// Where the chain stopped without finding anything, if it stopped at a horizon (the end it
-    /// was asked to search to, or the end of all contacts): what [`Resume`] carries.
+    /// was asked to search to, or the end of all contacts): what [`super::Resume`] carries.
     pub(super) parked: Option<Parked>,
 }
 
