@@ -706,6 +706,18 @@ impl Bodies {
         }
     }
 
+    /// [`Self::set_velocity_at`] at `at.since`, where body `i`'s path moved on to that time is `at`
+    /// ([`Motion::moved_on`]'s bits, read by the caller): a body without spin keeps the centre
+    /// `at` holds, not worked out again.
+    #[inline]
+    pub(crate) fn set_velocity_on(&mut self, i: usize, at: Motion, velocity: DVec3) {
+        if self.has_rigid() {
+            self.set_velocity_at(i, at.since, velocity);
+        } else {
+            self.move_onto(i, Motion { velocity, ..at });
+        }
+    }
+
     /// Starts keeping what stepping overwrites (see [`Bodies::undo`]).
     pub(crate) fn keep_undo(&mut self) {
         self.undo = Some(Vec::new());
@@ -738,6 +750,14 @@ impl Bodies {
     /// Moves body `i`'s centre to time `t` with a new velocity, voiding its predictions.
     #[inline]
     fn move_to(&mut self, i: usize, t: f64, velocity: DVec3) {
+        let motion = self.state[i].motion.moved_on(t, velocity, self.gravity_on(i));
+        self.move_onto(i, motion);
+    }
+
+    /// Gives body `i` the motion `motion`, from its centre at `motion.since` (see
+    /// [`Self::move_to`]), voiding its predictions.
+    #[inline]
+    fn move_onto(&mut self, i: usize, motion: Motion) {
         if self.undo.is_some() {
             let spin = self.has_rigid().then(|| (self.rigid.spin[i], self.rigid.spin_start[i]));
             let overwritten = Overwritten { slot: i, state: self.state[i], spin, crossed: None, rest: self.rest_of(i) };
@@ -745,12 +765,12 @@ impl Bodies {
                 log.push(overwritten);
             }
         }
-        self.state[i].motion = self.state[i].motion.moved_on(t, velocity, self.gravity_on(i));
+        self.state[i].motion = motion;
         // A new motion falls: an impact moved the body off whatever held it up.
         self.set_rest(i, Rest::Falling);
         self.renew(i);
         self.new_motion(i);
-        self.speed_bound = self.speed_bound.max(speed(velocity));
+        self.speed_bound = self.speed_bound.max(speed(motion.velocity));
     }
 
     /// Sets the speed bound to the speed of the fastest live body, and returns it.

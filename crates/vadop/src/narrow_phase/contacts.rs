@@ -294,7 +294,19 @@ pub(crate) fn sphere_pair_touch(
     (j, path_j): (usize, &SpherePath),
     t: f64,
 ) -> SphereTouch {
-    let (pi, pj) = (path_i.motion.at_under(t, path_i.gravity), path_j.motion.at_under(t, path_j.gravity));
+    let centres = [path_i.motion.at_under(t, path_i.gravity), path_j.motion.at_under(t, path_j.gravity)];
+    sphere_pair_touch_from(bodies, (i, path_i), (j, path_j), t, centres)
+}
+
+/// [`sphere_pair_touch`] from the two centres at `t` on the paths given (read by the caller).
+#[inline(always)]
+fn sphere_pair_touch_from(
+    bodies: &Bodies,
+    (i, path_i): (usize, &SpherePath),
+    (j, path_j): (usize, &SpherePath),
+    t: f64,
+    [pi, pj]: [DVec3; 2],
+) -> SphereTouch {
     let (offset, shift) = bodies.nearest_offset(pi, pj);
     // Coincident centres have no normal; the relative velocity gives one.
     let relative_velocity =
@@ -313,9 +325,21 @@ pub(crate) fn sphere_pair_touch(
 /// ([`Bodies::velocity_at`]'s bits) from the same read of their paths.
 #[inline]
 pub(crate) fn spheres_touch(bodies: &Bodies, i: usize, j: usize, t: f64) -> (SphereTouch, [DVec3; 2]) {
-    let paths = [SpherePath::of(bodies, i), SpherePath::of(bodies, j)];
-    let touch = sphere_pair_touch(bodies, (i, &paths[0]), (j, &paths[1]), t);
-    (touch, paths.map(|path| path.motion.velocity_under(t, path.gravity)))
+    let (touch, [on_i, on_j]) = spheres_touch_on(bodies, i, j, t);
+    (touch, [on_i.velocity, on_j.velocity])
+}
+
+/// [`spheres_touch`] with the two paths moved on to `t` (centre and velocity there, since `t`:
+/// [`Motion::moved_on`]'s bits), which an impact at `t` gives new velocities from.
+#[inline]
+pub(crate) fn spheres_touch_on(bodies: &Bodies, i: usize, j: usize, t: f64) -> (SphereTouch, [Motion; 2]) {
+    let (path_i, path_j) = (SpherePath::of(bodies, i), SpherePath::of(bodies, j));
+    let centres = [path_i.motion.at_under(t, path_i.gravity), path_j.motion.at_under(t, path_j.gravity)];
+    let touch = sphere_pair_touch_from(bodies, (i, &path_i), (j, &path_j), t, centres);
+    // (No array `map` here nor below: the compiler left its closure a call.)
+    let velocities = [path_i.motion.velocity_under(t, path_i.gravity), path_j.motion.velocity_under(t, path_j.gravity)];
+    let on = |k: usize| Motion { position: centres[k], since: t, velocity: velocities[k] };
+    (touch, [on(0), on(1)])
 }
 
 /// Where body `i` touches `wall` at `t`, and the wall's outward normal.

@@ -70,24 +70,29 @@ pub(crate) fn push_spheres(
     normal: DVec3,
     restitution: f64,
 ) -> f64 {
-    let velocities = [bodies.velocity_at(i, t), bodies.velocity_at(j, t)];
-    push_spheres_moving(bodies, (i, j), t, velocities, normal, restitution)
+    push_spheres_moving(bodies, (i, j), paths_on(bodies, (i, j), t), normal, restitution)
 }
 
-/// [`push_spheres`] of spheres moving at `velocities` at `t` (read by the caller).
+/// Bodies `i` and `j`'s paths moved on to `t`: their centres and velocities there, since `t`.
+#[inline]
+fn paths_on(bodies: &Bodies, (i, j): (usize, usize), t: f64) -> [Motion; 2] {
+    [i, j].map(|k| bodies.motion(k).moved_on(t, bodies.velocity_at(k, t), bodies.gravity_on(k)))
+}
+
+/// [`push_spheres`] of spheres on `paths`, their paths moved on to the impact's time (read by
+/// the caller, see [`paths_on`]): each keeps its centre there with its new velocity.
 #[inline(always)]
 fn push_spheres_moving(
     bodies: &mut Bodies,
     (i, j): (usize, usize),
-    t: f64,
-    velocities: [DVec3; 2],
+    paths: [Motion; 2],
     normal: DVec3,
     restitution: f64,
 ) -> f64 {
-    match spheres_pushed(bodies, (i, j), velocities, normal, restitution) {
+    match spheres_pushed(bodies, (i, j), [paths[0].velocity, paths[1].velocity], normal, restitution) {
         Some((impulse, vi, vj)) => {
-            bodies.set_velocity_at(i, t, vi);
-            bodies.set_velocity_at(j, t, vj);
+            bodies.set_velocity_on(i, paths[0], vi);
+            bodies.set_velocity_on(j, paths[1], vj);
             impulse
         }
         None => 0.0,
@@ -169,18 +174,18 @@ pub(crate) fn is_plain_pair(bodies: &Bodies, physics: &Physics, i: usize, j: usi
     physics.mode == Mode::Simulate && !rest::applies(bodies, physics) && plain_spheres(bodies, physics, i, j)
 }
 
-/// Two moving frictionless spheres, moving at `velocities` at `t`, pushed apart along `normal`
-/// with the contact rules' `restitution` (`changed` when the TC model set it): pushed, or
-/// parting with nothing changed.
+/// Two moving frictionless spheres, on `paths` (moved on to the impact's time, see
+/// [`paths_on`]), pushed apart along `normal` with the contact rules' `restitution` (`changed`
+/// when the TC model set it): pushed, or parting with nothing changed.
 fn pushed_apart(
     bodies: &mut Bodies,
     (i, j): (usize, usize),
-    (t, velocities): (f64, [DVec3; 2]),
+    paths: [Motion; 2],
     normal: DVec3,
     (restitution, changed): (f64, bool),
     stats: &mut FrameStats,
 ) -> Resolution {
-    let impulse = push_spheres_moving(bodies, (i, j), t, velocities, normal, restitution);
+    let impulse = push_spheres_moving(bodies, (i, j), paths, normal, restitution);
     // Zero impulse changes nothing; re-testing would find the same touch again.
     if impulse > 0.0 {
         stats.tc_contacts += changed as u64;
@@ -214,15 +219,16 @@ impl Impacts {
         stats: &mut FrameStats,
     ) -> (SphereTouch, Resolution, f64) {
         let (i, j) = (a as usize, b as usize);
-        let (touch, before) = contacts::spheres_touch(bodies, i, j, t);
+        let (touch, before) = contacts::spheres_touch_on(bodies, i, j, t);
         let resolution = match self.rules.pair(a, b, t, physics.restitution, tc_duration(physics)) {
             Rule::Jam => return (touch, Resolution::Jammed { by_rule: true }, 0.0),
             Rule::Impulse { restitution, changed } => {
-                pushed_apart(bodies, (i, j), (t, before), touch.normal, (restitution, changed), stats)
+                pushed_apart(bodies, (i, j), before, touch.normal, (restitution, changed), stats)
             }
         };
         let pushed = matches!(resolution, Resolution::Pushed(_));
-        let virial = if pushed { virial(touch.offset, bodies.mass(j), (before[1], bodies.velocity(j))) } else { 0.0 };
+        let virial =
+            if pushed { virial(touch.offset, bodies.mass(j), (before[1].velocity, bodies.velocity(j))) } else { 0.0 };
         (touch, resolution, virial)
     }
 
@@ -275,8 +281,7 @@ impl Impacts {
         let resolution = match rule {
             Rule::Jam => Resolution::Jammed { by_rule: true },
             Rule::Impulse { restitution, changed } if plain => {
-                let velocities = [bodies.velocity_at(i, t), bodies.velocity_at(j, t)];
-                pushed_apart(bodies, (i, j), (t, velocities), normal, (restitution, changed), stats)
+                pushed_apart(bodies, (i, j), paths_on(bodies, (i, j), t), normal, (restitution, changed), stats)
             }
             Rule::Impulse { restitution, changed } => {
                 contacts::pair_points(bodies, i, j, t, (point, normal), &mut self.manifold);
