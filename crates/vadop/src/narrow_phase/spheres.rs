@@ -471,14 +471,30 @@ pub unsafe fn straight_pair_contact_times_four(
     let tau = mul(scaled, ratio);
     let normal = |x| and(less_or_equal(one(f64::MIN_POSITIVE), x), less(x, one(f64::INFINITY)));
     let exact = and(normal(ratio), _mm256_or_pd(normal(magnitude(tau)), _mm256_cmp_pd::<_CMP_EQ_OQ>(tau, zero)));
-    // `approach_time_by`'s check of the velocities, scaled by the larger's largest component.
+    // `approach_time_by`'s check of the velocities, scaled by the larger's largest component,
+    // asked only where a found lane's relative velocity is not clearly above noise: with the
+    // relative velocity's largest component at least `speed_power`, a normal number, and every
+    // component of both velocities below `2^36 speed_power`, the scaled difference's length is
+    // at least about 2^-35 and the scaled speeds' sum below 4 sqrt(3), whose 10^-12 is below
+    // 2^-37: no noise (a NaN in a velocity makes the check's lengths NaN, no noise either).
     let [velocity_a, velocity_b] = velocities;
-    let scale =
-        _mm256_div_pd(one(1.0), _mm256_max_pd(largest_exponent_power(velocity_a), largest_exponent_power(velocity_b)));
-    let (va, vb) = (velocity_a.map(|x| mul(x, scale)), velocity_b.map(|x| mul(x, scale)));
-    let difference = std::array::from_fn(|k| sub(vb[k], va[k]));
-    let length = |u| _mm256_sqrt_pd(dot_four(u, u));
-    let noise = less_or_equal(length(difference), mul(one(NOISE_VELOCITY), add(length(va), length(vb))));
+    let largest = |u: [__m256d; 3]| _mm256_max_pd(_mm256_max_pd(magnitude(u[0]), magnitude(u[1])), magnitude(u[2]));
+    let clearly_moving = and(
+        less(_mm256_max_pd(largest(velocity_a), largest(velocity_b)), mul(speed_power, one(power_of_two(36)))),
+        less(one(f64::MIN_POSITIVE), speed_power),
+    );
+    let noise = if _mm256_movemask_pd(and_not(clearly_moving, found)) == 0 {
+        zero
+    } else {
+        let scale = _mm256_div_pd(
+            one(1.0),
+            _mm256_max_pd(largest_exponent_power(velocity_a), largest_exponent_power(velocity_b)),
+        );
+        let (va, vb) = (velocity_a.map(|x| mul(x, scale)), velocity_b.map(|x| mul(x, scale)));
+        let difference = std::array::from_fn(|k| sub(vb[k], va[k]));
+        let length = |u| _mm256_sqrt_pd(dot_four(u, u));
+        less_or_equal(length(difference), mul(one(NOISE_VELOCITY), add(length(va), length(vb))))
+    };
     let time = add(reference, tau);
     let finite = less(magnitude(time), one(f64::INFINITY));
     let inside = and(_mm256_cmp_pd::<_CMP_LE_OQ>(starts, time), less(time, ends));
@@ -913,6 +929,41 @@ mod tests {
         }
         // Contacts met often, inside and outside their windows, among pairs the screen keeps.
         assert!(contacts > 30_000 && outside > 10_000 && kept > 100_000, "contacts {contacts} kept {kept}");
+        // Pairs closing at about the noise's threshold, 2^-30 to 2^-50 of their own speeds, at
+        // scales from tiny to huge: the lanes' noise check, asked or skipped, as the scalar's.
+        let (mut noise, mut moving) = (0, 0);
+        for _ in 0..20_000 {
+            let pair = |rng: &mut rand_chacha::ChaCha8Rng| {
+                let (scale, speed) =
+                    (2f64.powi(rng.random_range(-1000..1000)), 2f64.powi(rng.random_range(-1000..1000)));
+                let along =
+                    DVec3::new(rng.random_range(0.5..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let closing = speed * 2f64.powi(-rng.random_range(30..50)) * rng.random_range(1.0..2.0);
+                let mut a = BodyState { radius: scale, ..BodyState::default() };
+                a.motion.velocity = along * speed;
+                let mut b = a;
+                b.motion.position = DVec3::X * (scale * 3.0);
+                b.motion.velocity = a.motion.velocity - DVec3::X * closing;
+                (a, b)
+            };
+            let pairs: [(BodyState, BodyState); 4] = std::array::from_fn(|_| pair(&mut rng));
+            let (a, b) = (pairs.map(|p| p.0), pairs.map(|p| p.1));
+            let (starts, ends) = ([f64::NEG_INFINITY; 4], [f64::INFINITY; 4]);
+            // SAFETY: AVX was detected above; four floats each.
+            let (events, times) = unsafe {
+                let everything = [_mm256_loadu_pd(starts.as_ptr()), _mm256_loadu_pd(ends.as_ptr())];
+                straight_pair_contact_times_four(a.each_ref(), b.each_ref(), everything)
+            };
+            for k in 0..4 {
+                let scalar =
+                    straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius);
+                let lane = (events >> k & 1 == 1).then_some(times[k]);
+                assert_eq!(bits(lane), bits(scalar), "a {:?} b {:?}", a[k], b[k]);
+                moving += usize::from(scalar.is_some());
+                noise += usize::from(scalar.is_none());
+            }
+        }
+        assert!(noise > 10_000 && moving > 10_000, "noise {noise} moving {moving}");
     }
 
     #[test]
