@@ -1,9 +1,9 @@
 //! What the grid's pair sweep does with a binned piece's candidates (the binned pieces whose
 //! boxes overlap its box), in the order the sweep finds them: each reported as it comes
 //! ([`Reporting`]), or held, asked of a [`PairScreen`] four at a time in AVX's lanes, and only
-//! the ones it keeps reported, with what the screen works out of them, again four at a time
-//! ([`Screened`]). Either way the pairs reported, their order and the candidates' count are the
-//! same. It knows nothing of cells or levels.
+//! the ones it keeps reported, with what the screen works out of them, again four at a time and
+//! in their windows ([`Screened`]). Either way the events predicted, their order and the
+//! candidates' count are the same. It knows nothing of cells or levels.
 
 use crate::bodies::BodyState;
 use crate::broad_phase::proxy::Reported;
@@ -105,10 +105,11 @@ const _: () = assert!(HELD <= 64);
 
 /// The sweep's candidates held, then asked of `screen` four at a time
 /// ([`PairScreen::clears_four_avx`]): the ones it keeps and [`Reporting`] would report (pieces of
-/// two bodies whose windows meet) are reported in the order found, with what the screen works
-/// out of them four at a time ([`PairScreen::kept_four_avx`]); the ones it clears are only
-/// counted, as [`Reporting`] would have counted them. Per candidate the screen's arithmetic is
-/// about half its scalar form's, the other pieces' loads included.
+/// two bodies whose windows meet) are worked out four at a time in their windows
+/// ([`PairScreen::kept_four_avx`]), and those that can have an event there reported in the order
+/// found, with what the screen works out of them; the others are only counted, as [`Reporting`]
+/// would have counted them. Per candidate the screen's arithmetic is about half its scalar
+/// form's, the other pieces' loads included.
 #[cfg(target_arch = "x86_64")]
 pub(super) struct Screened<'a, S> {
     reporting: Reporting<'a>,
@@ -179,21 +180,33 @@ impl<'a, S: PairScreen> Screened<'a, S> {
         // The last group's idle lanes repeat its last pair, and their answers are dropped.
         let last = self.kept[kept - 1];
         self.kept[kept..kept + 3].fill(last);
+        let mut reported = 0;
         for group in (0..kept).step_by(4) {
             let pairs = &self.kept[group..group + 4];
             let a = [pairs[0].0, pairs[1].0, pairs[2].0, pairs[3].0].map(|i| i as usize);
             let b = [pairs[0].1, pairs[1].1, pairs[2].1, pairs[3].1].map(|i| i as usize);
-            // SAFETY: every piece held indexes the motions (`new`'s contract).
+            // SAFETY: every piece held indexes both (`new`'s contract).
             let (states_a, states_b) =
                 unsafe { (a.map(|i| motions.get_unchecked(i)), b.map(|i| motions.get_unchecked(i))) };
+            // SAFETY: as above.
+            let (owners_a, owners_b) =
+                unsafe { (a.map(|i| owners.get_unchecked(i)), b.map(|i| owners.get_unchecked(i))) };
             // SAFETY: AVX, the caller's.
-            let answers = unsafe { self.screen.kept_four_avx(states_a, states_b) };
-            for k in 0..4.min(kept - group) {
+            let (events, answers) =
+                unsafe { self.screen.kept_four_avx(states_a, states_b, windows_four(owners_a, owners_b)) };
+            // Only the pairs that can have an event in their window are reported; the others
+            // are counted as cleared, below.
+            let mut events = events & ((1 << (kept - group).min(4)) - 1);
+            while events != 0 {
+                let k = events.trailing_zeros() as usize;
                 // SAFETY: as above.
                 let (x, y, window) = unsafe { self.reporting.reports_unchecked(a[k], b[k]) };
                 report(x, y, window, answers[k]);
+                reported += 1;
+                events &= events - 1;
             }
         }
+        self.cleared += (kept - reported) as u64;
     }
 }
 
@@ -231,9 +244,7 @@ impl<S: PairScreen> Candidates for Screened<'_, S> {
 }
 
 /// Bit k set when [`Reporting`] would report pieces `a[k]` and `b[k]`: of two bodies, windows
-/// that meet. `Window::intersect` takes the other's bound where it is the later start (the
-/// earlier end), as `vmaxpd` (`vminpd`) takes its first operand where it compares greater
-/// (less), so each lane's window is `intersect`'s, NaN and signed zeros included.
+/// that meet ([`windows_four`], each lane's `intersect`'s).
 ///
 /// # Safety
 /// The processor has AVX.
@@ -241,6 +252,23 @@ impl<S: PairScreen> Candidates for Screened<'_, S> {
 #[target_feature(enable = "avx")]
 #[inline]
 unsafe fn reportable_four(a: [&Owner; 4], b: [&Owner; 4]) -> u32 {
+    use std::arch::x86_64::*;
+    let bodies =
+        |of: [&Owner; 4]| _mm_set_epi32(of[3].body as i32, of[2].body as i32, of[1].body as i32, of[0].body as i32);
+    let [start, end] = windows_four(a, b);
+    let meet = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(start, end)) as u32;
+    let same = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(bodies(a), bodies(b)))) as u32;
+    meet & !same
+}
+
+/// The windows of pieces `a[k]` and `b[k]` intersected, in lane k: the four starts, then the
+/// four ends. `Window::intersect` takes the other's bound where it is the later start (the
+/// earlier end), as `vmaxpd` (`vminpd`) takes its first operand where it compares greater
+/// (less), so each lane's window is `intersect`'s, NaN and signed zeros included.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+#[inline]
+fn windows_four(a: [&Owner; 4], b: [&Owner; 4]) -> [std::arch::x86_64::__m256d; 2] {
     use std::arch::x86_64::*;
     let () = WINDOW_ROW;
     // Each owner's window read as one row of two floats, the rows of pieces 0 and 2 (1 and 3) in
@@ -252,17 +280,11 @@ unsafe fn reportable_four(a: [&Owner; 4], b: [&Owner; 4]) -> u32 {
         let (even, odd) = (_mm256_set_m128d(row(of[2]), row(of[0])), _mm256_set_m128d(row(of[3]), row(of[1])));
         (_mm256_unpacklo_pd(even, odd), _mm256_unpackhi_pd(even, odd))
     };
-    let bodies =
-        |of: [&Owner; 4]| _mm_set_epi32(of[3].body as i32, of[2].body as i32, of[1].body as i32, of[0].body as i32);
     let ((starts_a, ends_a), (starts_b, ends_b)) = (columns(a), columns(b));
-    let start = _mm256_max_pd(starts_b, starts_a);
-    let end = _mm256_min_pd(ends_b, ends_a);
-    let meet = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(start, end)) as u32;
-    let same = _mm_movemask_ps(_mm_castsi128_ps(_mm_cmpeq_epi32(bodies(a), bodies(b)))) as u32;
-    meet & !same
+    [_mm256_max_pd(starts_b, starts_a), _mm256_min_pd(ends_b, ends_a)]
 }
 
-/// What [`reportable_four`] reads a window as: its start and end, side by side.
+/// What [`windows_four`] reads a window as: its start and end, side by side.
 #[cfg(target_arch = "x86_64")]
 const WINDOW_ROW: () = {
     use std::mem::{offset_of, size_of};

@@ -58,7 +58,9 @@ pub trait BroadPhase: Sync {
 
     /// [`Self::find_pairs`] with `predict` asked only of the candidates `screen` does not clear
     /// (the cleared ones counted all the same), with what [`PairScreen::kept`] makes of each. A
-    /// broad phase that can ask the screen of several candidates at once does.
+    /// broad phase that can ask the screen of several candidates at once does, and then also
+    /// clears the kept ones that [`PairScreen::kept_four_avx`] finds without an event in their
+    /// window.
     fn find_pairs_screened<T: Send, S: PairScreen>(
         &mut self,
         proxies: Proxies,
@@ -119,13 +121,20 @@ pub trait PairScreen: Sync {
     #[cfg(target_arch = "x86_64")]
     unsafe fn clears_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> u32;
 
-    /// [`Self::kept`] of the pairs of `a[k]` and `b[k]`, four at once in AVX's lanes: its very
-    /// answers.
+    /// [`Self::kept`] of the pairs of `a[k]` and `b[k]`, four at once in AVX's lanes, in lane k's
+    /// window (`windows`: the starts, then the ends): bit k of the mask returned is clear when
+    /// pair k can have no event in its window, and set with its very answer in lane k of the
+    /// answers otherwise (the other lanes' answers are anything).
     ///
     /// # Safety
     /// The processor has AVX.
     #[cfg(target_arch = "x86_64")]
-    unsafe fn kept_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> [Self::Kept; 4];
+    unsafe fn kept_four_avx(
+        &self,
+        a: [&BodyState; 4],
+        b: [&BodyState; 4],
+        windows: [std::arch::x86_64::__m256d; 2],
+    ) -> (u32, [Self::Kept; 4]);
 }
 
 /// `predict` of the candidates `screen` does not clear, asked one by one.

@@ -418,12 +418,23 @@ fn largest_exponent_power([x, y, z]: [std::arch::x86_64::__m256d; 3]) -> std::ar
 /// through each other in detect mode, so this runs the whole test in every lane rather than
 /// leaving it early as the scalar form does.
 ///
+/// Only a contact inside its pair's window can be an event, and a third of the kept pairs' fall
+/// outside it at 5 diameters/frame: bit k of the mask returned is set when pair k has a contact
+/// and its time lies in lane k's window (`starts` and `ends`, `start <= time < end` as
+/// [`crate::window::Window::contains`] asks, by the same ordered comparisons), and then lane k of
+/// the times is that time; the other lanes' times are anything. The caller reports only the
+/// set lanes, from one mask and one row of four floats rather than four options.
+///
 /// # Safety
 /// The processor has AVX.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
 #[inline]
-pub unsafe fn straight_pair_contact_times_four(a: [&BodyState; 4], b: [&BodyState; 4]) -> [Option<f64>; 4] {
+pub unsafe fn straight_pair_contact_times_four(
+    a: [&BodyState; 4],
+    b: [&BodyState; 4],
+    [starts, ends]: [std::arch::x86_64::__m256d; 2],
+) -> (u32, [f64; 4]) {
     use std::arch::x86_64::*;
     let StraightPairsFour { reference, offset, relative_velocity, velocities, radius_sum } = straight_pairs_four(a, b);
     let one = |value: f64| _mm256_set1_pd(value);
@@ -460,39 +471,65 @@ pub unsafe fn straight_pair_contact_times_four(a: [&BodyState; 4], b: [&BodyStat
     let tau = mul(scaled, ratio);
     let normal = |x| and(less_or_equal(one(f64::MIN_POSITIVE), x), less(x, one(f64::INFINITY)));
     let exact = and(normal(ratio), _mm256_or_pd(normal(magnitude(tau)), _mm256_cmp_pd::<_CMP_EQ_OQ>(tau, zero)));
-    // `approach_time_by`'s check of the velocities, scaled by the larger's largest component.
+    // `approach_time_by`'s check of the velocities, scaled by the larger's largest component,
+    // asked only where a found lane's relative velocity is not clearly above noise: with the
+    // relative velocity's largest component at least `speed_power`, a normal number, and every
+    // component of both velocities below `2^36 speed_power`, the scaled difference's length is
+    // at least about 2^-35 and the scaled speeds' sum below 4 sqrt(3), whose 10^-12 is below
+    // 2^-37: no noise (a NaN in a velocity makes the check's lengths NaN, no noise either).
     let [velocity_a, velocity_b] = velocities;
-    let scale =
-        _mm256_div_pd(one(1.0), _mm256_max_pd(largest_exponent_power(velocity_a), largest_exponent_power(velocity_b)));
-    let (va, vb) = (velocity_a.map(|x| mul(x, scale)), velocity_b.map(|x| mul(x, scale)));
-    let difference = std::array::from_fn(|k| sub(vb[k], va[k]));
-    let length = |u| _mm256_sqrt_pd(dot_four(u, u));
-    let noise = less_or_equal(length(difference), mul(one(NOISE_VELOCITY), add(length(va), length(vb))));
+    let largest = |u: [__m256d; 3]| _mm256_max_pd(_mm256_max_pd(magnitude(u[0]), magnitude(u[1])), magnitude(u[2]));
+    let clearly_moving = and(
+        less(_mm256_max_pd(largest(velocity_a), largest(velocity_b)), mul(speed_power, one(power_of_two(36)))),
+        less(one(f64::MIN_POSITIVE), speed_power),
+    );
+    let noise = if _mm256_movemask_pd(and_not(clearly_moving, found)) == 0 {
+        zero
+    } else {
+        let scale = _mm256_div_pd(
+            one(1.0),
+            _mm256_max_pd(largest_exponent_power(velocity_a), largest_exponent_power(velocity_b)),
+        );
+        let (va, vb) = (velocity_a.map(|x| mul(x, scale)), velocity_b.map(|x| mul(x, scale)));
+        let difference = std::array::from_fn(|k| sub(vb[k], va[k]));
+        let length = |u| _mm256_sqrt_pd(dot_four(u, u));
+        less_or_equal(length(difference), mul(one(NOISE_VELOCITY), add(length(va), length(vb))))
+    };
     let time = add(reference, tau);
     let finite = less(magnitude(time), one(f64::INFINITY));
-    let kept = _mm256_movemask_pd(and(and_not(noise, found), finite)) as u32;
+    let inside = and(_mm256_cmp_pd::<_CMP_LE_OQ>(starts, time), less(time, ends));
+    let events = _mm256_movemask_pd(and(and(and_not(noise, found), finite), inside)) as u32;
     let by_scalar = _mm256_movemask_pd(and_not(exact, found)) as u32;
     let mut times = [0.0; 4];
     // SAFETY: four floats.
     unsafe { _mm256_storeu_pd(times.as_mut_ptr(), time) };
-    // Spelt out, and the scalar test apart: `from_fn` here is left as a call.
-    let lane = |k: usize| (kept >> k & 1 == 1).then_some(times[k]);
-    let mut answers = [lane(0), lane(1), lane(2), lane(3)];
-    if by_scalar != 0 {
-        answer_by_scalar(&mut answers, by_scalar, a, b);
+    if by_scalar == 0 {
+        return (events, times);
     }
-    answers
+    let (mut starts_of, mut ends_of) = ([0.0; 4], [0.0; 4]);
+    // SAFETY: four floats each.
+    unsafe { (_mm256_storeu_pd(starts_of.as_mut_ptr(), starts), _mm256_storeu_pd(ends_of.as_mut_ptr(), ends)) };
+    answer_by_scalar((events, times), by_scalar, (a, b), (starts_of, ends_of))
 }
 
 /// The lanes of [`straight_pair_contact_times_four`] set in `lanes`, answered by the scalar
-/// test itself. Out of line: no lane of an ordinary scene comes here.
+/// test itself in their windows. Out of line: no lane of an ordinary scene comes here.
 #[cfg(target_arch = "x86_64")]
 #[cold]
 #[inline(never)]
-fn answer_by_scalar(answers: &mut [Option<f64>; 4], lanes: u32, a: [&BodyState; 4], b: [&BodyState; 4]) {
+fn answer_by_scalar(
+    (mut events, mut times): (u32, [f64; 4]),
+    lanes: u32,
+    (a, b): ([&BodyState; 4], [&BodyState; 4]),
+    (starts, ends): ([f64; 4], [f64; 4]),
+) -> (u32, [f64; 4]) {
     for k in (0..4).filter(|k| lanes >> k & 1 == 1) {
-        answers[k] = straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius);
+        let time = straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius);
+        let inside = time.filter(|&t| crate::window::Window { start: starts[k], end: ends[k] }.contains(t));
+        events = events & !(1 << k) | u32::from(inside.is_some()) << k;
+        times[k] = inside.unwrap_or(0.0);
     }
+    (events, times)
 }
 
 /// The reference instant of two straight motions (the later `since`) and `b`'s centre less
@@ -839,34 +876,94 @@ mod tests {
 
     /// The four-lane exact test against the scalar one, lane by lane and to the bit, on the
     /// screen's hard pairs (grazing, equal velocities, touching and overlapping, tiny and huge
-    /// scales, special values), and the scalar one the same whichever body comes first.
+    /// scales, special values), in windows that hold the scalar's time, end at it, start just
+    /// after it, hold everything or are NaN; and the scalar one the same whichever body comes
+    /// first.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_exact_test_in_lanes_answers_as_the_scalar_test() {
-        use rand::SeedableRng;
+        use crate::window::Window;
+        use rand::{Rng, SeedableRng};
+        use std::arch::x86_64::_mm256_loadu_pd;
         if !std::arch::is_x86_feature_detected!("avx") {
             return;
         }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(31);
         let origin = BodyState::default();
         let bits = |time: Option<f64>| time.map(f64::to_bits);
-        let (mut contacts, mut kept) = (0, 0);
+        let (mut contacts, mut kept, mut outside) = (0, 0, 0);
         for _ in 0..200_000 {
             let a: [BodyState; 4] = std::array::from_fn(|_| hard_state(&mut rng, &origin));
             let b: [BodyState; 4] = std::array::from_fn(|k| hard_state(&mut rng, &a[k]));
-            // SAFETY: AVX was detected above.
-            let lanes = unsafe { straight_pair_contact_times_four(a.each_ref(), b.each_ref()) };
+            let scalar: [Option<f64>; 4] = std::array::from_fn(|k| {
+                straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius)
+            });
+            let windows: [Window; 4] = std::array::from_fn(|k| {
+                let t = scalar[k].unwrap_or(1.0);
+                let (start, end) = match rng.random_range(0..6) {
+                    0 => (f64::NEG_INFINITY, f64::INFINITY),
+                    1 => (t, t.next_up()),
+                    2 => (t.next_down(), t),
+                    3 => (t.next_up(), t + t.abs() + 1.0),
+                    4 => (t - t.abs() - 1.0, t + t.abs() + 1.0),
+                    _ => (f64::NAN, t.next_up()),
+                };
+                Window { start, end }
+            });
+            let (starts, ends) = (windows.map(|w| w.start), windows.map(|w| w.end));
+            // SAFETY: AVX was detected above; four floats each.
+            let (events, times) = unsafe {
+                let columns = [_mm256_loadu_pd(starts.as_ptr()), _mm256_loadu_pd(ends.as_ptr())];
+                straight_pair_contact_times_four(a.each_ref(), b.each_ref(), columns)
+            };
             for (k, (a, b)) in a.iter().zip(&b).enumerate() {
-                let scalar = straight_pair_contact_time_past_screen(&a.motion, &b.motion, a.radius + b.radius);
                 let swapped = straight_pair_contact_time_past_screen(&b.motion, &a.motion, b.radius + a.radius);
-                assert_eq!(bits(lanes[k]), bits(scalar), "a {a:?} b {b:?}");
-                assert_eq!(bits(swapped), bits(scalar), "a {a:?} b {b:?}");
-                contacts += usize::from(scalar.is_some());
+                let event = scalar[k].filter(|&t| windows[k].contains(t));
+                let lane = (events >> k & 1 == 1).then_some(times[k]);
+                assert_eq!(bits(lane), bits(event), "a {a:?} b {b:?} window {:?}", windows[k]);
+                assert_eq!(bits(swapped), bits(scalar[k]), "a {a:?} b {b:?}");
+                contacts += usize::from(scalar[k].is_some());
+                outside += usize::from(scalar[k].is_some() && event.is_none());
                 kept += usize::from(!straight_paths_clearly_miss(&a.motion, &b.motion, a.radius + b.radius));
             }
         }
-        // Contacts met often, among pairs the screen keeps.
-        assert!(contacts > 30_000 && kept > 100_000, "contacts {contacts} kept {kept}");
+        // Contacts met often, inside and outside their windows, among pairs the screen keeps.
+        assert!(contacts > 30_000 && outside > 10_000 && kept > 100_000, "contacts {contacts} kept {kept}");
+        // Pairs closing at about the noise's threshold, 2^-30 to 2^-50 of their own speeds, at
+        // scales from tiny to huge: the lanes' noise check, asked or skipped, as the scalar's.
+        let (mut noise, mut moving) = (0, 0);
+        for _ in 0..20_000 {
+            let pair = |rng: &mut rand_chacha::ChaCha8Rng| {
+                let (scale, speed) =
+                    (2f64.powi(rng.random_range(-1000..1000)), 2f64.powi(rng.random_range(-1000..1000)));
+                let along =
+                    DVec3::new(rng.random_range(0.5..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let closing = speed * 2f64.powi(-rng.random_range(30..50)) * rng.random_range(1.0..2.0);
+                let mut a = BodyState { radius: scale, ..BodyState::default() };
+                a.motion.velocity = along * speed;
+                let mut b = a;
+                b.motion.position = DVec3::X * (scale * 3.0);
+                b.motion.velocity = a.motion.velocity - DVec3::X * closing;
+                (a, b)
+            };
+            let pairs: [(BodyState, BodyState); 4] = std::array::from_fn(|_| pair(&mut rng));
+            let (a, b) = (pairs.map(|p| p.0), pairs.map(|p| p.1));
+            let (starts, ends) = ([f64::NEG_INFINITY; 4], [f64::INFINITY; 4]);
+            // SAFETY: AVX was detected above; four floats each.
+            let (events, times) = unsafe {
+                let everything = [_mm256_loadu_pd(starts.as_ptr()), _mm256_loadu_pd(ends.as_ptr())];
+                straight_pair_contact_times_four(a.each_ref(), b.each_ref(), everything)
+            };
+            for k in 0..4 {
+                let scalar =
+                    straight_pair_contact_time_past_screen(&a[k].motion, &b[k].motion, a[k].radius + b[k].radius);
+                let lane = (events >> k & 1 == 1).then_some(times[k]);
+                assert_eq!(bits(lane), bits(scalar), "a {:?} b {:?}", a[k], b[k]);
+                moving += usize::from(scalar.is_some());
+                noise += usize::from(scalar.is_none());
+            }
+        }
+        assert!(noise > 10_000 && moving > 10_000, "noise {noise} moving {moving}");
     }
 
     #[test]

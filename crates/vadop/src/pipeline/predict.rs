@@ -100,9 +100,15 @@ impl PairScreen for StraightSpheres {
 
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
-    unsafe fn kept_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> [Option<f64>; 4] {
+    unsafe fn kept_four_avx(
+        &self,
+        a: [&BodyState; 4],
+        b: [&BodyState; 4],
+        windows: [std::arch::x86_64::__m256d; 2],
+    ) -> (u32, [Option<f64>; 4]) {
         // SAFETY: the caller's.
-        unsafe { straight_pair_contact_times_four(a, b) }
+        let (events, times) = unsafe { straight_pair_contact_times_four(a, b, windows) };
+        (events, times.map(Some))
     }
 }
 
