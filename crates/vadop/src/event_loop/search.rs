@@ -541,6 +541,8 @@ impl<'a> Search<'a> {
             };
             self.exact(own, c.q as usize, shift, eligible, best);
         }
+        // The buffer holds the candidates left untested, no taken one twice.
+        self.candidates.len = left;
     }
 
     /// The exact test of `own.p` and `q` (through `q`'s image shifted by `shift`), as the frame
