@@ -70,8 +70,7 @@ pub(super) struct Pushed {
     pub restitution: f64,
     pub impulse: f64,
     pub virial: f64,
-    /// Their velocities, motions and stamps after it.
-    pub velocities: [DVec3; 2],
+    /// Their motions (from their centres at the contact) and stamps after it.
     pub motions: [Motion; 2],
     pub stamps: [u32; 2],
     /// Their next events and next cell crossings.
@@ -162,14 +161,16 @@ impl Seen<'_> {
         }
         let restitution = self.rules.pair_restitution(a, b, t, physics.restitution, physics.contact_duration);
         // What the serial loop's impact finds (`Impacts::plain_pair`), from the same functions.
-        let (touch, before) = contacts::spheres_touch(self.bodies, i, j, t);
+        // The paths moved on to `t` (as `plain_pair` takes them): the new motions keep their
+        // centres, the bits `Bodies::set_velocity_at` would work out again.
+        let (touch, [on_i, on_j]) = contacts::spheres_touch_on(self.bodies, i, j, t);
         let (point, normal) = (touch.point, touch.normal);
+        let before = [on_i.velocity, on_j.velocity];
         let Some((impulse, vi, vj)) = spheres_pushed(self.bodies, (i, j), before, normal, restitution) else {
             return Worked::Nothing;
         };
         let virial = virial(touch.offset, self.bodies.mass(j), (before[1], vj));
-        let moved = |k: usize, velocity| Motion { position: self.bodies.position_at(k, t), since: t, velocity };
-        let motions = [moved(i, vi), moved(j, vj)];
+        let motions = [Motion { velocity: vi, ..on_i }, Motion { velocity: vj, ..on_j }];
         let stamps = [self.bodies.stamp(i).wrapping_add(1), self.bodies.stamp(j).wrapping_add(1)];
         let state = |k: usize, motion| BodyState { motion, radius: self.bodies.radius(k) };
         search.overlay =
@@ -177,7 +178,6 @@ impl Seen<'_> {
         let next = [search.next_event(i, t, Eligible::From(t)), search.next_event(j, t, Eligible::From(t))];
         let crossings = [(i, motions[0]), (j, motions[1])]
             .map(|(k, motion)| self.cells.next_crossing_from(&motion, self.cells.place(k).0, t));
-        let velocities = [vi, vj];
         Worked::Pushed(Pushed {
             pair: [a, b],
             point,
@@ -185,7 +185,6 @@ impl Seen<'_> {
             restitution,
             impulse,
             virial,
-            velocities,
             motions,
             stamps,
             next,

@@ -215,8 +215,11 @@ impl EventLoop {
         let Rule::Impulse { restitution, changed } = rule else { unreachable!("checked: the rules do not jam them") };
         debug_assert_eq!(restitution.to_bits(), pushed.restitution.to_bits());
         out.stats.tc_contacts += changed as u64;
-        bodies.set_velocity_at(i, t, pushed.velocities[0]);
-        bodies.set_velocity_at(j, t, pushed.velocities[1]);
+        // The worker's motions hold the centres at `t` the store's paths give (the bodies'
+        // motions are those it read: `untouched_pair`), so they are set as found.
+        let [on_i, on_j] = pushed.motions;
+        bodies.set_velocity_on(i, on_i, on_i.velocity);
+        bodies.set_velocity_on(j, on_j, on_j.velocity);
         out.stats.pair_virial += pushed.virial;
         for k in 0..2 {
             let i = pushed.pair[k] as usize;

@@ -321,16 +321,10 @@ fn sphere_pair_touch_from(
     SphereTouch { point, normal, offset }
 }
 
-/// [`sphere_pair_touch`] of spheres `i` and `j` on their paths now, with their velocities at `t`
-/// ([`Bodies::velocity_at`]'s bits) from the same read of their paths.
-#[inline]
-pub(crate) fn spheres_touch(bodies: &Bodies, i: usize, j: usize, t: f64) -> (SphereTouch, [DVec3; 2]) {
-    let (touch, [on_i, on_j]) = spheres_touch_on(bodies, i, j, t);
-    (touch, [on_i.velocity, on_j.velocity])
-}
-
-/// [`spheres_touch`] with the two paths moved on to `t` (centre and velocity there, since `t`:
-/// [`Motion::moved_on`]'s bits), which an impact at `t` gives new velocities from.
+/// [`sphere_pair_touch`] of spheres `i` and `j` on their paths now, with the two paths moved on
+/// to `t` (centre and velocity there, since `t`: [`Motion::moved_on`]'s bits, the velocities
+/// [`Bodies::velocity_at`]'s) from the same read of their paths, which an impact at `t` gives
+/// new velocities from.
 #[inline]
 pub(crate) fn spheres_touch_on(bodies: &Bodies, i: usize, j: usize, t: f64) -> (SphereTouch, [Motion; 2]) {
     let (path_i, path_j) = (SpherePath::of(bodies, i), SpherePath::of(bodies, j));
