@@ -326,15 +326,19 @@ impl<'a> Search<'a> {
     #[inline]
     fn offer_own(&self, p: usize, now: f64, eligible: Eligible, best: &mut Best) {
         let window = Window::new(eligible.start(), f64::INFINITY);
-        // A box periodic on every axis has no walls to predict against.
-        let walled = self.bounds.periodic.contains(&false);
         let (state, stamp, gravity) = (self.state_of(p), self.stamp_of(p), self.bodies.gravity);
-        let (wall, face) = (
-            walled.then(|| sphere_wall_event((p as u32, stamp), state, gravity, self.bounds, window)).flatten(),
-            crossing_event((p as u32, stamp), &state.motion, gravity, self.bounds, window),
-        );
-        for event in [wall, face].into_iter().flatten() {
-            best.offer(event, eligible, now);
+        // A box periodic on every axis has no walls to predict against, one with no periodic
+        // axis no faces to cross (whose corners the cells keep: see `Cells::faces`). Each event
+        // offered as found, the wall's first (no array of the two to walk: a tenth of the call).
+        if self.bounds.periodic.contains(&false) {
+            if let Some(wall) = sphere_wall_event((p as u32, stamp), state, gravity, self.bounds, window) {
+                best.offer(wall, eligible, now);
+            }
+        }
+        if let Some(faces) = self.cells.faces {
+            if let Some(face) = crossing_event((p as u32, stamp), &state.motion, gravity, faces, window) {
+                best.offer(face, eligible, now);
+            }
         }
     }
 

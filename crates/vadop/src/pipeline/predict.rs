@@ -328,23 +328,20 @@ pub(crate) fn predict_crossing(bodies: &Bodies, bounds: &BoxBounds, body: u32, w
         return None;
     }
     let i = body as usize;
-    crossing_event((body, bodies.stamp(i)), &bodies.motion(i), bodies.gravity_on(i), bounds, window)
+    crossing_event((body, bodies.stamp(i)), &bodies.motion(i), bodies.gravity_on(i), bounds.faces(), window)
 }
 
-/// [`predict_crossing`] of body `body` (stamped as given) on `motion` under `gravity`: a motion
-/// the store may not hold yet.
+/// [`predict_crossing`] of body `body` (stamped as given) on `motion` under `gravity`, in a box
+/// whose periodic faces are `(low, high)` ([`BoxBounds::faces`] of a periodic box, read once by
+/// the caller): a motion the store may not hold yet.
 #[inline]
 pub(crate) fn crossing_event(
     (body, stamp): (u32, u32),
     motion: &Motion,
     gravity: DVec3,
-    bounds: &BoxBounds,
+    (low, high): (DVec3, DVec3),
     window: Window,
 ) -> Option<Event> {
-    if !bounds.is_periodic() {
-        return None;
-    }
-    let (low, high) = bounds.faces();
     let (time, face) = wall_contact_time(motion, 0.0, low, high, gravity)?;
     let event = Event { time, body, partner: Partner::Cross(face), body_stamp: stamp, partner_stamp: 0 };
     window.contains(time).then_some(event)
