@@ -250,11 +250,16 @@ impl Cells {
         self.link(i, at);
     }
 
-    /// Moves body `i` one cell along `crossing`'s axis.
-    pub(super) fn step_across(&mut self, i: usize, crossing: Crossing) {
-        let at = self.stepped(i, crossing).0.map(i64::from);
-        self.unlink(i);
-        self.link(i, at);
+    /// Moves body `i` one cell along `crossing`'s axis; returns its new cell's coordinates and
+    /// index. (The index as [`Self::stepped`] finds it, a stride from the old one, not worked out
+    /// from the coordinates again, and the unlinking and linking inline, not calls: about 50
+    /// instructions fewer a crossing in the thin gas, of some 130.)
+    #[inline]
+    pub(super) fn step_across(&mut self, i: usize, crossing: Crossing) -> ([u16; 3], u32) {
+        let (at, cell) = self.stepped(i, crossing);
+        self.unlink_inline(i);
+        self.link_into(i, at, cell);
+        (at, cell)
     }
 
     /// The coordinates and index of the cell body `i` steps into by `crossing`.
@@ -294,8 +299,14 @@ impl Cells {
 
     fn link(&mut self, i: usize, at: [i64; 3]) {
         let cell = (at[0] + at[1] * self.strides[1] + at[2] * self.strides[2]) as u32;
+        self.link_into(i, at.map(|c| c as u16), cell);
+    }
+
+    /// Lists body `i` first in cell `cell`, at `at`.
+    #[inline(always)]
+    fn link_into(&mut self, i: usize, at: [u16; 3], cell: u32) {
         let first = self.first(cell);
-        self.listing[i] = Listing { next: first, prev: NONE, cell, at: at.map(|c| c as u16) };
+        self.listing[i] = Listing { next: first, prev: NONE, cell, at };
         self.head[cell as usize] = if first != NONE {
             self.listing[first as usize].prev = i as u32;
             i as u32 | CROWDED
@@ -305,7 +316,14 @@ impl Cells {
         };
     }
 
+    /// Takes body `i`, listed, off its cell's list (out of line but in a crossing's move).
     fn unlink(&mut self, i: usize) {
+        self.unlink_inline(i);
+    }
+
+    /// [`Self::unlink`], inline in a crossing's move.
+    #[inline(always)]
+    fn unlink_inline(&mut self, i: usize) {
         let Listing { next, prev, cell, .. } = self.listing[i];
         // One body left: `i` was the head and its next is the last, or `i` was the last and its
         // previous the head (lines the unlinking writes anyway).

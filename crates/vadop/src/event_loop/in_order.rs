@@ -177,8 +177,8 @@ impl EventLoop {
         match worked {
             &Worked::Crossed { next, crossing } if self.untouched_crossing(i) => {
                 self.marks.mark(self.cells.cell_of(i));
-                self.cells.step_across(i, self.calendar.events(i).crossing);
-                self.marks.mark(self.cells.cell_of(i));
+                let (_, into) = self.cells.step_across(i, self.calendar.events(i).crossing);
+                self.marks.mark(into);
                 self.calendar.schedule(i as u32, Events { next, crossing });
             }
             &Worked::Voided { next } if self.untouched_around(i) => {

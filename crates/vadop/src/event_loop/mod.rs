@@ -454,9 +454,8 @@ impl EventLoop {
     fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
         let Events { next: before, crossing } = *self.calendar.events(i);
         self.marks.mark(self.cells.cell_of(i));
-        self.cells.step_across(i, crossing);
-        self.marks.mark(self.cells.cell_of(i));
-        let into = self.cells.place(i);
+        let into = self.cells.step_across(i, crossing);
+        self.marks.mark(into.1);
         let mut search = self.search(bodies);
         let next = search.after_crossing(i, (into, crossing), t, before);
         stats.narrow_tests += search.tests;
