@@ -6,7 +6,9 @@
 //!
 //! It owns the screen's margins and when they are trusted, the searching body as the screen sees
 //! it ([`Own`]), and the screen itself: of one partner, and of four at a time in AVX lanes, the
-//! same bits. It never computes a contact time nor changes a body.
+//! same bits; and for a pair sure to touch, that its relative velocity is no rounding noise to the
+//! exact test (see [`NOISE`]), which then skips its own check of it. It never computes a contact
+//! time nor changes a body.
 
 use crate::bodies::BodyState;
 use glam::DVec3;
@@ -23,6 +25,18 @@ const TIME_SLACK: f64 = 1e-4;
 /// A pair whose relative speed squared is below this fraction of the sum of the two speeds
 /// squared may be rounding noise to the exact test (its own rule is 10^-12 of the sum of the
 /// speeds): it never bounds the screen.
+///
+/// A pair sure to touch is above it, and is then *moving*: the exact test's noise rule
+/// (`narrow_phase::spheres`, |v| <= 10^-12 (|va| + |vb|) on the velocities scaled by a power of
+/// two) cannot hold for it, so the test skips it, the same bits. Why: write V = |v|^2 (v = vb - va)
+/// and S = |va|^2 + |vb|^2, true values. The rule, computed a few roundings from them on values
+/// scaled near 1, holds only where V <= 1.0001e-24 (|va| + |vb|)^2 <= 2.0002e-24 S. The screen's
+/// V and S (sums of squares of the same velocities) are each within 8 roundings plus 4 * 2^-1074
+/// of the true ones; where S >= 2^-1000 that is far below the gap between 10^-16 S and
+/// 2.0002e-24 S, so the screen's V is not above `NOISE` times its S; where S < 2^-1000, V is
+/// below 2^-1078, every component of v below 2^-539, their squares round to zero, the screen's V
+/// is zero and not above it either. (An overflow makes S infinite, which nothing is above, or
+/// V infinite, which the rule cannot call noise; a NaN fails every comparison.)
 const NOISE: f64 = 1e-16;
 /// The screen is trusted when this many roundings of the largest coordinate are within
 /// `1e-11` of the smallest radius.
@@ -53,12 +67,13 @@ pub(super) struct Own {
 /// shifted to its image) as its offset: `None` when it can be skipped (moving apart from `own`,
 /// passing wide of it, or unable to touch it within `bound` of `own.now`), else a lower bound on
 /// when it can touch, after `own.now` (minus infinity when there is none to trust, as for a pair
-/// touching now). A pair sure to touch lowers `bound` to an upper bound on when it does. Every
+/// touching now), and whether it is moving (see [`NOISE`]). A pair sure to touch lowers `bound`
+/// to an upper bound on when it does, and is moving. Every
 /// bound allows for the rounding of the offsets (see [`screen_trusted`]): |offset|^2 falls no
 /// faster than 2 |approach| per unit time at first, and the paths' closest approach is where the
 /// discriminant says, to its slack.
 #[inline(always)]
-pub(super) fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Option<f64> {
+pub(super) fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f64) -> Option<(f64, bool)> {
     let motion = &state.motion;
     // Written per component: the vector types' shuffles cost more than the arithmetic here.
     let (p, v, dt) = (motion.position, motion.velocity, own.now - motion.since);
@@ -69,13 +84,13 @@ pub(super) fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f6
     // |approach| clear of 10^-6 |offset| |velocity|: its sign is sure.
     let clear = approach * approach > RECEDING * RECEDING * d2 * v2;
     if approach > 0.0 {
-        return if clear { None } else { Some(f64::NEG_INFINITY) };
+        return if clear { None } else { Some((f64::NEG_INFINITY, false)) };
     }
     let reach = own.radius + state.radius;
     let gap = d2 - reach * reach;
     let slack = GAP_SLACK * reach * reach + OFFSET_SLACK * d2;
     if !(clear && gap > slack) {
-        return Some(f64::NEG_INFINITY);
+        return Some((f64::NEG_INFINITY, false));
     }
     let closing = -approach;
     bounded(own, (gap - slack, 2.0 * closing), bound, || {
@@ -102,14 +117,15 @@ pub(super) fn screen(own: &Own, state: &BodyState, origin: DVec3, bound: &mut f6
 
 /// The steps of [`screen`] that depend on `bound`, for a pair approaching with its gap clear of
 /// the slack: `late` the gap less the slack, `rate` twice the closing rate; `rest` the earliest
-/// it can touch (none when the paths pass wide) and the latest when it is sure to.
+/// it can touch (none when the paths pass wide) and the latest when it is sure to (then it is
+/// moving).
 #[inline(always)]
 fn bounded(
     own: &Own,
     (late, rate): (f64, f64),
     bound: &mut f64,
     rest: impl FnOnce() -> Option<(f64, Option<f64>)>,
-) -> Option<f64> {
+) -> Option<(f64, bool)> {
     if late > rate * (*bound + own.rounding) * (1.0 + TIME_SLACK) {
         return None;
     }
@@ -120,7 +136,7 @@ fn bounded(
     if let Some(latest) = latest {
         *bound = bound.min(latest);
     }
-    Some(earliest)
+    Some((earliest, latest.is_some()))
 }
 
 /// True when [`screen`] can run four partners at a time (see [`screen_four_avx`]).
@@ -140,7 +156,7 @@ pub(super) struct Four {
     /// only falls along a search).
     pub left: u32,
     /// Of those, the lanes bounded by it (approaching, the gap clear of the slack: [`bounded`]'s
-    /// values follow); the others have no bound to trust.
+    /// values follow); the others have no bound to trust, and are not moving.
     bounded: u32,
     /// Of those, the lanes sure to touch, by `latest`.
     sure: u32,
@@ -152,10 +168,10 @@ pub(super) struct Four {
 impl Four {
     /// [`screen`]'s answer for lane `lane`, one of those left, with the bound as it stands.
     #[inline(always)]
-    pub(super) fn lane(&self, lane: usize, own: &Own, bound: &mut f64) -> Option<f64> {
+    pub(super) fn lane(&self, lane: usize, own: &Own, bound: &mut f64) -> Option<(f64, bool)> {
         let bit = 1 << lane;
         if self.bounded & bit == 0 {
-            return Some(f64::NEG_INFINITY);
+            return Some((f64::NEG_INFINITY, false));
         }
         // SAFETY: a lane is bounded only once the values are written.
         let [late, rate, earliest, latest] = unsafe { self.values.assume_init_ref() };
@@ -193,7 +209,8 @@ pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partn
 
 /// [`screen_four_avx`] of `groups` groups of four partners in a row, `group(g)` the `g`-th: the
 /// lanes each group leaves, taken in order with `bound` as it stands (as [`Four::lane`] answers
-/// them), `keep(g, lane, earliest)` for each that passes. Asked only where [`lanes`] holds.
+/// them), `keep(g, lane, (earliest, moving))` for each that passes. Asked only where [`lanes`]
+/// holds.
 ///
 /// One call for all the groups of a search, inside which the lanes' screen is inlined: called
 /// once a group from code without AVX, which cannot inline it, it cost the call's saving and
@@ -205,7 +222,7 @@ pub(super) fn screen_fours<P: Partners>(
     groups: usize,
     group: impl Fn(usize) -> P,
     bound: &mut f64,
-    keep: impl FnMut(usize, usize, f64),
+    keep: impl FnMut(usize, usize, (f64, bool)),
 ) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: asked only where `lanes` found AVX.
@@ -226,7 +243,7 @@ fn screen_fours_avx<P: Partners>(
     groups: usize,
     group: impl Fn(usize) -> P,
     bound: &mut f64,
-    mut keep: impl FnMut(usize, usize, f64),
+    mut keep: impl FnMut(usize, usize, (f64, bool)),
 ) {
     for g in 0..groups {
         let four = screen_four_avx(own, states, &group(g), *bound);
@@ -234,8 +251,8 @@ fn screen_fours_avx<P: Partners>(
         while left != 0 {
             let lane = left.trailing_zeros() as usize;
             left &= left - 1;
-            if let Some(earliest) = four.lane(lane, own, bound) {
-                keep(g, lane, earliest);
+            if let Some(screened) = four.lane(lane, own, bound) {
+                keep(g, lane, screened);
             }
         }
     }
@@ -341,4 +358,48 @@ fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bo
         }
     }
     four
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Motion;
+    use crate::narrow_phase::contacts::screened_spheres_start;
+    use crate::window::Window;
+    use rand::{Rng, SeedableRng};
+
+    /// A pair the screen finds moving gets the exact test's answer without its noise rule, the
+    /// same bits as with it (see [`NOISE`]): head-on pairs whose relative speed runs from 10^-17
+    /// of their speeds (rounding noise to the exact test) to their size, at speeds from 10^-300
+    /// to 10^300 (where the screen's squares underflow or overflow).
+    #[test]
+    fn a_moving_pair_s_exact_test_needs_no_noise_rule() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(25);
+        let window = Window::new(0.0, f64::INFINITY);
+        // Pairs found moving, and pairs not moving that the noise rule rejects.
+        let (mut moving, mut noise) = (0, 0);
+        for round in 0..200_000 {
+            let speed = 10f64.powf(rng.random_range(-300.0..300.0));
+            let velocity = DVec3::from_array([(); 3].map(|_| rng.random_range(-1.0..1.0))) * speed;
+            let relative = -DVec3::X * speed * 10f64.powf(rng.random_range(-17.0..0.0));
+            let own = Own { p: 0, position: DVec3::ZERO, velocity, radius: 0.5, now: 0.0, rounding: 0.0 };
+            let at = |position, velocity| BodyState { motion: Motion { position, since: 0.0, velocity }, radius: 0.5 };
+            let (mine, partner) =
+                (at(own.position, velocity), at(DVec3::X * rng.random_range(1.001..3.0), velocity + relative));
+            let mut bound = f64::INFINITY;
+            let with_rule = screened_spheres_start(&mine, &partner, window, false);
+            match screen(&own, &partner, own.position, &mut bound) {
+                Some((_, true)) => {
+                    moving += 1;
+                    assert_eq!(screened_spheres_start(&mine, &partner, window, true), with_rule, "round {round}");
+                }
+                _ => {
+                    noise += usize::from(
+                        with_rule.is_none() && screened_spheres_start(&mine, &partner, window, true).is_some(),
+                    )
+                }
+            }
+        }
+        assert!(moving > 10_000 && noise > 1_000, "moving {moving}, rejected as noise {noise}");
+    }
 }

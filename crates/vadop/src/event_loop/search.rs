@@ -129,6 +129,9 @@ pub(super) struct Candidate {
     /// Its cell among the neighbourhood's (see [`Near`]), or with lists its image (see
     /// [`Lists::images`]).
     cell: u8,
+    /// The screen found its velocity surely apart from the searching body's, beyond the exact
+    /// test's noise rule, which its test then skips (see [`super::screen`]).
+    moving: bool,
 }
 
 /// The partners a search gathered, then those that passed the screen: the first `len` of a buffer
@@ -176,7 +179,7 @@ impl Candidates {
     #[cold]
     #[inline(never)]
     fn grow(&mut self) {
-        let none = Candidate { earliest: 0.0, q: NONE, cell: 0 };
+        let none = Candidate { earliest: 0.0, q: NONE, cell: 0, moving: false };
         self.slots.resize((2 * self.slots.len()).max(64), none);
     }
 }
@@ -396,7 +399,7 @@ impl<'a> Search<'a> {
                     self.overlay.met = Some((q, k));
                 } else {
                     prefetch_item(states, q as usize);
-                    candidates.put(len, Candidate { earliest: 0.0, q, cell: k });
+                    candidates.put(len, Candidate { earliest: 0.0, q, cell: k, moving: false });
                     len += 1;
                 }
             }
@@ -418,7 +421,7 @@ impl<'a> Search<'a> {
             if lists.fresh(q) {
                 prefetch_item(states, q);
                 origins[image] = own.position - lists.images[image];
-                candidates.push(Candidate { earliest: 0.0, q: q as u32, cell: image as u8 });
+                candidates.push(Candidate { earliest: 0.0, q: q as u32, cell: image as u8, moving: false });
             }
         }
     }
@@ -447,22 +450,22 @@ impl<'a> Search<'a> {
                 images: &lists.images,
                 centre: own.position,
             };
-            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, earliest| {
+            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, (earliest, moving)| {
                 let (q, image) = lists::split(members[4 * g + lane]);
-                candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+                candidates.push(Candidate { earliest, q: q as u32, cell: image as u8, moving });
             });
         }
         for &entry in &members[grouped..] {
             let (q, image) = lists::split(entry);
-            let earliest = if screened {
+            let (earliest, moving) = if screened {
                 match screen(own, &states[q], own.position - lists.images[image], &mut bound) {
-                    Some(earliest) => earliest,
+                    Some(screened) => screened,
                     None => continue,
                 }
             } else {
-                f64::NEG_INFINITY
+                (f64::NEG_INFINITY, false)
             };
-            candidates.push(Candidate { earliest, q: q as u32, cell: image as u8 });
+            candidates.push(Candidate { earliest, q: q as u32, cell: image as u8, moving });
         }
         best.bound = bound;
     }
@@ -473,7 +476,7 @@ impl<'a> Search<'a> {
     fn screen_all(&mut self, own: &Own, best: &mut Best) {
         if !self.screen {
             if let Some((q, cell)) = self.overlay.met.take() {
-                self.candidates.push(Candidate { earliest: 0.0, q, cell });
+                self.candidates.push(Candidate { earliest: 0.0, q, cell, moving: false });
             }
             self.candidates.as_mut_slice().iter_mut().for_each(|c| c.earliest = f64::NEG_INFINITY);
             return;
@@ -493,15 +496,17 @@ impl<'a> Search<'a> {
             let slots = Cell::from_mut(&mut *candidates).as_slice_of_cells();
             let group =
                 |g: usize| Gathered { group: slots[4 * g..4 * g + 4].try_into().expect("four candidates"), origins };
-            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, earliest| {
-                slots[kept].set(Candidate { earliest, ..slots[4 * g + lane].get() });
+            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, (earliest, moving)| {
+                slots[kept].set(Candidate { earliest, moving, ..slots[4 * g + lane].get() });
                 kept += 1;
             });
         }
         for k in grouped..candidates.len() {
             let c = candidates[k];
-            if let Some(earliest) = screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound) {
-                candidates[kept] = Candidate { earliest, ..c };
+            if let Some((earliest, moving)) =
+                screen(own, &states[c.q as usize], origins[c.cell as usize & 31], &mut bound)
+            {
+                candidates[kept] = Candidate { earliest, moving, ..c };
                 kept += 1;
             }
         }
@@ -509,8 +514,8 @@ impl<'a> Search<'a> {
         // The overlay's body met among the neighbours, by its own motion.
         if let Some((q, k)) = self.overlay.met.take() {
             let state = self.state_of(q as usize);
-            if let Some(earliest) = screen(own, state, origins[k as usize & 31], &mut bound) {
-                self.candidates.push(Candidate { earliest, q, cell: k });
+            if let Some((earliest, moving)) = screen(own, state, origins[k as usize & 31], &mut bound) {
+                self.candidates.push(Candidate { earliest, q, cell: k, moving });
             }
         }
         best.bound = bound;
@@ -553,16 +558,17 @@ impl<'a> Search<'a> {
                 Some(lists) => lists.images[c.cell as usize],
                 None => self.near.shifts[c.cell as usize],
             };
-            self.exact(own, c.q as usize, shift, eligible, best);
+            self.exact(own, (c.q as usize, c.moving), shift, eligible, best);
         }
         // The buffer holds the candidates left untested, no taken one twice.
         self.candidates.len = left;
     }
 
     /// The exact test of `own.p` and `q` (through `q`'s image shifted by `shift`), as the frame
-    /// pipeline makes it: their contact becomes `best` when eligible and earlier.
+    /// pipeline makes it (its noise rule skipped when the screen found them `moving`): their
+    /// contact becomes `best` when eligible and earlier.
     #[inline]
-    fn exact(&mut self, own: &Own, q: usize, shift: DVec3, eligible: Eligible, best: &mut Best) {
+    fn exact(&mut self, own: &Own, (q, moving): (usize, bool), shift: DVec3, eligible: Eligible, best: &mut Best) {
         self.tests += 1;
         let p = own.p;
         // The lower id's own motion against the higher id's, shifted next to it.
@@ -576,7 +582,7 @@ impl<'a> Search<'a> {
         // Moving spheres without gravity (the loop takes no other world), screened: the lean
         // form of `contacts::pair_start`, the same bits.
         debug_assert!(self.bodies.are_spheres(low, high) && self.bodies.straight_paths());
-        let Some((time, _)) = contacts::screened_spheres_start(low_state, &image, window) else {
+        let Some((time, _)) = contacts::screened_spheres_start(low_state, &image, window, moving) else {
             return;
         };
         let stamps = (self.stamp_of(low), self.stamp_of(high));
@@ -716,6 +722,7 @@ mod tests {
                 earliest: 0.0,
                 q: k as u32,
                 cell: if shared { 0 } else { k as u8 },
+                moving: false,
             });
             let members: [u32; 4] = std::array::from_fn(|k| k as u32 | image_of[k] << lists::IMAGE_BITS);
             let start = match round % 4 {
@@ -733,15 +740,15 @@ mod tests {
                 let scalar = screen(&own, &states[lane], origins[lane], &mut scalar_bound);
                 met[match scalar {
                     None => 0,
-                    Some(f64::NEG_INFINITY) => 1,
+                    Some((f64::NEG_INFINITY, _)) => 1,
                     Some(_) if scalar_bound == before => 2,
                     Some(_) => 3,
                 }] += 1;
                 for (four, lanes_bound) in fours.iter().zip(&mut lanes_bounds) {
                     let in_lanes = if four.left & (1 << lane) != 0 { four.lane(lane, &own, lanes_bound) } else { None };
                     assert_eq!(
-                        (scalar.map(f64::to_bits), scalar_bound.to_bits()),
-                        (in_lanes.map(f64::to_bits), lanes_bound.to_bits()),
+                        (scalar.map(|(t, moving)| (t.to_bits(), moving)), scalar_bound.to_bits()),
+                        (in_lanes.map(|(t, moving)| (t.to_bits(), moving)), lanes_bound.to_bits()),
                         "round {round}, lane {lane}"
                     );
                 }

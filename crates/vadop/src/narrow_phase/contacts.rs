@@ -20,7 +20,7 @@ use crate::narrow_phase::shapes::{contact_tolerance, wall_contact_geometry, SHAP
 use crate::narrow_phase::shapes::{
     pair_first_start, shape_contact_after_measured, shape_wall_time, walls_in_reach, Resume,
 };
-use crate::narrow_phase::spheres::straight_pair_contact_time_past_screen;
+use crate::narrow_phase::spheres::{moving_pair_contact_time, straight_pair_contact_time_past_screen};
 use crate::narrow_phase::spheres::{pair_contact_time, pair_separation_time, straight_pair_contact_time};
 use crate::narrow_phase::spheres::{wall_contact_time, CONTACT_TOLERANCE};
 use crate::numeric::{direction, unit_scale};
@@ -92,11 +92,16 @@ pub(crate) fn pair_start(
 /// [`pair_start`] of two spheres on straight paths (a world without gravity) that a screen of
 /// the caller's own has passed, the same time to the bit: the clear-miss screen that
 /// [`straight_pair_contact_time`] asks first only rejects pairs its exact test rejects too (see
-/// [`straight_pair_contact_time_past_screen`]), and most pairs screened already pass it.
+/// [`straight_pair_contact_time_past_screen`]), and most pairs screened already pass it. With
+/// `moving`, the caller's screen found the relative velocity beyond its noise rule, which is then
+/// not asked (see [`moving_pair_contact_time`]).
 #[inline(always)]
-pub(crate) fn screened_spheres_start(state_a: &BodyState, state_b: &BodyState, window: Window) -> Found {
-    let time =
-        straight_pair_contact_time_past_screen(&state_a.motion, &state_b.motion, state_a.radius + state_b.radius)?;
+pub(crate) fn screened_spheres_start(state_a: &BodyState, state_b: &BodyState, window: Window, moving: bool) -> Found {
+    let (a, b, radius_sum) = (&state_a.motion, &state_b.motion, state_a.radius + state_b.radius);
+    let time = match moving {
+        true => moving_pair_contact_time(a, b, radius_sum)?,
+        false => straight_pair_contact_time_past_screen(a, b, radius_sum)?,
+    };
     window.contains(time).then_some((time, false))
 }
 
