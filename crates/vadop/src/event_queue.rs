@@ -141,7 +141,7 @@ pub struct EventQueue {
 const RADIX_MIN: usize = 1024;
 /// Above this many events on more than one worker the bulk part is sorted in place by rayon's
 /// comparison sort: the radix sort holds the events twice, 32 bytes an event more than that
-/// sort (9.4 bytes a body at 10^6 bodies x 0.05 d/f, two threads), which at 10^7 bodies (well
+/// sort (9.0 bytes a body at 10^6 bodies x 0.05 d/f, two threads), which at 10^7 bodies (well
 /// over a million events a window) would pass 300 bytes a body.
 const SHARED_RADIX_MAX: usize = 1 << 20;
 /// Bits of the time key sorted per radix pass: 2^11 bins fit the first-level cache.
@@ -246,7 +246,7 @@ impl RadixBuffers {
         });
         let varying = self.chunks.iter().fold(0, |bits, chunk| bits | chunk.varying);
         self.spare.clear();
-        self.spare.reserve(n);
+        self.spare.reserve_exact(n);
         let mut counted = Some(0);
         let mut moved = false;
         for shift in (0..64).step_by(DIGIT_BITS as usize) {
