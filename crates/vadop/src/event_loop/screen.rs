@@ -185,6 +185,11 @@ impl Four {
 pub(super) trait Partners {
     /// Lane `lane`'s body.
     fn body(&self, lane: usize) -> usize;
+    /// Lane `lane`'s body's record, of `states` (those the search reads).
+    #[inline(always)]
+    fn state<'s>(&self, states: &'s [BodyState], lane: usize) -> &'s BodyState {
+        &states[self.body(lane)]
+    }
     /// The origin of lane `lane`'s offset.
     fn origin(&self, lane: usize) -> DVec3;
     /// The origin of all four lanes when they share it (met through one cell or one image, as
@@ -280,7 +285,7 @@ fn screen_fours_avx<'a, G, P: Partners>(
 fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     use crate::narrow_phase::spheres::state_columns;
     use std::arch::x86_64::*;
-    let states: [&BodyState; 4] = std::array::from_fn(|lane| &states[partners.body(lane)]);
+    let states: [&BodyState; 4] = std::array::from_fn(|lane| partners.state(states, lane));
     let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
     let one = |value: f64| _mm256_set1_pd(value);
     let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));

@@ -441,6 +441,8 @@ impl<'a> Search<'a> {
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
         if grouped > 0 {
+            // What lets the lanes read the members' records unchecked (see `Listed`).
+            assert!(lists.slots() <= states.len(), "the lists outnumber the bodies");
             let partners = |group| Listed { group, images: &lists.images, centre: own.position };
             let groups = members[..grouped].as_chunks().0;
             screen_fours(own, states, groups, partners, &mut bound, |group, lane, (earliest, moving)| {
@@ -606,6 +608,11 @@ impl Partners for Gathered<'_> {
 
 /// Four members of a list in a row (see [`lists::split`]), each with the origin of its image:
 /// `centre`, the searching body's, less the image's sides (as the scalar screen takes it).
+///
+/// Built only of a list of lists no more than the bodies (see [`Lists::slots`]; asserted once a
+/// search, in [`Search::screen_members`]; the lanes' test's, of its four bodies), and screened
+/// against those bodies' records: its
+/// records are read unchecked, four bounds checks a group saved.
 struct Listed<'a> {
     group: &'a [u32; 4],
     images: &'a [DVec3; 27],
@@ -616,6 +623,15 @@ impl Partners for Listed<'_> {
     #[inline(always)]
     fn body(&self, lane: usize) -> usize {
         lists::split(self.group[lane]).0
+    }
+
+    #[inline(always)]
+    fn state<'s>(&self, states: &'s [BodyState], lane: usize) -> &'s BodyState {
+        let q = self.body(lane);
+        debug_assert!(q < states.len(), "a member past the bodies");
+        // SAFETY: a list's member is below `Lists::slots`, which is no more than the bodies
+        // `states` holds (see `Listed`).
+        unsafe { states.get_unchecked(q) }
     }
 
     #[inline(always)]
