@@ -158,6 +158,13 @@ impl Lists {
             + (self.blocks.capacity() + self.seen.capacity() + self.old.capacity()) * 4
     }
 
+    /// The bodies the lists have room for: every entry's body is below it (an entry is pushed
+    /// only once its body's shell is read, and the shells are never fewer).
+    #[inline(always)]
+    pub(super) fn slots(&self) -> usize {
+        self.shells.len()
+    }
+
     /// Body `i`'s list: each entry the body in its low bits, its image above (see [`split`]).
     #[inline(always)]
     pub(super) fn members(&self, i: usize) -> &[u32] {

@@ -185,6 +185,11 @@ impl Four {
 pub(super) trait Partners {
     /// Lane `lane`'s body.
     fn body(&self, lane: usize) -> usize;
+    /// Lane `lane`'s body's record, of `states` (those the search reads).
+    #[inline(always)]
+    fn state<'s>(&self, states: &'s [BodyState], lane: usize) -> &'s BodyState {
+        &states[self.body(lane)]
+    }
     /// The origin of lane `lane`'s offset.
     fn origin(&self, lane: usize) -> DVec3;
     /// The origin of all four lanes when they share it (met through one cell or one image, as
@@ -207,29 +212,32 @@ pub(super) fn screen_four(own: &Own, states: &[BodyState], partners: &impl Partn
     }
 }
 
-/// [`screen_four_avx`] of `groups` groups of four partners in a row, `group(g)` the `g`-th: the
-/// lanes each group leaves, taken in order with `bound` as it stands (as [`Four::lane`] answers
-/// them), `keep(g, lane, (earliest, moving))` for each that passes. Asked only where [`lanes`]
-/// holds.
+/// [`screen_four_avx`] of the groups of four partners in a row, `partners(group)` each one's
+/// partners: the lanes each group leaves, taken in order with `bound` as it stands (as
+/// [`Four::lane`] answers them), `keep(group, lane, (earliest, moving))` for each that passes.
+/// Asked only where [`lanes`] holds.
 ///
 /// One call for all the groups of a search, inside which the lanes' screen is inlined: called
 /// once a group from code without AVX, which cannot inline it, it cost the call's saving and
-/// restoring of registers, about twenty instructions a group.
+/// restoring of registers, about twenty instructions a group. The groups come as a slice of
+/// fours walked by its iterator, `keep` handed the group itself: taken by index, as before,
+/// each group cost a check of its slice's bounds, and each lane kept another (BENCHMARKS.md,
+/// twenty-fifth session).
 #[inline]
-pub(super) fn screen_fours<P: Partners>(
+pub(super) fn screen_fours<'a, G, P: Partners>(
     own: &Own,
     states: &[BodyState],
-    groups: usize,
-    group: impl Fn(usize) -> P,
+    groups: &'a [G],
+    partners: impl Fn(&'a G) -> P,
     bound: &mut f64,
-    keep: impl FnMut(usize, usize, (f64, bool)),
+    keep: impl FnMut(&'a G, usize, (f64, bool)),
 ) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: asked only where `lanes` found AVX.
-    return unsafe { screen_fours_avx(own, states, groups, group, bound, keep) };
+    return unsafe { screen_fours_avx(own, states, groups, partners, bound, keep) };
     #[cfg(not(target_arch = "x86_64"))]
     {
-        let _ = (own, states, groups, group, bound, keep);
+        let _ = (own, states, groups, partners, bound, keep);
         unreachable!("lanes are x86-64's: `lanes` is false elsewhere")
     }
 }
@@ -237,22 +245,22 @@ pub(super) fn screen_fours<P: Partners>(
 /// [`screen_fours`] in AVX's registers (to be called only where the processor has AVX).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-fn screen_fours_avx<P: Partners>(
+fn screen_fours_avx<'a, G, P: Partners>(
     own: &Own,
     states: &[BodyState],
-    groups: usize,
-    group: impl Fn(usize) -> P,
+    groups: &'a [G],
+    partners: impl Fn(&'a G) -> P,
     bound: &mut f64,
-    mut keep: impl FnMut(usize, usize, (f64, bool)),
+    mut keep: impl FnMut(&'a G, usize, (f64, bool)),
 ) {
-    for g in 0..groups {
-        let four = screen_four_avx(own, states, &group(g), *bound);
+    for group in groups {
+        let four = screen_four_avx(own, states, &partners(group), *bound);
         let mut left = four.left;
         while left != 0 {
             let lane = left.trailing_zeros() as usize;
             left &= left - 1;
             if let Some(screened) = four.lane(lane, own, bound) {
-                keep(g, lane, screened);
+                keep(group, lane, screened);
             }
         }
     }
@@ -277,7 +285,7 @@ fn screen_fours_avx<P: Partners>(
 fn screen_four_avx(own: &Own, states: &[BodyState], partners: &impl Partners, bound: f64) -> Four {
     use crate::narrow_phase::spheres::state_columns;
     use std::arch::x86_64::*;
-    let states: [&BodyState; 4] = std::array::from_fn(|lane| &states[partners.body(lane)]);
+    let states: [&BodyState; 4] = std::array::from_fn(|lane| partners.state(states, lane));
     let ([px, py, pz, since], [vx, vy, vz, radius]) = (state_columns(states, 0), state_columns(states, 1));
     let one = |value: f64| _mm256_set1_pd(value);
     let (add, sub, mul) = (|x, y| _mm256_add_pd(x, y), |x, y| _mm256_sub_pd(x, y), |x, y| _mm256_mul_pd(x, y));

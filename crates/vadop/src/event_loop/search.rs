@@ -445,13 +445,12 @@ impl<'a> Search<'a> {
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
         if grouped > 0 {
-            let group = |g: usize| Listed {
-                group: members[4 * g..4 * g + 4].try_into().expect("four members"),
-                images: &lists.images,
-                centre: own.position,
-            };
-            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, (earliest, moving)| {
-                let (q, image) = lists::split(members[4 * g + lane]);
+            // What lets the lanes read the members' records unchecked (see `Listed`).
+            assert!(lists.slots() <= states.len(), "the lists outnumber the bodies");
+            let partners = |group| Listed { group, images: &lists.images, centre: own.position };
+            let groups = members[..grouped].as_chunks().0;
+            screen_fours(own, states, groups, partners, &mut bound, |group, lane, (earliest, moving)| {
+                let (q, image) = lists::split(group[lane]);
                 candidates.push(Candidate { earliest, q: q as u32, cell: image as u8, moving });
             });
         }
@@ -491,13 +490,13 @@ impl<'a> Search<'a> {
         // for the lanes left, in order: every bound and result is the scalar screen's.
         let grouped = if lanes() { candidates.len() & !3 } else { 0 };
         if grouped > 0 {
-            // Read and written over through cells: `kept` is at most `4 g + lane`, so an entry
-            // is read before it is written over.
+            // Read and written over through cells: `kept` is at most the place of the entry
+            // kept (four a group before its own, plus its lane), so an entry is read before it
+            // is written over.
             let slots = Cell::from_mut(&mut *candidates).as_slice_of_cells();
-            let group =
-                |g: usize| Gathered { group: slots[4 * g..4 * g + 4].try_into().expect("four candidates"), origins };
-            screen_fours(own, states, grouped / 4, group, &mut bound, |g, lane, (earliest, moving)| {
-                slots[kept].set(Candidate { earliest, moving, ..slots[4 * g + lane].get() });
+            let (partners, groups) = (|group| Gathered { group, origins }, slots[..grouped].as_chunks().0);
+            screen_fours(own, states, groups, partners, &mut bound, |group, lane, (earliest, moving)| {
+                slots[kept].set(Candidate { earliest, moving, ..group[lane].get() });
                 kept += 1;
             });
         }
@@ -623,6 +622,11 @@ impl Partners for Gathered<'_> {
 
 /// Four members of a list in a row (see [`lists::split`]), each with the origin of its image:
 /// `centre`, the searching body's, less the image's sides (as the scalar screen takes it).
+///
+/// Built only of a list of lists no more than the bodies (see [`Lists::slots`]; asserted once a
+/// search, in [`Search::screen_members`]; the lanes' test's, of its four bodies), and screened
+/// against those bodies' records: its
+/// records are read unchecked, four bounds checks a group saved.
 struct Listed<'a> {
     group: &'a [u32; 4],
     images: &'a [DVec3; 27],
@@ -633,6 +637,15 @@ impl Partners for Listed<'_> {
     #[inline(always)]
     fn body(&self, lane: usize) -> usize {
         lists::split(self.group[lane]).0
+    }
+
+    #[inline(always)]
+    fn state<'s>(&self, states: &'s [BodyState], lane: usize) -> &'s BodyState {
+        let q = self.body(lane);
+        debug_assert!(q < states.len(), "a member past the bodies");
+        // SAFETY: a list's member is below `Lists::slots`, which is no more than the bodies
+        // `states` holds (see `Listed`).
+        unsafe { states.get_unchecked(q) }
     }
 
     #[inline(always)]
