@@ -16,7 +16,6 @@ use crate::parallel::Workers;
 use crate::walls::Wall;
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
-use std::ops::Range;
 
 /// What a body meets in a predicted event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -139,74 +138,26 @@ pub struct EventQueue {
 
 /// Below this many events the bulk part is sorted by comparisons: a radix pass costs its bins.
 const RADIX_MIN: usize = 1024;
-/// Above this many events on more than one worker the bulk part is sorted in place by rayon's
-/// comparison sort: the radix sort holds the events twice, 32 bytes an event more than that
-/// sort (9.0 bytes a body at 10^6 bodies x 0.05 d/f, two threads), which at 10^7 bodies (well
-/// over a million events a window) would pass 300 bytes a body.
-const SHARED_RADIX_MAX: usize = 1 << 20;
 /// Bits of the time key sorted per radix pass: 2^11 bins fit the first-level cache.
 const DIGIT_BITS: u32 = 11;
-/// Bins of a radix pass.
-const BINS: usize = 1 << DIGIT_BITS;
 
 /// An event's time as an unsigned key that ascends as the bulk part does, latest first: the
-/// bits `f64::total_cmp` orders by, made unsigned and reversed. The map is its own inverse (a
-/// key's top bit is its time's sign), so the sort keeps each event's key in place of its time
-/// while it runs, and maps it back at the end.
+/// bits `f64::total_cmp` orders by, made unsigned and reversed.
 #[inline]
-fn latest_first_key(bits: u64) -> u64 {
-    bits ^ (!(((bits as i64) >> 63) as u64) >> 1)
+fn latest_first_key(time: f64) -> u64 {
+    let bits = time.to_bits() as i64;
+    let total = bits ^ ((((bits >> 63) as u64) >> 1) as i64);
+    !((total as u64) ^ (1 << 63))
 }
 
-/// An event's bin in the radix pass that sorts the bits from `shift` of the key it holds.
-#[inline]
-fn digit(event: &Event, shift: u32) -> usize {
-    ((event.time.to_bits() >> shift) as usize) & (BINS - 1)
-}
-
-/// The radix sort's reused storage: the events' second buffer (each pass moves them from one
-/// buffer to the other, so a window's events are held twice during the sort, as the keys and
-/// places they were sorted by were before) and each worker's share of a pass.
+/// The radix sort's reused storage: each event's key with its place, the pass's output, and the
+/// bins (the events themselves are moved in place, so a window's thousands of events are not
+/// held twice).
 #[derive(Debug, Default)]
 struct RadixBuffers {
-    spare: Vec<Event>,
-    chunks: Vec<RadixChunk>,
-}
-
-/// A worker's contiguous share of the events in a radix pass: how many of them fall in each bin,
-/// then where its next event of each bin goes.
-#[derive(Debug)]
-struct RadixChunk {
-    bins: [u32; BINS],
-    /// The key bits its events do not share with the first event's.
-    varying: u64,
-    /// The events whose times it maps back and whose runs of equal times it puts in order.
-    runs: Range<usize>,
-}
-
-/// A buffer of events written by every worker at places no other one writes.
-#[derive(Clone, Copy)]
-struct Places(*mut Event);
-// SAFETY: each worker reads and writes its own places only (see `RadixBuffers::sort`).
-unsafe impl Send for Places {}
-unsafe impl Sync for Places {}
-impl Places {
-    /// The places `range` (a method, so a closure captures the `Send` wrapper, not the bare
-    /// pointer).
-    ///
-    /// # Safety
-    /// `range` is inside the buffer and no other reference to its places is in use.
-    unsafe fn slice<'a>(self, range: Range<usize>) -> &'a mut [Event] {
-        unsafe { std::slice::from_raw_parts_mut(self.0.add(range.start), range.len()) }
-    }
-    /// Writes `event` at `place`.
-    ///
-    /// # Safety
-    /// `place` is inside the buffer and nothing else reads or writes it meanwhile.
-    #[inline]
-    unsafe fn write(self, place: usize, event: Event) {
-        unsafe { self.0.add(place).write(event) }
-    }
+    keyed: Vec<(u64, u32)>,
+    spare: Vec<(u64, u32)>,
+    bins: Vec<u32>,
 }
 
 impl RadixBuffers {
@@ -215,119 +166,68 @@ impl RadixBuffers {
     /// skipping the digits they all share (a window's times share their leading bits), then each
     /// run of equal times by comparisons. A window start sorts thousands of events, and a pass
     /// over them costs less than the dozen comparisons each takes otherwise.
-    ///
-    /// Each worker counts and moves a contiguous share of the events in every pass: it owns the
-    /// places its events of a bin take, after the places of that bin's events in the shares
-    /// before its own, so every pass is stable and its output the same whatever the number of
-    /// workers.
-    fn sort(&mut self, events: &mut Vec<Event>, workers: &Workers) {
+    fn sort(&mut self, events: &mut [Event]) {
         let n = events.len();
-        let Some(first) = events.first().map(|event| latest_first_key(event.time.to_bits())) else {
-            return;
-        };
-        self.chunks.resize_with(workers.threads().min(n), || RadixChunk { bins: [0; BINS], varying: 0, runs: 0..0 });
-        let shares = self.chunks.len();
-        let share = |k: usize| k * n / shares..(k + 1) * n / shares;
-        // Each event's key in place of its time; the bits that vary, and the counts of the
-        // lowest digit, which nearly always does.
-        let places = Places(events.as_mut_ptr());
-        workers.chunks_mut(&mut self.chunks, |k, chunk| {
-            let chunk = &mut chunk[0];
-            chunk.bins.fill(0);
-            let mut varying = 0;
-            // SAFETY: the shares are disjoint.
-            for event in unsafe { places.slice(share(k)) } {
-                let key = latest_first_key(event.time.to_bits());
-                event.time = f64::from_bits(key);
-                varying |= key ^ first;
-                chunk.bins[key as usize & (BINS - 1)] += 1;
-            }
-            chunk.varying = varying;
-        });
-        let varying = self.chunks.iter().fold(0, |bits, chunk| bits | chunk.varying);
-        self.spare.clear();
-        self.spare.reserve_exact(n);
-        let mut counted = Some(0);
-        let mut moved = false;
+        self.keyed.clear();
+        self.keyed.extend(events.iter().enumerate().map(|(k, e)| (latest_first_key(e.time), k as u32)));
+        let first = self.keyed.first().map_or(0, |&(key, _)| key);
+        let varying = self.keyed.iter().fold(0, |bits, &(key, _)| bits | (key ^ first));
+        let mask = (1u64 << DIGIT_BITS) - 1;
+        self.bins.resize(1 << DIGIT_BITS, 0);
+        self.spare.resize(n, (0, 0));
         for shift in (0..64).step_by(DIGIT_BITS as usize) {
-            if (varying >> shift) & (BINS as u64 - 1) == 0 {
+            if (varying >> shift) & mask == 0 {
                 continue;
             }
-            let (from, to) = if moved { (&self.spare, &mut *events) } else { (&*events, &mut self.spare) };
-            let source: &[Event] = &from[..n];
-            if counted != Some(shift) {
-                workers.chunks_mut(&mut self.chunks, |k, chunk| {
-                    let chunk = &mut chunk[0];
-                    chunk.bins.fill(0);
-                    for event in &source[share(k)] {
-                        chunk.bins[digit(event, shift)] += 1;
-                    }
-                });
+            self.bins.fill(0);
+            for &(key, _) in &self.keyed {
+                self.bins[((key >> shift) & mask) as usize] += 1;
             }
-            // Bin by bin, each share's events after the shares' before it.
-            let mut start = 0u32;
-            for bin in 0..BINS {
-                for chunk in self.chunks.iter_mut() {
-                    (chunk.bins[bin], start) = (start, start + chunk.bins[bin]);
-                }
+            let mut start = 0;
+            for bin in self.bins.iter_mut() {
+                (*bin, start) = (start, start + *bin);
             }
-            let places = Places(to.as_mut_ptr());
-            workers.chunks_mut(&mut self.chunks, |k, chunk| {
-                let chunk = &mut chunk[0];
-                for event in &source[share(k)] {
-                    let place = &mut chunk.bins[digit(event, shift)];
-                    // SAFETY: `to` has room for `n` events; the places of this share's events of
-                    // a bin are its own (the prefix sums above), each written once.
-                    unsafe { places.write(*place as usize, *event) };
-                    *place += 1;
-                }
-            });
-            // SAFETY: the pass wrote every one of the `n` places (`to` held `n` events already
-            // when it is `events`).
-            unsafe { to.set_len(n) };
-            counted = None;
-            moved = !moved;
+            for &item in &self.keyed {
+                let bin = &mut self.bins[((item.0 >> shift) & mask) as usize];
+                self.spare[*bin as usize] = item;
+                *bin += 1;
+            }
+            std::mem::swap(&mut self.keyed, &mut self.spare);
         }
-        if moved {
-            std::mem::swap(events, &mut self.spare);
-        }
-        // The times back, and equal times (equal keys: the key is one-to-one) in the order of
-        // the rest of the key; they are rare but for repeats of one prediction. Each share's
-        // worker takes the runs that start in it, its start moved past a run the share before
-        // it holds.
-        let mut end = n;
-        for (k, chunk) in self.chunks.iter_mut().enumerate().rev() {
-            let mut start = share(k).start;
-            while start > 0 && start < n && events[start].time.to_bits() == events[start - 1].time.to_bits() {
-                start += 1;
+        // Place k takes the event at `keyed[k].1`: each cycle of that permutation moved through
+        // one spare event, each place marked done (pointing at itself) once filled.
+        for first in 0..n {
+            if self.keyed[first].1 as usize == first {
+                continue;
             }
-            chunk.runs = start..end;
-            end = start;
-        }
-        let places = Places(events.as_mut_ptr());
-        workers.chunks_mut(&mut self.chunks, |_, chunk| {
-            // SAFETY: the shares' moved starts ascend, so their ranges are disjoint.
-            let events = unsafe { places.slice(chunk[0].runs.clone()) };
-            let (mut run, mut run_key) = (0, events.first().map(|event| event.time.to_bits()));
-            for k in 0..events.len() {
-                let key = events[k].time.to_bits();
-                events[k].time = f64::from_bits(latest_first_key(key));
-                if Some(key) != run_key {
-                    if k - run > 1 {
-                        events[run..k].sort_unstable();
-                    }
-                    (run, run_key) = (k, Some(key));
+            let spare = events[first];
+            let mut k = first;
+            loop {
+                let from = self.keyed[k].1 as usize;
+                self.keyed[k].1 = k as u32;
+                if from == first {
+                    events[k] = spare;
+                    break;
                 }
+                events[k] = events[from];
+                k = from;
             }
-            if events.len() - run > 1 {
-                events[run..].sort_unstable();
+        }
+        // Equal times (the same bits: the key is one-to-one) in the order of the rest of the key;
+        // they are rare but for repeats of one prediction.
+        let mut start = 0;
+        while start < n {
+            let bits = events[start].time.to_bits();
+            let end = start + events[start..].iter().take_while(|e| e.time.to_bits() == bits).count();
+            if end - start > 1 {
+                events[start..end].sort_unstable();
             }
-        });
+            start = end;
+        }
     }
 
     fn memory_bytes(&self) -> usize {
-        self.spare.capacity() * std::mem::size_of::<Event>()
-            + self.chunks.capacity() * std::mem::size_of::<RadixChunk>()
+        (self.keyed.capacity() + self.spare.capacity()) * std::mem::size_of::<(u64, u32)>() + self.bins.capacity() * 4
     }
 }
 
@@ -349,16 +249,14 @@ impl EventQueue {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
-        // fine, and every way of sorting gives the same order. The radix sort's passes are
-        // shared by the workers: rayon's comparison sort reads 2.1 times the radix sort's
-        // instructions (BENCHMARKS.md, twenty-second and twenty-fifth sessions).
-        let n = self.bulk.len();
-        if n < RADIX_MIN {
-            self.bulk.sort_unstable();
-        } else if workers.threads() == 1 || n <= SHARED_RADIX_MAX {
-            self.radix.sort(&mut self.bulk, workers);
+        // fine, and every way of sorting gives the same order. With more than one worker
+        // rayon's sort, which reads 2.1 times the radix sort's instructions (27.3 M against
+        // 12.9 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
+        // 0.86-1.02 of the time they took with the radix sort on one of the two threads
+        // (BENCHMARKS.md, twenty-second session).
+        if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
+            self.radix.sort(&mut self.bulk);
         } else {
-            self.radix.spare = Vec::new();
             workers.sort_unstable(&mut self.bulk);
         }
     }
@@ -587,14 +485,12 @@ mod tests {
                 .collect();
             let mut expected = events.clone();
             expected.sort_unstable();
+            let mut sorted = events;
+            radix.sort(&mut sorted);
             let bits = |v: &[Event]| -> Vec<(u64, u32, u64, u32)> {
                 v.iter().map(|e| (e.time.to_bits(), e.body, e.partner.key(), e.body_stamp)).collect()
             };
-            for threads in 1..=3 {
-                let mut sorted = events.clone();
-                radix.sort(&mut sorted, &Workers::new(threads));
-                assert_eq!(bits(&sorted), bits(&expected), "case {case}, {n} events, {threads} workers");
-            }
+            assert_eq!(bits(&sorted), bits(&expected), "case {case}, {n} events");
         }
     }
 
