@@ -264,10 +264,11 @@ impl EventQueue {
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
         // fine, and every way of sorting gives the same order. With more than one worker
-        // rayon's sort, which reads 2.1 times the radix sort's instructions (27.3 M against
-        // 12.9 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
-        // 0.86-1.02 of the time they took with the radix sort on one of the two threads
-        // (BENCHMARKS.md, twenty-second session).
+        // rayon's sort, which reads 2.6 times the radix sort's instructions (27.3 M against
+        // 10.5 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
+        // 0.86-1.02 of the time they took with the radix sort of then (12.9 M) on one of the two
+        // threads (BENCHMARKS.md, twenty-second session); sharing the radix sort's passes was
+        // slower by the clock (twenty-fifth session).
         if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
             self.radix.sort(&mut self.bulk);
         } else {
