@@ -140,24 +140,30 @@ pub struct EventQueue {
 const RADIX_MIN: usize = 1024;
 /// Bits of the time key sorted per radix pass: 2^11 bins fit the first-level cache.
 const DIGIT_BITS: u32 = 11;
+/// Bins of a radix pass.
+const BINS: usize = 1 << DIGIT_BITS;
 
 /// An event's time as an unsigned key that ascends as the bulk part does, latest first: the
-/// bits `f64::total_cmp` orders by, made unsigned and reversed.
+/// bits `f64::total_cmp` orders by, made unsigned and reversed. The map is its own inverse (a
+/// key's top bit is its time's sign), so the sort keeps each event's key in place of its time
+/// while it runs, and maps it back at the end.
 #[inline]
-fn latest_first_key(time: f64) -> u64 {
-    let bits = time.to_bits() as i64;
-    let total = bits ^ ((((bits >> 63) as u64) >> 1) as i64);
-    !((total as u64) ^ (1 << 63))
+fn latest_first_key(bits: u64) -> u64 {
+    bits ^ (!(((bits as i64) >> 63) as u64) >> 1)
 }
 
-/// The radix sort's reused storage: each event's key with its place, the pass's output, and the
-/// bins (the events themselves are moved in place, so a window's thousands of events are not
-/// held twice).
+/// An event's bin in the radix pass that sorts the bits from `shift` of the key it holds.
+#[inline]
+fn digit(event: &Event, shift: u32) -> usize {
+    ((event.time.to_bits() >> shift) as usize) & (BINS - 1)
+}
+
+/// The radix sort's reused storage: the events' second buffer (each pass moves the events
+/// themselves from one buffer to the other, so a window's events are held twice during the
+/// sort, as the keys and places they used to be sorted by were).
 #[derive(Debug, Default)]
 struct RadixBuffers {
-    keyed: Vec<(u64, u32)>,
-    spare: Vec<(u64, u32)>,
-    bins: Vec<u32>,
+    spare: Vec<Event>,
 }
 
 impl RadixBuffers {
@@ -165,69 +171,77 @@ impl RadixBuffers {
     /// (the order is total, so there is one): a least-significant-digit radix sort of the times,
     /// skipping the digits they all share (a window's times share their leading bits), then each
     /// run of equal times by comparisons. A window start sorts thousands of events, and a pass
-    /// over them costs less than the dozen comparisons each takes otherwise.
-    fn sort(&mut self, events: &mut [Event]) {
+    /// over them costs less than the dozen comparisons each takes otherwise. Moving the events
+    /// themselves, rather than (key, place) pairs followed by the permutation's cycles, spares a
+    /// pass over the events in an order that misses the cache.
+    fn sort(&mut self, events: &mut Vec<Event>) {
         let n = events.len();
-        self.keyed.clear();
-        self.keyed.extend(events.iter().enumerate().map(|(k, e)| (latest_first_key(e.time), k as u32)));
-        let first = self.keyed.first().map_or(0, |&(key, _)| key);
-        let varying = self.keyed.iter().fold(0, |bits, &(key, _)| bits | (key ^ first));
-        let mask = (1u64 << DIGIT_BITS) - 1;
-        self.bins.resize(1 << DIGIT_BITS, 0);
-        self.spare.resize(n, (0, 0));
+        let Some(first) = events.first().map(|event| latest_first_key(event.time.to_bits())) else {
+            return;
+        };
+        // Each event's key in place of its time; the bits that vary, and the counts of the
+        // lowest digit, which nearly always does (the bins a fixed array indexed by a masked
+        // digit: no bounds checks).
+        let mut bins = [0u32; BINS];
+        let mut varying = 0;
+        for event in events.iter_mut() {
+            let key = latest_first_key(event.time.to_bits());
+            event.time = f64::from_bits(key);
+            varying |= key ^ first;
+            bins[key as usize & (BINS - 1)] += 1;
+        }
+        // Sized exactly: the spare is as large as the window's events, and is kept.
+        self.spare.reserve_exact(n.saturating_sub(self.spare.len()));
+        self.spare.resize(n, events[0]);
+        let mut moved = false;
         for shift in (0..64).step_by(DIGIT_BITS as usize) {
-            if (varying >> shift) & mask == 0 {
+            if (varying >> shift) & (BINS as u64 - 1) == 0 {
                 continue;
             }
-            self.bins.fill(0);
-            for &(key, _) in &self.keyed {
-                self.bins[((key >> shift) & mask) as usize] += 1;
+            let (from, to) =
+                if moved { (&self.spare[..], &mut events[..]) } else { (&events[..], &mut self.spare[..]) };
+            // The lowest digit's counts were taken with the keys.
+            if shift != 0 {
+                bins.fill(0);
+                for event in from {
+                    bins[digit(event, shift)] += 1;
+                }
             }
             let mut start = 0;
-            for bin in self.bins.iter_mut() {
+            for bin in bins.iter_mut() {
                 (*bin, start) = (start, start + *bin);
             }
-            for &item in &self.keyed {
-                let bin = &mut self.bins[((item.0 >> shift) & mask) as usize];
-                self.spare[*bin as usize] = item;
-                *bin += 1;
+            for event in from {
+                let place = &mut bins[digit(event, shift)];
+                to[*place as usize] = *event;
+                *place += 1;
             }
-            std::mem::swap(&mut self.keyed, &mut self.spare);
+            moved = !moved;
         }
-        // Place k takes the event at `keyed[k].1`: each cycle of that permutation moved through
-        // one spare event, each place marked done (pointing at itself) once filled.
-        for first in 0..n {
-            if self.keyed[first].1 as usize == first {
-                continue;
-            }
-            let spare = events[first];
-            let mut k = first;
-            loop {
-                let from = self.keyed[k].1 as usize;
-                self.keyed[k].1 = k as u32;
-                if from == first {
-                    events[k] = spare;
-                    break;
+        if moved {
+            std::mem::swap(events, &mut self.spare);
+        }
+        // The times back, and equal times (equal keys: the key is one-to-one) in the order of
+        // the rest of the key; they are rare but for repeats of one prediction.
+        let mut run = 0;
+        let mut run_key = events[0].time.to_bits();
+        for k in 0..n {
+            let key = events[k].time.to_bits();
+            events[k].time = f64::from_bits(latest_first_key(key));
+            if key != run_key {
+                if k - run > 1 {
+                    events[run..k].sort_unstable();
                 }
-                events[k] = events[from];
-                k = from;
+                (run, run_key) = (k, key);
             }
         }
-        // Equal times (the same bits: the key is one-to-one) in the order of the rest of the key;
-        // they are rare but for repeats of one prediction.
-        let mut start = 0;
-        while start < n {
-            let bits = events[start].time.to_bits();
-            let end = start + events[start..].iter().take_while(|e| e.time.to_bits() == bits).count();
-            if end - start > 1 {
-                events[start..end].sort_unstable();
-            }
-            start = end;
+        if n - run > 1 {
+            events[run..].sort_unstable();
         }
     }
 
     fn memory_bytes(&self) -> usize {
-        (self.keyed.capacity() + self.spare.capacity()) * std::mem::size_of::<(u64, u32)>() + self.bins.capacity() * 4
+        self.spare.capacity() * std::mem::size_of::<Event>()
     }
 }
 
@@ -250,10 +264,11 @@ impl EventQueue {
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
         // fine, and every way of sorting gives the same order. With more than one worker
-        // rayon's sort, which reads 2.1 times the radix sort's instructions (27.3 M against
-        // 12.9 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
-        // 0.86-1.02 of the time they took with the radix sort on one of the two threads
-        // (BENCHMARKS.md, twenty-second session).
+        // rayon's sort, which reads 2.6 times the radix sort's instructions (27.3 M against
+        // 10.5 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
+        // 0.86-1.02 of the time they took with the radix sort of then (12.9 M) on one of the two
+        // threads (BENCHMARKS.md, twenty-second session); sharing the radix sort's passes was
+        // slower by the clock (twenty-fifth session).
         if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
             self.radix.sort(&mut self.bulk);
         } else {
