@@ -125,6 +125,52 @@ impl Listing {
     const UNLISTED: Listing = Listing { next: NONE, prev: NONE, cell: NONE, at: [0; 3] };
 }
 
+/// The lists' arrays as slices, taken once a search: their places and lengths then stay in
+/// registers, where read through the grid they are read again after every candidate the search
+/// writes (the compiler cannot tell the writes from the grid), three loads a cell's bit test.
+#[derive(Clone, Copy)]
+pub(super) struct Lookup<'a> {
+    head: &'a [u32],
+    occupied: &'a [u64],
+    listing: &'a [Listing],
+}
+
+impl Lookup<'_> {
+    /// The first body of cell `cell`, which holds one, and whether it holds more (see
+    /// [`Cells::head`]).
+    #[inline(always)]
+    pub(super) fn first_of_occupied(&self, cell: u32) -> (u32, bool) {
+        let head = self.head[cell as usize];
+        debug_assert_ne!(head, NONE, "cell {cell} is empty");
+        (head & !CROWDED, head & CROWDED != 0)
+    }
+
+    /// True when cell `cell` holds a body (see [`Cells::occupied`]).
+    #[inline(always)]
+    pub(super) fn is_occupied(&self, cell: u32) -> bool {
+        self.occupied[cell as usize / 64] & (1 << (cell % 64)) != 0
+    }
+
+    /// The cells `first`, `first + 1` and `first + 2` (a row along x) that hold a body, as the
+    /// bits 0, 1 and 2.
+    #[inline(always)]
+    pub(super) fn occupied_in_row(&self, first: usize) -> u32 {
+        let (word, bit) = (first / 64, first % 64);
+        let mut bits = self.occupied[word] >> bit;
+        if bit > 61 {
+            // The row runs into the next word (which exists: `first + 2` is a cell).
+            bits |= self.occupied[word + 1] << (64 - bit);
+        }
+        (bits & 7) as u32
+    }
+
+    /// The body after `i` in its cell, or [`NONE`].
+    #[inline(always)]
+    pub(super) fn after(&self, i: u32) -> u32 {
+        self.listing[i as usize].next
+    }
+}
+
 /// A body's neighbours along one axis: up to three (index part, shift) steps.
 type AxisSteps = ([(u32, f64); 3], usize);
 
@@ -359,32 +405,16 @@ impl Cells {
         }
     }
 
-    /// The first body of cell `cell`, which holds one, and whether it holds more (see
-    /// [`Self::head`]).
-    #[inline(always)]
-    pub(super) fn first_of_occupied(&self, cell: u32) -> (u32, bool) {
-        let head = self.head[cell as usize];
-        debug_assert_ne!(head, NONE, "cell {cell} is empty");
-        (head & !CROWDED, head & CROWDED != 0)
-    }
-
     /// True when cell `cell` holds a body (see [`Self::occupied`]).
     #[inline(always)]
     pub(super) fn is_occupied(&self, cell: u32) -> bool {
-        self.occupied[cell as usize / 64] & (1 << (cell % 64)) != 0
+        self.lookup().is_occupied(cell)
     }
 
-    /// The cells `first`, `first + 1` and `first + 2` (a row along x) that hold a body, as the
-    /// bits 0, 1 and 2.
+    /// The lists' arrays, for a search's many reads (see [`Lookup`]).
     #[inline(always)]
-    pub(super) fn occupied_in_row(&self, first: usize) -> u32 {
-        let (word, bit) = (first / 64, first % 64);
-        let mut bits = self.occupied[word] >> bit;
-        if bit > 61 {
-            // The row runs into the next word (which exists: `first + 2` is a cell).
-            bits |= self.occupied[word + 1] << (64 - bit);
-        }
-        (bits & 7) as u32
+    pub(super) fn lookup(&self) -> Lookup<'_> {
+        Lookup { head: &self.head, occupied: &self.occupied, listing: &self.listing }
     }
 
     /// Cell `cell` of `other`, a grid of the same cells, copied: its head, and the places of the
@@ -412,7 +442,7 @@ impl Cells {
     /// The body after `i` in its cell, or [`NONE`].
     #[inline]
     pub(super) fn after(&self, i: u32) -> u32 {
-        self.listing[i as usize].next
+        self.lookup().after(i)
     }
 
     /// The cell `d` steps from coordinate `c` along axis `a`, as its part of a cell index, with

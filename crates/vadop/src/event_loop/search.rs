@@ -11,7 +11,7 @@
 //! canonical and the same bits as every method's. It never schedules, handles an event or
 //! changes a body.
 
-use super::cells::{Cells, Crossing, Neighbour, NONE};
+use super::cells::{Cells, Crossing, Lookup, Neighbour, NONE};
 use super::lists::{self, Lists};
 use super::screen::{lanes, screen, screen_fours, Own, Partners, ROUNDINGS};
 use crate::bodies::{Bodies, BodyState};
@@ -242,20 +242,22 @@ impl<'a> Search<'a> {
             self.test_candidates(&own, eligible, &mut best);
             return best.event;
         }
+        let lookup = cells.lookup();
         match cells.rows_around(p) {
             Some(rows) => {
                 // No cell across a face: one origin for all.
                 (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
+                let (mut found, mut len) = ([0; 27], 0);
                 for first in rows {
-                    let mut occupied = cells.occupied_in_row(first);
+                    let mut occupied = lookup.occupied_in_row(first);
                     while occupied != 0 {
-                        let cell = first as u32 + occupied.trailing_zeros();
+                        (found[len], len) = (first as u32 + occupied.trailing_zeros(), len + 1);
                         occupied &= occupied - 1;
-                        self.gather_list(own.p, cell, 0);
                     }
                 }
+                self.gather_cells(lookup, own.p, &found[..len], 0);
             }
-            None => cells.for_each_around(p, |n| self.gather(&own, n)),
+            None => cells.for_each_around(p, |n| self.gather(lookup, &own, n)),
         }
         self.screen_all(&own, &mut best);
         self.test_candidates(&own, eligible, &mut best);
@@ -281,15 +283,16 @@ impl<'a> Search<'a> {
         }
         self.candidates.clear();
         self.near.cells = 0;
+        let lookup = cells.lookup();
         match cells.cells_ahead(into, crossing) {
             Some(ahead) => {
                 // No cell across a face: one origin for all, and an empty cell costs a bit's test.
                 (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
+                let (mut found, mut len) = ([0; 9], 0);
                 for cell in ahead {
-                    if cells.is_occupied(cell) {
-                        self.gather_list(own.p, cell, 0);
-                    }
+                    (found[len], len) = (cell, len + lookup.is_occupied(cell) as usize);
                 }
+                self.gather_cells(lookup, own.p, &found[..len], 0);
             }
             // Inline: a call per cell (about 35 instructions, the closure left out of line by
             // the nested loops) for a mostly empty cell's bit test.
@@ -297,7 +300,7 @@ impl<'a> Search<'a> {
                 into,
                 crossing,
                 #[inline(always)]
-                |n| self.gather(&own, n),
+                |n| self.gather(lookup, &own, n),
             ),
         }
         self.screen_all(&own, &mut best);
@@ -378,39 +381,47 @@ impl<'a> Search<'a> {
     /// asking for their records on the way: a neighbourhood's bodies are scattered in memory,
     /// and the records then arrive together rather than one after the other.
     #[inline(always)]
-    fn gather(&mut self, own: &Own, n: Neighbour) {
-        if !self.cells.is_occupied(n.cell) {
+    fn gather(&mut self, lookup: Lookup, own: &Own, n: Neighbour) {
+        if !lookup.is_occupied(n.cell) {
             return;
         }
         let k = self.near.cells;
         self.near.origins[k] = own.position - n.shift;
         self.near.shifts[k] = n.shift;
         self.near.cells += 1;
-        self.gather_list(own.p, n.cell, k as u8);
+        self.gather_cells(lookup, own.p, &[n.cell], k as u8);
     }
 
-    /// [`Self::gather`] of cell `cell`, its shift the `k`-th of the neighbourhood's. A cell
-    /// that is not crowded holds its head alone, whose place in the lists is then not read.
-    /// A body of the overlay met this way waits aside (see [`Self::screen_all`]).
+    /// [`Self::gather`] of the cells `occupied`, each holding a body, their shift the `k`-th of
+    /// the neighbourhood's. A cell that is not crowded holds its head alone, whose place in the
+    /// lists is then not read. A body of the overlay met this way waits aside (see
+    /// [`Self::screen_all`]). The candidates' place and count stay in registers from one cell to
+    /// the next, where a call per cell read and wrote them through the search (with the grid's
+    /// arrays: see [`Lookup`]).
     #[inline(always)]
-    fn gather_list(&mut self, p: usize, cell: u32, k: u8) {
-        let (cells, states) = (self.cells, &self.bodies.state[..]);
-        let (mut q, crowded) = cells.first_of_occupied(cell);
-        // The candidates' `Vec` reached once, not through the search at every push; and a
-        // prefetch, which never faults, without a bounds check.
+    fn gather_cells(&mut self, cells: Lookup, p: usize, occupied: &[u32], k: u8) {
+        let (states, overlaid) = (&self.bodies.state[..], self.overlay.len > 0);
         let candidates = &mut *self.candidates;
         let mut len = candidates.len;
-        while q != NONE {
-            if q as usize != p {
-                if self.overlay.len > 0 && self.overlay.find(q as usize).is_some() {
-                    self.overlay.met = Some((q, k));
-                } else {
-                    prefetch_item(states, q as usize);
-                    candidates.put(len, Candidate { earliest: 0.0, q, cell: k, moving: false });
-                    len += 1;
+        let mut slots = &mut candidates.slots[..];
+        for &cell in occupied {
+            let (mut q, crowded) = cells.first_of_occupied(cell);
+            while q != NONE {
+                if q as usize != p {
+                    if overlaid && self.overlay.find(q as usize).is_some() {
+                        self.overlay.met = Some((q, k));
+                    } else {
+                        prefetch_item(states, q as usize);
+                        if len == slots.len() {
+                            candidates.grow();
+                            slots = &mut candidates.slots[..];
+                        }
+                        slots[len] = Candidate { earliest: 0.0, q, cell: k, moving: false };
+                        len += 1;
+                    }
                 }
+                q = if crowded { cells.after(q) } else { NONE };
             }
-            q = if crowded { cells.after(q) } else { NONE };
         }
         candidates.len = len;
     }
@@ -447,7 +458,7 @@ impl<'a> Search<'a> {
             prefetch_item(states, lists::split(entry).0);
         }
         // The screen's switch and the candidates' `Vec` read once, not through the search at
-        // every member (as in `gather_list`).
+        // every member (as in `gather_cells`).
         let (mut bound, screened, candidates) = (best.bound, self.screen, &mut *self.candidates);
         // Four at a time in lanes, as in `screen_all`.
         let grouped = if screened && lanes() { members.len() & !3 } else { 0 };
