@@ -255,9 +255,13 @@ impl<'a> Search<'a> {
                         occupied &= occupied - 1;
                     }
                 }
-                self.gather_cells(lookup, own.p, &found[..len], 0);
+                self.gather_cells(lookup, own.p, found[..len].iter().map(|&cell| (cell, 0)));
             }
-            None => cells.for_each_around(p, |n| self.gather(lookup, &own, n)),
+            None => {
+                let (mut found, mut len) = ([(0, 0); 27], 0);
+                cells.for_each_around(p, |n| self.note(lookup, &own, n, &mut found, &mut len));
+                self.gather_cells(lookup, own.p, found[..len].iter().copied());
+            }
         }
         self.screen_all(&own, &mut best);
         self.test_candidates(&own, eligible, &mut best);
@@ -292,16 +296,20 @@ impl<'a> Search<'a> {
                 for cell in ahead {
                     (found[len], len) = (cell, len + lookup.is_occupied(cell) as usize);
                 }
-                self.gather_cells(lookup, own.p, &found[..len], 0);
+                self.gather_cells(lookup, own.p, found[..len].iter().map(|&cell| (cell, 0)));
             }
-            // Inline: a call per cell (about 35 instructions, the closure left out of line by
-            // the nested loops) for a mostly empty cell's bit test.
-            None => cells.for_each_new(
-                into,
-                crossing,
-                #[inline(always)]
-                |n| self.gather(lookup, &own, n),
-            ),
+            None => {
+                // Inline: a call per cell (about 35 instructions, the closure left out of line
+                // by the nested loops) for a mostly empty cell's bit test.
+                let (mut found, mut len) = ([(0, 0); 27], 0);
+                cells.for_each_new(
+                    into,
+                    crossing,
+                    #[inline(always)]
+                    |n| self.note(lookup, &own, n, &mut found, &mut len),
+                );
+                self.gather_cells(lookup, own.p, found[..len].iter().copied());
+            }
         }
         self.screen_all(&own, &mut best);
         self.test_candidates(&own, Eligible::From(now), &mut best);
@@ -377,11 +385,11 @@ impl<'a> Search<'a> {
         Own { p, position: state.motion.at(now), velocity: state.motion.velocity, radius: state.radius, now, rounding }
     }
 
-    /// Lists the bodies of neighbour cell `n` (but `own`'s) in `self.candidates`, to be screened,
-    /// asking for their records on the way: a neighbourhood's bodies are scattered in memory,
-    /// and the records then arrive together rather than one after the other.
+    /// Neighbour cell `n`, when it holds a body: its shift becomes the neighbourhood's next (with
+    /// the origin `own`'s centre less it), and the cell is noted in `found` with that shift's
+    /// place, its bodies to be gathered ([`Self::gather_cells`]) once every cell is noted.
     #[inline(always)]
-    fn gather(&mut self, lookup: Lookup, own: &Own, n: Neighbour) {
+    fn note(&mut self, lookup: Lookup, own: &Own, n: Neighbour, found: &mut [(u32, u8); 27], len: &mut usize) {
         if !lookup.is_occupied(n.cell) {
             return;
         }
@@ -389,22 +397,24 @@ impl<'a> Search<'a> {
         self.near.origins[k] = own.position - n.shift;
         self.near.shifts[k] = n.shift;
         self.near.cells += 1;
-        self.gather_cells(lookup, own.p, &[n.cell], k as u8);
+        (found[*len], *len) = ((n.cell, k as u8), *len + 1);
     }
 
-    /// [`Self::gather`] of the cells `occupied`, each holding a body, their shift the `k`-th of
-    /// the neighbourhood's. A cell that is not crowded holds its head alone, whose place in the
-    /// lists is then not read. A body of the overlay met this way waits aside (see
-    /// [`Self::screen_all`]). The candidates' place and count stay in registers from one cell to
-    /// the next, where a call per cell read and wrote them through the search (with the grid's
-    /// arrays: see [`Lookup`]).
+    /// Lists the bodies (but `own`'s) of the cells `occupied`, each holding a body and given with
+    /// the place of its shift among the neighbourhood's, in `self.candidates`, to be screened,
+    /// asking for their records on the way: a neighbourhood's bodies are scattered in memory,
+    /// and the records then arrive together rather than one after the other. A cell that is not
+    /// crowded holds its head alone, whose place in the lists is then not read. A body of the
+    /// overlay met this way waits aside (see [`Self::screen_all`]). The candidates' place and
+    /// count stay in registers from one cell to the next, where a call per cell read and wrote
+    /// them through the search (with the grid's arrays: see [`Lookup`]).
     #[inline(always)]
-    fn gather_cells(&mut self, cells: Lookup, p: usize, occupied: &[u32], k: u8) {
+    fn gather_cells(&mut self, cells: Lookup, p: usize, occupied: impl IntoIterator<Item = (u32, u8)>) {
         let (states, overlaid) = (&self.bodies.state[..], self.overlay.len > 0);
         let candidates = &mut *self.candidates;
         let mut len = candidates.len;
         let mut slots = &mut candidates.slots[..];
-        for &cell in occupied {
+        for (cell, k) in occupied {
             let (mut q, crowded) = cells.first_of_occupied(cell);
             while q != NONE {
                 if q as usize != p {
