@@ -20,7 +20,7 @@
 mod plan;
 mod sweep;
 
-use super::box_columns::{BoxColumns, BoxColumnsMut};
+use super::box_columns::BoxColumns;
 use super::candidates::Owner;
 #[cfg(target_arch = "x86_64")]
 use super::candidates::Screened;
@@ -31,7 +31,7 @@ use crate::memory::prefetch;
 use crate::parallel::{split_at_points, Workers};
 use crate::window::Window;
 use glam::DVec3;
-use plan::{add_pieces, BinnedPaths, PieceRule, PlanPass};
+use plan::{add_pieces, BinnedPaths, CountPieces, PieceRule, PieceSink, PlanPass, StorePieces};
 
 /// Base cells are this many times the median swept-box extent of the window's proxies (and at
 /// least two typical diameters): small enough that a query in a dense gas meets few bodies, large
@@ -46,6 +46,11 @@ const CELLS_PER_PIECE: f64 = 2.0;
 const MIN_CELLS: f64 = 64.0;
 /// Most cells along one axis of a level.
 const MAX_CELLS_PER_AXIS: f64 = (1u32 << 20) as f64;
+/// On more than one worker the binning's count is shared out by paths, each worker counting its
+/// share's pieces in a count of every cell of its own (4 bytes a cell), while the workers past
+/// the first have at most one cell for this many paths: a byte a path at most. Past that (many
+/// cells beside the pieces) each worker counts the cells it owns, going through every path.
+const SHARED_COUNTS_PER_PATH: usize = 4;
 /// End of a late list.
 const NONE: u32 = u32::MAX;
 
@@ -158,73 +163,6 @@ impl Level {
     }
 }
 
-/// What the binning does with each piece a worker owns: count it in its cell, or store it in
-/// the cell's next slot. A trait with always-inline methods rather than a closure: the store,
-/// a closure called from the single-piece and the cut paths' loops, stayed a call (about 80
-/// instructions a piece, its captures read back from memory each time). `ahead` says whether the
-/// path is a foreseen one, a constant in each of the binning's loops, so no read asks.
-trait PieceSink {
-    /// The one piece of path `path`: its box and window are the path's, read only if needed (the
-    /// count needs neither).
-    fn whole(&mut self, path: usize, cell: usize, ahead: bool);
-    /// One of the pieces path `path` is cut into.
-    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window, ahead: bool);
-}
-
-/// Counts the pieces of the cells from `lowest` on.
-struct CountPieces<'a> {
-    counts: &'a mut [u32],
-    lowest: usize,
-}
-
-impl PieceSink for CountPieces<'_> {
-    #[inline(always)]
-    fn whole(&mut self, _: usize, cell: usize, _: bool) {
-        self.counts[cell - self.lowest] += 1;
-    }
-
-    #[inline(always)]
-    fn piece(&mut self, _: usize, cell: usize, _: CompactBox, _: Window, _: bool) {
-        self.counts[cell - self.lowest] += 1;
-    }
-}
-
-/// Stores each piece of the cells from `lowest` on in its cell's next slot (`next_slot`, from
-/// `first_slot` on), with its owner and its path's motion.
-struct StorePieces<'a, 'p> {
-    paths: BinnedPaths<'p>,
-    next_slot: &'a mut [u32],
-    lowest: usize,
-    first_slot: usize,
-    owners: &'a mut [Owner],
-    boxes: BoxColumnsMut<'a>,
-    motions: &'a mut [BodyState],
-}
-
-impl PieceSink for StorePieces<'_, '_> {
-    #[inline(always)]
-    fn whole(&mut self, path: usize, cell: usize, ahead: bool) {
-        let (bbox, window) = (self.paths.bbox(path, ahead), self.paths.window(path, ahead));
-        self.piece(path, cell, bbox, window, ahead);
-    }
-
-    #[inline(always)]
-    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window, ahead: bool) {
-        // Every read of the path before the first store: a store could be to the table the
-        // reads go through, as far as the compiler knows, and it read the proxies' length and
-        // checked the index again after each.
-        let (body, stamp) = self.paths.owner(path, ahead);
-        let state = self.paths.state(path, ahead);
-        let next = &mut self.next_slot[cell - self.lowest];
-        let slot = *next as usize;
-        *next += 1;
-        let k = slot - self.first_slot;
-        self.owners[k] = Owner { body, stamp, window };
-        self.boxes.set(k, bbox);
-        self.motions[k] = *state;
-    }
-}
-
 /// The grid broad phase.
 #[derive(Debug)]
 pub struct Grid {
@@ -257,6 +195,9 @@ pub struct Grid {
     hits: Vec<u32>,
     /// Scratch of the binning: each cell's piece count, then the slot of its next piece.
     next_slot: Vec<u32>,
+    /// Scratch of the binning on more than one worker: each cell's piece count among the paths
+    /// of each worker but the first (whose count is `next_slot`), while they are few.
+    counts: Vec<u32>,
     /// The binned pieces include foreseen paths (see [`BroadPhase::prepare_foreseen`]), and stay
     /// as the window's start left them.
     foreseen: bool,
@@ -284,6 +225,7 @@ impl Grid {
             runs: Vec::new(),
             hits: Vec::new(),
             next_slot: Vec::new(),
+            counts: Vec::new(),
             foreseen: false,
         }
     }
@@ -380,6 +322,23 @@ impl Grid {
                 sink.piece(i, cell, bbox, window, AHEAD);
             }
         });
+    }
+
+    /// [`Self::for_each_owned_piece_cut`] of path `i`, cut into `count` pieces of `level`,
+    /// asking whether it is a foreseen one: for loops over cut paths of both kinds, where the
+    /// answer is no constant.
+    #[inline(always)]
+    fn for_each_cut_piece(
+        (level, i, count): (&Level, usize, u32),
+        paths: BinnedPaths,
+        owned: &std::ops::Range<usize>,
+        sink: &mut impl PieceSink,
+    ) {
+        if paths.is_ahead(i) {
+            Grid::for_each_owned_piece_cut::<true>(level, i, count, paths, owned, sink);
+        } else {
+            Grid::for_each_owned_piece_cut::<false>(level, i, count, paths, owned, sink);
+        }
     }
 
     /// Names in each path's `plan` (paths `offset..`) its level, by `level_of` its exponent less
@@ -626,13 +585,15 @@ impl Grid {
         }
         // Each path's level, or a single piece's cell, found in parallel; then pass 2: count
         // the pieces of each cell, and pass 3: scatter them (a counting sort, no hashing). In
-        // passes 2 and 3 each worker owns a range of cells (cells are numbered level by level,
-        // so their slots are a range too) and goes through all bodies in order, taking the
-        // pieces that fall in its cells: a cell holds its pieces in body order whatever the
-        // number of workers, and no two workers write near each other. Longer paths are cut
-        // again.
+        // pass 3 each worker owns a range of cells (cells are numbered level by level, so their
+        // slots are a range too) and goes through all bodies in order, taking the pieces that
+        // fall in its cells: a cell holds its pieces in body order whatever the number of
+        // workers, and no two workers write near each other. Pass 2 counts, which no order
+        // changes: by shares of the paths where the cells are few, by cells as pass 3 where
+        // not. Longer paths are cut again.
         let cells = self.levels.last().map_or(0, |l| l.cells_before + l.late_head.len());
         let mut next_slot = std::mem::take(&mut self.next_slot);
+        let mut counts = std::mem::take(&mut self.counts);
         next_slot.clear();
         next_slot.resize(cells, 0);
         let levels = &self.levels;
@@ -654,14 +615,40 @@ impl Grid {
             let sink = &mut CountPieces { counts: &mut next_slot, lowest: 0 };
             for &i in &cut {
                 let (i, (count, level)) = (i as usize, plan[i as usize]);
-                let level = &levels[level as usize];
-                if paths.is_ahead(i) {
-                    Grid::for_each_owned_piece_cut::<true>(level, i, count, paths, &owned, sink);
-                } else {
-                    Grid::for_each_owned_piece_cut::<false>(level, i, count, paths, &owned, sink);
-                }
+                Grid::for_each_cut_piece((&levels[level as usize], i, count), paths, &owned, sink);
             }
             self.cut = cut;
+        } else if cells > 0 && (workers.threads() - 1) * cells <= plan.len() / SHARED_COUNTS_PER_PATH {
+            // Few cells beside the paths: each worker counts the pieces of its own share of the
+            // paths in a count of every cell of its own (as one worker does), and the counts are
+            // summed, rather than every worker going through every path to take its cells'.
+            let threads = workers.threads();
+            counts.clear();
+            counts.resize((threads - 1) * cells, 0);
+            let firsts: Vec<usize> = (1..threads).map(|k| k * plan.len() / threads).collect();
+            let parts: Vec<_> = split_at_points(&mut plan, &firsts)
+                .into_iter()
+                .zip(std::iter::once(&mut next_slot[..]).chain(counts.chunks_mut(cells)))
+                .zip(std::iter::once(0).chain(firsts.iter().copied()))
+                .collect();
+            workers.for_each_part(parts, |_, ((chunk, counts), offset)| {
+                let (owned, sink) = (0..cells, &mut CountPieces { counts, lowest: 0 });
+                Grid::place_paths(by_exponent, paths, offset, chunk, |i, (count, place)| {
+                    if count == 1 {
+                        sink.whole(i, place as usize, false);
+                    } else {
+                        Grid::for_each_cut_piece((&levels[place as usize], i, count), paths, &owned, sink);
+                    }
+                });
+            });
+            let counts = &counts;
+            workers.chunks_mut(&mut next_slot, |offset, sums| {
+                for theirs in counts.chunks(cells) {
+                    for (sum, &count) in sums.iter_mut().zip(&theirs[offset..]) {
+                        *sum += count;
+                    }
+                }
+            });
         } else {
             workers
                 .chunks_mut(&mut plan, |offset, chunk| Grid::place_paths(by_exponent, paths, offset, chunk, |_, _| {}));
@@ -719,6 +706,7 @@ impl Grid {
             Grid::for_each_owned_piece(levels, &plan, paths, owned, &mut store);
         });
         self.next_slot = next_slot;
+        self.counts = counts;
         self.foreseen = !paths.foreseen.is_empty();
         self.late.clear();
         self.late_motions.clear();
@@ -792,7 +780,7 @@ impl BroadPhase for Grid {
             + self.extents.capacity() * 8
             + self.level_of.capacity() * 4
             + self.cut.capacity() * 4
-            + self.next_slot.capacity() * 4
+            + (self.next_slot.capacity() + self.counts.capacity()) * 4
             + self.pieces.capacity() * std::mem::size_of::<(CompactBox, Window)>()
             + levels
     }

@@ -1,8 +1,11 @@
 //! How the grid plans a window's paths before it bins them: the paths it bins ([`BinnedPaths`]),
-//! how many pieces each path is cut into and which level they fit ([`PieceRule`]), and the pieces
-//! per level exponent ([`PlanPass`]).
+//! how many pieces each path is cut into and which level they fit ([`PieceRule`]), the pieces
+//! per level exponent ([`PlanPass`]), and what the binning then does with each piece a worker
+//! takes ([`PieceSink`]: count it in its cell, or store it in the cell's next slot).
 
 use crate::bodies::BodyState;
+use crate::broad_phase::box_columns::BoxColumnsMut;
+use crate::broad_phase::candidates::Owner;
 use crate::broad_phase::proxy::{CompactBox, Foreseen, Path, Proxies, RELATIVE_PADDING};
 use crate::window::Window;
 
@@ -180,5 +183,72 @@ pub(super) fn add_pieces(per_exponent: &mut Vec<(i32, usize)>, (exponent, count)
     match per_exponent.iter_mut().find(|(e, _)| *e == exponent) {
         Some((_, n)) => *n += count,
         None => per_exponent.push((exponent, count)),
+    }
+}
+
+/// What the binning does with each piece a worker owns: count it in its cell, or store it in
+/// the cell's next slot. A trait with always-inline methods rather than a closure: the store,
+/// a closure called from the single-piece and the cut paths' loops, stayed a call (about 80
+/// instructions a piece, its captures read back from memory each time). `ahead` says whether the
+/// path is a foreseen one, a constant in each of the binning's loops, so no read asks.
+pub(super) trait PieceSink {
+    /// The one piece of path `path`: its box and window are the path's, read only if needed (the
+    /// count needs neither).
+    fn whole(&mut self, path: usize, cell: usize, ahead: bool);
+    /// One of the pieces path `path` is cut into.
+    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window, ahead: bool);
+}
+
+/// Counts the pieces of the cells from `lowest` on.
+pub(super) struct CountPieces<'a> {
+    pub(super) counts: &'a mut [u32],
+    pub(super) lowest: usize,
+}
+
+impl PieceSink for CountPieces<'_> {
+    #[inline(always)]
+    fn whole(&mut self, _: usize, cell: usize, _: bool) {
+        self.counts[cell - self.lowest] += 1;
+    }
+
+    #[inline(always)]
+    fn piece(&mut self, _: usize, cell: usize, _: CompactBox, _: Window, _: bool) {
+        self.counts[cell - self.lowest] += 1;
+    }
+}
+
+/// Stores each piece of the cells from `lowest` on in its cell's next slot (`next_slot`, from
+/// `first_slot` on), with its owner and its path's motion.
+pub(super) struct StorePieces<'a, 'p> {
+    pub(super) paths: BinnedPaths<'p>,
+    pub(super) next_slot: &'a mut [u32],
+    pub(super) lowest: usize,
+    pub(super) first_slot: usize,
+    pub(super) owners: &'a mut [Owner],
+    pub(super) boxes: BoxColumnsMut<'a>,
+    pub(super) motions: &'a mut [BodyState],
+}
+
+impl PieceSink for StorePieces<'_, '_> {
+    #[inline(always)]
+    fn whole(&mut self, path: usize, cell: usize, ahead: bool) {
+        let (bbox, window) = (self.paths.bbox(path, ahead), self.paths.window(path, ahead));
+        self.piece(path, cell, bbox, window, ahead);
+    }
+
+    #[inline(always)]
+    fn piece(&mut self, path: usize, cell: usize, bbox: CompactBox, window: Window, ahead: bool) {
+        // Every read of the path before the first store: a store could be to the table the
+        // reads go through, as far as the compiler knows, and it read the proxies' length and
+        // checked the index again after each.
+        let (body, stamp) = self.paths.owner(path, ahead);
+        let state = self.paths.state(path, ahead);
+        let next = &mut self.next_slot[cell - self.lowest];
+        let slot = *next as usize;
+        *next += 1;
+        let k = slot - self.first_slot;
+        self.owners[k] = Owner { body, stamp, window };
+        self.boxes.set(k, bbox);
+        self.motions[k] = *state;
     }
 }
