@@ -136,7 +136,8 @@ pub struct EventQueue {
     radix: RadixBuffers,
 }
 
-/// Below this many events the bulk part is sorted by comparisons: a radix pass costs its bins.
+/// Below this many events (in each half, on more than one worker) the bulk part is sorted by
+/// comparisons: a radix pass costs its bins.
 const RADIX_MIN: usize = 1024;
 /// Above this many events (32 MiB of them) more than one worker sorts the bulk part by rayon's
 /// comparison sort, in place, and no spare is kept: issue 28 holds 10^7 bodies to 300 bytes a
@@ -165,7 +166,8 @@ fn digit(event: &Event, shift: u32) -> usize {
 
 /// The radix sort's reused storage: the events' second buffer (each pass moves the events
 /// themselves from one buffer to the other, so a window's events are held twice during the
-/// sort, as the keys and places they used to be sorted by were).
+/// sort, as the keys and places they used to be sorted by were; on more than one worker, up to
+/// `HALVES_MAX` of them only).
 #[derive(Debug, Default)]
 struct RadixBuffers {
     spare: Vec<Event>,
@@ -189,7 +191,7 @@ impl RadixBuffers {
         self.spare.reserve_exact(n.saturating_sub(self.spare.len()));
         self.spare.resize(n, first);
         if workers.threads() == 1 {
-            if radix_sort(events, &mut self.spare) {
+            if radix_sort::<true>(events, &mut self.spare) {
                 std::mem::swap(events, &mut self.spare);
             }
             return;
@@ -197,7 +199,8 @@ impl RadixBuffers {
         let half = n / 2;
         let (events_a, events_b) = events.split_at_mut(half);
         let (spare_a, spare_b) = self.spare.split_at_mut(half);
-        let (moved_a, moved_b) = workers.join(|| radix_sort(events_a, spare_a), || radix_sort(events_b, spare_b));
+        let (moved_a, moved_b) =
+            workers.join(|| radix_sort::<false>(events_a, spare_a), || radix_sort::<false>(events_b, spare_b));
         // The halves end in the same buffer but where the digits their times vary in differ in
         // number (rare: a window's halves share their times' leading bits).
         if moved_a != moved_b {
@@ -223,13 +226,14 @@ impl RadixBuffers {
 }
 
 /// Sorts `events` ascending in `Ord` (latest first), the sorted events left in `events` or, when
-/// it returns true, in `spare` (as long as `events`): a least-significant-digit radix sort of the
+/// it returns true, in `spare` (as long as `events`), with their times, or with their keys in
+/// place of their times unless `TIMES_BACK` (for [`merge`]): a least-significant-digit radix sort of the
 /// times, skipping the digits they all share (a window's times share their leading bits), then
 /// each run of equal times by comparisons. A window start sorts thousands of events, and a pass
 /// over them costs less than the dozen comparisons each takes otherwise. Moving the events
 /// themselves, rather than (key, place) pairs followed by the permutation's cycles, spares a
 /// pass over the events in an order that misses the cache.
-fn radix_sort(events: &mut [Event], spare: &mut [Event]) -> bool {
+fn radix_sort<const TIMES_BACK: bool>(events: &mut [Event], spare: &mut [Event]) -> bool {
     let n = events.len();
     assert!(spare.len() == n && u32::try_from(n).is_ok(), "a spare as long as the events, counted in u32");
     let Some(first) = events.first().map(|event| latest_first_key(event.time.to_bits())) else {
@@ -278,12 +282,15 @@ fn radix_sort(events: &mut [Event], spare: &mut [Event]) -> bool {
     }
     let sorted = if moved { spare } else { events };
     // The times back, and equal times (equal keys: the key is one-to-one) in the order of the
-    // rest of the key; they are rare but for repeats of one prediction.
+    // rest of the key, which is the comparisons' whether a run holds its times or its key (they
+    // tie either way); equal times are rare but for repeats of one prediction.
     let mut run = 0;
     let mut run_key = sorted[0].time.to_bits();
     for k in 0..n {
         let key = sorted[k].time.to_bits();
-        sorted[k].time = f64::from_bits(latest_first_key(key));
+        if TIMES_BACK {
+            sorted[k].time = f64::from_bits(latest_first_key(key));
+        }
         if key != run_key {
             if k - run > 1 {
                 sorted[run..k].sort_unstable();
@@ -297,16 +304,24 @@ fn radix_sort(events: &mut [Event], spare: &mut [Event]) -> bool {
     moved
 }
 
-/// How many of the merge of the sorted `a` and `b` (ascending in `Ord`, `a`'s first on a tie)
-/// first `out` events come from `a` (the rest from `b`): the merge path's crossing of that
-/// diagonal, by a binary search, so each half of the output is merged on its own.
+/// The order of two events that hold their keys in place of their times: `Ord`'s (an event's
+/// key ascends as the bulk part does, and events of one key tie on their times).
+#[inline]
+fn key_order(x: &Event, y: &Event) -> Ordering {
+    x.time.to_bits().cmp(&y.time.to_bits()).then_with(|| x.cmp(y))
+}
+
+/// How many of the merge of the sorted `a` and `b` (keys in place of times, ascending in
+/// [`key_order`], `a`'s first on a tie) first `out` events come from `a` (the rest from `b`):
+/// the merge path's crossing of that diagonal, by a binary search, so each half of the output is
+/// merged on its own.
 fn merge_split(a: &[Event], b: &[Event], out: usize) -> usize {
     // `a[i]` is among the first `out` when it precedes or ties `b[out - 1 - i]`: true up to the
     // split and false after it, as `a` ascends and `b[out - 1 - i]` descends.
     let (mut low, mut high) = (out.saturating_sub(b.len()), out.min(a.len()));
     while low < high {
         let middle = (low + high) / 2;
-        if a[middle] <= b[out - 1 - middle] {
+        if key_order(&a[middle], &b[out - 1 - middle]).is_le() {
             low = middle + 1;
         } else {
             high = middle;
@@ -315,20 +330,24 @@ fn merge_split(a: &[Event], b: &[Event], out: usize) -> usize {
     low
 }
 
-/// Merges the sorted `a` and `b` (ascending in `Ord`) into `out`, as long as both: the earlier
-/// of the two fronts taken each time, `a`'s on a tie (equal events are the same prediction, so
-/// which is taken does not show).
+/// Merges the sorted `a` and `b` (keys in place of times, ascending in [`key_order`]) into
+/// `out`, as long as both, with their times back: the earlier of the two fronts taken each time,
+/// `a`'s on a tie (equal events are the same prediction, so which is taken does not show). The
+/// keys compare as integers, cheaper than the times' `total_cmp`, and each event's time is put
+/// back as it is written, not in a walk of its own.
 fn merge(a: &[Event], b: &[Event], out: &mut [Event]) {
+    let with_time = |event: &Event| Event { time: f64::from_bits(latest_first_key(event.time.to_bits())), ..*event };
     let (mut i, mut j) = (0, 0);
     while i < a.len() && j < b.len() {
         let (x, y) = (&a[i], &b[j]);
-        let take_b = y < x;
-        out[i + j] = *if take_b { y } else { x };
+        let take_b = key_order(y, x).is_lt();
+        out[i + j] = with_time(if take_b { y } else { x });
         i += usize::from(!take_b);
         j += usize::from(take_b);
     }
-    out[i + j..a.len() + j].copy_from_slice(&a[i..]);
-    out[a.len() + j..].copy_from_slice(&b[j..]);
+    for (slot, event) in out[i + j..].iter_mut().zip(a[i..].iter().chain(&b[j..])) {
+        *slot = with_time(event);
+    }
 }
 
 impl EventQueue {
@@ -349,7 +368,13 @@ impl EventQueue {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
-        // fine, and every way of sorting gives the same order. TODO figures.
+        // fine, and every way of sorting gives the same order. The radix sort, on one worker
+        // whole and on more in two halves merged (see `RadixBuffers::sort`): at n = 10^5, 5 d/f,
+        // 8.1 M instructions a frame on one thread, 9.7 M on two, shared (rayon's sort read
+        // 27.3 M, 15.3 M of them on the pipeline's thread), with two stage starts where sharing
+        // each radix pass took a dozen and was slower by the clock (BENCHMARKS.md, twenty-fifth
+        // and twenty-sixth sessions). Comparisons below `RADIX_MIN` events (a half's on more
+        // than one worker), and on more than one worker above `HALVES_MAX`.
         let n = self.bulk.len();
         if (workers.threads() == 1 && n >= RADIX_MIN) || (2 * RADIX_MIN..=HALVES_MAX).contains(&n) {
             self.radix.sort(&mut self.bulk, workers);
@@ -603,6 +628,9 @@ mod tests {
     #[test]
     fn merged_halves_are_the_whole_order() {
         let times = |ts: &[f64]| -> Vec<Event> { ts.iter().map(|&t| event(t, 1, Partner::Renew)).collect() };
+        let keyed = |v: &[Event]| -> Vec<Event> {
+            v.iter().map(|e| Event { time: f64::from_bits(latest_first_key(e.time.to_bits())), ..*e }).collect()
+        };
         for (a, b) in [
             (times(&[4.0, 3.0]), times(&[2.0, 1.0, 0.5])),
             (times(&[2.0, 1.0]), times(&[4.0, 3.0, 0.5])),
@@ -611,6 +639,7 @@ mod tests {
         ] {
             let mut expected = [a.clone(), b.clone()].concat();
             expected.sort_unstable();
+            let (a, b) = (keyed(&a), keyed(&b));
             let taken = merge_split(&a, &b, a.len());
             let mut out = expected.clone();
             let (to_a, to_b) = out.split_at_mut(a.len());
