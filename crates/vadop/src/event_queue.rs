@@ -201,8 +201,8 @@ impl RadixBuffers {
         let (spare_a, spare_b) = self.spare.split_at_mut(half);
         let (moved_a, moved_b) =
             workers.join(|| radix_sort::<false>(events_a, spare_a), || radix_sort::<false>(events_b, spare_b));
-        // The halves end in the same buffer but where the digits their times vary in differ in
-        // number (rare: a window's halves share their times' leading bits).
+        // Both halves in one buffer: they end in different ones only where their times vary in
+        // different numbers of digits (rare: a window's halves share their times' leading bits).
         if moved_a != moved_b {
             if moved_a {
                 spare_b.copy_from_slice(events_b);
@@ -227,9 +227,9 @@ impl RadixBuffers {
 
 /// Sorts `events` ascending in `Ord` (latest first), the sorted events left in `events` or, when
 /// it returns true, in `spare` (as long as `events`), with their times, or with their keys in
-/// place of their times unless `TIMES_BACK` (for [`merge`]): a least-significant-digit radix sort of the
-/// times, skipping the digits they all share (a window's times share their leading bits), then
-/// each run of equal times by comparisons. A window start sorts thousands of events, and a pass
+/// place of their times unless `TIMES_BACK` (for [`merge`]): a least-significant-digit radix
+/// sort of the times, skipping the digits they all share (a window's times share their leading
+/// bits), then each run of equal times by comparisons. A window start sorts thousands of events, and a pass
 /// over them costs less than the dozen comparisons each takes otherwise. Moving the events
 /// themselves, rather than (key, place) pairs followed by the permutation's cycles, spares a
 /// pass over the events in an order that misses the cache.
