@@ -136,8 +136,14 @@ pub struct EventQueue {
     radix: RadixBuffers,
 }
 
-/// Below this many events the bulk part is sorted by comparisons: a radix pass costs its bins.
+/// Below this many events (in each half, on more than one worker) the bulk part is sorted by
+/// comparisons: a radix pass costs its bins.
 const RADIX_MIN: usize = 1024;
+/// Above this many events (32 MiB of them) more than one worker sorts the bulk part by rayon's
+/// comparison sort, in place, and no spare is kept: issue 28 holds 10^7 bodies to 300 bytes a
+/// body on two threads, and their windows' spare (0.27 events a body at 0.05 d/f, 8.6 bytes a
+/// body) would pass it; on one worker the spare is the radix sort's, as it always was.
+const HALVES_MAX: usize = 1 << 20;
 /// Bits of the time key sorted per radix pass: 2^11 bins fit the first-level cache.
 const DIGIT_BITS: u32 = 11;
 /// Bins of a radix pass.
@@ -160,7 +166,8 @@ fn digit(event: &Event, shift: u32) -> usize {
 
 /// The radix sort's reused storage: the events' second buffer (each pass moves the events
 /// themselves from one buffer to the other, so a window's events are held twice during the
-/// sort, as the keys and places they used to be sorted by were).
+/// sort, as the keys and places they used to be sorted by were; on more than one worker, up to
+/// `HALVES_MAX` of them only).
 #[derive(Debug, Default)]
 struct RadixBuffers {
     spare: Vec<Event>,
@@ -168,80 +175,178 @@ struct RadixBuffers {
 
 impl RadixBuffers {
     /// Sorts `events` ascending in `Ord` (latest first), to the same order `sort_unstable` gives
-    /// (the order is total, so there is one): a least-significant-digit radix sort of the times,
-    /// skipping the digits they all share (a window's times share their leading bits), then each
-    /// run of equal times by comparisons. A window start sorts thousands of events, and a pass
-    /// over them costs less than the dozen comparisons each takes otherwise. Moving the events
-    /// themselves, rather than (key, place) pairs followed by the permutation's cycles, spares a
-    /// pass over the events in an order that misses the cache.
-    fn sort(&mut self, events: &mut Vec<Event>) {
+    /// (the order is total, so there is one, and every way of sorting gives it). On one worker
+    /// one radix sort (see [`radix_sort`]). On more, two stage starts, as few as sharing it can
+    /// cost (each wakes a worker, and a dozen of them, one for each pass's count and move, were
+    /// slower by the clock than rayon's sort, which wakes one): each half of the events radix
+    /// sorted on a worker of its own, in its own half of the spare, then the sorted halves merged
+    /// into the other buffer, each worker writing one half of the output from the stretches of
+    /// the two halves that land there.
+    fn sort(&mut self, events: &mut Vec<Event>, workers: &Workers) {
         let n = events.len();
-        let Some(first) = events.first().map(|event| latest_first_key(event.time.to_bits())) else {
+        let Some(&first) = events.first() else {
             return;
         };
-        // Each event's key in place of its time; the bits that vary, and the counts of the
-        // lowest digit, which nearly always does (the bins a fixed array indexed by a masked
-        // digit: no bounds checks).
-        let mut bins = [0u32; BINS];
-        let mut varying = 0;
-        for event in events.iter_mut() {
-            let key = latest_first_key(event.time.to_bits());
-            event.time = f64::from_bits(key);
-            varying |= key ^ first;
-            bins[key as usize & (BINS - 1)] += 1;
-        }
         // Sized exactly: the spare is as large as the window's events, and is kept.
         self.spare.reserve_exact(n.saturating_sub(self.spare.len()));
-        self.spare.resize(n, events[0]);
-        let mut moved = false;
-        for shift in (0..64).step_by(DIGIT_BITS as usize) {
-            if (varying >> shift) & (BINS as u64 - 1) == 0 {
-                continue;
+        self.spare.resize(n, first);
+        if workers.threads() == 1 {
+            if radix_sort::<true>(events, &mut self.spare) {
+                std::mem::swap(events, &mut self.spare);
             }
-            let (from, to) =
-                if moved { (&self.spare[..], &mut events[..]) } else { (&events[..], &mut self.spare[..]) };
-            // The lowest digit's counts were taken with the keys.
-            if shift != 0 {
-                bins.fill(0);
-                for event in from {
-                    bins[digit(event, shift)] += 1;
-                }
-            }
-            let mut start = 0;
-            for bin in bins.iter_mut() {
-                (*bin, start) = (start, start + *bin);
-            }
-            for event in from {
-                let place = &mut bins[digit(event, shift)];
-                to[*place as usize] = *event;
-                *place += 1;
-            }
-            moved = !moved;
+            return;
         }
-        if moved {
+        let half = n / 2;
+        let (events_a, events_b) = events.split_at_mut(half);
+        let (spare_a, spare_b) = self.spare.split_at_mut(half);
+        let (moved_a, moved_b) =
+            workers.join(|| radix_sort::<false>(events_a, spare_a), || radix_sort::<false>(events_b, spare_b));
+        // Both halves in one buffer: they end in different ones only where their times vary in
+        // different numbers of digits (rare: a window's halves share their times' leading bits).
+        if moved_a != moved_b {
+            if moved_a {
+                spare_b.copy_from_slice(events_b);
+            } else {
+                events_b.copy_from_slice(spare_b);
+            }
+        }
+        let (from, to) = if moved_a { (&self.spare[..], &mut events[..]) } else { (&events[..], &mut self.spare[..]) };
+        let (a, b) = from.split_at(half);
+        let taken = merge_split(a, b, half);
+        let (to_a, to_b) = to.split_at_mut(half);
+        workers.join(|| merge(&a[..taken], &b[..half - taken], to_a), || merge(&a[taken..], &b[half - taken..], to_b));
+        if !moved_a {
             std::mem::swap(events, &mut self.spare);
-        }
-        // The times back, and equal times (equal keys: the key is one-to-one) in the order of
-        // the rest of the key; they are rare but for repeats of one prediction.
-        let mut run = 0;
-        let mut run_key = events[0].time.to_bits();
-        for k in 0..n {
-            let key = events[k].time.to_bits();
-            events[k].time = f64::from_bits(latest_first_key(key));
-            if key != run_key {
-                if k - run > 1 {
-                    events[run..k].sort_unstable();
-                }
-                (run, run_key) = (k, key);
-            }
-        }
-        if n - run > 1 {
-            events[run..].sort_unstable();
         }
     }
 
     fn memory_bytes(&self) -> usize {
         self.spare.capacity() * std::mem::size_of::<Event>()
+    }
+}
+
+/// Sorts `events` ascending in `Ord` (latest first), the sorted events left in `events` or, when
+/// it returns true, in `spare` (as long as `events`), with their times, or with their keys in
+/// place of their times unless `TIMES_BACK` (for [`merge`]): a least-significant-digit radix
+/// sort of the times, skipping the digits they all share (a window's times share their leading
+/// bits), then each run of equal times by comparisons. A window start sorts thousands of events, and a pass
+/// over them costs less than the dozen comparisons each takes otherwise. Moving the events
+/// themselves, rather than (key, place) pairs followed by the permutation's cycles, spares a
+/// pass over the events in an order that misses the cache.
+fn radix_sort<const TIMES_BACK: bool>(events: &mut [Event], spare: &mut [Event]) -> bool {
+    let n = events.len();
+    assert!(spare.len() == n && u32::try_from(n).is_ok(), "a spare as long as the events, counted in u32");
+    let Some(first) = events.first().map(|event| latest_first_key(event.time.to_bits())) else {
+        return false;
+    };
+    // Each event's key in place of its time; the bits that vary, and the counts of the lowest
+    // digit, which nearly always does (the bins a fixed array indexed by a masked digit: no
+    // bounds checks).
+    let mut bins = [0u32; BINS];
+    let mut varying = 0;
+    for event in events.iter_mut() {
+        let key = latest_first_key(event.time.to_bits());
+        event.time = f64::from_bits(key);
+        varying |= key ^ first;
+        bins[key as usize & (BINS - 1)] += 1;
+    }
+    let mut moved = false;
+    for shift in (0..64).step_by(DIGIT_BITS as usize) {
+        if (varying >> shift) & (BINS as u64 - 1) == 0 {
+            continue;
+        }
+        let (from, to) = if moved { (&spare[..], &mut events[..]) } else { (&events[..], &mut spare[..]) };
+        // The lowest digit's counts were taken with the keys, from the events this pass moves
+        // (it is the first pass when it is made).
+        if shift != 0 {
+            bins.fill(0);
+            for event in from {
+                bins[digit(event, shift)] += 1;
+            }
+        }
+        let mut start = 0;
+        for bin in bins.iter_mut() {
+            (*bin, start) = (start, start + *bin);
+        }
+        for event in from {
+            let place = &mut bins[digit(event, shift)];
+            debug_assert!((*place as usize) < to.len());
+            // SAFETY: `bins[d]` starts at the number of events of `from` with a digit below `d`
+            // and is raised once for each of the `count(d)` events with digit `d`, all counted
+            // above from these same events (`n` of them, fitting u32 as asserted): every place
+            // is below `count(0) + ... + count(d) <= n = to.len()`.
+            unsafe { *to.get_unchecked_mut(*place as usize) = *event };
+            *place += 1;
+        }
+        moved = !moved;
+    }
+    let sorted = if moved { spare } else { events };
+    // The times back, and equal times (equal keys: the key is one-to-one) in the order of the
+    // rest of the key, which is the comparisons' whether a run holds its times or its key (they
+    // tie either way); equal times are rare but for repeats of one prediction.
+    let mut run = 0;
+    let mut run_key = sorted[0].time.to_bits();
+    for k in 0..n {
+        let key = sorted[k].time.to_bits();
+        if TIMES_BACK {
+            sorted[k].time = f64::from_bits(latest_first_key(key));
+        }
+        if key != run_key {
+            if k - run > 1 {
+                sorted[run..k].sort_unstable();
+            }
+            (run, run_key) = (k, key);
+        }
+    }
+    if n - run > 1 {
+        sorted[run..].sort_unstable();
+    }
+    moved
+}
+
+/// The order of two events that hold their keys in place of their times: `Ord`'s (an event's
+/// key ascends as the bulk part does, and events of one key tie on their times).
+#[inline]
+fn key_order(x: &Event, y: &Event) -> Ordering {
+    x.time.to_bits().cmp(&y.time.to_bits()).then_with(|| x.cmp(y))
+}
+
+/// How many of the merge of the sorted `a` and `b` (keys in place of times, ascending in
+/// [`key_order`], `a`'s first on a tie) first `out` events come from `a` (the rest from `b`):
+/// the merge path's crossing of that diagonal, by a binary search, so each half of the output is
+/// merged on its own.
+fn merge_split(a: &[Event], b: &[Event], out: usize) -> usize {
+    // `a[i]` is among the first `out` when it precedes or ties `b[out - 1 - i]`: true up to the
+    // split and false after it, as `a` ascends and `b[out - 1 - i]` descends.
+    let (mut low, mut high) = (out.saturating_sub(b.len()), out.min(a.len()));
+    while low < high {
+        let middle = (low + high) / 2;
+        if key_order(&a[middle], &b[out - 1 - middle]).is_le() {
+            low = middle + 1;
+        } else {
+            high = middle;
+        }
+    }
+    low
+}
+
+/// Merges the sorted `a` and `b` (keys in place of times, ascending in [`key_order`]) into
+/// `out`, as long as both, with their times back: the earlier of the two fronts taken each time,
+/// `a`'s on a tie (equal events are the same prediction, so which is taken does not show). The
+/// keys compare as integers, cheaper than the times' `total_cmp`, and each event's time is put
+/// back as it is written, not in a walk of its own.
+fn merge(a: &[Event], b: &[Event], out: &mut [Event]) {
+    let with_time = |event: &Event| Event { time: f64::from_bits(latest_first_key(event.time.to_bits())), ..*event };
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        let (x, y) = (&a[i], &b[j]);
+        let take_b = key_order(y, x).is_lt();
+        out[i + j] = with_time(if take_b { y } else { x });
+        i += usize::from(!take_b);
+        j += usize::from(take_b);
+    }
+    for (slot, event) in out[i + j..].iter_mut().zip(a[i..].iter().chain(&b[j..])) {
+        *slot = with_time(event);
     }
 }
 
@@ -263,15 +368,20 @@ impl EventQueue {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
-        // fine, and every way of sorting gives the same order. With more than one worker
-        // rayon's sort, which reads 2.6 times the radix sort's instructions (27.3 M against
-        // 10.5 M a frame at n = 10^5, 5 d/f) but shares them: two-thread frames with it took
-        // 0.86-1.02 of the time they took with the radix sort of then (12.9 M) on one of the two
-        // threads (BENCHMARKS.md, twenty-second session); sharing the radix sort's passes was
-        // slower by the clock (twenty-fifth session).
-        if workers.threads() == 1 && self.bulk.len() >= RADIX_MIN {
-            self.radix.sort(&mut self.bulk);
+        // fine, and every way of sorting gives the same order. The radix sort, on one worker
+        // whole and on more in two halves merged (see `RadixBuffers::sort`): at n = 10^5, 5 d/f,
+        // 8.1 M instructions a frame on one thread, 9.7 M on two, shared (rayon's sort read
+        // 27.3 M, 15.3 M of them on the pipeline's thread), with two stage starts where sharing
+        // each radix pass took a dozen and was slower by the clock (BENCHMARKS.md, twenty-fifth
+        // and twenty-sixth sessions). Comparisons below `RADIX_MIN` events (a half's on more
+        // than one worker), and on more than one worker above `HALVES_MAX`.
+        let n = self.bulk.len();
+        if (workers.threads() == 1 && n >= RADIX_MIN) || (2 * RADIX_MIN..=HALVES_MAX).contains(&n) {
+            self.radix.sort(&mut self.bulk, workers);
         } else {
+            if n > HALVES_MAX {
+                self.radix.spare = Vec::new();
+            }
             workers.sort_unstable(&mut self.bulk);
         }
     }
@@ -466,16 +576,18 @@ mod tests {
         assert!(q.is_empty());
     }
 
-    /// The radix sort of the bulk part gives `sort_unstable`'s order, bit for bit, on times of
-    /// every sign and scale, many ties among them (resolved by the rest of the key), repeats
-    /// and NaN; and over a window's times, which share their leading bits.
+    /// The radix sort of the bulk part gives `sort_unstable`'s order, bit for bit, on one worker
+    /// and in two halves merged on two and three: on times of every sign and scale, many ties
+    /// among them (resolved by the rest of the key), repeats and NaN, over a window's times,
+    /// which share their leading bits, and on tiny sizes (a half of none or one event). One
+    /// `RadixBuffers` for all, so the spare shrinks, grows and is swapped.
     #[test]
     fn radix_sort_orders_as_the_comparisons_do() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
         let mut radix = RadixBuffers::default();
-        for case in 0..40 {
-            let n = rng.random_range(0..3000);
+        for case in 0..80 {
+            let n = if case < 16 { case / 2 } else { rng.random_range(0..3000) };
             let events: Vec<Event> = (0..n)
                 .map(|_| {
                     let time = match case % 4 {
@@ -500,12 +612,41 @@ mod tests {
                 .collect();
             let mut expected = events.clone();
             expected.sort_unstable();
-            let mut sorted = events;
-            radix.sort(&mut sorted);
             let bits = |v: &[Event]| -> Vec<(u64, u32, u64, u32)> {
                 v.iter().map(|e| (e.time.to_bits(), e.body, e.partner.key(), e.body_stamp)).collect()
             };
-            assert_eq!(bits(&sorted), bits(&expected), "case {case}, {n} events");
+            for threads in [1, 2, 3] {
+                let mut sorted = events.clone();
+                radix.sort(&mut sorted, &Workers::new(threads));
+                assert_eq!(bits(&sorted), bits(&expected), "case {case}, {n} events, {threads} workers");
+            }
+        }
+    }
+
+    /// Two sorted halves whose leading parts hold every event of the other's up to the end:
+    /// each half of the output is merged from its own stretches, whatever the split.
+    #[test]
+    fn merged_halves_are_the_whole_order() {
+        let times = |ts: &[f64]| -> Vec<Event> { ts.iter().map(|&t| event(t, 1, Partner::Renew)).collect() };
+        let keyed = |v: &[Event]| -> Vec<Event> {
+            v.iter().map(|e| Event { time: f64::from_bits(latest_first_key(e.time.to_bits())), ..*e }).collect()
+        };
+        for (a, b) in [
+            (times(&[4.0, 3.0]), times(&[2.0, 1.0, 0.5])),
+            (times(&[2.0, 1.0]), times(&[4.0, 3.0, 0.5])),
+            (times(&[3.0, 3.0]), times(&[3.0, 3.0, 3.0])),
+            (times(&[3.0, 1.0]), times(&[4.0, 2.0, 0.0])),
+        ] {
+            let mut expected = [a.clone(), b.clone()].concat();
+            expected.sort_unstable();
+            let (a, b) = (keyed(&a), keyed(&b));
+            let taken = merge_split(&a, &b, a.len());
+            let mut out = expected.clone();
+            let (to_a, to_b) = out.split_at_mut(a.len());
+            merge(&a[..taken], &b[..a.len() - taken], to_a);
+            merge(&a[taken..], &b[a.len() - taken..], to_b);
+            let time = |v: &[Event]| v.iter().map(|e| e.time).collect::<Vec<_>>();
+            assert_eq!(time(&out), time(&expected));
         }
     }
 

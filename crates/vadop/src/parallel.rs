@@ -151,6 +151,16 @@ impl Workers {
             .collect()
     }
 
+    /// `a()` and `b()`, on two threads when there is more than one (one stage start), else one
+    /// after the other.
+    pub fn join<RA: Send, RB: Send>(&self, a: impl FnOnce() -> RA + Send, b: impl FnOnce() -> RB + Send) -> (RA, RB) {
+        if self.threads == 1 {
+            (a(), b())
+        } else {
+            rayon::join(a, b)
+        }
+    }
+
     /// Sorts `v` (unstable: equal elements must be indistinguishable).
     pub fn sort_unstable<T: Ord + Send>(&self, v: &mut [T]) {
         if self.threads == 1 {
