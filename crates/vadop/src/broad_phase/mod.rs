@@ -56,11 +56,10 @@ pub trait BroadPhase: Sync {
         out: &mut Vec<T>,
     ) -> u64;
 
-    /// [`Self::find_pairs`] with `predict` asked only of the candidates `screen` does not clear
-    /// (the cleared ones counted all the same), with what [`PairScreen::kept`] makes of each. A
-    /// broad phase that can ask the screen of several candidates at once does, and then also
-    /// clears the kept ones that [`PairScreen::kept_four_avx`] finds without an event in their
-    /// window.
+    /// [`Self::find_pairs`] with `predict` asked only of the candidates `screen` neither clears
+    /// nor finds without an event in their window (the others counted all the same), with what
+    /// [`PairScreen::kept`] makes of each. A broad phase that can ask the screen of several
+    /// candidates at once does ([`PairScreen::kept_four_avx`]).
     fn find_pairs_screened<T: Send, S: PairScreen>(
         &mut self,
         proxies: Proxies,
@@ -109,9 +108,10 @@ pub trait PairScreen: Sync {
     /// True when the pair of `a` and `b` has no event.
     fn clears(&self, a: &BodyState, b: &BodyState) -> bool;
 
-    /// What the screen works out of the pair of `a` and `b`, which it does not clear; the same
-    /// whichever of the two comes first.
-    fn kept(&self, a: &BodyState, b: &BodyState) -> Self::Kept;
+    /// What the screen works out of the pair of `a` and `b`, which it does not clear, when the
+    /// pair can have an event in `window` (`None` otherwise); the same whichever of the two comes
+    /// first.
+    fn kept(&self, a: &BodyState, b: &BodyState, window: Window) -> Option<Self::Kept>;
 
     /// Bit k (k < 4) set when [`Self::clears`] the pair of `a[k]` and `b[k]`: its very
     /// verdicts, four at once in AVX's lanes.
@@ -122,9 +122,9 @@ pub trait PairScreen: Sync {
     unsafe fn clears_four_avx(&self, a: [&BodyState; 4], b: [&BodyState; 4]) -> u32;
 
     /// [`Self::kept`] of the pairs of `a[k]` and `b[k]`, four at once in AVX's lanes, in lane k's
-    /// window (`windows`: the starts, then the ends): bit k of the mask returned is clear when
-    /// pair k can have no event in its window, and set with its very answer in lane k of the
-    /// answers otherwise (the other lanes' answers are anything).
+    /// window (`windows`: the starts, then the ends): bit k of the mask returned is clear where
+    /// [`Self::kept`] is `None`, and set with its very answer in lane k of the answers otherwise
+    /// (the other lanes' answers are anything).
     ///
     /// # Safety
     /// The processor has AVX.
@@ -144,8 +144,11 @@ fn screened_one_by_one<'a, T, S: PairScreen>(
     predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send + 'a,
 ) -> impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send + 'a {
     move |x, y, window, out| {
-        if !screen.clears(x.state, y.state) {
-            predict(x, y, window, screen.kept(x.state, y.state), out);
+        if screen.clears(x.state, y.state) {
+            return;
+        }
+        if let Some(kept) = screen.kept(x.state, y.state, window) {
+            predict(x, y, window, kept, out);
         }
     }
 }

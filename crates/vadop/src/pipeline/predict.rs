@@ -76,10 +76,10 @@ pub(super) fn predict_own_pair(bodies: &Bodies, x: Reported, y: Reported, window
 pub(super) struct StraightSpheres;
 
 impl PairScreen for StraightSpheres {
-    /// The pair's contact time, if any ([`straight_pair_contact_time_past_screen`]), whichever
-    /// body comes first (the offset and relative velocity of `b, a` are those of `a, b` negated,
+    /// The pair's contact time ([`straight_pair_contact_time_past_screen`]), whichever body
+    /// comes first (the offset and relative velocity of `b, a` are those of `a, b` negated,
     /// exactly, which no square, product of two or comparison with zero sees).
-    type Kept = Option<f64>;
+    type Kept = f64;
 
     #[inline(always)]
     fn clears(&self, a: &BodyState, b: &BodyState) -> bool {
@@ -87,8 +87,9 @@ impl PairScreen for StraightSpheres {
     }
 
     #[inline(always)]
-    fn kept(&self, a: &BodyState, b: &BodyState) -> Option<f64> {
+    fn kept(&self, a: &BodyState, b: &BodyState, window: Window) -> Option<f64> {
         straight_pair_contact_time_past_screen(&a.motion, &b.motion, a.radius + b.radius)
+            .filter(|&time| window.contains(time))
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -105,21 +106,20 @@ impl PairScreen for StraightSpheres {
         a: [&BodyState; 4],
         b: [&BodyState; 4],
         windows: [std::arch::x86_64::__m256d; 2],
-    ) -> (u32, [Option<f64>; 4]) {
+    ) -> (u32, [f64; 4]) {
         // SAFETY: the caller's.
-        let (events, times) = unsafe { straight_pair_contact_times_four(a, b, windows) };
-        (events, times.map(Some))
+        unsafe { straight_pair_contact_times_four(a, b, windows) }
     }
 }
 
-/// The event of two spheres on straight paths whose contact time, if any, is `time` (what
-/// [`StraightSpheres`] keeps of them): the lower id first, the window, the stamps.
+/// The event of two spheres on straight paths whose contact time is `time`, in their window
+/// (what [`StraightSpheres`] keeps of them, which asked the window already): the lower id first,
+/// the stamps.
 #[inline(always)]
-pub(super) fn straight_sphere_event_at(x: Reported, y: Reported, window: Window, time: Option<f64>) -> Option<Event> {
+pub(super) fn straight_sphere_event_at(x: Reported, y: Reported, time: f64) -> Event {
     let (a, b) = if x.body < y.body { (x, y) } else { (y, x) };
     debug_assert!(a.body != b.body, "a body reported against itself");
-    let time = time?;
-    window.contains(time).then(|| pair_event((a.body, a.stamp), (b.body, b.stamp), (time, false)))
+    pair_event((a.body, a.stamp), (b.body, b.stamp), (time, false))
 }
 
 /// Pushes `event`, if any: not `out.extend(event)`, which reserves room for it even when there is
