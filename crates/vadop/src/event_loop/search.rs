@@ -164,10 +164,13 @@ impl Candidates {
     /// Writes `candidate` into slot `len`, the buffer grown first when it holds no such slot.
     #[inline(always)]
     fn put(&mut self, len: usize, candidate: Candidate) {
-        if len == self.slots.len() {
-            self.grow();
+        match self.slots.get_mut(len) {
+            Some(slot) => *slot = candidate,
+            None => {
+                self.grow();
+                self.slots[len] = candidate;
+            }
         }
-        self.slots[len] = candidate;
     }
 
     #[inline(always)]
