@@ -164,10 +164,13 @@ impl Candidates {
     /// Writes `candidate` into slot `len`, the buffer grown first when it holds no such slot.
     #[inline(always)]
     fn put(&mut self, len: usize, candidate: Candidate) {
-        if len == self.slots.len() {
-            self.grow();
+        match self.slots.get_mut(len) {
+            Some(slot) => *slot = candidate,
+            None => {
+                self.grow();
+                self.slots[len] = candidate;
+            }
         }
-        self.slots[len] = candidate;
     }
 
     #[inline(always)]
@@ -247,20 +250,24 @@ impl<'a> Search<'a> {
             Some(rows) => {
                 // No cell across a face: one origin for all.
                 (self.near.origins[0], self.near.shifts[0], self.near.cells) = (own.position, DVec3::ZERO, 1);
-                let (mut found, mut len) = ([0; 27], 0);
-                for first in rows {
-                    let mut occupied = lookup.occupied_in_row(first);
-                    while occupied != 0 {
-                        (found[len], len) = (first as u32 + occupied.trailing_zeros(), len + 1);
-                        occupied &= occupied - 1;
-                    }
+                // The occupied cells as bits, four a row: no array of them to zero.
+                let mut bits = 0;
+                for (k, &first) in rows.iter().enumerate() {
+                    bits |= u64::from(lookup.occupied_in_row(first)) << (4 * k);
                 }
-                self.gather_cells(lookup, own.p, found[..len].iter().map(|&cell| (cell, 0)));
+                let occupied = std::iter::from_fn(|| {
+                    (bits != 0).then(|| {
+                        let bit = bits.trailing_zeros();
+                        bits &= bits - 1;
+                        (rows[bit as usize / 4] as u32 + bit % 4, 0)
+                    })
+                });
+                self.gather_cells(lookup, own.p, occupied);
             }
             None => {
-                let (mut found, mut len) = ([(0, 0); 27], 0);
-                cells.for_each_around(p, |n| self.note(lookup, &own, n, &mut found, &mut len));
-                self.gather_cells(lookup, own.p, found[..len].iter().copied());
+                let mut found = [0; 32];
+                cells.for_each_around(p, |n| self.note(lookup, &own, n, &mut found));
+                self.gather_noted(lookup, own.p, &found);
             }
         }
         self.screen_all(&own, &mut best);
@@ -301,14 +308,14 @@ impl<'a> Search<'a> {
             None => {
                 // Inline: a call per cell (about 35 instructions, the closure left out of line
                 // by the nested loops) for a mostly empty cell's bit test.
-                let (mut found, mut len) = ([(0, 0); 27], 0);
+                let mut found = [0; 32];
                 cells.for_each_new(
                     into,
                     crossing,
                     #[inline(always)]
-                    |n| self.note(lookup, &own, n, &mut found, &mut len),
+                    |n| self.note(lookup, &own, n, &mut found),
                 );
-                self.gather_cells(lookup, own.p, found[..len].iter().copied());
+                self.gather_noted(lookup, own.p, &found);
             }
         }
         self.screen_all(&own, &mut best);
@@ -386,18 +393,26 @@ impl<'a> Search<'a> {
     }
 
     /// Neighbour cell `n`, when it holds a body: its shift becomes the neighbourhood's next (with
-    /// the origin `own`'s centre less it), and the cell is noted in `found` with that shift's
-    /// place, its bodies to be gathered ([`Self::gather_cells`]) once every cell is noted.
+    /// the origin `own`'s centre less it), and the cell is noted in `found` at that shift's
+    /// place, its bodies to be gathered ([`Self::gather_noted`]) once every cell is noted.
+    /// (Indexed as the origins are, one bounds check serves both, and no count of its own.)
     #[inline(always)]
-    fn note(&mut self, lookup: Lookup, own: &Own, n: Neighbour, found: &mut [(u32, u8); 27], len: &mut usize) {
+    fn note(&mut self, lookup: Lookup, own: &Own, n: Neighbour, found: &mut [u32; 32]) {
         if !lookup.is_occupied(n.cell) {
             return;
         }
         let k = self.near.cells;
         self.near.origins[k] = own.position - n.shift;
         self.near.shifts[k] = n.shift;
+        found[k] = n.cell;
         self.near.cells += 1;
-        (found[*len], *len) = ((n.cell, k as u8), *len + 1);
+    }
+
+    /// [`Self::gather_cells`] of the cells [`Self::note`] noted, each at its shift's place.
+    #[inline(always)]
+    fn gather_noted(&mut self, lookup: Lookup, p: usize, found: &[u32; 32]) {
+        let noted = found[..self.near.cells].iter().zip(0..);
+        self.gather_cells(lookup, p, noted.map(|(&cell, k)| (cell, k)));
     }
 
     /// Lists the bodies (but `own`'s) of the cells `occupied`, each holding a body and given with
@@ -422,11 +437,16 @@ impl<'a> Search<'a> {
                         self.overlay.met = Some((q, k));
                     } else {
                         prefetch_item(states, q as usize);
-                        if len == slots.len() {
-                            candidates.grow();
-                            slots = &mut candidates.slots[..];
+                        let candidate = Candidate { earliest: 0.0, q, cell: k, moving: false };
+                        // One comparison a body: the slot's bounds check is the room's.
+                        match slots.get_mut(len) {
+                            Some(slot) => *slot = candidate,
+                            None => {
+                                candidates.grow();
+                                slots = &mut candidates.slots[..];
+                                slots[len] = candidate;
+                            }
                         }
-                        slots[len] = Candidate { earliest: 0.0, q, cell: k, moving: false };
                         len += 1;
                     }
                 }
