@@ -136,13 +136,11 @@ pub struct EventQueue {
     radix: RadixBuffers,
 }
 
-/// Below this many events (in each half, on more than one worker) the bulk part is sorted by
-/// comparisons: a radix pass costs its bins.
+/// Fewest events the bulk part's radix sort takes (in each half, on more than one worker); why,
+/// with the other bounds of the choice, at the one place it is made: [`EventQueue::set_bulk`].
 const RADIX_MIN: usize = 1024;
-/// Above this many events (32 MiB of them) more than one worker sorts the bulk part by rayon's
-/// comparison sort, in place, and no spare is kept: issue 28 holds 10^7 bodies to 300 bytes a
-/// body on two threads, and their windows' spare (0.27 events a body at 0.05 d/f, 8.6 bytes a
-/// body) would pass it; on one worker the spare is the radix sort's, as it always was.
+/// Most events more than one worker radix sorts in halves (32 MiB of them): see
+/// [`EventQueue::set_bulk`].
 const HALVES_MAX: usize = 1 << 20;
 /// Bits of the time key sorted per radix pass: 2^11 bins fit the first-level cache.
 const DIGIT_BITS: u32 = 11;
@@ -156,6 +154,13 @@ const BINS: usize = 1 << DIGIT_BITS;
 #[inline]
 fn latest_first_key(bits: u64) -> u64 {
     bits ^ (!(((bits as i64) >> 63) as u64) >> 1)
+}
+
+/// The time whose key is `key` (the key map is its own inverse): what the sort puts back in an
+/// event that held its key in place of its time.
+#[inline]
+fn time_of_key(key: u64) -> f64 {
+    f64::from_bits(latest_first_key(key))
 }
 
 /// An event's bin in the radix pass that sorts the bits from `shift` of the key it holds.
@@ -175,28 +180,28 @@ struct RadixBuffers {
 
 impl RadixBuffers {
     /// Sorts `events` ascending in `Ord` (latest first), to the same order `sort_unstable` gives
-    /// (the order is total, so there is one, and every way of sorting gives it). On one worker
-    /// one radix sort (see [`radix_sort`]). On more, two stage starts, as few as sharing it can
-    /// cost (each wakes a worker, and a dozen of them, one for each pass's count and move, were
-    /// slower by the clock than rayon's sort, which wakes one): each half of the events radix
-    /// sorted on a worker of its own, in its own half of the spare, then the sorted halves merged
-    /// into the other buffer, each worker writing one half of the output from the stretches of
-    /// the two halves that land there.
-    fn sort(&mut self, events: &mut Vec<Event>, workers: &Workers) {
-        let n = events.len();
-        let Some(&first) = events.first() else {
-            return;
-        };
-        // Sized exactly: the spare is as large as the window's events, and is kept.
-        self.spare.reserve_exact(n.saturating_sub(self.spare.len()));
-        self.spare.resize(n, first);
-        if workers.threads() == 1 {
-            if radix_sort::<true>(events, &mut self.spare) {
-                std::mem::swap(events, &mut self.spare);
-            }
+    /// (the order is total, so there is one, and every way of sorting gives it): one radix sort
+    /// (see [`radix_sort`]).
+    fn sort_whole(&mut self, events: &mut Vec<Event>) {
+        if !self.fit_spare(events) {
             return;
         }
-        let half = n / 2;
+        if radix_sort::<true>(events, &mut self.spare) {
+            std::mem::swap(events, &mut self.spare);
+        }
+    }
+
+    /// [`Self::sort_whole`]'s order, on more than one worker in two stage starts, as few as
+    /// sharing it can cost (each wakes a worker, and a dozen of them, one for each pass's count
+    /// and move, were slower by the clock than rayon's sort, which wakes one): each half of the
+    /// events radix sorted on a worker of its own, in its own half of the spare, then the sorted
+    /// halves merged into the other buffer, each worker writing one half of the output from the
+    /// stretches of the two halves that land there.
+    fn sort_halves(&mut self, events: &mut Vec<Event>, workers: &Workers) {
+        if !self.fit_spare(events) {
+            return;
+        }
+        let half = events.len() / 2;
         let (events_a, events_b) = events.split_at_mut(half);
         let (spare_a, spare_b) = self.spare.split_at_mut(half);
         let (moved_a, moved_b) =
@@ -218,6 +223,17 @@ impl RadixBuffers {
         if !moved_a {
             std::mem::swap(events, &mut self.spare);
         }
+    }
+
+    /// Sizes the spare to `events`, exactly: it is as large as the window's events, and is kept.
+    /// False when there is nothing to sort.
+    fn fit_spare(&mut self, events: &[Event]) -> bool {
+        let Some(&first) = events.first() else {
+            return false;
+        };
+        self.spare.reserve_exact(events.len().saturating_sub(self.spare.len()));
+        self.spare.resize(events.len(), first);
+        true
     }
 
     fn memory_bytes(&self) -> usize {
@@ -289,7 +305,7 @@ fn radix_sort<const TIMES_BACK: bool>(events: &mut [Event], spare: &mut [Event])
     for k in 0..n {
         let key = sorted[k].time.to_bits();
         if TIMES_BACK {
-            sorted[k].time = f64::from_bits(latest_first_key(key));
+            sorted[k].time = time_of_key(key);
         }
         if key != run_key {
             if k - run > 1 {
@@ -336,7 +352,7 @@ fn merge_split(a: &[Event], b: &[Event], out: usize) -> usize {
 /// keys compare as integers, cheaper than the times' `total_cmp`, and each event's time is put
 /// back as it is written, not in a walk of its own.
 fn merge(a: &[Event], b: &[Event], out: &mut [Event]) {
-    let with_time = |event: &Event| Event { time: f64::from_bits(latest_first_key(event.time.to_bits())), ..*event };
+    let with_time = |event: &Event| Event { time: time_of_key(event.time.to_bits()), ..*event };
     let (mut i, mut j) = (0, 0);
     while i < a.len() && j < b.len() {
         let (x, y) = (&a[i], &b[j]);
@@ -368,16 +384,25 @@ impl EventQueue {
         self.bulk = events;
         // Ascending in `Ord`, which is reversed: the earliest event ends up last. The order is
         // total, so no two events are equal unless they are the same prediction: unstable is
-        // fine, and every way of sorting gives the same order. The radix sort, on one worker
-        // whole and on more in two halves merged (see `RadixBuffers::sort`): at n = 10^5, 5 d/f,
-        // 8.1 M instructions a frame on one thread, 9.7 M on two, shared (rayon's sort read
-        // 27.3 M, 15.3 M of them on the pipeline's thread), with two stage starts where sharing
-        // each radix pass took a dozen and was slower by the clock (BENCHMARKS.md, twenty-fifth
-        // and twenty-sixth sessions). Comparisons below `RADIX_MIN` events (a half's on more
-        // than one worker), and on more than one worker above `HALVES_MAX`.
-        let n = self.bulk.len();
-        if (workers.threads() == 1 && n >= RADIX_MIN) || (2 * RADIX_MIN..=HALVES_MAX).contains(&n) {
-            self.radix.sort(&mut self.bulk, workers);
+        // fine, and every way of sorting gives the same order. Which sort, decided here alone
+        // (BENCHMARKS.md, twenty-fifth and twenty-sixth sessions, at n = 10^5, 5 d/f):
+        // - on one worker, from `RADIX_MIN` events, one radix sort: 8.1 M instructions a frame
+        //   where rayon's sort read 27.3 M;
+        // - on more, from `RADIX_MIN` events a half up to `HALVES_MAX`, two halves radix sorted
+        //   side by side and merged: 9.7 M, shared (rayon's sort 15.3 M on the pipeline's thread
+        //   alone), in two stage starts where sharing each radix pass took a dozen and was slower
+        //   by the clock;
+        // - below `RADIX_MIN` (a half's), comparisons: a radix pass costs its bins whatever the
+        //   number of events;
+        // - on more than one worker above `HALVES_MAX`, rayon's comparison sort, in place, and no
+        //   spare kept: issue 28 holds 10^7 bodies to 300 bytes a body on two threads, and their
+        //   windows' spare (0.27 events a body at 0.05 d/f, 8.6 bytes a body) would pass it; on
+        //   one worker the spare is the radix sort's, as it always was.
+        let (n, one_worker) = (self.bulk.len(), workers.threads() == 1);
+        if one_worker && n >= RADIX_MIN {
+            self.radix.sort_whole(&mut self.bulk);
+        } else if !one_worker && (2 * RADIX_MIN..=HALVES_MAX).contains(&n) {
+            self.radix.sort_halves(&mut self.bulk, workers);
         } else {
             if n > HALVES_MAX {
                 self.radix.spare = Vec::new();
@@ -617,7 +642,10 @@ mod tests {
             };
             for threads in [1, 2, 3] {
                 let mut sorted = events.clone();
-                radix.sort(&mut sorted, &Workers::new(threads));
+                match threads {
+                    1 => radix.sort_whole(&mut sorted),
+                    _ => radix.sort_halves(&mut sorted, &Workers::new(threads)),
+                }
                 assert_eq!(bits(&sorted), bits(&expected), "case {case}, {n} events, {threads} workers");
             }
         }
