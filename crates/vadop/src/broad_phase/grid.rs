@@ -748,13 +748,18 @@ impl BroadPhase for Grid {
         proxies: Proxies,
         workers: &Workers,
         screen: &S,
-        predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send,
+        predict: impl Fn(Reported, Reported, S::Kept, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64 {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx") {
             // SAFETY: the processor has AVX, and the sweep hands on only its own pieces.
-            return self.sweep(workers, predict, out, |reporting| unsafe { Screened::new(reporting, screen) });
+            return self.sweep(
+                workers,
+                |x, y, _, kept, found| predict(x, y, kept, found),
+                out,
+                |reporting| unsafe { Screened::new(reporting, screen) },
+            );
         }
         self.find_pairs(proxies, workers, screened_one_by_one(screen, predict), out)
     }

@@ -56,16 +56,17 @@ pub trait BroadPhase: Sync {
         out: &mut Vec<T>,
     ) -> u64;
 
-    /// [`Self::find_pairs`] with `predict` asked only of the candidates `screen` neither clears
-    /// nor finds without an event in their window (the others counted all the same), with what
-    /// [`PairScreen::kept`] makes of each. A broad phase that can ask the screen of several
-    /// candidates at once does ([`PairScreen::kept_four_avx`]).
+    /// [`Self::find_pairs`] with `predict(a, b, kept, out)` asked only of the candidates `screen`
+    /// neither clears nor finds without an event in their window (the others counted all the
+    /// same), `kept` being what [`PairScreen::kept`] makes of each: the window is the screen's to
+    /// ask, not `predict`'s. A broad phase that can ask the screen of several candidates at once
+    /// does ([`PairScreen::kept_four_avx`]).
     fn find_pairs_screened<T: Send, S: PairScreen>(
         &mut self,
         proxies: Proxies,
         workers: &Workers,
         screen: &S,
-        predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send,
+        predict: impl Fn(Reported, Reported, S::Kept, &mut Vec<T>) + Sync + Send,
         out: &mut Vec<T>,
     ) -> u64 {
         self.find_pairs(proxies, workers, screened_one_by_one(screen, predict), out)
@@ -141,14 +142,14 @@ pub trait PairScreen: Sync {
 #[inline(always)]
 fn screened_one_by_one<'a, T, S: PairScreen>(
     screen: &'a S,
-    predict: impl Fn(Reported, Reported, Window, S::Kept, &mut Vec<T>) + Sync + Send + 'a,
+    predict: impl Fn(Reported, Reported, S::Kept, &mut Vec<T>) + Sync + Send + 'a,
 ) -> impl Fn(Reported, Reported, Window, &mut Vec<T>) + Sync + Send + 'a {
     move |x, y, window, out| {
         if screen.clears(x.state, y.state) {
             return;
         }
         if let Some(kept) = screen.kept(x.state, y.state, window) {
-            predict(x, y, window, kept, out);
+            predict(x, y, kept, out);
         }
     }
 }

@@ -373,7 +373,7 @@ impl<B: BroadPhase> Pipeline<B> {
                     view,
                     workers,
                     &StraightSpheres,
-                    |a, b, _, time, out| out.push(straight_sphere_event_at(a, b, time)),
+                    |a, b, time, out| out.push(straight_sphere_event_at(a, b, time)),
                     found,
                 )
             } else {
