@@ -45,6 +45,14 @@ pub const APPROACH_TOLERANCE: f64 = 1e-12;
 /// A relative velocity within this fraction of the bodies' own speeds is rounding noise, not an
 /// approach: without this, a pair brought to rest against each other would keep "colliding" on
 /// rounding residues until they underflow.
+///
+/// The rule (`approach_time_by`) holds only where the true velocities have |vb - va| <=
+/// 1.0001e-12 (|va| + |vb|), the bound every proof that a pair may skip it starts from (the
+/// screens of `moving_pair_contact_time`'s callers, and [`straight_pair_contact_times_four`]'s
+/// lanes): it is asked of the velocities scaled by a power of two, exactly, their largest
+/// component in [1, 2) (a component scaled below 2^-1022 loses at most 2^-1074, far below
+/// 10^-12 of a sum of lengths of at least 1), and its three lengths are each a few roundings,
+/// well under 10^-4 relative, from the true ones.
 pub const NOISE_VELOCITY: f64 = 1e-12;
 
 /// Time `tau >= 0` after the reference instant at which two spheres first touch while
@@ -481,11 +489,12 @@ pub unsafe fn straight_pair_contact_times_four(
     let normal = |x| and(less_or_equal(one(f64::MIN_POSITIVE), x), less(x, one(f64::INFINITY)));
     let exact = and(normal(ratio), _mm256_or_pd(normal(magnitude(tau)), _mm256_cmp_pd::<_CMP_EQ_OQ>(tau, zero)));
     // `approach_time_by`'s check of the velocities, scaled by the larger's largest component,
-    // asked only where a found lane's relative velocity is not clearly above noise: with the
-    // relative velocity's largest component at least `speed_power`, a normal number, and every
-    // component of both velocities below `2^36 speed_power`, the scaled difference's length is
-    // at least about 2^-35 and the scaled speeds' sum below 4 sqrt(3), whose 10^-12 is below
-    // 2^-37: no noise (a NaN in a velocity makes the check's lengths NaN, no noise either).
+    // asked only where a found lane's relative velocity is not clearly above the bound the rule
+    // can hold under (see [`NOISE_VELOCITY`]): with the relative velocity's largest component at
+    // least `speed_power`, a normal number, and every component of both velocities below
+    // `2^36 speed_power`, |vb - va| is about `speed_power` or more and 1.0001e-12 (|va| + |vb|)
+    // below 1.0001e-12 2 sqrt(3) 2^36 `speed_power`, under a quarter of it: no noise (a NaN in a
+    // velocity makes the check's lengths NaN, no noise either).
     let [velocity_a, velocity_b] = velocities;
     let largest = |u: [__m256d; 3]| _mm256_max_pd(_mm256_max_pd(magnitude(u[0]), magnitude(u[1])), magnitude(u[2]));
     let clearly_moving = and(
