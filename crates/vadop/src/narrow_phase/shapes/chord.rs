@@ -37,6 +37,14 @@ pub(super) struct Moving<'s, 'a> {
 /// Relative allowance for the rounding of an evaluated angular velocity.
 const OMEGA_ROUNDING: f64 = 1e-12;
 
+/// What a hold over `[0, s]` allows for rounding: the probe's `slack`, [`SLACK`] of the way its
+/// first-order part moves at `rate`, and [`OMEGA_ROUNDING`] of the way its points move at `turned`
+/// (each evaluated angular speed times the lever it turns).
+#[inline]
+fn rounding(slack: f64, rate: f64, turned: f64, s: f64) -> f64 {
+    slack + SLACK * s * rate + OMEGA_ROUNDING * turned * s
+}
+
 /// Far ends of the chord tried per certificate.
 const TRIALS: usize = 4;
 
@@ -73,12 +81,12 @@ pub(super) fn chord_hold(
             + (other.turning.acceleration + w_other * w_other) * (reach.length() + s * drift)
             + 2.0 * w_other * drift
     };
-    let rounding = |s: f64| {
-        slack + SLACK * s * heading.length() + OMEGA_ROUNDING * (w_own * lever.length() + w_other * reach.length()) * s
-    };
+    let turned = w_own * lever.length() + w_other * reach.length();
     // Along [0, s] the path is within `curvature(s) t² / 2` of the line at time t, and σ on the
     // line below its chord: their sum is convex in t, at most its larger end.
-    let bound = |s: f64, far: f64| near.max(far + 0.5 * curvature(s) * s * s) + own_depth + rounding(s);
+    let bound = |s: f64, far: f64| {
+        near.max(far + 0.5 * curvature(s) * s * s) + own_depth + rounding(slack, heading.length(), turned, s)
+    };
     let room = level - bound(0.0, near);
     if !(room > 0.0) {
         return 0.0;
@@ -130,9 +138,8 @@ pub(super) fn sliding_hold(
             + 2.0 * w_other * speed
     };
     let speed = heading_own.length() + heading.length();
-    let rounding =
-        |s: f64| slack + SLACK * s * speed + OMEGA_ROUNDING * (w_own * lever.length() + w_other * reach.length()) * s;
-    let bound = |s: f64, far: f64| near.max(far + 0.5 * curvature(s) * s * s) + rounding(s);
+    let turned = w_own * lever.length() + w_other * reach.length();
+    let bound = |s: f64, far: f64| near.max(far + 0.5 * curvature(s) * s * s) + rounding(slack, speed, turned, s);
     let room = level - bound(0.0, near);
     if !(room > 0.0) {
         return 0.0;
@@ -199,12 +206,10 @@ fn turned_axis_hold(m: DVec3, own: f64, with: &Frame, other: &Moving, level: f64
             + radius * (with.turning.acceleration + other.turning.acceleration + (w_with + w_other).powi(2))
     };
     let rate = along_rate.abs() + turn.length() * radius;
-    let rounding = |s: f64| {
-        slack + SLACK * s * rate + OMEGA_ROUNDING * (w_with * offset.length() + (w_with + w_other) * radius) * s
-    };
+    let turned = w_with * offset.length() + (w_with + w_other) * radius;
     // Concave in t over [0, s] (the gap on the line above its chord, less the rest): at least
     // its smaller end.
-    let bound = |s: f64, far: f64| near.min(far - 0.5 * curvature(s) * s * s) - own - rounding(s);
+    let bound = |s: f64, far: f64| near.min(far - 0.5 * curvature(s) * s * s) - own - rounding(slack, rate, turned, s);
     let room = bound(0.0, near) - level;
     if !(room > 0.0) {
         return 0.0;
