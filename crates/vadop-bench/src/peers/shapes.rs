@@ -24,13 +24,11 @@
 //! frame the centre of mass moves in a straight line and the body turns about it at the constant
 //! angular velocity.
 
-use super::trajectory::{pair_contacts, write_contacts, PACKING};
-use crate::common::io_error;
+use super::trajectory::{pair_contacts, ExportFiles, PACKING};
 use crate::CliResult;
 use glam::{DQuat, DVec3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::io::{BufWriter, Write as _};
 use std::path::Path;
 use vadop::scene::FRAMES_PER_SECOND;
 use vadop::shape::{Shape, ShapeGeometry};
@@ -176,9 +174,7 @@ fn random_direction(rng: &mut ChaCha8Rng) -> DVec3 {
 pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> CliResult<()> {
     let (mut world, kinds) = world(n, speed, frames, if brute { Method::Brute } else { Method::Auto })?;
     let dt = 1.0 / FRAMES_PER_SECOND;
-    let path = dir.join("trajectory.bin");
-    let file = std::fs::File::create(&path).map_err(|e| io_error(&path, e))?;
-    let mut file = BufWriter::new(file);
+    let mut files = ExportFiles::create(dir)?;
     let mut bytes: Vec<u8> = MAGIC.to_vec();
     let bounds = world.bounds();
     put_u64s(&mut bytes, &[n as u64, frames]);
@@ -190,7 +186,7 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
         write_shape(&mut bytes, geometry)?;
     }
     bytes.extend(kinds.iter().flat_map(|k| k.to_le_bytes()));
-    file.write_all(&bytes).map_err(|e| io_error(&path, e))?;
+    files.write(&bytes)?;
     let mut contacts = Vec::new();
     for frame in 0..=frames {
         let mut bytes = Vec::with_capacity(n * 13 * 8);
@@ -201,7 +197,7 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
             put_f64s(&mut bytes, &body.velocity.to_array());
             put_f64s(&mut bytes, &body.angular_velocity.to_array());
         }
-        file.write_all(&bytes).map_err(|e| io_error(&path, e))?;
+        files.write(&bytes)?;
         if frame == frames {
             break;
         }
@@ -211,10 +207,7 @@ pub fn export(n: usize, speed: f64, frames: u64, brute: bool, dir: &Path) -> Cli
         }
         contacts.extend(pair_contacts(frame, step));
     }
-    file.flush().map_err(|e| io_error(&path, e))?;
-    contacts.sort_unstable();
-    contacts.dedup();
-    write_contacts(&dir.join("reference.bin"), &contacts)
+    files.finish(contacts)
 }
 
 /// One entry of the file's shape table.
@@ -256,19 +249,14 @@ fn put_f64s(bytes: &mut Vec<u8>, values: &[f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::peers::trajectory::read_contacts;
+    use crate::peers::trajectory::exported;
 
     /// Reads the file the way the peers do and checks that every frame is the motion the peers
     /// assume: the centre of mass moves in a straight line at its velocity and the body turns about
     /// it at its constant angular velocity, from each state to the next; and no body leaves the box.
     #[test]
     fn trajectory_file_holds_straight_paths_and_steady_spins() {
-        let dir = std::env::temp_dir().join(format!("vadop-peers-shapes-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        export(60, 5.0, 4, true, &dir).unwrap();
-        let bytes = std::fs::read(dir.join("trajectory.bin")).unwrap();
-        let contacts = read_contacts(&dir.join("reference.bin")).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
+        let (bytes, contacts) = exported("vadop-peers-shapes", |dir| export(60, 5.0, 4, true, dir));
         let at = std::cell::Cell::new(8);
         let take = |count: usize| {
             at.set(at.get() + count);

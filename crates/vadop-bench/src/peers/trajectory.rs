@@ -12,7 +12,7 @@ use crate::common::io_error;
 use crate::markdown::peak_memory_mib;
 use crate::CliResult;
 use std::io::{BufReader, BufWriter, Read as _, Write as _};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 use vadop::scene::{PaperScene, FRAMES_PER_SECOND};
 use vadop::{Contact, Method, Mode, Touched, World, WorldConfig};
@@ -69,16 +69,14 @@ pub fn export_scene(scene: &vadop::scene::Scene, frames: u64, brute: bool, dir: 
     let n = scene.spheres.len();
     let dt = 1.0 / FRAMES_PER_SECOND;
     let mut contacts = Vec::new();
-    let path = dir.join("trajectory.bin");
-    let file = std::fs::File::create(&path).map_err(|e| io_error(&path, e))?;
-    let mut file = BufWriter::new(file);
+    let mut files = ExportFiles::create(dir)?;
     let header = [n as u64, frames];
     let floats = [dt, scene.spheres[0].radius];
     let corners = [scene.bounds.min.to_array(), scene.bounds.max.to_array()];
     let mut bytes: Vec<u8> = MAGIC.to_vec();
     bytes.extend(header.iter().flat_map(|v| v.to_le_bytes()));
     bytes.extend(floats.iter().chain(corners.iter().flatten()).flat_map(|v| v.to_le_bytes()));
-    file.write_all(&bytes).map_err(|e| io_error(&path, e))?;
+    files.write(&bytes)?;
     for frame in 0..frames {
         let mut bytes = Vec::with_capacity(n * 72);
         let start: Vec<_> = world.spheres().map(|(_, s)| s).collect();
@@ -106,12 +104,38 @@ pub fn export_scene(scene: &vadop::scene::Scene, frames: u64, brute: bool, dir: 
             bytes.extend(body.to_le_bytes());
             bytes.extend([tau, p.x, p.y, p.z].iter().flat_map(|v| v.to_le_bytes()));
         }
-        file.write_all(&bytes).map_err(|e| io_error(&path, e))?;
+        files.write(&bytes)?;
     }
-    file.flush().map_err(|e| io_error(&path, e))?;
-    contacts.sort_unstable();
-    contacts.dedup();
-    write_contacts(&dir.join("reference.bin"), &contacts)
+    files.finish(contacts)
+}
+
+/// An export child job's files in its folder: `trajectory.bin`, written as the job steps the
+/// scene, and `reference.bin`, the pair contacts found, written at the end.
+pub(super) struct ExportFiles {
+    dir: PathBuf,
+    path: PathBuf,
+    trajectory: BufWriter<std::fs::File>,
+}
+
+impl ExportFiles {
+    pub(super) fn create(dir: &Path) -> CliResult<ExportFiles> {
+        let path = dir.join("trajectory.bin");
+        let file = std::fs::File::create(&path).map_err(|e| io_error(&path, e))?;
+        Ok(ExportFiles { dir: dir.to_path_buf(), path, trajectory: BufWriter::new(file) })
+    }
+
+    /// Appends `bytes` to the trajectory file.
+    pub(super) fn write(&mut self, bytes: &[u8]) -> CliResult<()> {
+        self.trajectory.write_all(bytes).map_err(|e| io_error(&self.path, e))
+    }
+
+    /// Flushes the trajectory file and writes the reference file: `contacts` sorted, each once.
+    pub(super) fn finish(mut self, mut contacts: Vec<[u32; 3]>) -> CliResult<()> {
+        self.trajectory.flush().map_err(|e| io_error(&self.path, e))?;
+        contacts.sort_unstable();
+        contacts.dedup();
+        write_contacts(&self.dir.join("reference.bin"), &contacts)
+    }
 }
 
 /// The sphere scene's trajectory file, read one frame at a time into [`Frame`] buffers that are
@@ -236,6 +260,19 @@ pub fn write_contacts(path: &Path, contacts: &[[u32; 3]]) -> CliResult<()> {
     std::fs::write(path, bytes).map_err(|e| io_error(path, e))
 }
 
+/// The trajectory file's bytes and the reference contacts that `export` writes into a folder of
+/// its own, `name` and the process id in the system's temporary folder, removed after.
+#[cfg(test)]
+pub(super) fn exported(name: &str, export: impl FnOnce(&Path) -> CliResult<()>) -> (Vec<u8>, Vec<[u32; 3]>) {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    export(&dir).unwrap();
+    let bytes = std::fs::read(dir.join("trajectory.bin")).unwrap();
+    let contacts = read_contacts(&dir.join("reference.bin")).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    (bytes, contacts)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -254,13 +291,8 @@ mod tests {
     /// the start to the first knot.
     #[test]
     fn trajectory_file_describes_the_stepped_paths() {
-        let dir = std::env::temp_dir().join(format!("vadop-peers-export-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
         // 60 bodies at 5 diameters per frame in a box about 8.6 wide: bounces in every frame.
-        export(60, 5.0, 4, true, &dir).unwrap();
-        let bytes = std::fs::read(dir.join("trajectory.bin")).unwrap();
-        let contacts = read_contacts(&dir.join("reference.bin")).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
+        let (bytes, contacts) = exported("vadop-peers-export", |dir| export(60, 5.0, 4, true, dir));
         let at = std::cell::Cell::new(8);
         let word = || {
             at.set(at.get() + 8);
