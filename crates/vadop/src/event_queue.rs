@@ -386,12 +386,11 @@ impl EventQueue {
         // total, so no two events are equal unless they are the same prediction: unstable is
         // fine, and every way of sorting gives the same order. Which sort, decided here alone
         // (BENCHMARKS.md, twenty-fifth and twenty-sixth sessions, at n = 10^5, 5 d/f):
-        // - on one worker, from `RADIX_MIN` events, one radix sort: 8.1 M instructions a frame
-        //   where rayon's sort read 27.3 M;
+        // - on one worker, from `RADIX_MIN` events, one radix sort: 8.1 M instructions a frame;
         // - on more, from `RADIX_MIN` events a half up to `HALVES_MAX`, two halves radix sorted
-        //   side by side and merged: 9.7 M, shared (rayon's sort 15.3 M on the pipeline's thread
-        //   alone), in two stage starts where sharing each radix pass took a dozen and was slower
-        //   by the clock;
+        //   side by side and merged: 9.7 M on two, shared (rayon's sort read 27.3 M, 15.3 M of
+        //   them on the pipeline's thread), in two stage starts where sharing each radix pass
+        //   took a dozen and was slower by the clock;
         // - below `RADIX_MIN` (a half's), comparisons: a radix pass costs its bins whatever the
         //   number of events;
         // - on more than one worker above `HALVES_MAX`, rayon's comparison sort, in place, and no
