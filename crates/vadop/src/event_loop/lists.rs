@@ -89,6 +89,8 @@ pub(super) struct Lists {
     pub images: [DVec3; 27],
     /// Per body: its shell's centre, and its radius (read together when lists are built).
     shells: Vec<Shell>,
+    /// The radii the shells were placed with (see [`Radii`]).
+    radii: Radii,
     /// Per body, `stride` entries: the count, then the list.
     blocks: Vec<u32>,
     stride: usize,
@@ -99,6 +101,17 @@ pub(super) struct Lists {
     /// Scratch: the old list of the body whose list is built anew in place (see
     /// [`Lists::rebuild`] with `in_place`).
     old: Vec<u32>,
+}
+
+/// The radii the shells were placed with: none yet, all the one (bit for bit), or several. While
+/// all are one, every pair a list built anew meets has the same reach, one float worked out once
+/// a list (see [`Lists::pair_around`]), where the walk of the cells around worked it out again for
+/// each of the fifty-odd bodies it meets, from the two radii: the same float either way.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Radii {
+    None,
+    All(f64),
+    Several,
 }
 
 /// A body's shell: its centre, and its radius as `w`. Aligned to its size, so that one is never
@@ -135,6 +148,7 @@ impl Lists {
             slack: ROUNDINGS * f64::EPSILON * scale,
             images,
             shells: Vec::new(),
+            radii: Radii::None,
             blocks: Vec::new(),
             stride: block + 1,
             seen: Vec::new(),
@@ -217,51 +231,71 @@ impl Lists {
         (own.truncate() - shift).extend(own.w + 2.0 * self.shell)
     }
 
-    /// True when body `q` is within the lists' reach of the shell whose [`Self::origin`] (for
-    /// `q`'s image) is `origin`.
+    /// The lists' reach, squared, of a shell whose [`Self::origin`]'s radius is `w` and a shell of
+    /// radius `other`.
     #[inline(always)]
-    fn within(&self, origin: DVec4, q: usize) -> bool {
-        let other = self.shells[q].0;
-        let reach = (origin.w + other.w) * (1.0 + REACH_SLACK) + self.slack;
+    fn reach2(slack: f64, w: f64, other: f64) -> f64 {
+        let reach = (w + other) * (1.0 + REACH_SLACK) + slack;
+        reach * reach
+    }
+
+    /// True when body `q` (of `shells`) is within the lists' reach of the shell whose
+    /// [`Self::origin`] (for `q`'s image) is `origin`, `reach2` its reach squared from `q`'s radius
+    /// (see [`Self::reach2`]).
+    #[inline(always)]
+    fn within(shells: &[Shell], origin: DVec4, q: usize, reach2: impl Fn(f64) -> f64) -> bool {
+        let other = shells[q].0;
         let (x, y, z) = (other.x - origin.x, other.y - origin.y, other.z - origin.z);
-        x * x + y * y + z * z < reach * reach
+        x * x + y * y + z * z < reach2(other.w)
     }
 
     /// Body `i`'s shell: its centre at `t`, and its radius.
     fn place(&mut self, bodies: &Bodies, i: usize, t: f64) {
-        self.shells[i] = Shell(bodies.position_at(i, t).extend(bodies.radius(i)));
+        let radius = bodies.radius(i);
+        self.shells[i] = Shell(bodies.position_at(i, t).extend(radius));
+        self.radii = match self.radii {
+            Radii::None => Radii::All(radius),
+            Radii::All(all) if all.to_bits() == radius.to_bits() => Radii::All(all),
+            _ => Radii::Several,
+        };
     }
 
     /// Lists the pairs of body `i` and the bodies of the cell whose first body is `first`, seen
     /// through `image` (see [`Self::images`]), that are within reach: those of higher id only
     /// when `higher`. With `in_place`, a body of `i`'s old list keeps its entry for `i` (see
-    /// [`Self::rebuild`]). False when a block overflowed.
+    /// [`Self::rebuild`]). `reach2` is the reach squared from a body's radius (see
+    /// [`Self::within`]). False when a block overflowed.
     #[inline(always)]
     fn pair_with_cell(
         &mut self,
         cells: &Cells,
         i: usize,
         (first, image): (u32, u32),
-        higher: bool,
-        in_place: bool,
+        (higher, in_place): (bool, bool),
+        reach2: impl Fn(f64) -> f64,
     ) -> bool {
         if first == NONE {
             return true;
         }
         let origin = self.origin(self.shells[i].0, self.images[image as usize]);
+        // The arrays as slices, borrowed apart: their places and lengths then stay in registers
+        // along the walk, where read through `self` they were read again after every write.
+        let (shells, blocks, seen, stride, built) =
+            (&self.shells[..], &mut self.blocks[..], &mut self.seen[..], self.stride, self.built);
+        let lookup = cells.lookup();
         let mut fits = true;
         let mut q = first;
         while q != NONE {
             let k = q as usize;
-            if (if higher { k > i } else { k != i }) && self.within(origin, k) {
-                fits &= self.push(i, q | (image << IMAGE_BITS));
-                if in_place && self.seen[k] == self.built {
-                    self.seen[k] |= FOUND_AGAIN;
+            if (if higher { k > i } else { k != i }) && Self::within(shells, origin, k, &reach2) {
+                fits &= push(blocks, stride, i, q | (image << IMAGE_BITS));
+                if in_place && seen[k] == built {
+                    seen[k] |= FOUND_AGAIN;
                 } else {
-                    fits &= self.push(k, i as u32 | ((26 - image) << IMAGE_BITS));
+                    fits &= push(blocks, stride, k, i as u32 | ((26 - image) << IMAGE_BITS));
                 }
             }
-            q = cells.after(q);
+            q = lookup.after(q);
         }
         fits
     }
@@ -269,9 +303,25 @@ impl Lists {
     /// Lists the pairs of body `i` and the bodies around it within reach (of higher id only when
     /// `higher`); false when a block overflowed. The cells of its neighbourhood that lie out of
     /// reach of its shell, whatever the radii (most of the corners and some edges: a quarter of
-    /// the 27 cells' bodies), are not read.
+    /// the 27 cells' bodies), are not read. While every shell has one radius (see [`Radii`]),
+    /// the reach is worked out once, not for each body met.
     #[inline(always)]
     fn pair_around(&mut self, cells: &Cells, i: usize, higher: bool, in_place: bool) -> bool {
+        let (w, slack) = (self.shells[i].0.w + 2.0 * self.shell, self.slack);
+        match self.radii {
+            Radii::All(radius) => {
+                let reach2 = Self::reach2(slack, w, radius);
+                self.pair_cells(cells, i, (higher, in_place), move |_| reach2)
+            }
+            Radii::None | Radii::Several => {
+                self.pair_cells(cells, i, (higher, in_place), move |other| Self::reach2(slack, w, other))
+            }
+        }
+    }
+
+    /// [`Self::pair_around`] with the reach squared from a body's radius `reach2`.
+    #[inline(always)]
+    fn pair_cells(&mut self, cells: &Cells, i: usize, ways: (bool, bool), reach2: impl Fn(f64) -> f64) -> bool {
         let own = self.shells[i].0;
         let reach = (own.w + 2.0 * self.shell + cells.max_radius()) * (1.0 + REACH_SLACK) + self.slack;
         // Twice the rounding [`Self::within`] allows for: the gaps' own, and the cells'.
@@ -287,25 +337,12 @@ impl Lists {
                 for x in &xs.0[..xs.1] {
                     if gap2 + x.gap2 < out_of_reach {
                         let cell = (cells.first(x.part + y.part + z.part), x.sign + 3 * y.sign + 9 * z.sign);
-                        fits &= self.pair_with_cell(cells, i, cell, higher, in_place);
+                        fits &= self.pair_with_cell(cells, i, cell, ways, &reach2);
                     }
                 }
             }
         }
         fits
-    }
-
-    /// Appends `entry` to body `i`'s list; false when its block is full.
-    #[inline(always)]
-    fn push(&mut self, i: usize, entry: u32) -> bool {
-        let at = i * self.stride;
-        let count = self.blocks[at] as usize;
-        if count + 1 == self.stride {
-            return false;
-        }
-        self.blocks[at + 1 + count] = entry;
-        self.blocks[at] += 1;
-        true
     }
 
     /// Takes body `i` off body `q`'s list.
@@ -406,6 +443,20 @@ impl Lists {
     }
 }
 
+/// Appends `entry` to body `i`'s list, of `blocks` of `stride` entries; false when its block is
+/// full.
+#[inline(always)]
+fn push(blocks: &mut [u32], stride: usize, i: usize, entry: u32) -> bool {
+    let at = i * stride;
+    let count = blocks[at] as usize;
+    if count + 1 == stride {
+        return false;
+    }
+    blocks[at + 1 + count] = entry;
+    blocks[at] += 1;
+    true
+}
+
 /// A list entry's body and image.
 #[inline(always)]
 pub(super) fn split(entry: u32) -> (usize, usize) {
@@ -425,7 +476,8 @@ impl Lists {
             let mut expected: Vec<u32> = Vec::new();
             for &q in listed.iter().filter(|&&q| q != i) {
                 for image in (0..27).filter(|&image| real(image)) {
-                    if self.within(self.origin(self.shells[i].0, self.images[image]), q) {
+                    let origin = self.origin(self.shells[i].0, self.images[image]);
+                    if Self::within(&self.shells, origin, q, |other| Self::reach2(self.slack, origin.w, other)) {
                         expected.push(q as u32 | ((image as u32) << IMAGE_BITS));
                     }
                 }

@@ -404,7 +404,8 @@ mod tests {
     /// (contacts, virial and states, frame after frame) and its lists stay complete: sparse and
     /// dense gases in periodic, walled and mixed boxes, elastic and not, frames of changing
     /// lengths, a few bodies thirty times faster than the rest, which leave their shells and cross
-    /// periodic faces many times a frame, and lists outgrowing their blocks.
+    /// periodic faces many times a frame, bodies of one radius and of two, and lists outgrowing
+    /// their blocks.
     #[test]
     fn neighbour_lists_give_brute_force_s_bits() {
         let cases =
@@ -413,6 +414,11 @@ mod tests {
             let mut scene = gas(600, packing, periodic, 20 + k as u64);
             for sphere in scene.spheres.iter_mut().step_by(37) {
                 sphere.velocity *= 30.0;
+            }
+            // Two radii in every other case: the lists' reach then comes from each pair's radii
+            // (`lists::Radii`), in the others from the one radius of them all.
+            for sphere in scene.spheres.iter_mut().step_by(5).filter(|_| k % 2 == 1) {
+                sphere.radius *= 0.8;
             }
             let config = WorldConfig { restitution, threads: Some(1), ..WorldConfig::default() };
             let mut listed = scene.world(config).unwrap();
