@@ -119,6 +119,26 @@ impl Workers {
         a.par_chunks_mut(size).zip(b.par_chunks_mut(size)).enumerate().for_each(|(k, (x, y))| f(k * size, x, y));
     }
 
+    /// `f(offset, share, own)` on each thread's contiguous share of `v` (`v.len() / threads`
+    /// rounded up), each with its own stretch `own` of `scratch` (`scratch.len() / threads`
+    /// items, at least one): for work each thread does into state of its own, which the caller
+    /// keeps from call to call, so no part list is allocated for it.
+    pub fn shares_mut<A: Send, B: Send>(
+        &self,
+        v: &mut [A],
+        scratch: &mut [B],
+        f: impl Fn(usize, &mut [A], &mut [B]) + Sync + Send,
+    ) {
+        if self.threads == 1 {
+            return f(0, v, scratch);
+        }
+        let (size, own) = (v.len().div_ceil(self.threads).max(1), (scratch.len() / self.threads).max(1));
+        v.par_chunks_mut(size)
+            .zip(scratch.par_chunks_mut(own))
+            .enumerate()
+            .for_each(|(k, (share, own))| f(k * size, share, own));
+    }
+
     /// `f(k, part)` for every part, in parallel with more than one thread: for work already cut
     /// into disjoint pieces (see [`split_at_points`]).
     pub fn for_each_part<S: Send>(&self, parts: Vec<S>, f: impl Fn(usize, S) + Sync + Send) {
@@ -211,6 +231,20 @@ mod tests {
         Workers::new(3).extend_ranges(len, &mut shared, fill);
         assert!(shared.len() > MOVED_TOGETHER);
         assert_eq!(shared, serial);
+    }
+
+    #[test]
+    fn shares_mut_example() {
+        let (mut v, mut sums) = ([1, 2, 3, 4, 5], [0; 4]);
+        Workers::new(2).shares_mut(&mut v, &mut sums, |offset, share, own| {
+            own[0] = offset;
+            own[1] = share.iter().sum();
+        });
+        // Shares of 3 and 2, each with two items of its own.
+        assert_eq!(sums, [0, 6, 3, 9]);
+        let mut all = [0; 2];
+        Workers::serial().shares_mut(&mut v, &mut all, |offset, share, own| own[0] = offset + share.len());
+        assert_eq!(all, [5, 0]);
     }
 
     #[test]

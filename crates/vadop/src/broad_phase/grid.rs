@@ -47,8 +47,8 @@ const MIN_CELLS: f64 = 64.0;
 /// Most cells along one axis of a level.
 const MAX_CELLS_PER_AXIS: f64 = (1u32 << 20) as f64;
 /// On more than one worker the binning's count is shared out by paths, each worker counting its
-/// share's pieces in a count of every cell of its own (4 bytes a cell), while the workers past
-/// the first have at most one cell for this many paths: a byte a path at most. Past that (many
+/// share's pieces in a count of every cell of its own (4 bytes a cell), while the workers have
+/// at most one cell for this many paths between them: a byte a path at most. Past that (many
 /// cells beside the pieces) each worker counts the cells it owns, going through every path.
 const SHARED_COUNTS_PER_PATH: usize = 4;
 /// End of a late list.
@@ -196,7 +196,7 @@ pub struct Grid {
     /// Scratch of the binning: each cell's piece count, then the slot of its next piece.
     next_slot: Vec<u32>,
     /// Scratch of the binning on more than one worker: each cell's piece count among the paths
-    /// of each worker but the first (whose count is `next_slot`), while they are few.
+    /// of each worker, while they are few.
     counts: Vec<u32>,
     /// The binned pieces include foreseen paths (see [`BroadPhase::prepare_foreseen`]), and stay
     /// as the window's start left them.
@@ -618,25 +618,22 @@ impl Grid {
                 Grid::for_each_cut_piece((&levels[level as usize], i, count), paths, &owned, sink);
             }
             self.cut = cut;
-        } else if cells > 0 && (workers.threads() - 1) * cells <= plan.len() / SHARED_COUNTS_PER_PATH {
+        } else if cells > 0 && workers.threads() * cells <= plan.len() / SHARED_COUNTS_PER_PATH {
             // Few cells beside the paths: each worker counts the pieces of its own share of the
             // paths in a count of every cell of its own (as one worker does), and the counts are
-            // summed, rather than every worker going through every path to take its cells'.
-            let threads = workers.threads();
+            // summed, rather than every worker going through every path to take its cells'. The
+            // counts are the grid's, so no part list is allocated each window.
             counts.clear();
-            counts.resize((threads - 1) * cells, 0);
-            let firsts: Vec<usize> = (1..threads).map(|k| k * plan.len() / threads).collect();
-            let parts: Vec<_> = split_at_points(&mut plan, &firsts)
-                .into_iter()
-                .zip(std::iter::once(&mut next_slot[..]).chain(counts.chunks_mut(cells)))
-                .zip(std::iter::once(0).chain(firsts.iter().copied()))
-                .collect();
-            workers.for_each_part(parts, |_, ((chunk, counts), offset)| {
-                let (owned, sink) = (0..cells, &mut CountPieces { counts, lowest: 0 });
-                Grid::place_paths(by_exponent, paths, offset, chunk, |i, (count, place)| {
+            counts.resize(workers.threads() * cells, 0);
+            workers.shares_mut(&mut plan, &mut counts, |offset, share, counts| {
+                let owned = 0..cells;
+                Grid::place_paths(by_exponent, paths, offset, share, |i, (count, place)| {
                     if count == 1 {
-                        sink.whole(i, place as usize, false);
+                        // Straight into the slice, as one worker counts: through the sink it
+                        // read the slice back from the sink for each piece.
+                        counts[place as usize] += 1;
                     } else {
+                        let sink = &mut CountPieces { counts: &mut *counts, lowest: 0 };
                         Grid::for_each_cut_piece((&levels[place as usize], i, count), paths, &owned, sink);
                     }
                 });
