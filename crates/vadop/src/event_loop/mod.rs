@@ -52,7 +52,6 @@ use crate::walls::BoxBounds;
 use ahead::{Marks, Mirror, Worked, Worker};
 use calendar::{Calendar, Entry, Events};
 use cells::{Cells, Crossing, NONE};
-use glam::DVec3;
 use lists::Lists;
 use search::{Candidates, Eligible, Near, Overlay, Search};
 use std::time::Instant;
@@ -530,7 +529,7 @@ impl EventLoop {
         self.mark_cell_of(a as usize);
         self.mark_cell_of(b as usize);
         let (point, normal, resolution, impulse) = if is_plain_pair(bodies, physics, a as usize, b as usize) {
-            self.plain_pair_impact(bodies, physics, (a, b), t, out.stats)
+            respond::plain_pair_impact(self, bodies, physics, (a, b), t, out.stats)
         } else {
             respond::pair_impact(self, bodies, physics, (a, b), t, out.stats)
         };
@@ -543,45 +542,11 @@ impl EventLoop {
         let (body, touched) = (bodies.handle(a as usize), Touched::Body(bodies.handle(b as usize)));
         out.contacts.push(Contact { time: t, body, touched, point, normal, impulse });
     }
-
-    /// [`respond::pair_impact`] of moving spheres `a < b` touching at `t`, an [`is_plain_pair`]
-    /// pair (every impact of a gas): the same calls in the same order, so the same bits, without
-    /// what only other pairs need (whether either is static or lies still, which no body of the
-    /// loop does, and the general impact's geometry), about a hundred instructions a collision.
-    /// Pushed, both are tested again; jammed, their cluster is frozen.
-    #[inline]
-    fn plain_pair_impact(
-        &mut self,
-        bodies: &mut Bodies,
-        physics: &Physics,
-        (a, b): (u32, u32),
-        t: f64,
-        stats: &mut FrameStats,
-    ) -> (DVec3, DVec3, Resolution, f64) {
-        let (touch, resolution, virial) = self.impacts.plain_pair(bodies, physics, (a, b), t, stats);
-        let impulse = match resolution {
-            Resolution::Pushed(total) => {
-                stats.pair_virial += virial;
-                self.moved(bodies, physics, a, Some(b), t, stats);
-                total
-            }
-            Resolution::Jammed { by_rule } => {
-                let before = bodies.velocity_at(a as usize, t);
-                stats.pair_virial += self.freeze_cluster(bodies, physics, &[a, b], t, stats);
-                let taken = bodies.mass(a as usize) * (before - bodies.velocity(a as usize)).dot(touch.normal);
-                if by_rule {
-                    taken.max(0.0)
-                } else {
-                    0.0
-                }
-            }
-            Resolution::Parting | Resolution::Passed | Resolution::Rested(..) => 0.0,
-        };
-        (touch.point, touch.normal, resolution, impulse)
-    }
 }
 
 impl Responder for EventLoop {
+    const MAY_LIE_STILL: bool = false;
+
     fn impacts(&mut self) -> &mut Impacts {
         &mut self.impacts
     }

@@ -36,14 +36,18 @@ pub(crate) trait Responder {
     /// Body `woken`, which lay still (see [`crate::response::rest`]), moves at `t`: the bodies
     /// it held up fall again.
     fn woke(&mut self, bodies: &mut Bodies, physics: &Physics, woken: usize, t: f64, stats: &mut FrameStats);
+    /// Whether the engine's bodies may lie still: an impact then asks whether it woke one. The
+    /// event loop runs without gravity, so none of its bodies does, and its impacts read nothing
+    /// for it.
+    const MAY_LIE_STILL: bool = true;
 }
 
 /// The impact of bodies `a < b` touching at `t`: where, the normal from `a` to `b`, how it was
 /// resolved and the impulse to report. Pushed bodies are tested again and a jammed cluster frozen;
 /// the virial of an impact between moving bodies is added to `stats` (impacts with static
 /// bodies are the level's pressure, as the walls' are).
-pub(crate) fn pair_impact(
-    engine: &mut impl Responder,
+pub(crate) fn pair_impact<E: Responder>(
+    engine: &mut E,
     bodies: &mut Bodies,
     physics: &Physics,
     (a, b): (u32, u32),
@@ -51,21 +55,75 @@ pub(crate) fn pair_impact(
     stats: &mut FrameStats,
 ) -> (DVec3, DVec3, Resolution, f64) {
     let (i, j) = (a as usize, b as usize);
-    let still = [i, j].map(|k| bodies.rest_of(k) == Rest::Still);
+    if is_plain_pair(bodies, physics, i, j) {
+        return plain_pair_impact(engine, bodies, physics, (a, b), t, stats);
+    }
+    let still = lying_still::<E>(bodies, i, j);
     let between_moving = !bodies.is_fixed(i) && !bodies.is_fixed(j);
-    // Two moving frictionless spheres without the rest rule (every impact of a gas) take the
-    // lean case, which reads each path once and finds the push's virial with it; the same bits.
-    let (point, normal, resolution, pushed_virial) = if is_plain_pair(bodies, physics, i, j) {
-        let (touch, resolution, virial) = engine.impacts().plain_pair(bodies, physics, (a, b), t, stats);
-        (touch.point, touch.normal, resolution, virial)
+    let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
+    let before_j = bodies.velocity_at(j, t);
+    let resolution = engine.impacts().pair(bodies, physics, (a, b), t, (point, normal), stats);
+    let pushed = matches!(resolution, Resolution::Pushed(_)) && between_moving;
+    let pushed_virial = if pushed { exchange_virial(bodies, (i, j), t, before_j) } else { 0.0 };
+    let outcome = Outcome { normal, resolution, pushed_virial, between_moving, still };
+    (point, normal, resolution, settle(engine, bodies, physics, (a, b), t, outcome, stats))
+}
+
+/// [`pair_impact`] of an [`is_plain_pair`] pair (two moving frictionless spheres without the
+/// rest rule: every impact of a gas), which the event loop calls directly: the lean impact
+/// reads each path once and finds the push's virial with it, and neither body can be static.
+#[inline]
+pub(crate) fn plain_pair_impact<E: Responder>(
+    engine: &mut E,
+    bodies: &mut Bodies,
+    physics: &Physics,
+    (a, b): (u32, u32),
+    t: f64,
+    stats: &mut FrameStats,
+) -> (DVec3, DVec3, Resolution, f64) {
+    let still = lying_still::<E>(bodies, a as usize, b as usize);
+    let (touch, resolution, pushed_virial) = engine.impacts().plain_pair(bodies, physics, (a, b), t, stats);
+    let outcome = Outcome { normal: touch.normal, resolution, pushed_virial, between_moving: true, still };
+    (touch.point, touch.normal, resolution, settle(engine, bodies, physics, (a, b), t, outcome, stats))
+}
+
+/// Which of bodies `i` and `j` lie still before their impact (none in an engine whose bodies
+/// never do).
+#[inline(always)]
+fn lying_still<E: Responder>(bodies: &Bodies, i: usize, j: usize) -> [bool; 2] {
+    if E::MAY_LIE_STILL {
+        [i, j].map(|k| bodies.rest_of(k) == Rest::Still)
     } else {
-        let (point, normal) = contacts::pair_geometry(bodies, i, j, t);
-        let before_j = bodies.velocity_at(j, t);
-        let resolution = engine.impacts().pair(bodies, physics, (a, b), t, (point, normal), stats);
-        let pushed = matches!(resolution, Resolution::Pushed(_)) && between_moving;
-        (point, normal, resolution, if pushed { exchange_virial(bodies, (i, j), t, before_j) } else { 0.0 })
-    };
-    let mut impulse = 0.0;
+        [false; 2]
+    }
+}
+
+/// What an impact resolved, as [`settle`] needs it.
+struct Outcome {
+    normal: DVec3,
+    resolution: Resolution,
+    /// The collisional virial of a push between moving bodies.
+    pushed_virial: f64,
+    between_moving: bool,
+    /// Which of the two lay still before it.
+    still: [bool; 2],
+}
+
+/// An impact's consequences for the engine: the jammed cluster frozen, or the pushed or rested
+/// bodies tested again (and what a body lying still held up woken); the virial added. Returns
+/// the impulse to report.
+#[inline(always)]
+fn settle<E: Responder>(
+    engine: &mut E,
+    bodies: &mut Bodies,
+    physics: &Physics,
+    (a, b): (u32, u32),
+    t: f64,
+    outcome: Outcome,
+    stats: &mut FrameStats,
+) -> f64 {
+    let (i, j) = (a as usize, b as usize);
+    let Outcome { normal, resolution, pushed_virial, between_moving, still } = outcome;
     match resolution {
         Resolution::Jammed { by_rule } => {
             let before = bodies.velocity_at(i, t);
@@ -74,11 +132,12 @@ pub(crate) fn pair_impact(
                 stats.pair_virial += virial;
             }
             if by_rule {
-                impulse = (bodies.mass(i) * (before - bodies.velocity(i)).dot(normal)).max(0.0);
+                (bodies.mass(i) * (before - bodies.velocity(i)).dot(normal)).max(0.0)
+            } else {
+                0.0
             }
         }
         Resolution::Pushed(total) => {
-            impulse = total;
             if between_moving {
                 stats.pair_virial += pushed_virial;
             }
@@ -88,14 +147,14 @@ pub(crate) fn pair_impact(
                     engine.woke(bodies, physics, k, t, stats);
                 }
             }
+            total
         }
         Resolution::Rested(k, total) => {
-            impulse = total;
             engine.moved(bodies, physics, k, None, t, stats);
+            total
         }
-        Resolution::Parting | Resolution::Passed => {}
+        Resolution::Parting | Resolution::Passed => 0.0,
     }
-    (point, normal, resolution, impulse)
 }
 
 /// Body `a` touches `wall` at `t`: the impact (a jammed one freezes its cluster), the body
