@@ -27,10 +27,10 @@ const TIME_SLACK: f64 = 1e-4;
 /// speeds): it never bounds the screen.
 ///
 /// A pair sure to touch is above it, and is then *moving*: the exact test's noise rule
-/// (`narrow_phase::spheres`, |v| <= 10^-12 (|va| + |vb|) on the velocities scaled by a power of
-/// two) cannot hold for it, so the test skips it, the same bits. Why: write V = |v|^2 (v = vb - va)
-/// and S = |va|^2 + |vb|^2, true values. The rule, computed a few roundings from them on values
-/// scaled near 1, holds only where V <= 1.0001e-24 (|va| + |vb|)^2 <= 2.0002e-24 S. The screen's
+/// ([`NOISE_VELOCITY`](crate::narrow_phase::spheres::NOISE_VELOCITY)) cannot hold for it, so
+/// the test skips it, the same bits. Why: write V = |v|^2 (v = vb - va) and S = |va|^2 + |vb|^2,
+/// true values. The rule holds only where |v| <= 1.0001e-12 (|va| + |vb|) (its bound in true
+/// values, stated there), so where V <= 1.0001e-24 (|va| + |vb|)^2 <= 2.0002e-24 S. The screen's
 /// V and S (sums of squares of the same velocities) are each within 8 roundings plus 4 * 2^-1074
 /// of the true ones; where S >= 2^-1000 that is far below the gap between 10^-16 S and
 /// 2.0002e-24 S, so the screen's V is not above `NOISE` times its S; where S < 2^-1000, V is
