@@ -464,6 +464,7 @@ impl EventLoop {
     /// bodies that came within reach.
     fn cross_cell(&mut self, bodies: &Bodies, i: usize, t: f64, stats: &mut FrameStats) {
         let Events { next: before, crossing } = *self.calendar.events(i);
+        // Both cells change: the one it leaves, then (once it stepped across) the one it enters.
         self.mark_cell_of(i);
         let into = self.cells.step_across(i, crossing);
         self.mark_cell_of(i);
