@@ -513,7 +513,10 @@ proptest! {
                 // rest, neither turning (only the pull brings them together).
                 check_pair(&a, &under(b.clone(), g), Window::new(0.0, 4.0), 800, &format!("{what}, one falling"));
                 let held = body(ga.clone(), from_a, DVec3::ZERO, pa.2, DVec3::ZERO);
-                let dropped = under(body(gb.clone(), from_b, DVec3::ZERO, pb.2, DVec3::ZERO), -u * g.length().max(0.5));
+                // Pulled hard enough to cover twice the distance of their centres, reach and gap, in
+                // the window (8 a >= 2 (reach + gap)), so the drop always meets the body held.
+                let pull = g.length().max(0.5).max((reach + gap) / 4.0);
+                let dropped = under(body(gb.clone(), from_b, DVec3::ZERO, pb.2, DVec3::ZERO), -u * pull);
                 let found = check_pair(&dropped, &held, Window::new(0.0, 4.0), 800, &format!("{what}, dropped on it"));
                 prop_assert!(!found.is_empty(), "{}: dropped on it, never touched", what);
             }
